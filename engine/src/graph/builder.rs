@@ -1,0 +1,492 @@
+//! Declaring a frame: resources (transient or imported) and passes with the
+//! accesses they make.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::access::{BufferAccess, ImageAccess, PassKind, SyncState};
+use super::execute::PassContext;
+use super::GraphError;
+use crate::error::Result;
+use crate::memory::{Buffer, Image, ImageDesc};
+
+/// A version of an image in a [`FrameGraph`]. Writing returns a new handle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ImageHandle {
+    pub(crate) id: u32,
+    pub(crate) version: u32,
+}
+
+/// A version of a buffer in a [`FrameGraph`]. Writing returns a new handle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct BufferHandle {
+    pub(crate) id: u32,
+    pub(crate) version: u32,
+}
+
+/// Where an imported image's memory comes from.
+pub(crate) enum ImageBacking {
+    Owned(Arc<Image>),
+    External {
+        image: vk::Image,
+        view: vk::ImageView,
+    },
+}
+
+/// Where an imported buffer's memory comes from.
+pub(crate) enum BufferBacking {
+    Owned(Arc<Buffer>),
+    #[cfg_attr(not(test), allow(dead_code))]
+    External(vk::Buffer),
+}
+
+pub(crate) struct Import<B> {
+    pub backing: B,
+    pub initial: SyncState,
+    pub export: Option<SyncState>,
+}
+
+pub(crate) struct ImageDecl {
+    pub name: String,
+    pub desc: ImageDesc,
+    pub import: Option<Import<ImageBacking>>,
+    pub versions: Vec<VersionInfo>,
+    pub output_version: Option<u32>,
+}
+
+pub(crate) struct BufferDecl {
+    pub name: String,
+    pub size: u64,
+    pub import: Option<Import<BufferBacking>>,
+    pub versions: Vec<VersionInfo>,
+    pub output_version: Option<u32>,
+}
+
+/// Who wrote one version of a resource and who read it.
+#[derive(Default, Clone)]
+pub(crate) struct VersionInfo {
+    pub writer: Option<usize>,
+    pub readers: Vec<usize>,
+}
+
+#[derive(Clone, Copy)]
+pub(crate) struct ImageUse {
+    pub id: u32,
+    /// The version read (for writes: the version overwritten).
+    pub version: u32,
+    pub access: ImageAccess,
+}
+
+#[derive(Clone, Copy)]
+pub(crate) struct BufferUse {
+    pub id: u32,
+    pub version: u32,
+    pub access: BufferAccess,
+}
+
+/// A pass's recording callback.
+pub(crate) type PassFn<'a> = Box<dyn FnOnce(&mut PassContext<'_>) -> Result<()> + 'a>;
+
+pub(crate) struct PassDecl<'a> {
+    pub name: String,
+    pub kind: PassKind,
+    pub images: Vec<ImageUse>,
+    pub buffers: Vec<BufferUse>,
+    pub keep: bool,
+    pub exec: Option<PassFn<'a>>,
+}
+
+/// One frame's graph: declare resources and passes, then hand it to the
+/// [`Renderer`](crate::Renderer) (or [`Plan::new`](super::Plan::new) to inspect the plan).
+/// Rebuilt every frame; declaration is cheap.
+#[derive(Default)]
+pub struct FrameGraph<'a> {
+    pub(crate) images: Vec<ImageDecl>,
+    pub(crate) buffers: Vec<BufferDecl>,
+    pub(crate) passes: Vec<PassDecl<'a>>,
+    pub(crate) error: Option<GraphError>,
+}
+
+impl<'a> FrameGraph<'a> {
+    /// An empty graph.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A transient image: created (or reused from earlier frames) by the graph,
+    /// valid only within this frame, aliased with others whose lifetimes do
+    /// not overlap.
+    pub fn create_image(&mut self, name: &str, desc: ImageDesc) -> ImageHandle {
+        self.images.push(ImageDecl {
+            name: name.into(),
+            desc,
+            import: None,
+            versions: vec![VersionInfo::default()],
+            output_version: None,
+        });
+        ImageHandle {
+            id: self.images.len() as u32 - 1,
+            version: 0,
+        }
+    }
+
+    /// A transient buffer of `size` bytes.
+    pub fn create_buffer(&mut self, name: &str, size: u64) -> BufferHandle {
+        self.buffers.push(BufferDecl {
+            name: name.into(),
+            size,
+            import: None,
+            versions: vec![VersionInfo::default()],
+            output_version: None,
+        });
+        BufferHandle {
+            id: self.buffers.len() as u32 - 1,
+            version: 0,
+        }
+    }
+
+    /// Imports an image that lives across frames. Its state from the previous
+    /// frame is picked up automatically; `export`, when given, is the state
+    /// it is left in at the end of the frame. Passes writing it are never culled.
+    pub fn import_image(
+        &mut self,
+        image: &Arc<Image>,
+        name: &str,
+        export: Option<SyncState>,
+    ) -> ImageHandle {
+        let initial = image.sync_state();
+        self.push_imported_image(
+            name,
+            image.desc(),
+            ImageBacking::Owned(image.clone()),
+            initial,
+            export,
+        )
+    }
+
+    /// Imports an image the engine does not own (e.g. a swapchain image).
+    pub(crate) fn import_external_image(
+        &mut self,
+        name: &str,
+        desc: ImageDesc,
+        image: vk::Image,
+        view: vk::ImageView,
+        initial: SyncState,
+        export: Option<SyncState>,
+    ) -> ImageHandle {
+        self.push_imported_image(
+            name,
+            desc,
+            ImageBacking::External { image, view },
+            initial,
+            export,
+        )
+    }
+
+    fn push_imported_image(
+        &mut self,
+        name: &str,
+        desc: ImageDesc,
+        backing: ImageBacking,
+        initial: SyncState,
+        export: Option<SyncState>,
+    ) -> ImageHandle {
+        self.images.push(ImageDecl {
+            name: name.into(),
+            desc,
+            import: Some(Import {
+                backing,
+                initial,
+                export,
+            }),
+            versions: vec![VersionInfo::default()],
+            output_version: None,
+        });
+        ImageHandle {
+            id: self.images.len() as u32 - 1,
+            version: 0,
+        }
+    }
+
+    /// Imports a buffer that lives across frames (see [`Self::import_image`]).
+    pub fn import_buffer(
+        &mut self,
+        buffer: &Arc<Buffer>,
+        export: Option<SyncState>,
+    ) -> BufferHandle {
+        let initial = buffer.sync_state();
+        self.push_imported_buffer(
+            buffer.name(),
+            buffer.size(),
+            BufferBacking::Owned(buffer.clone()),
+            initial,
+            export,
+        )
+    }
+
+    #[cfg(test)]
+    pub(crate) fn import_external_buffer(
+        &mut self,
+        name: &str,
+        size: u64,
+        initial: SyncState,
+        export: Option<SyncState>,
+    ) -> BufferHandle {
+        self.push_imported_buffer(
+            name,
+            size,
+            BufferBacking::External(vk::Buffer::null()),
+            initial,
+            export,
+        )
+    }
+
+    fn push_imported_buffer(
+        &mut self,
+        name: &str,
+        size: u64,
+        backing: BufferBacking,
+        initial: SyncState,
+        export: Option<SyncState>,
+    ) -> BufferHandle {
+        self.buffers.push(BufferDecl {
+            name: name.into(),
+            size,
+            import: Some(Import {
+                backing,
+                initial,
+                export,
+            }),
+            versions: vec![VersionInfo::default()],
+            output_version: None,
+        });
+        BufferHandle {
+            id: self.buffers.len() as u32 - 1,
+            version: 0,
+        }
+    }
+
+    /// Marks this version of an image as a result of the frame: the passes
+    /// producing it are not culled.
+    pub fn mark_output_image(&mut self, image: ImageHandle) {
+        if let Some(d) = self.images.get_mut(image.id as usize) {
+            d.output_version = Some(image.version);
+        }
+    }
+
+    /// Marks this version of a buffer as a result of the frame.
+    pub fn mark_output_buffer(&mut self, buffer: BufferHandle) {
+        if let Some(d) = self.buffers.get_mut(buffer.id as usize) {
+            d.output_version = Some(buffer.version);
+        }
+    }
+
+    /// Starts declaring a pass. Declare its accesses on the returned builder,
+    /// then give it its recording callback with [`PassBuilder::exec`].
+    pub fn add_pass(&mut self, name: &str, kind: PassKind) -> PassBuilder<'_, 'a> {
+        self.passes.push(PassDecl {
+            name: name.into(),
+            kind,
+            images: Vec::new(),
+            buffers: Vec::new(),
+            keep: false,
+            exec: None,
+        });
+        let index = self.passes.len() - 1;
+        PassBuilder { graph: self, index }
+    }
+
+    /// The number of declared passes.
+    pub fn pass_count(&self) -> usize {
+        self.passes.len()
+    }
+
+    /// The name of a declared pass.
+    pub fn pass_name(&self, index: usize) -> &str {
+        &self.passes[index].name
+    }
+
+    /// The name of an image.
+    pub fn image_name(&self, image: ImageHandle) -> &str {
+        self.images
+            .get(image.id as usize)
+            .map(|d| d.name.as_str())
+            .unwrap_or("?")
+    }
+
+    /// The description of an image.
+    pub fn image_desc(&self, image: ImageHandle) -> Option<ImageDesc> {
+        self.images.get(image.id as usize).map(|d| d.desc)
+    }
+
+    fn fail(&mut self, e: GraphError) {
+        if self.error.is_none() {
+            self.error = Some(e);
+        }
+    }
+}
+
+/// Declares one pass's accesses. Errors are recorded and reported when the
+/// graph is planned, so declarations read as a plain list.
+pub struct PassBuilder<'g, 'a> {
+    graph: &'g mut FrameGraph<'a>,
+    index: usize,
+}
+
+impl<'a> PassBuilder<'_, 'a> {
+    fn pass_name(&self) -> String {
+        self.graph.passes[self.index].name.clone()
+    }
+
+    /// Declares a use of an image. For a writing access, returns the new
+    /// version that later readers must use; for a read, returns `image`.
+    pub fn image(&mut self, image: ImageHandle, access: ImageAccess) -> ImageHandle {
+        let pass = self.pass_name();
+        let kind = self.graph.passes[self.index].kind;
+        let Some(decl) = self.graph.images.get(image.id as usize) else {
+            self.graph.fail(GraphError::UnknownHandle { pass });
+            return image;
+        };
+        let resource = decl.name.clone();
+        let latest = decl.versions.len() as u32 - 1;
+        let error = if image.version > latest {
+            Some(GraphError::UnknownHandle { pass: pass.clone() })
+        } else if !access.allowed_in(kind) {
+            Some(GraphError::AccessNotAllowed {
+                pass: pass.clone(),
+                kind,
+                resource: resource.clone(),
+                access: format!("{access:?}"),
+            })
+        } else if self.graph.passes[self.index]
+            .images
+            .iter()
+            .any(|u| u.id == image.id)
+        {
+            Some(GraphError::DuplicateAccess {
+                pass: pass.clone(),
+                resource: resource.clone(),
+            })
+        } else if access.writes() && image.version != latest {
+            Some(GraphError::StaleWrite {
+                pass: pass.clone(),
+                resource: resource.clone(),
+                version: image.version,
+                latest,
+            })
+        } else if decl.import.is_none() && image.version == 0 && access.reads_previous() {
+            Some(GraphError::ReadBeforeWrite {
+                pass: pass.clone(),
+                resource: resource.clone(),
+            })
+        } else {
+            None
+        };
+        if let Some(e) = error {
+            self.graph.fail(e);
+            return image;
+        }
+        self.graph.passes[self.index].images.push(ImageUse {
+            id: image.id,
+            version: image.version,
+            access,
+        });
+        let decl = &mut self.graph.images[image.id as usize];
+        if access.writes() {
+            decl.versions.push(VersionInfo {
+                writer: Some(self.index),
+                readers: Vec::new(),
+            });
+            ImageHandle {
+                id: image.id,
+                version: image.version + 1,
+            }
+        } else {
+            decl.versions[image.version as usize]
+                .readers
+                .push(self.index);
+            image
+        }
+    }
+
+    /// Declares a use of a buffer; like [`Self::image`].
+    pub fn buffer(&mut self, buffer: BufferHandle, access: BufferAccess) -> BufferHandle {
+        let pass = self.pass_name();
+        let kind = self.graph.passes[self.index].kind;
+        let Some(decl) = self.graph.buffers.get(buffer.id as usize) else {
+            self.graph.fail(GraphError::UnknownHandle { pass });
+            return buffer;
+        };
+        let resource = decl.name.clone();
+        let latest = decl.versions.len() as u32 - 1;
+        let error = if buffer.version > latest {
+            Some(GraphError::UnknownHandle { pass: pass.clone() })
+        } else if !access.allowed_in(kind) {
+            Some(GraphError::AccessNotAllowed {
+                pass: pass.clone(),
+                kind,
+                resource: resource.clone(),
+                access: format!("{access:?}"),
+            })
+        } else if self.graph.passes[self.index]
+            .buffers
+            .iter()
+            .any(|u| u.id == buffer.id)
+        {
+            Some(GraphError::DuplicateAccess {
+                pass: pass.clone(),
+                resource: resource.clone(),
+            })
+        } else if access.writes() && buffer.version != latest {
+            Some(GraphError::StaleWrite {
+                pass: pass.clone(),
+                resource: resource.clone(),
+                version: buffer.version,
+                latest,
+            })
+        } else if decl.import.is_none() && buffer.version == 0 && !access.writes() {
+            Some(GraphError::ReadBeforeWrite {
+                pass: pass.clone(),
+                resource: resource.clone(),
+            })
+        } else {
+            None
+        };
+        if let Some(e) = error {
+            self.graph.fail(e);
+            return buffer;
+        }
+        self.graph.passes[self.index].buffers.push(BufferUse {
+            id: buffer.id,
+            version: buffer.version,
+            access,
+        });
+        let decl = &mut self.graph.buffers[buffer.id as usize];
+        if access.writes() {
+            decl.versions.push(VersionInfo {
+                writer: Some(self.index),
+                readers: Vec::new(),
+            });
+            BufferHandle {
+                id: buffer.id,
+                version: buffer.version + 1,
+            }
+        } else {
+            decl.versions[buffer.version as usize]
+                .readers
+                .push(self.index);
+            buffer
+        }
+    }
+
+    /// Marks the pass as having effects outside the graph: never culled.
+    pub fn keep(&mut self) {
+        self.graph.passes[self.index].keep = true;
+    }
+
+    /// Sets the callback that records the pass's commands.
+    pub fn exec(self, f: impl FnOnce(&mut PassContext<'_>) -> Result<()> + 'a) {
+        self.graph.passes[self.index].exec = Some(Box::new(f));
+    }
+}

@@ -1,0 +1,733 @@
+//! Recording a planned graph: barriers from the plan, dynamic rendering for
+//! raster passes, timestamps around each pass, and the safe [`PassContext`]
+//! through which passes bind resources and record work.
+
+use std::time::Instant;
+
+use ash::vk;
+
+use super::builder::{FrameGraph, PassDecl};
+use super::plan::{Barrier, BarrierResource, Plan};
+use super::{BufferAccess, BufferHandle, ImageAccess, ImageHandle, LoadOp, PassKind};
+use crate::context::Context;
+use crate::descriptors::{DescriptorArena, Samplers};
+use crate::error::{EngineError, Result};
+use crate::memory::{whole, ImageDesc};
+use crate::pipeline::{descriptor_type, ComputePipeline, GraphicsPipeline, PipelineCore};
+use crate::shader::DescriptorKind;
+use crate::timing::PassQueries;
+
+/// Which shared sampler to bind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Bilinear, clamped to the edge.
+    LinearClamp,
+    /// Nearest texel, clamped to the edge.
+    NearestClamp,
+}
+
+/// A resource bound to one binding of a pipeline, in binding order.
+#[derive(Debug, Clone, Copy)]
+pub enum Binding {
+    /// `texture_2d` (the pass must declare `ImageAccess::Sampled`).
+    SampledImage(ImageHandle),
+    /// `texture_storage_2d` (the pass must declare a storage access).
+    StorageImage(ImageHandle),
+    /// `var<storage>` (the pass must declare a storage access).
+    StorageBuffer(BufferHandle),
+    /// `var<uniform>` (the pass must declare `BufferAccess::Uniform`).
+    UniformBuffer(BufferHandle),
+    /// `sampler`.
+    Sampler(SamplerKind),
+}
+
+/// A physical image a logical one resolves to this frame.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ResolvedImage {
+    pub image: vk::Image,
+    pub view: vk::ImageView,
+    pub desc: ImageDesc,
+}
+
+/// A physical buffer a logical one resolves to this frame.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ResolvedBuffer {
+    pub buffer: vk::Buffer,
+    pub size: u64,
+}
+
+/// Physical resources of every logical one (None: not used by a live pass).
+pub(crate) struct Resolved {
+    pub images: Vec<Option<ResolvedImage>>,
+    pub buffers: Vec<Option<ResolvedBuffer>>,
+}
+
+/// What recording produced: the executed pass names with their CPU time.
+pub(crate) struct RecordOutput {
+    pub passes: Vec<(String, f64)>,
+    pub culled: Vec<String>,
+}
+
+/// What a pass's callback records through: resolved resources, descriptor
+/// sets and commands, checked against the accesses the pass declared.
+pub struct PassContext<'r> {
+    ctx: &'r Context,
+    cmd: vk::CommandBuffer,
+    pass: &'r PassDecl<'r>,
+    resolved: &'r Resolved,
+    descriptors: &'r mut DescriptorArena,
+    samplers: &'r Samplers,
+    extent: vk::Extent2D,
+}
+
+impl PassContext<'_> {
+    fn error(&self, message: String) -> EngineError {
+        EngineError::Pass {
+            pass: self.pass.name.clone(),
+            message,
+        }
+    }
+
+    /// The size of a raster pass's attachments (zero for other passes).
+    pub fn extent(&self) -> (u32, u32) {
+        (self.extent.width, self.extent.height)
+    }
+
+    /// The physical image behind a handle, checking the pass declared it.
+    fn image(
+        &self,
+        h: ImageHandle,
+        ok: impl Fn(ImageAccess) -> bool,
+        what: &str,
+    ) -> Result<ResolvedImage> {
+        let declared = self
+            .pass
+            .images
+            .iter()
+            .find(|u| u.id == h.id)
+            .map(|u| u.access);
+        match declared {
+            Some(a) if ok(a) => {}
+            Some(a) => {
+                return Err(self.error(format!(
+                    "uses image #{} as {what} but declared it as {a:?}",
+                    h.id
+                )))
+            }
+            None => {
+                return Err(self.error(format!(
+                    "uses image #{} as {what} without declaring it",
+                    h.id
+                )))
+            }
+        }
+        self.resolved
+            .images
+            .get(h.id as usize)
+            .copied()
+            .flatten()
+            .ok_or_else(|| self.error(format!("image #{} has no physical resource", h.id)))
+    }
+
+    fn buffer(
+        &self,
+        h: BufferHandle,
+        ok: impl Fn(BufferAccess) -> bool,
+        what: &str,
+    ) -> Result<ResolvedBuffer> {
+        let declared = self
+            .pass
+            .buffers
+            .iter()
+            .find(|u| u.id == h.id)
+            .map(|u| u.access);
+        match declared {
+            Some(a) if ok(a) => {}
+            Some(a) => {
+                return Err(self.error(format!(
+                    "uses buffer #{} as {what} but declared it as {a:?}",
+                    h.id
+                )))
+            }
+            None => {
+                return Err(self.error(format!(
+                    "uses buffer #{} as {what} without declaring it",
+                    h.id
+                )))
+            }
+        }
+        self.resolved
+            .buffers
+            .get(h.id as usize)
+            .copied()
+            .flatten()
+            .ok_or_else(|| self.error(format!("buffer #{} has no physical resource", h.id)))
+    }
+
+    /// Allocates and writes the descriptor set for `bindings`, binds it and
+    /// the pipeline, and pushes constants.
+    fn bind(
+        &mut self,
+        core: &PipelineCore,
+        bind_point: vk::PipelineBindPoint,
+        bindings: &[Binding],
+        push: &[u8],
+    ) -> Result<()> {
+        if bindings.len() != core.bindings.len() {
+            let names: Vec<&str> = core.bindings.iter().map(|b| b.name.as_str()).collect();
+            return Err(self.error(format!(
+                "pipeline {} takes {} bindings {names:?}, got {}",
+                core.name,
+                core.bindings.len(),
+                bindings.len()
+            )));
+        }
+        if push.len() as u32 != core.push_size {
+            return Err(self.error(format!(
+                "pipeline {} takes {} bytes of push constants, got {}",
+                core.name,
+                core.push_size,
+                push.len()
+            )));
+        }
+        let mut image_infos = Vec::with_capacity(bindings.len());
+        let mut buffer_infos = Vec::with_capacity(bindings.len());
+        for (b, r) in bindings.iter().zip(&core.bindings) {
+            let kind = match b {
+                Binding::SampledImage(_) => DescriptorKind::SampledImage,
+                Binding::StorageImage(_) => DescriptorKind::StorageImage,
+                Binding::StorageBuffer(_) => DescriptorKind::StorageBuffer,
+                Binding::UniformBuffer(_) => DescriptorKind::UniformBuffer,
+                Binding::Sampler(_) => DescriptorKind::Sampler,
+            };
+            if kind != r.kind {
+                return Err(self.error(format!(
+                    "binding {} (`{}`) of {} is a {:?}, got a {kind:?}",
+                    r.binding, r.name, core.name, r.kind
+                )));
+            }
+            match *b {
+                Binding::SampledImage(h) => {
+                    let i = self.image(h, |a| a == ImageAccess::Sampled, "a sampled image")?;
+                    image_infos.push((
+                        r.binding,
+                        vk::DescriptorImageInfo::default()
+                            .image_view(i.view)
+                            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+                    ));
+                }
+                Binding::StorageImage(h) => {
+                    let i = self.image(
+                        h,
+                        |a| {
+                            matches!(
+                                a,
+                                ImageAccess::StorageRead
+                                    | ImageAccess::StorageWrite
+                                    | ImageAccess::StorageReadWrite
+                            )
+                        },
+                        "a storage image",
+                    )?;
+                    image_infos.push((
+                        r.binding,
+                        vk::DescriptorImageInfo::default()
+                            .image_view(i.view)
+                            .image_layout(vk::ImageLayout::GENERAL),
+                    ));
+                }
+                Binding::Sampler(s) => {
+                    let sampler = match s {
+                        SamplerKind::LinearClamp => self.samplers.linear_clamp,
+                        SamplerKind::NearestClamp => self.samplers.nearest_clamp,
+                    };
+                    image_infos.push((
+                        r.binding,
+                        vk::DescriptorImageInfo::default().sampler(sampler),
+                    ));
+                }
+                Binding::StorageBuffer(h) => {
+                    let buf = self.buffer(
+                        h,
+                        |a| {
+                            matches!(
+                                a,
+                                BufferAccess::StorageRead
+                                    | BufferAccess::StorageWrite
+                                    | BufferAccess::StorageReadWrite
+                            )
+                        },
+                        "a storage buffer",
+                    )?;
+                    buffer_infos.push((
+                        r.binding,
+                        vk::DescriptorBufferInfo::default()
+                            .buffer(buf.buffer)
+                            .range(vk::WHOLE_SIZE),
+                    ));
+                }
+                Binding::UniformBuffer(h) => {
+                    let buf = self.buffer(h, |a| a == BufferAccess::Uniform, "a uniform buffer")?;
+                    buffer_infos.push((
+                        r.binding,
+                        vk::DescriptorBufferInfo::default()
+                            .buffer(buf.buffer)
+                            .range(vk::WHOLE_SIZE),
+                    ));
+                }
+            }
+        }
+        let device = &self.ctx.device;
+        let set = if core.bindings.is_empty() {
+            None
+        } else {
+            Some(self.descriptors.allocate(core.set_layout)?)
+        };
+        if let Some(set) = set {
+            let kind_of = |binding: u32| {
+                core.bindings
+                    .iter()
+                    .find(|r| r.binding == binding)
+                    .map(|r| descriptor_type(r.kind))
+                    .unwrap_or_default()
+            };
+            let mut writes = Vec::with_capacity(bindings.len());
+            for (binding, info) in &image_infos {
+                writes.push(
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(set)
+                        .dst_binding(*binding)
+                        .descriptor_type(kind_of(*binding))
+                        .image_info(std::slice::from_ref(info)),
+                );
+            }
+            for (binding, info) in &buffer_infos {
+                writes.push(
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(set)
+                        .dst_binding(*binding)
+                        .descriptor_type(kind_of(*binding))
+                        .buffer_info(std::slice::from_ref(info)),
+                );
+            }
+            unsafe { device.update_descriptor_sets(&writes, &[]) };
+        }
+        unsafe {
+            device.cmd_bind_pipeline(self.cmd, bind_point, core.pipeline);
+            if let Some(set) = set {
+                device.cmd_bind_descriptor_sets(self.cmd, bind_point, core.layout, 0, &[set], &[]);
+            }
+            if !push.is_empty() {
+                device.cmd_push_constants(self.cmd, core.layout, core.push_stages, 0, push);
+            }
+        }
+        Ok(())
+    }
+
+    /// Records a compute dispatch of `groups` workgroups.
+    pub fn dispatch(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[Binding],
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> Result<()> {
+        if self.pass.kind != PassKind::Compute {
+            return Err(self.error("dispatch outside a compute pass".into()));
+        }
+        self.bind(
+            &pipeline.core,
+            vk::PipelineBindPoint::COMPUTE,
+            bindings,
+            push,
+        )?;
+        if groups.iter().all(|&g| g > 0) {
+            unsafe {
+                self.ctx
+                    .device
+                    .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+            };
+        }
+        Ok(())
+    }
+
+    /// Records a non-indexed draw inside the raster pass's rendering.
+    pub fn draw(
+        &mut self,
+        pipeline: &GraphicsPipeline,
+        bindings: &[Binding],
+        push: &[u8],
+        vertices: u32,
+        instances: u32,
+    ) -> Result<()> {
+        if self.pass.kind != PassKind::Raster {
+            return Err(self.error("draw outside a raster pass".into()));
+        }
+        let colors: Vec<vk::Format> = self
+            .pass
+            .images
+            .iter()
+            .filter(|u| matches!(u.access, ImageAccess::ColorAttachment(_)))
+            .filter_map(|u| self.resolved.images[u.id as usize].map(|i| i.desc.format))
+            .collect();
+        let depth = self
+            .pass
+            .images
+            .iter()
+            .find(|u| matches!(u.access, ImageAccess::DepthAttachment(_)))
+            .and_then(|u| self.resolved.images[u.id as usize].map(|i| i.desc.format));
+        if colors != pipeline.desc.color_formats || depth != pipeline.desc.depth_format {
+            return Err(self.error(format!("pipeline {} renders to {:?} + depth {:?} but the pass's attachments are {colors:?} + depth {depth:?}", pipeline.core.name, pipeline.desc.color_formats, pipeline.desc.depth_format)));
+        }
+        self.bind(
+            &pipeline.core,
+            vk::PipelineBindPoint::GRAPHICS,
+            bindings,
+            push,
+        )?;
+        if vertices > 0 && instances > 0 {
+            unsafe {
+                self.ctx
+                    .device
+                    .cmd_draw(self.cmd, vertices, instances, 0, 0)
+            };
+        }
+        Ok(())
+    }
+
+    /// Copies a whole image into a buffer, tightly packed.
+    pub fn copy_image_to_buffer(&mut self, src: ImageHandle, dst: BufferHandle) -> Result<()> {
+        let i = self.image(src, |a| a == ImageAccess::TransferSrc, "a copy source")?;
+        let b = self.buffer(
+            dst,
+            |a| a == BufferAccess::TransferDst,
+            "a copy destination",
+        )?;
+        let bytes = texel_bytes(i.desc.format).ok_or_else(|| {
+            self.error(format!(
+                "cannot read back images of format {:?}",
+                i.desc.format
+            ))
+        })? as u64
+            * i.desc.width as u64
+            * i.desc.height as u64;
+        if b.size < bytes {
+            return Err(self.error(format!(
+                "buffer of {} bytes is too small for a {}x{} {:?} image ({bytes} bytes)",
+                b.size, i.desc.width, i.desc.height, i.desc.format
+            )));
+        }
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(whole(i.desc.format).aspect_mask)
+                    .layer_count(1),
+            )
+            .image_extent(vk::Extent3D {
+                width: i.desc.width,
+                height: i.desc.height,
+                depth: 1,
+            });
+        unsafe {
+            self.ctx.device.cmd_copy_image_to_buffer(
+                self.cmd,
+                i.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                b.buffer,
+                &[region],
+            )
+        };
+        Ok(())
+    }
+
+    /// Copies `src` into `dst` (the smaller of the two sizes).
+    pub fn copy_buffer(&mut self, src: BufferHandle, dst: BufferHandle) -> Result<()> {
+        let s = self.buffer(src, |a| a == BufferAccess::TransferSrc, "a copy source")?;
+        let d = self.buffer(
+            dst,
+            |a| a == BufferAccess::TransferDst,
+            "a copy destination",
+        )?;
+        let region = vk::BufferCopy::default().size(s.size.min(d.size));
+        unsafe {
+            self.ctx
+                .device
+                .cmd_copy_buffer(self.cmd, s.buffer, d.buffer, &[region])
+        };
+        Ok(())
+    }
+
+    /// Fills a whole buffer with a repeated 32-bit value.
+    pub fn fill_buffer(&mut self, dst: BufferHandle, value: u32) -> Result<()> {
+        let d = self.buffer(
+            dst,
+            |a| a == BufferAccess::TransferDst,
+            "a fill destination",
+        )?;
+        unsafe {
+            self.ctx
+                .device
+                .cmd_fill_buffer(self.cmd, d.buffer, 0, vk::WHOLE_SIZE, value)
+        };
+        Ok(())
+    }
+
+    /// Clears a whole colour image.
+    pub fn clear_image(&mut self, dst: ImageHandle, color: [f32; 4]) -> Result<()> {
+        let i = self.image(
+            dst,
+            |a| a == ImageAccess::TransferDst,
+            "a clear destination",
+        )?;
+        let value = vk::ClearColorValue { float32: color };
+        unsafe {
+            self.ctx.device.cmd_clear_color_image(
+                self.cmd,
+                i.image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &value,
+                &[whole(i.desc.format)],
+            )
+        };
+        Ok(())
+    }
+}
+
+/// Bytes per texel of the formats the engine reads back.
+pub(crate) fn texel_bytes(format: vk::Format) -> Option<u32> {
+    Some(match format {
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R8G8B8A8_UNORM
+        | vk::Format::R8G8B8A8_SRGB
+        | vk::Format::B8G8R8A8_UNORM
+        | vk::Format::B8G8R8A8_SRGB
+        | vk::Format::R32_SFLOAT
+        | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R16_SFLOAT => 2,
+        _ => return None,
+    })
+}
+
+fn record_barriers(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    graph: &FrameGraph<'_>,
+    resolved: &Resolved,
+    barriers: &[Barrier],
+) {
+    if barriers.is_empty() {
+        return;
+    }
+    let mut images = Vec::new();
+    let mut buffers = Vec::new();
+    for b in barriers {
+        match b.resource {
+            BarrierResource::Image(id) => {
+                let Some(r) = resolved.images[id as usize] else {
+                    continue;
+                };
+                images.push(
+                    vk::ImageMemoryBarrier2::default()
+                        .src_stage_mask(b.src_stage)
+                        .src_access_mask(b.src_access)
+                        .dst_stage_mask(b.dst_stage)
+                        .dst_access_mask(b.dst_access)
+                        .old_layout(b.old_layout)
+                        .new_layout(b.new_layout)
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .image(r.image)
+                        .subresource_range(
+                            whole(r.desc.format).aspect_mask(Plan::aspect(graph, id)),
+                        ),
+                );
+            }
+            BarrierResource::Buffer(id) => {
+                let Some(r) = resolved.buffers[id as usize] else {
+                    continue;
+                };
+                buffers.push(
+                    vk::BufferMemoryBarrier2::default()
+                        .src_stage_mask(b.src_stage)
+                        .src_access_mask(b.src_access)
+                        .dst_stage_mask(b.dst_stage)
+                        .dst_access_mask(b.dst_access)
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .buffer(r.buffer)
+                        .size(vk::WHOLE_SIZE),
+                );
+            }
+        }
+    }
+    let info = vk::DependencyInfo::default()
+        .image_memory_barriers(&images)
+        .buffer_memory_barriers(&buffers);
+    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &info) };
+}
+
+fn begin_rendering(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    pass: &PassDecl<'_>,
+    resolved: &Resolved,
+) -> vk::Extent2D {
+    let mut extent = vk::Extent2D::default();
+    let mut colors = Vec::new();
+    let mut depth = None;
+    for u in &pass.images {
+        let Some(r) = resolved.images[u.id as usize] else {
+            continue;
+        };
+        let view = |layout| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(r.view)
+                .image_layout(layout)
+                .store_op(vk::AttachmentStoreOp::STORE)
+        };
+        match u.access {
+            ImageAccess::ColorAttachment(load) => {
+                extent = vk::Extent2D {
+                    width: r.desc.width,
+                    height: r.desc.height,
+                };
+                let (op, clear) = match load {
+                    LoadOp::Clear(c) => (
+                        vk::AttachmentLoadOp::CLEAR,
+                        vk::ClearValue {
+                            color: vk::ClearColorValue { float32: c },
+                        },
+                    ),
+                    LoadOp::Load => (vk::AttachmentLoadOp::LOAD, vk::ClearValue::default()),
+                    LoadOp::DontCare => {
+                        (vk::AttachmentLoadOp::DONT_CARE, vk::ClearValue::default())
+                    }
+                };
+                colors.push(
+                    view(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .load_op(op)
+                        .clear_value(clear),
+                );
+            }
+            ImageAccess::DepthAttachment(load) => {
+                extent = vk::Extent2D {
+                    width: r.desc.width,
+                    height: r.desc.height,
+                };
+                let (op, clear) = match load {
+                    LoadOp::Clear(d) => (
+                        vk::AttachmentLoadOp::CLEAR,
+                        vk::ClearValue {
+                            depth_stencil: vk::ClearDepthStencilValue {
+                                depth: d,
+                                stencil: 0,
+                            },
+                        },
+                    ),
+                    LoadOp::Load => (vk::AttachmentLoadOp::LOAD, vk::ClearValue::default()),
+                    LoadOp::DontCare => {
+                        (vk::AttachmentLoadOp::DONT_CARE, vk::ClearValue::default())
+                    }
+                };
+                depth = Some(
+                    view(vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL)
+                        .load_op(op)
+                        .clear_value(clear),
+                );
+            }
+            _ => {}
+        }
+    }
+    let area = vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent,
+    };
+    let mut info = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&colors);
+    if let Some(d) = depth.as_ref() {
+        info = info.depth_attachment(d);
+    }
+    unsafe {
+        ctx.device.cmd_begin_rendering(cmd, &info);
+        // Negative-height viewport is not used: naga's ADJUST_COORDINATE_SPACE
+        // already flips WGSL's Y-up clip space for Vulkan.
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        ctx.device.cmd_set_viewport(cmd, 0, &[viewport]);
+        ctx.device.cmd_set_scissor(cmd, 0, &[area]);
+    }
+    extent
+}
+
+/// Everything recording needs besides the graph.
+pub(crate) struct RecordEnv<'r> {
+    pub ctx: &'r Context,
+    pub cmd: vk::CommandBuffer,
+    pub descriptors: &'r mut DescriptorArena,
+    pub samplers: &'r Samplers,
+    pub queries: &'r PassQueries,
+}
+
+/// Records every live pass of `graph` in plan order, with the plan's
+/// barriers before each and timestamps around each.
+pub(crate) fn record_graph(
+    env: RecordEnv<'_>,
+    mut graph: FrameGraph<'_>,
+    plan: &Plan,
+    resolved: &Resolved,
+) -> Result<RecordOutput> {
+    let RecordEnv {
+        ctx,
+        cmd,
+        descriptors,
+        samplers,
+        queries,
+    } = env;
+    queries.reset(cmd, plan.order.len() as u32);
+    let mut passes = Vec::with_capacity(plan.order.len());
+    let mut callbacks: Vec<_> = graph.passes.iter_mut().map(|p| p.exec.take()).collect();
+    for (slot, (&p, barriers)) in plan.order.iter().zip(&plan.barriers).enumerate() {
+        let started = Instant::now();
+        record_barriers(ctx, cmd, &graph, resolved, barriers);
+        queries.write(cmd, slot as u32, false);
+        let decl = &graph.passes[p];
+        let extent = if decl.kind == PassKind::Raster {
+            begin_rendering(ctx, cmd, decl, resolved)
+        } else {
+            vk::Extent2D::default()
+        };
+        if let Some(f) = callbacks[p].take() {
+            let mut pc = PassContext {
+                ctx,
+                cmd,
+                pass: decl,
+                resolved,
+                descriptors,
+                samplers,
+                extent,
+            };
+            f(&mut pc)?;
+        }
+        if decl.kind == PassKind::Raster {
+            unsafe { ctx.device.cmd_end_rendering(cmd) };
+        }
+        queries.write(cmd, slot as u32, true);
+        passes.push((decl.name.clone(), started.elapsed().as_secs_f64() * 1e3));
+    }
+    record_barriers(ctx, cmd, &graph, resolved, &plan.final_barriers);
+    let culled = plan
+        .culled
+        .iter()
+        .map(|&p| graph.passes[p].name.clone())
+        .collect();
+    Ok(RecordOutput { passes, culled })
+}

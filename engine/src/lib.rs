@@ -1,0 +1,33 @@
+//! The inlay engine: Vulkan context, memory, WGSL shaders, the frame graph,
+//! GPU timing and render targets. It knows nothing about radiance fields; the
+//! method's passes live in `inlay-passes` and run as passes of its graph.
+//!
+//! `unsafe` is confined to this crate: everything it exports is safe.
+#![warn(missing_docs)]
+
+mod context;
+mod descriptors;
+pub mod device_choice;
+mod error;
+pub mod graph;
+mod image_io;
+mod memory;
+mod pipeline;
+mod readback;
+mod renderer;
+pub mod shader;
+pub mod timing;
+pub mod tonemap;
+mod transient_pool;
+mod validation;
+pub mod window;
+
+pub use ash::vk;
+pub use context::{Context, ContextOptions, DeviceInfo, WindowHandles, DEVICE_ENV};
+pub use error::{EngineError, Result};
+pub use image_io::HdrImage;
+pub use memory::{is_depth_format, Buffer, BufferLocation, Image, ImageDesc};
+pub use pipeline::{ComputePipeline, GraphicsDesc, GraphicsPipeline};
+pub use readback::Readback;
+pub use renderer::{FrameReport, FrameToken, Renderer, SubmitSync, DEFAULT_FRAMES_IN_FLIGHT};
+pub use validation::ValidationLog;

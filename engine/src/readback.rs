@@ -1,0 +1,102 @@
+//! Headless target support: copying a rendered HDR image into host-visible
+//! memory through a graph transfer pass, and decoding it on the CPU.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::context::Context;
+use crate::error::{EngineError, Result};
+use crate::graph::{
+    texel_bytes, BufferAccess, FrameGraph, ImageAccess, ImageHandle, PassKind, SyncState,
+};
+use crate::image_io::HdrImage;
+use crate::memory::{Buffer, BufferLocation, ImageDesc};
+
+/// A host-visible buffer that receives an RGBA16F or RGBA32F image at the end
+/// of a frame.
+pub struct Readback {
+    buffer: Arc<Buffer>,
+    desc: ImageDesc,
+}
+
+impl Readback {
+    /// A readback buffer for images of this shape (RGBA16F or RGBA32F).
+    pub fn new(ctx: &Arc<Context>, desc: ImageDesc) -> Result<Self> {
+        if !matches!(
+            desc.format,
+            vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32B32A32_SFLOAT
+        ) {
+            return Err(EngineError::Pass {
+                pass: "readback".into(),
+                message: format!(
+                    "reads back RGBA16F or RGBA32F images, not {:?}",
+                    desc.format
+                ),
+            });
+        }
+        let bytes =
+            texel_bytes(desc.format).unwrap_or(16) as u64 * desc.width as u64 * desc.height as u64;
+        let buffer = Buffer::new(
+            ctx,
+            "readback",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Readback,
+        )?;
+        Ok(Self {
+            buffer: Arc::new(buffer),
+            desc,
+        })
+    }
+
+    /// Adds a transfer pass named `readback` that copies `image` into the
+    /// buffer; the buffer is left ready for host reads.
+    pub fn add_to_graph(&self, graph: &mut FrameGraph<'_>, image: ImageHandle) {
+        let export = SyncState {
+            stage: vk::PipelineStageFlags2::HOST,
+            access: vk::AccessFlags2::HOST_READ,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        let buffer = graph.import_buffer(&self.buffer, Some(export));
+        let mut pass = graph.add_pass("readback", PassKind::Transfer);
+        pass.image(image, ImageAccess::TransferSrc);
+        pass.buffer(buffer, BufferAccess::TransferDst);
+        pass.exec(move |ctx| ctx.copy_image_to_buffer(image, buffer));
+    }
+
+    /// Decodes the buffer. Call after the frame that filled it has finished
+    /// (e.g. after [`Renderer::finish`](crate::Renderer::finish)).
+    pub fn read(&self) -> Result<HdrImage> {
+        let bytes = self.buffer.mapped().ok_or_else(|| EngineError::Pass {
+            pass: "readback".into(),
+            message: "readback buffer is not host-visible".into(),
+        })?;
+        let n = (self.desc.width * self.desc.height) as usize;
+        let pixels = match self.desc.format {
+            vk::Format::R16G16B16A16_SFLOAT => bytes
+                .chunks_exact(8)
+                .take(n)
+                .map(|c| {
+                    std::array::from_fn(|i| {
+                        half::f16::from_le_bytes([c[2 * i], c[2 * i + 1]]).to_f32()
+                    })
+                })
+                .collect(),
+            _ => bytes
+                .chunks_exact(16)
+                .take(n)
+                .map(|c| {
+                    std::array::from_fn(|i| {
+                        f32::from_le_bytes([c[4 * i], c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]])
+                    })
+                })
+                .collect(),
+        };
+        Ok(HdrImage {
+            width: self.desc.width,
+            height: self.desc.height,
+            pixels,
+        })
+    }
+}

@@ -1,0 +1,75 @@
+//! The set of WGSL files shaders are composed from, embedded in the binary or
+//! read from a directory (for editing shaders without rebuilding).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::error::{EngineError, Result};
+
+/// WGSL source files by path relative to the library root (`common/x.wgsl`).
+#[derive(Debug, Clone, Default)]
+pub struct ShaderLibrary {
+    files: BTreeMap<String, String>,
+}
+
+impl ShaderLibrary {
+    /// A library from `(path, source)` pairs, e.g. embedded with `include_str!`.
+    pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, &'a str)>) -> Self {
+        Self {
+            files: pairs
+                .into_iter()
+                .map(|(p, s)| (p.to_owned(), s.to_owned()))
+                .collect(),
+        }
+    }
+
+    /// Every `.wgsl` file below `root`, keyed by its path relative to `root`.
+    pub fn from_dir(root: &Path) -> Result<Self> {
+        let mut files = BTreeMap::new();
+        let mut stack = vec![root.to_path_buf()];
+        while let Some(dir) = stack.pop() {
+            let entries = std::fs::read_dir(&dir).map_err(|e| EngineError::File {
+                path: dir.display().to_string(),
+                message: e.to_string(),
+            })?;
+            for entry in entries {
+                let path = entry
+                    .map_err(|e| EngineError::File {
+                        path: dir.display().to_string(),
+                        message: e.to_string(),
+                    })?
+                    .path();
+                if path.is_dir() {
+                    stack.push(path);
+                } else if path.extension().is_some_and(|e| e == "wgsl") {
+                    let text = std::fs::read_to_string(&path).map_err(|e| EngineError::File {
+                        path: path.display().to_string(),
+                        message: e.to_string(),
+                    })?;
+                    let key = path
+                        .strip_prefix(root)
+                        .unwrap_or(&path)
+                        .to_string_lossy()
+                        .replace('\\', "/");
+                    files.insert(key, text);
+                }
+            }
+        }
+        Ok(Self { files })
+    }
+
+    /// Adds or replaces one file.
+    pub fn insert(&mut self, path: &str, source: &str) {
+        self.files.insert(path.to_owned(), source.to_owned());
+    }
+
+    /// The source of one file.
+    pub fn get(&self, path: &str) -> Option<&str> {
+        self.files.get(path).map(String::as_str)
+    }
+
+    /// All file paths, sorted.
+    pub fn paths(&self) -> impl Iterator<Item = &str> {
+        self.files.keys().map(String::as_str)
+    }
+}

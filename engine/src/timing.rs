@@ -1,0 +1,137 @@
+//! GPU timestamps around every pass, read back without stalling (a frame
+//! slot's queries are read when the slot is reused, frames later), and the
+//! per-pass timing data exposed to the profiler and the window overlay.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::context::Context;
+use crate::error::{Result, VkContext};
+
+/// The most passes one frame can time.
+pub const MAX_TIMED_PASSES: u32 = 128;
+
+/// One pass's cost in one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PassTiming {
+    /// The pass name.
+    pub name: String,
+    /// GPU time between the timestamps around the pass, in milliseconds.
+    pub gpu_ms: f64,
+    /// CPU time spent recording the pass (barriers and commands), in milliseconds.
+    pub cpu_ms: f64,
+}
+
+/// The timings of one completed frame.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FrameTimings {
+    /// The frame's number (0 = first frame rendered).
+    pub frame: u64,
+    /// Executed passes in execution order.
+    pub passes: Vec<PassTiming>,
+    /// Passes declared but culled (nothing consumed their output).
+    pub culled: Vec<String>,
+    /// GPU time from the first pass's start to the last pass's end, ms.
+    pub gpu_total_ms: f64,
+}
+
+impl FrameTimings {
+    /// GPU milliseconds of the named pass, if it ran.
+    pub fn gpu_ms(&self, pass: &str) -> Option<f64> {
+        self.passes
+            .iter()
+            .find(|p| p.name == pass)
+            .map(|p| p.gpu_ms)
+    }
+}
+
+/// A timestamp query pool for one frame slot: query 2i is pass i's start,
+/// 2i + 1 its end.
+pub(crate) struct PassQueries {
+    ctx: Arc<Context>,
+    pool: vk::QueryPool,
+    valid_mask: u64,
+}
+
+impl PassQueries {
+    pub(crate) fn new(ctx: &Arc<Context>) -> Result<Self> {
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(2 * MAX_TIMED_PASSES);
+        let pool = unsafe { ctx.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        let bits = unsafe {
+            ctx.instance
+                .get_physical_device_queue_family_properties(ctx.physical)
+        }
+        .get(ctx.queue_family as usize)
+        .map(|f| f.timestamp_valid_bits)
+        .unwrap_or(64);
+        let valid_mask = if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        };
+        Ok(Self {
+            ctx: ctx.clone(),
+            pool,
+            valid_mask,
+        })
+    }
+
+    /// Resets the queries the frame will write (recorded in the frame's command buffer).
+    pub(crate) fn reset(&self, cmd: vk::CommandBuffer, passes: u32) {
+        unsafe {
+            self.ctx.device.cmd_reset_query_pool(
+                cmd,
+                self.pool,
+                0,
+                2 * passes.clamp(1, MAX_TIMED_PASSES),
+            )
+        };
+    }
+
+    /// Writes pass `index`'s start (`end = false`) or end timestamp once all
+    /// earlier commands have completed.
+    pub(crate) fn write(&self, cmd: vk::CommandBuffer, index: u32, end: bool) {
+        if index < MAX_TIMED_PASSES {
+            unsafe {
+                self.ctx.device.cmd_write_timestamp2(
+                    cmd,
+                    vk::PipelineStageFlags2::ALL_COMMANDS,
+                    self.pool,
+                    2 * index + end as u32,
+                )
+            };
+        }
+    }
+
+    /// Reads the timestamps of `passes` passes; call only after the frame's
+    /// fence has signalled (never waits). Returns (start, end) in ms.
+    pub(crate) fn read(&self, passes: u32) -> Result<Vec<(f64, f64)>> {
+        let n = passes.min(MAX_TIMED_PASSES);
+        if n == 0 {
+            return Ok(Vec::new());
+        }
+        let mut raw = vec![0u64; 2 * n as usize];
+        unsafe {
+            self.ctx.device.get_query_pool_results(
+                self.pool,
+                0,
+                &mut raw,
+                vk::QueryResultFlags::TYPE_64,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
+        let period = self.ctx.info().timestamp_period_ns;
+        let origin = raw[0] & self.valid_mask;
+        let ms = |t: u64| ((t & self.valid_mask).wrapping_sub(origin)) as f64 * period * 1e-6;
+        Ok(raw.chunks(2).map(|c| (ms(c[0]), ms(c[1]))).collect())
+    }
+}
+
+impl Drop for PassQueries {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    }
+}
