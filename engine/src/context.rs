@@ -259,6 +259,8 @@ fn create_instance(
         }
         layers.push(VALIDATION_LAYER.as_ptr());
         extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        // Needed for VkValidationFeaturesEXT (synchronization validation) to take effect.
+        extensions.push(ash::ext::validation_features::NAME.as_ptr());
     }
     if let Some(w) = window {
         let required = ash_window::enumerate_required_extensions(w.display)

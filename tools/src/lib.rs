@@ -1,1 +1,12 @@
+//! The `inlay` program's library: the command-line tools' building blocks
+//! (shader library, targets, the engine demo) shared with the tests.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
+pub mod demo;
+pub mod headless;
+pub mod present;
+pub mod push;
+pub mod shaders;
+pub mod timings_table;
+pub mod window_app;

@@ -1,1 +1,169 @@
-fn main() {}
+//! `inlay`: inserts virtual objects into HDR radiance fields in real time.
+#![forbid(unsafe_code)]
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use inlay::demo::{DemoPipelines, DemoScene};
+use inlay::headless::run_headless;
+use inlay::timings_table::format_table;
+use inlay::window_app::{run_window, WindowError, WindowOptions};
+use inlay_engine::window::PresentMode;
+use inlay_engine::{Context, ContextOptions};
+
+#[derive(Parser)]
+#[command(
+    name = "inlay",
+    version,
+    about = "Virtual objects inserted into HDR radiance fields, in real time, on Vulkan"
+)]
+struct Cli {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Args, Clone)]
+struct GpuArgs {
+    /// Turn on the Vulkan validation layer; its messages go to the log and any error fails the run.
+    #[arg(long, global = true)]
+    validate: bool,
+    /// Use the Vulkan device whose name contains this text (default: discrete > integrated > CPU).
+    #[arg(long, global = true, env = "INLAY_DEVICE")]
+    device: Option<String>,
+}
+
+impl GpuArgs {
+    fn options(&self) -> ContextOptions {
+        ContextOptions {
+            validate: self.validate,
+            device: self.device.clone(),
+        }
+    }
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the engine demo (two compute passes feeding a raster pass with depth) in a window, or headless.
+    Demo(DemoArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PresentArg {
+    Fifo,
+    FifoRelaxed,
+    Mailbox,
+    Immediate,
+}
+
+#[derive(Args)]
+struct DemoArgs {
+    /// Render offscreen and write images instead of opening a window.
+    #[arg(long)]
+    headless: bool,
+    /// Output images (headless): .exr is linear HDR, .png is tonemapped sRGB. Repeatable.
+    #[arg(long, default_values = ["inlay-demo.exr", "inlay-demo.png"])]
+    out: Vec<PathBuf>,
+    /// Width in pixels (headless image or initial window).
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    /// Height in pixels.
+    #[arg(long, default_value_t = 360)]
+    height: u32,
+    /// Frames to render (headless default 8; window: until closed).
+    #[arg(long)]
+    frames: Option<u64>,
+    /// Animation time of the first frame, in seconds (headless).
+    #[arg(long, default_value_t = 0.0)]
+    time: f32,
+    /// Exposure multiplier applied before tonemapping (PNG and window).
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Consume the heat-map debug image so its pass is not culled.
+    #[arg(long)]
+    keep_heatmap: bool,
+    /// Presentation mode of the window.
+    #[arg(long, value_enum, default_value_t = PresentArg::Fifo)]
+    present_mode: PresentArg,
+}
+
+fn main() -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Demo(args) => demo(&cli.gpu, args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("inlay: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.exposure.is_finite() && args.exposure > 0.0,
+        "--exposure must be a positive number, got {}",
+        args.exposure
+    );
+    let library = inlay::shaders::library()?;
+    if !args.headless {
+        let options = WindowOptions {
+            context: gpu.options(),
+            title: "inlay demo".into(),
+            size: (args.width.max(1), args.height.max(1)),
+            present_mode: match args.present_mode {
+                PresentArg::Fifo => PresentMode::Fifo,
+                PresentArg::FifoRelaxed => PresentMode::FifoRelaxed,
+                PresentArg::Mailbox => PresentMode::Mailbox,
+                PresentArg::Immediate => PresentMode::Immediate,
+            },
+            frames: args.frames,
+            exposure: args.exposure,
+        };
+        let keep_heatmap = args.keep_heatmap;
+        let factory = Box::new(
+            move |ctx: &std::sync::Arc<Context>,
+                  lib: &inlay_engine::shader::ShaderLibrary|
+                  -> anyhow::Result<Box<dyn inlay::headless::SceneDyn>> {
+                Ok(Box::new(DemoScene {
+                    pipelines: DemoPipelines::new(ctx, lib)?,
+                    keep_heatmap,
+                }))
+            },
+        );
+        match run_window(options, library.clone(), factory) {
+            Ok(timings) => {
+                print!("{}", format_table(&timings, "the window's device"));
+                return Ok(());
+            }
+            Err(WindowError::NoDisplay(why)) => {
+                eprintln!("inlay: {why}; rendering headless instead")
+            }
+            Err(WindowError::Other(e)) => return Err(e),
+        }
+    }
+    let ctx = Context::new(&gpu.options(), None)?;
+    let scene = DemoScene {
+        pipelines: DemoPipelines::new(&ctx, &library)?,
+        keep_heatmap: args.keep_heatmap,
+    };
+    let frames = args.frames.unwrap_or(8).clamp(1, 100_000) as u32;
+    let run = run_headless(&ctx, &scene, args.width, args.height, frames, args.time)?;
+    for out in &args.out {
+        run.image.save(out, args.exposure)?;
+        println!("wrote {}", out.display());
+    }
+    print!(
+        "{}",
+        format_table(
+            &run.timings,
+            &format!("{} ({:?})", ctx.info().name, ctx.info().kind)
+        )
+    );
+    Ok(())
+}

@@ -1,0 +1,174 @@
+//! The `inlay` program end to end: headless demo output files and the clear,
+//! non-panicking errors it gives for bad input.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use inlay_engine::HdrImage;
+
+fn inlay(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .args(args)
+        .output()
+        .expect("the inlay binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("inlay-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn headless_demo_writes_exr_and_png_and_prints_per_pass_timings() {
+    let dir = scratch("demo");
+    let exr = dir.join("d.exr");
+    let png = dir.join("d.png");
+    let o = inlay(&[
+        "--validate",
+        "demo",
+        "--headless",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--frames",
+        "3",
+        "--out",
+        exr.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    for pass in ["sky", "quads", "scene", "readback", "frame (gpu)"] {
+        assert!(t.contains(pass), "timing table lacks {pass}: {t}");
+    }
+    assert!(t.contains("culled (nothing consumes them): heatmap"), "{t}");
+    let img = HdrImage::load_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (48, 32));
+    assert_eq!(img.non_finite_count(), 0);
+    assert!(
+        img.pixels.iter().any(|p| p[0] > 2.0),
+        "the EXR keeps HDR values"
+    );
+    let png_bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&png_bytes[1..4], b"PNG");
+}
+
+#[test]
+fn bad_arguments_fail_cleanly_with_named_causes() {
+    let dir = scratch("bad");
+    let bmp = dir.join("x.bmp");
+    let o = inlay(&[
+        "demo",
+        "--headless",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--frames",
+        "1",
+        "--out",
+        bmp.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("x.bmp") && text(&o).contains(".exr or .png"),
+        "{}",
+        text(&o)
+    );
+
+    let o = inlay(&["demo", "--headless", "--width", "0", "--height", "8"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("out of range"), "{}", text(&o));
+
+    let missing = dir.join("no/such/dir/out.png");
+    let o = inlay(&[
+        "demo",
+        "--headless",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--frames",
+        "1",
+        "--out",
+        missing.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("no/such/dir/out.png"), "{}", text(&o));
+
+    let o = inlay(&["demo", "--headless", "--exposure", "NaN"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+}
+
+#[test]
+fn an_unknown_device_name_lists_the_devices() {
+    let o = inlay(&[
+        "--device",
+        "no-such-gpu-xyz",
+        "demo",
+        "--headless",
+        "--frames",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("no usable Vulkan device matches `no-such-gpu-xyz`"),
+        "{t}"
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .env("INLAY_DEVICE", "also-missing")
+        .args(["demo", "--headless", "--frames", "1"])
+        .output()
+        .unwrap();
+    assert!(text(&o).contains("`also-missing`"), "{}", text(&o));
+}
+
+#[test]
+fn a_broken_shader_directory_is_reported_with_file_and_line() {
+    let dir = scratch("shaders");
+    for (path, source) in inlay::shaders::embedded_library().paths().map(|p| {
+        (
+            p.to_string(),
+            inlay::shaders::embedded_library()
+                .get(p)
+                .unwrap()
+                .to_string(),
+        )
+    }) {
+        let dest = dir.join(&path);
+        std::fs::create_dir_all(dest.parent().unwrap()).unwrap();
+        let source = if path == "demo/quads.wgsl" {
+            source.replace("let c = corners[v % 6u];", "let c = corners[v % 6u]\n")
+        } else {
+            source
+        };
+        std::fs::write(dest, source).unwrap();
+    }
+    let out = dir.join("o.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .env("INLAY_SHADER_DIR", &dir)
+        .args([
+            "demo",
+            "--headless",
+            "--frames",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("demo/quads.wgsl:"), "{}", text(&o));
+}

@@ -1,0 +1,180 @@
+//! `inlay demo`: a small graph that exercises the engine before the method
+//! exists — two compute passes (an HDR sky image, a buffer of quad vertices)
+//! feeding one raster pass with a depth buffer, plus a debug heat-map pass
+//! that the graph culls unless its output is asked for.
+
+pub mod pattern;
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{
+    Binding, BufferAccess, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind, SamplerKind,
+};
+use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, ComputePipeline, Context, GraphicsDesc, GraphicsPipeline, ImageDesc};
+
+use crate::push::Push;
+
+/// Format of the demo's HDR colour target.
+pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Format of its depth buffer.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// Vertices the quads pass writes (two quads of two triangles).
+pub const QUAD_VERTICES: u32 = 12;
+const VERTEX_BYTES: u64 = 32;
+
+/// The demo's pipelines, built once.
+pub struct DemoPipelines {
+    sky: ComputePipeline,
+    quads: ComputePipeline,
+    heatmap: ComputePipeline,
+    background: GraphicsPipeline,
+    quad: GraphicsPipeline,
+}
+
+impl DemoPipelines {
+    /// Compiles the demo's shaders and builds its pipelines.
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
+        let cs = |file: &str| -> anyhow::Result<ComputePipeline> {
+            Ok(ComputePipeline::new(
+                ctx,
+                &compile(lib, file, "main", ShaderStage::Compute, &[])?,
+            )?)
+        };
+        let raster = |vs: &str, fs: &str, depth_test: bool| -> anyhow::Result<GraphicsPipeline> {
+            let v = compile(lib, "demo/scene.wgsl", vs, ShaderStage::Vertex, &[])?;
+            let f = compile(lib, "demo/scene.wgsl", fs, ShaderStage::Fragment, &[])?;
+            let desc = GraphicsDesc {
+                color_formats: vec![HDR_FORMAT],
+                depth_format: Some(DEPTH_FORMAT),
+                depth_test,
+                depth_write: depth_test,
+                blend: false,
+                cull_back: false,
+            };
+            Ok(GraphicsPipeline::new(ctx, &v, &f, &desc)?)
+        };
+        Ok(Self {
+            sky: cs("demo/sky.wgsl")?,
+            quads: cs("demo/quads.wgsl")?,
+            heatmap: cs("demo/heatmap.wgsl")?,
+            background: raster("vs_background", "fs_background", false)?,
+            quad: raster("vs_quad", "fs_quad", true)?,
+        })
+    }
+}
+
+/// What the demo graph produced.
+#[derive(Debug, Clone, Copy)]
+pub struct DemoOutputs {
+    /// The HDR image (sky with quads).
+    pub hdr: ImageHandle,
+    /// The heat-map debug image (its pass is culled unless this is consumed).
+    pub heatmap: ImageHandle,
+}
+
+/// Adds the demo's passes for a `width`×`height` frame at time `time` (s).
+pub fn add_demo_passes<'a>(
+    graph: &mut FrameGraph<'a>,
+    p: &'a DemoPipelines,
+    width: u32,
+    height: u32,
+    time: f32,
+) -> DemoOutputs {
+    let hdr_desc = ImageDesc {
+        width,
+        height,
+        format: HDR_FORMAT,
+    };
+    let sky = graph.create_image("sky", hdr_desc);
+    let vertices = graph.create_buffer("quad-vertices", QUAD_VERTICES as u64 * VERTEX_BYTES);
+    let color = graph.create_image("hdr", hdr_desc);
+    let depth = graph.create_image(
+        "depth",
+        ImageDesc {
+            width,
+            height,
+            format: DEPTH_FORMAT,
+        },
+    );
+    let heat = graph.create_image("heatmap", hdr_desc);
+
+    let mut pass = graph.add_pass("sky", PassKind::Compute);
+    let sky = pass.image(sky, ImageAccess::StorageWrite);
+    pass.exec(move |ctx| {
+        let push = Push::new().u32(width).u32(height).f32(time).f32(0.0);
+        ctx.dispatch(
+            &p.sky,
+            &[Binding::StorageImage(sky)],
+            push.bytes(),
+            p.sky.groups_for([width, height, 1]),
+        )
+    });
+
+    let mut pass = graph.add_pass("quads", PassKind::Compute);
+    let vertices = pass.buffer(vertices, BufferAccess::StorageWrite);
+    pass.exec(move |ctx| {
+        let push = Push::new().f32(time).f32(width as f32 / height as f32);
+        ctx.dispatch(
+            &p.quads,
+            &[Binding::StorageBuffer(vertices)],
+            push.bytes(),
+            [1, 1, 1],
+        )
+    });
+
+    let mut pass = graph.add_pass("scene", PassKind::Raster);
+    pass.image(sky, ImageAccess::Sampled);
+    pass.buffer(vertices, BufferAccess::StorageRead);
+    let hdr = pass.image(color, ImageAccess::ColorAttachment(LoadOp::DontCare));
+    pass.image(depth, ImageAccess::DepthAttachment(LoadOp::Clear(1.0)));
+    pass.exec(move |ctx| {
+        let bindings = [
+            Binding::SampledImage(sky),
+            Binding::Sampler(SamplerKind::NearestClamp),
+            Binding::StorageBuffer(vertices),
+        ];
+        ctx.draw(&p.background, &bindings[..2], &[], 3, 1)?;
+        ctx.draw(&p.quad, &bindings[2..], &[], QUAD_VERTICES, 1)
+    });
+
+    let mut pass = graph.add_pass("heatmap", PassKind::Compute);
+    pass.image(sky, ImageAccess::Sampled);
+    let heatmap = pass.image(heat, ImageAccess::StorageWrite);
+    pass.exec(move |ctx| {
+        let push = Push::new().u32(width).u32(height);
+        ctx.dispatch(
+            &p.heatmap,
+            &[Binding::SampledImage(sky), Binding::StorageImage(heatmap)],
+            push.bytes(),
+            p.heatmap.groups_for([width, height, 1]),
+        )
+    });
+
+    DemoOutputs { hdr, heatmap }
+}
+
+/// The demo as a [`Scene`](crate::headless::Scene) for the headless and
+/// windowed targets.
+pub struct DemoScene {
+    /// Its pipelines.
+    pub pipelines: DemoPipelines,
+    /// Consume the heat-map debug image (so its pass is not culled).
+    pub keep_heatmap: bool,
+}
+
+impl crate::headless::Scene for DemoScene {
+    fn build<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        width: u32,
+        height: u32,
+        time: f32,
+    ) -> ImageHandle {
+        let out = add_demo_passes(graph, &self.pipelines, width, height, time);
+        if self.keep_heatmap {
+            graph.mark_output_image(out.heatmap);
+        }
+        out.hdr
+    }
+}

@@ -1,0 +1,72 @@
+//! The present pass: tonemaps an HDR image onto the swapchain image.
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind};
+use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline};
+
+use crate::push::Push;
+
+/// The tonemapping pipeline for one swapchain format.
+pub struct PresentPipeline {
+    pipeline: GraphicsPipeline,
+    format: vk::Format,
+    encode_srgb: bool,
+}
+
+impl PresentPipeline {
+    /// Builds the pipeline for `format`; `srgb_format` says whether the
+    /// hardware encodes sRGB on write (else the shader does).
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        format: vk::Format,
+        srgb_format: bool,
+    ) -> anyhow::Result<Self> {
+        let v = compile(lib, "present.wgsl", "vs_main", ShaderStage::Vertex, &[])?;
+        let f = compile(lib, "present.wgsl", "fs_main", ShaderStage::Fragment, &[])?;
+        let desc = GraphicsDesc {
+            color_formats: vec![format],
+            depth_format: None,
+            depth_test: false,
+            depth_write: false,
+            blend: false,
+            cull_back: false,
+        };
+        Ok(Self {
+            pipeline: GraphicsPipeline::new(ctx, &v, &f, &desc)?,
+            format,
+            encode_srgb: !srgb_format,
+        })
+    }
+
+    /// The swapchain format it renders to.
+    pub fn format(&self) -> vk::Format {
+        self.format
+    }
+
+    /// Adds the `present` pass: `hdr` (sampled) → `target` (colour attachment).
+    pub fn add_pass<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        hdr: ImageHandle,
+        target: ImageHandle,
+        exposure: f32,
+    ) -> ImageHandle {
+        let mut pass = graph.add_pass("present", PassKind::Raster);
+        pass.image(hdr, ImageAccess::Sampled);
+        let out = pass.image(target, ImageAccess::ColorAttachment(LoadOp::DontCare));
+        let push = Push::new().f32(exposure).u32(self.encode_srgb as u32);
+        pass.exec(move |ctx| {
+            ctx.draw(
+                &self.pipeline,
+                &[Binding::SampledImage(hdr)],
+                push.bytes(),
+                3,
+                1,
+            )
+        });
+        out
+    }
+}
