@@ -9,7 +9,8 @@ use inlay_engine::{
     vk, Context, HdrImage, ImageDesc, Readback, Renderer, SubmitSync, DEFAULT_FRAMES_IN_FLIGHT,
 };
 
-/// Something that renders an HDR image through a frame graph.
+/// Something that renders an HDR image through a frame graph (object-safe:
+/// the targets take `&dyn Scene`).
 pub trait Scene {
     /// Adds passes that render a `width`×`height` linear HDR (RGBA16F) image
     /// at time `time` (seconds) and returns it.
@@ -38,7 +39,7 @@ pub struct HeadlessRun {
 /// flight, at times `time + i/60`, and reads the last one back.
 pub fn run_headless(
     ctx: &Arc<Context>,
-    scene: &dyn SceneDyn,
+    scene: &dyn Scene,
     width: u32,
     height: u32,
     frames: u32,
@@ -61,7 +62,7 @@ pub fn run_headless(
     for i in 0..frames.max(1) {
         renderer.begin_frame()?;
         let mut graph = FrameGraph::new();
-        let hdr = scene.build_dyn(&mut graph, width, height, time + i as f32 / 60.0);
+        let hdr = scene.build(&mut graph, width, height, time + i as f32 / 60.0);
         readback.add_to_graph(&mut graph, hdr);
         let report = renderer.submit(graph, &SubmitSync::none())?;
         culled = report.culled;
@@ -74,28 +75,4 @@ pub fn run_headless(
         culled,
         transients_created: renderer.transients_created(),
     })
-}
-
-/// Object-safe form of [`Scene`], implemented for every scene.
-pub trait SceneDyn {
-    /// See [`Scene::build`].
-    fn build_dyn<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        width: u32,
-        height: u32,
-        time: f32,
-    ) -> ImageHandle;
-}
-
-impl<S: Scene> SceneDyn for S {
-    fn build_dyn<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        width: u32,
-        height: u32,
-        time: f32,
-    ) -> ImageHandle {
-        self.build(graph, width, height, time)
-    }
 }

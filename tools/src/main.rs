@@ -129,7 +129,7 @@ fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
         let factory = Box::new(
             move |ctx: &std::sync::Arc<Context>,
                   lib: &inlay_engine::shader::ShaderLibrary|
-                  -> anyhow::Result<Box<dyn inlay::headless::SceneDyn>> {
+                  -> anyhow::Result<Box<dyn inlay::headless::Scene>> {
                 Ok(Box::new(DemoScene {
                     pipelines: DemoPipelines::new(ctx, lib)?,
                     keep_heatmap,

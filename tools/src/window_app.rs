@@ -17,7 +17,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
-use crate::headless::SceneDyn;
+use crate::headless::Scene;
 use crate::present::PresentPipeline;
 use crate::timings_table::format_table;
 
@@ -51,12 +51,12 @@ pub enum WindowError {
 
 /// Builds a scene once the context exists.
 pub type SceneFactory =
-    Box<dyn FnOnce(&Arc<Context>, &ShaderLibrary) -> anyhow::Result<Box<dyn SceneDyn>>>;
+    Box<dyn FnOnce(&Arc<Context>, &ShaderLibrary) -> anyhow::Result<Box<dyn Scene>>>;
 
 // Field order is drop order: Vulkan objects go before the window.
 struct Running {
     present: PresentPipeline,
-    scene: Box<dyn SceneDyn>,
+    scene: Box<dyn Scene>,
     target: WindowTarget,
     renderer: Renderer,
     ctx: Arc<Context>,
@@ -173,7 +173,7 @@ impl App {
         let (w, h) = r.target.extent();
         let time = r.started.elapsed().as_secs_f32();
         let mut graph = FrameGraph::new();
-        let hdr = r.scene.build_dyn(&mut graph, w, h, time);
+        let hdr = r.scene.build(&mut graph, w, h, time);
         let swapchain = r.target.import(&mut graph, acquired);
         r.present
             .add_pass(&mut graph, hdr, swapchain, self.options.exposure);

@@ -272,6 +272,11 @@ impl BufferAccess {
         )
     }
 
+    /// Whether the access depends on what the buffer held before the pass.
+    pub fn reads_previous(&self) -> bool {
+        !matches!(self, BufferAccess::StorageWrite | BufferAccess::TransferDst)
+    }
+
     pub(crate) fn usage(&self, kind: PassKind) -> Usage {
         use vk::AccessFlags2 as A;
         use vk::PipelineStageFlags2 as S;

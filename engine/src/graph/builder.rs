@@ -342,48 +342,25 @@ impl<'a> PassBuilder<'_, 'a> {
     /// Declares a use of an image. For a writing access, returns the new
     /// version that later readers must use; for a read, returns `image`.
     pub fn image(&mut self, image: ImageHandle, access: ImageAccess) -> ImageHandle {
-        let pass = self.pass_name();
         let kind = self.graph.passes[self.index].kind;
-        let Some(decl) = self.graph.images.get(image.id as usize) else {
-            self.graph.fail(GraphError::UnknownHandle { pass });
-            return image;
-        };
-        let resource = decl.name.clone();
-        let latest = decl.versions.len() as u32 - 1;
-        let error = if image.version > latest {
-            Some(GraphError::UnknownHandle { pass: pass.clone() })
-        } else if !access.allowed_in(kind) {
-            Some(GraphError::AccessNotAllowed {
-                pass: pass.clone(),
-                kind,
-                resource: resource.clone(),
-                access: format!("{access:?}"),
-            })
-        } else if self.graph.passes[self.index]
+        let already = self.graph.passes[self.index]
             .images
             .iter()
-            .any(|u| u.id == image.id)
-        {
-            Some(GraphError::DuplicateAccess {
-                pass: pass.clone(),
-                resource: resource.clone(),
-            })
-        } else if access.writes() && image.version != latest {
-            Some(GraphError::StaleWrite {
-                pass: pass.clone(),
-                resource: resource.clone(),
-                version: image.version,
-                latest,
-            })
-        } else if decl.import.is_none() && image.version == 0 && access.reads_previous() {
-            Some(GraphError::ReadBeforeWrite {
-                pass: pass.clone(),
-                resource: resource.clone(),
-            })
-        } else {
-            None
+            .any(|u| u.id == image.id);
+        let checked = self.graph.images.get(image.id as usize).map(|d| Resource {
+            name: &d.name,
+            versions: d.versions.len(),
+            imported: d.import.is_some(),
+        });
+        let use_ = Use {
+            version: image.version,
+            already,
+            allowed: access.allowed_in(kind),
+            writes: access.writes(),
+            reads_previous: access.reads_previous(),
+            access: format!("{access:?}"),
         };
-        if let Some(e) = error {
+        if let Err(e) = self.check(checked, &use_) {
             self.graph.fail(e);
             return image;
         }
@@ -392,68 +369,43 @@ impl<'a> PassBuilder<'_, 'a> {
             version: image.version,
             access,
         });
-        let decl = &mut self.graph.images[image.id as usize];
-        if access.writes() {
-            decl.versions.push(VersionInfo {
-                writer: Some(self.index),
-                readers: Vec::new(),
-            });
-            ImageHandle {
-                id: image.id,
-                version: image.version + 1,
-            }
-        } else {
-            decl.versions[image.version as usize]
-                .readers
-                .push(self.index);
-            image
+        let version = record_version(
+            &mut self.graph.images[image.id as usize].versions,
+            self.index,
+            image.version,
+            access.writes(),
+        );
+        ImageHandle {
+            id: image.id,
+            version,
         }
     }
 
     /// Declares a use of a buffer; like [`Self::image`].
     pub fn buffer(&mut self, buffer: BufferHandle, access: BufferAccess) -> BufferHandle {
-        let pass = self.pass_name();
         let kind = self.graph.passes[self.index].kind;
-        let Some(decl) = self.graph.buffers.get(buffer.id as usize) else {
-            self.graph.fail(GraphError::UnknownHandle { pass });
-            return buffer;
-        };
-        let resource = decl.name.clone();
-        let latest = decl.versions.len() as u32 - 1;
-        let error = if buffer.version > latest {
-            Some(GraphError::UnknownHandle { pass: pass.clone() })
-        } else if !access.allowed_in(kind) {
-            Some(GraphError::AccessNotAllowed {
-                pass: pass.clone(),
-                kind,
-                resource: resource.clone(),
-                access: format!("{access:?}"),
-            })
-        } else if self.graph.passes[self.index]
+        let already = self.graph.passes[self.index]
             .buffers
             .iter()
-            .any(|u| u.id == buffer.id)
-        {
-            Some(GraphError::DuplicateAccess {
-                pass: pass.clone(),
-                resource: resource.clone(),
-            })
-        } else if access.writes() && buffer.version != latest {
-            Some(GraphError::StaleWrite {
-                pass: pass.clone(),
-                resource: resource.clone(),
-                version: buffer.version,
-                latest,
-            })
-        } else if decl.import.is_none() && buffer.version == 0 && !access.writes() {
-            Some(GraphError::ReadBeforeWrite {
-                pass: pass.clone(),
-                resource: resource.clone(),
-            })
-        } else {
-            None
+            .any(|u| u.id == buffer.id);
+        let checked = self
+            .graph
+            .buffers
+            .get(buffer.id as usize)
+            .map(|d| Resource {
+                name: &d.name,
+                versions: d.versions.len(),
+                imported: d.import.is_some(),
+            });
+        let use_ = Use {
+            version: buffer.version,
+            already,
+            allowed: access.allowed_in(kind),
+            writes: access.writes(),
+            reads_previous: access.reads_previous(),
+            access: format!("{access:?}"),
         };
-        if let Some(e) = error {
+        if let Err(e) = self.check(checked, &use_) {
             self.graph.fail(e);
             return buffer;
         }
@@ -462,21 +414,53 @@ impl<'a> PassBuilder<'_, 'a> {
             version: buffer.version,
             access,
         });
-        let decl = &mut self.graph.buffers[buffer.id as usize];
-        if access.writes() {
-            decl.versions.push(VersionInfo {
-                writer: Some(self.index),
-                readers: Vec::new(),
-            });
-            BufferHandle {
-                id: buffer.id,
-                version: buffer.version + 1,
-            }
+        let version = record_version(
+            &mut self.graph.buffers[buffer.id as usize].versions,
+            self.index,
+            buffer.version,
+            access.writes(),
+        );
+        BufferHandle {
+            id: buffer.id,
+            version,
+        }
+    }
+
+    /// The declaration rules shared by images and buffers.
+    fn check(
+        &self,
+        resource: Option<Resource<'_>>,
+        u: &Use,
+    ) -> std::result::Result<(), GraphError> {
+        let pass = self.pass_name();
+        let kind = self.graph.passes[self.index].kind;
+        let Some(r) = resource else {
+            return Err(GraphError::UnknownHandle { pass });
+        };
+        let latest = r.versions as u32 - 1;
+        let resource = r.name.to_owned();
+        if u.version > latest {
+            Err(GraphError::UnknownHandle { pass })
+        } else if !u.allowed {
+            Err(GraphError::AccessNotAllowed {
+                pass,
+                kind,
+                resource,
+                access: u.access.clone(),
+            })
+        } else if u.already {
+            Err(GraphError::DuplicateAccess { pass, resource })
+        } else if u.writes && u.version != latest {
+            Err(GraphError::StaleWrite {
+                pass,
+                resource,
+                version: u.version,
+                latest,
+            })
+        } else if !r.imported && u.version == 0 && u.reads_previous {
+            Err(GraphError::ReadBeforeWrite { pass, resource })
         } else {
-            decl.versions[buffer.version as usize]
-                .readers
-                .push(self.index);
-            buffer
+            Ok(())
         }
     }
 
@@ -488,5 +472,37 @@ impl<'a> PassBuilder<'_, 'a> {
     /// Sets the callback that records the pass's commands.
     pub fn exec(self, f: impl FnOnce(&mut PassContext<'_>) -> Result<()> + 'a) {
         self.graph.passes[self.index].exec = Some(Box::new(f));
+    }
+}
+
+/// What the declaration rules need to know of a resource.
+struct Resource<'d> {
+    name: &'d str,
+    versions: usize,
+    imported: bool,
+}
+
+/// What the declaration rules need to know of one use.
+struct Use {
+    version: u32,
+    already: bool,
+    allowed: bool,
+    writes: bool,
+    reads_previous: bool,
+    access: String,
+}
+
+/// Records a use in a resource's version table; returns the handle version
+/// after it (a new one for writes).
+fn record_version(versions: &mut Vec<VersionInfo>, pass: usize, version: u32, writes: bool) -> u32 {
+    if writes {
+        versions.push(VersionInfo {
+            writer: Some(pass),
+            readers: Vec::new(),
+        });
+        version + 1
+    } else {
+        versions[version as usize].readers.push(pass);
+        version
     }
 }

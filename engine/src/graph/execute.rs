@@ -106,21 +106,7 @@ impl PassContext<'_> {
             .iter()
             .find(|u| u.id == h.id)
             .map(|u| u.access);
-        match declared {
-            Some(a) if ok(a) => {}
-            Some(a) => {
-                return Err(self.error(format!(
-                    "uses image #{} as {what} but declared it as {a:?}",
-                    h.id
-                )))
-            }
-            None => {
-                return Err(self.error(format!(
-                    "uses image #{} as {what} without declaring it",
-                    h.id
-                )))
-            }
-        }
+        self.check_declared("image", h.id, declared, ok, what)?;
         self.resolved
             .images
             .get(h.id as usize)
@@ -129,6 +115,7 @@ impl PassContext<'_> {
             .ok_or_else(|| self.error(format!("image #{} has no physical resource", h.id)))
     }
 
+    /// The physical buffer behind a handle, checking the pass declared it.
     fn buffer(
         &self,
         h: BufferHandle,
@@ -141,27 +128,30 @@ impl PassContext<'_> {
             .iter()
             .find(|u| u.id == h.id)
             .map(|u| u.access);
-        match declared {
-            Some(a) if ok(a) => {}
-            Some(a) => {
-                return Err(self.error(format!(
-                    "uses buffer #{} as {what} but declared it as {a:?}",
-                    h.id
-                )))
-            }
-            None => {
-                return Err(self.error(format!(
-                    "uses buffer #{} as {what} without declaring it",
-                    h.id
-                )))
-            }
-        }
+        self.check_declared("buffer", h.id, declared, ok, what)?;
         self.resolved
             .buffers
             .get(h.id as usize)
             .copied()
             .flatten()
             .ok_or_else(|| self.error(format!("buffer #{} has no physical resource", h.id)))
+    }
+
+    fn check_declared<A: std::fmt::Debug + Copy>(
+        &self,
+        noun: &str,
+        id: u32,
+        declared: Option<A>,
+        ok: impl Fn(A) -> bool,
+        what: &str,
+    ) -> Result<()> {
+        match declared {
+            Some(a) if ok(a) => Ok(()),
+            Some(a) => Err(self.error(format!(
+                "uses {noun} #{id} as {what} but declared it as {a:?}"
+            ))),
+            None => Err(self.error(format!("uses {noun} #{id} as {what} without declaring it"))),
+        }
     }
 
     /// Allocates and writes the descriptor set for `bindings`, binds it and

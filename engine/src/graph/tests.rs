@@ -438,6 +438,19 @@ fn declaration_errors_name_the_pass_and_resource() {
     );
 
     let mut g = FrameGraph::new();
+    let b = g.create_buffer("counters", 16);
+    let mut p = g.add_pass("accumulate", PassKind::Compute);
+    p.buffer(b, BufferAccess::StorageReadWrite);
+    assert_eq!(
+        Plan::new(&g).unwrap_err(),
+        GraphError::ReadBeforeWrite {
+            pass: "accumulate".into(),
+            resource: "counters".into()
+        },
+        "read-modify-write of a never-written transient reads garbage"
+    );
+
+    let mut g = FrameGraph::new();
     let x = g.create_image("x", desc(4));
     let mut p = g.add_pass("w1", PassKind::Compute);
     p.image(x, ImageAccess::StorageWrite);
