@@ -1,6 +1,8 @@
 //! The `inlay` program end to end: headless demo output files and the clear,
 //! non-panicking errors it gives for bad input.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
@@ -14,11 +16,7 @@ fn inlay(args: &[&str]) -> Output {
 }
 
 fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
+    common::output_text(o)
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -138,16 +136,10 @@ fn an_unknown_device_name_lists_the_devices() {
 #[test]
 fn a_broken_shader_directory_is_reported_with_file_and_line() {
     let dir = scratch("shaders");
-    for (path, source) in inlay::shaders::embedded_library().paths().map(|p| {
-        (
-            p.to_string(),
-            inlay::shaders::embedded_library()
-                .get(p)
-                .unwrap()
-                .to_string(),
-        )
-    }) {
-        let dest = dir.join(&path);
+    let lib = inlay::shaders::embedded_library();
+    for path in lib.paths() {
+        let source = lib.get(path).unwrap().to_string();
+        let dest = dir.join(path);
         std::fs::create_dir_all(dest.parent().unwrap()).unwrap();
         let source = if path == "demo/quads.wgsl" {
             source.replace("let c = corners[v % 6u];", "let c = corners[v % 6u]\n")

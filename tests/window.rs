@@ -3,6 +3,8 @@
 //! Needs Xvfb (tools/test.sh installs it); set INLAY_SKIP_WINDOW_TESTS=1 to
 //! skip on a machine without it.
 
+mod common;
+
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
@@ -69,11 +71,7 @@ fn demo_window_presents_frames_with_validation_clean() {
         ])
         .output()
         .unwrap();
-    let t = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let t = common::output_text(&o);
     assert!(o.status.success(), "{t}");
     assert!(t.contains("window: inlay demo on"), "{t}");
     assert!(!t.contains("rendering headless instead"), "{t}");
@@ -106,11 +104,7 @@ fn without_a_display_the_demo_falls_back_to_headless() {
         ])
         .output()
         .unwrap();
-    let t = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let t = common::output_text(&o);
     assert!(o.status.success(), "{t}");
     assert!(
         t.contains("rendering headless instead") && out.exists(),

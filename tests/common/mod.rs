@@ -2,6 +2,7 @@
 //! fail on any validation error), on lavapipe in CI.
 #![allow(dead_code)]
 
+use std::process::Output;
 use std::sync::Arc;
 
 use inlay_engine::{Context, ContextOptions};
@@ -21,4 +22,13 @@ pub fn assert_no_validation_errors(ctx: &Context) {
     if let Err(e) = ctx.check_validation() {
         panic!("{e}");
     }
+}
+
+/// A finished process's stdout and stderr as one text, for assertions.
+pub fn output_text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
 }
