@@ -65,6 +65,10 @@ pub(crate) struct SurfaceParts {
 pub struct Context {
     pub(crate) device: ash::Device,
     pub(crate) queue: vk::Queue,
+    /// Held around every use of `queue` (Vulkan requires queue access to be
+    /// externally synchronised: frames, presents and uploads may come from
+    /// different threads).
+    pub(crate) queue_lock: Mutex<()>,
     pub(crate) queue_family: u32,
     pub(crate) physical: vk::PhysicalDevice,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
@@ -140,6 +144,7 @@ impl Context {
         Ok(Arc::new(Self {
             device,
             queue,
+            queue_lock: Mutex::new(()),
             queue_family,
             physical,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
@@ -183,7 +188,14 @@ impl Context {
     /// Waits until the device has finished all submitted work. For shutdown,
     /// resizing and tests, never per frame.
     pub fn wait_idle(&self) -> Result<()> {
+        // vkDeviceWaitIdle needs every queue externally synchronised.
+        let _queue = self.lock_queue();
         unsafe { self.device.device_wait_idle() }.vk("vkDeviceWaitIdle")
+    }
+
+    /// Exclusive use of the queue for a submit or present.
+    pub(crate) fn lock_queue(&self) -> MutexGuard<'_, ()> {
+        self.queue_lock.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {

@@ -21,16 +21,19 @@ pub struct Readback {
 }
 
 impl Readback {
-    /// A readback buffer for images of this shape (RGBA16F or RGBA32F).
+    /// A readback buffer for images of this shape (RGBA16F, RGBA32F, or R32F
+    /// which reads back as (v, 0, 0, 1)).
     pub fn new(ctx: &Arc<Context>, desc: ImageDesc) -> Result<Self> {
         if !matches!(
             desc.format,
-            vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32B32A32_SFLOAT
+            vk::Format::R16G16B16A16_SFLOAT
+                | vk::Format::R32G32B32A32_SFLOAT
+                | vk::Format::R32_SFLOAT
         ) {
             return Err(EngineError::Pass {
                 pass: "readback".into(),
                 message: format!(
-                    "reads back RGBA16F or RGBA32F images, not {:?}",
+                    "reads back RGBA16F, RGBA32F or R32F images, not {:?}",
                     desc.format
                 ),
             });
@@ -82,6 +85,11 @@ impl Readback {
                         half::f16::from_le_bytes([c[2 * i], c[2 * i + 1]]).to_f32()
                     })
                 })
+                .collect(),
+            vk::Format::R32_SFLOAT => bytes
+                .chunks_exact(4)
+                .take(n)
+                .map(|c| [f32::from_le_bytes([c[0], c[1], c[2], c[3]]), 0.0, 0.0, 1.0])
                 .collect(),
             _ => bytes
                 .chunks_exact(16)

@@ -282,6 +282,7 @@ impl Renderer {
             .signal_semaphore_infos(&signals)];
         unsafe {
             device.reset_fences(&[slot.fence]).vk("vkResetFences")?;
+            let _queue = self.ctx.lock_queue();
             device
                 .queue_submit2(self.ctx.queue, &submit, slot.fence)
                 .vk("vkQueueSubmit2")?;

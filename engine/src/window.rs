@@ -353,7 +353,11 @@ impl WindowTarget {
             .wait_semaphores(&waits)
             .swapchains(&swapchains)
             .image_indices(&indices);
-        match unsafe { s.swapchain.queue_present(self.ctx.queue, &info) } {
+        let presented = {
+            let _queue = self.ctx.lock_queue();
+            unsafe { s.swapchain.queue_present(self.ctx.queue, &info) }
+        };
+        match presented {
             Ok(false) => Ok(()),
             Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
                 self.stale = true;

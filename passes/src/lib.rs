@@ -4,6 +4,17 @@
 //! the math they share. Every pass is a pass of the engine's frame graph and
 //! uses only the engine's safe API.
 //!
-//! The engine foundation (issue 2) lands first; the passes arrive with the
-//! issues that follow it.
+//! So far: radiance fields ([`field`]), scene files and recipes ([`scene`]),
+//! baking recipes into fields and ground-truth images ([`bake`]), and the
+//! ray march ([`march`]).
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod bake;
+pub mod camera;
+pub mod field;
+pub mod geometry;
+pub mod march;
+pub mod rng;
+pub mod scene;
+pub mod sg;

@@ -12,7 +12,7 @@ use inlay_engine::{
 /// Something that renders an HDR image through a frame graph (object-safe:
 /// the targets take `&dyn Scene`).
 pub trait Scene {
-    /// Adds passes that render a `width`×`height` linear HDR (RGBA16F) image
+    /// Adds passes that render a `width`×`height` linear HDR image
     /// at time `time` (seconds) and returns it.
     fn build<'a>(
         &'a self,
@@ -21,6 +21,12 @@ pub trait Scene {
         height: u32,
         time: f32,
     ) -> ImageHandle;
+
+    /// Format of the image [`Scene::build`] returns (RGBA16F unless the
+    /// scene says otherwise; RGBA32F is the other readable one).
+    fn output_format(&self) -> vk::Format {
+        vk::Format::R16G16B16A16_SFLOAT
+    }
 }
 
 /// The outcome of a headless run.
@@ -55,7 +61,7 @@ pub fn run_headless(
         ImageDesc {
             width,
             height,
-            format: vk::Format::R16G16B16A16_SFLOAT,
+            format: scene.output_format(),
         },
     )?;
     let mut culled = Vec::new();

@@ -3,10 +3,12 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod commands;
 pub mod demo;
+pub mod field_source;
+pub mod field_view;
 pub mod headless;
 pub mod present;
-pub mod push;
 pub mod shaders;
 pub mod timings_table;
 pub mod window_app;

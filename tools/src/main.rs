@@ -48,6 +48,14 @@ impl GpuArgs {
 enum Command {
     /// Run the engine demo (two compute passes feeding a raster pass with depth) in a window, or headless.
     Demo(DemoArgs),
+    /// Bake a scene's recipe of analytic primitives into a grid-field file (path traced).
+    BakeScene(inlay::commands::bake_scene::BakeSceneArgs),
+    /// Render a scene's radiance field headless from one of its cameras.
+    Render(inlay::commands::render::RenderArgs),
+    /// Measure the march: rays/s and samples/s per image size, and its error as the step size changes.
+    BenchMarch(inlay::commands::bench_march::BenchMarchArgs),
+    /// Path trace the ground-truth image of a recipe scene's camera (no field).
+    Reference(inlay::commands::reference::ReferenceArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -94,6 +102,14 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Demo(args) => demo(&cli.gpu, args),
+        Command::BakeScene(args) => inlay::commands::bake_scene::run(args),
+        Command::Render(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::render::run(&ctx, args)),
+        Command::Reference(args) => inlay::commands::reference::run(args),
+        Command::BenchMarch(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::bench_march::run(&ctx, args)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,7 +6,7 @@ use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, LoadOp,
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline};
 
-use crate::push::Push;
+use inlay_engine::Push;
 
 /// The tonemapping pipeline for one swapchain format.
 pub struct PresentPipeline {

@@ -13,7 +13,7 @@ use inlay_engine::graph::{
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, ComputePipeline, Context, GraphicsDesc, GraphicsPipeline, ImageDesc};
 
-use crate::push::Push;
+use inlay_engine::Push;
 
 /// Format of the demo's HDR colour target.
 pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;

@@ -1,0 +1,101 @@
+//! One-off uploads: device-local buffers filled from the CPU through a
+//! staging buffer, for data that lives across frames (fields, tables).
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::error::{Result, VkContext};
+use crate::graph::SyncState;
+use crate::memory::{Buffer, BufferLocation};
+use crate::Context;
+
+impl Buffer {
+    /// Creates a device-local buffer holding `bytes`, for `usage` (transfer
+    /// destination is added). Copies through a staging buffer in a one-time
+    /// submission and waits for it, so the buffer is ready for any later
+    /// frame; the graph sees it as untouched.
+    pub fn with_data(
+        ctx: &Arc<Context>,
+        name: &str,
+        bytes: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Buffer> {
+        let size = bytes.len() as u64;
+        let dst = Buffer::new(
+            ctx,
+            name,
+            size,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Gpu,
+        )?;
+        if bytes.is_empty() {
+            return Ok(dst);
+        }
+        let mut staging = Buffer::new(
+            ctx,
+            &format!("{name} (staging)"),
+            size,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            BufferLocation::Upload,
+        )?;
+        staging
+            .mapped_mut()
+            .expect("upload buffers are host-visible")[..bytes.len()]
+            .copy_from_slice(bytes);
+        submit_once(ctx, |device, cmd| unsafe {
+            let region = vk::BufferCopy::default().size(size);
+            device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[region]);
+            // Make the copy visible to whatever reads the buffer next.
+            let barrier = vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE);
+            let dep = vk::DependencyInfo::default().memory_barriers(std::slice::from_ref(&barrier));
+            device.cmd_pipeline_barrier2(cmd, &dep);
+        })?;
+        dst.set_sync_state(SyncState::FRESH);
+        Ok(dst)
+    }
+}
+
+/// Records `record` into a fresh command buffer, submits it and waits.
+fn submit_once(
+    ctx: &Arc<Context>,
+    record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+) -> Result<()> {
+    let device = &ctx.device;
+    let pool_info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(ctx.queue_family)
+        .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+    let pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+    let result = (|| -> Result<()> {
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd =
+            unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+        record(device, cmd);
+        unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .vk("vkCreateFence")?;
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+        let submitted = {
+            let _queue = ctx.lock_queue();
+            unsafe { device.queue_submit2(ctx.queue, &submit, fence) }.vk("vkQueueSubmit2")
+        };
+        let waited = submitted.and_then(|_| {
+            unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+        });
+        unsafe { device.destroy_fence(fence, None) };
+        waited
+    })();
+    unsafe { device.destroy_command_pool(pool, None) };
+    result
+}

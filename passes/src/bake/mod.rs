@@ -1,0 +1,12 @@
+//! Turning recipes into fields and ground truth: the path tracer over
+//! analytic primitives, the grid bake, and reference camera images.
+
+mod grid_bake;
+mod knobs;
+mod path_tracer;
+mod reference_image;
+
+pub use grid_bake::{bake_grid, edge_profile, grid_resolution};
+pub use knobs::BakeKnobs;
+pub use path_tracer::{Event, PathTracer, Scatter};
+pub use reference_image::{render_reference, ReferenceOptions};

@@ -1,0 +1,153 @@
+//! Pinhole cameras: the scene-file description and the per-image frame that
+//! turns a pixel into a ray. Mirrored in `shaders/common/camera.wgsl`.
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::geometry::Ray;
+
+/// A camera as a scene file describes it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Optional name, for messages and `--camera NAME`.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Eye position.
+    pub position: DVec3,
+    /// Point the camera looks at.
+    pub look_at: DVec3,
+    /// Approximate up direction (default +Y).
+    #[serde(default = "default_up")]
+    pub up: DVec3,
+    /// Vertical field of view in degrees (default 50).
+    #[serde(default = "default_fov")]
+    pub fov_y: f64,
+}
+
+fn default_up() -> DVec3 {
+    DVec3::Y
+}
+
+fn default_fov() -> f64 {
+    50.0
+}
+
+impl CameraSpec {
+    /// Why the camera cannot be used, if it cannot.
+    pub fn problem(&self) -> Option<String> {
+        if !(self.position.is_finite() && self.look_at.is_finite() && self.up.is_finite()) {
+            return Some("position, look_at and up must be finite".into());
+        }
+        let f = self.look_at - self.position;
+        if f.length() < 1e-9 {
+            return Some("look_at equals position".into());
+        }
+        if f.normalize().cross(self.up).length() < 1e-6 {
+            return Some("up is parallel to the viewing direction".into());
+        }
+        if !(self.fov_y > 0.0 && self.fov_y < 179.0) {
+            return Some(format!(
+                "fov_y = {} is outside (0, 179) degrees",
+                self.fov_y
+            ));
+        }
+        None
+    }
+}
+
+/// A camera set up for one image size: origin and the scaled basis vectors a
+/// pixel's normalised coordinates multiply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraFrame {
+    /// Eye position.
+    pub origin: DVec3,
+    /// Right vector scaled by tan(fov/2)·aspect.
+    pub right: DVec3,
+    /// Up vector scaled by tan(fov/2).
+    pub up: DVec3,
+    /// Unit viewing direction.
+    pub forward: DVec3,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl CameraFrame {
+    /// The frame of `spec` for a `width`×`height` image (the spec must have
+    /// no [`CameraSpec::problem`]).
+    pub fn new(spec: &CameraSpec, width: u32, height: u32) -> Self {
+        let forward = (spec.look_at - spec.position).normalize();
+        let right = forward.cross(spec.up).normalize();
+        let up = right.cross(forward);
+        let tan = (spec.fov_y.to_radians() * 0.5).tan();
+        let aspect = width as f64 / height as f64;
+        Self {
+            origin: spec.position,
+            right: right * tan * aspect,
+            up: up * tan,
+            forward,
+            width,
+            height,
+        }
+    }
+
+    /// The unit-direction ray through image position (`x`, `y`) in pixels
+    /// (pixel centres at +0.5; y grows downwards).
+    pub fn ray(&self, x: f64, y: f64) -> Ray {
+        let nx = 2.0 * x / self.width as f64 - 1.0;
+        let ny = 1.0 - 2.0 * y / self.height as f64;
+        Ray {
+            origin: self.origin,
+            dir: (self.forward + nx * self.right + ny * self.up).normalize(),
+        }
+    }
+
+    /// The ray through the centre of pixel (`px`, `py`).
+    pub fn pixel_ray(&self, px: u32, py: u32) -> Ray {
+        self.ray(px as f64 + 0.5, py as f64 + 0.5)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_pixel_looks_forward_and_corners_span_the_fov() {
+        let spec = CameraSpec {
+            name: None,
+            position: DVec3::new(0.0, 0.0, 5.0),
+            look_at: DVec3::ZERO,
+            up: DVec3::Y,
+            fov_y: 90.0,
+        };
+        assert!(spec.problem().is_none());
+        let f = CameraFrame::new(&spec, 200, 100);
+        let c = f.ray(100.0, 50.0);
+        assert!((c.dir - DVec3::NEG_Z).length() < 1e-12);
+        let top = f.ray(100.0, 0.0);
+        assert!((top.dir.angle_between(DVec3::NEG_Z).to_degrees() - 45.0).abs() < 1e-9);
+        assert!(top.dir.y > 0.0);
+        let right = f.ray(200.0, 50.0);
+        assert!(right.dir.x > 0.0);
+    }
+
+    #[test]
+    fn degenerate_cameras_are_named() {
+        let mut spec = CameraSpec {
+            name: None,
+            position: DVec3::ZERO,
+            look_at: DVec3::Y,
+            up: DVec3::Y,
+            fov_y: 50.0,
+        };
+        assert!(spec.problem().unwrap().contains("parallel"));
+        spec.look_at = DVec3::ZERO;
+        assert!(spec.problem().unwrap().contains("equals"));
+        spec.look_at = DVec3::X;
+        spec.fov_y = 0.0;
+        assert!(spec.problem().unwrap().contains("fov_y"));
+    }
+}

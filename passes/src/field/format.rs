@@ -1,0 +1,306 @@
+//! The grid-field file format (`.inlayfield`), version 1. All numbers are
+//! little-endian:
+//!
+//! | offset | size | content |
+//! | --- | --- | --- |
+//! | 0 | 8 | magic `INLAYFLD` |
+//! | 8 | 4 | format version, u32 = 1 |
+//! | 12 | 4 | colour model, u32: 0 = view-independent linear RGB |
+//! | 16 | 12 | nodes per axis x, y, z, u32 each, 2..=1024 |
+//! | 28 | 24 | bounds: min x, y, z then max x, y, z, f32 each |
+//! | 52 | 4 | flags, u32, must be 0 |
+//! | 56 | 16·N | N = x·y·z nodes, x fastest: r, g, b, σ as f32 |
+//!
+//! Colours are linear HDR radiance (finite, ≥ 0); σ is density per unit
+//! length (finite, ≥ 0). Node (0,0,0) lies at `min`, the last at `max`.
+//! Loading checks every field and names the first bad one.
+
+use std::path::{Path, PathBuf};
+
+use glam::{DVec3, UVec3};
+
+use super::grid::GridField;
+use super::occupancy::DEFAULT_OCCUPANCY_BLOCK;
+use crate::geometry::Aabb;
+
+/// The file's first eight bytes.
+pub const FIELD_MAGIC: &[u8; 8] = b"INLAYFLD";
+/// The version this build reads and writes.
+pub const FIELD_VERSION: u32 = 1;
+const HEADER_BYTES: usize = 56;
+const MAX_NODES_PER_AXIS: u32 = 1024;
+
+/// Why a field file could not be read or written.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {field}: {message}")]
+pub struct FieldFormatError {
+    /// The file.
+    pub path: PathBuf,
+    /// The header field or node the problem is in.
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+fn err(path: &Path, field: &str, message: impl Into<String>) -> FieldFormatError {
+    FieldFormatError {
+        path: path.to_owned(),
+        field: field.to_owned(),
+        message: message.into(),
+    }
+}
+
+fn u32_at(bytes: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
+}
+
+fn f32_at(bytes: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
+}
+
+/// Reads a grid field from `path`.
+pub fn load_field(path: &Path) -> Result<GridField, FieldFormatError> {
+    let bytes = std::fs::read(path).map_err(|e| err(path, "file", e.to_string()))?;
+    parse_field(path, &bytes)
+}
+
+/// Parses the bytes of a field file (`path` is only used in messages).
+pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatError> {
+    if bytes.len() < 8 || &bytes[..8] != FIELD_MAGIC {
+        return Err(err(
+            path,
+            "magic",
+            "not an inlay field file (expected the bytes `INLAYFLD` at the start)",
+        ));
+    }
+    if bytes.len() < HEADER_BYTES {
+        return Err(err(
+            path,
+            "header",
+            format!(
+                "truncated: {} bytes, the header needs {HEADER_BYTES}",
+                bytes.len()
+            ),
+        ));
+    }
+    let version = u32_at(bytes, 8);
+    if version != FIELD_VERSION {
+        return Err(err(
+            path,
+            "version",
+            format!(
+                "version {version} is not supported (this build reads version {FIELD_VERSION})"
+            ),
+        ));
+    }
+    let model = u32_at(bytes, 12);
+    if model != 0 {
+        return Err(err(
+            path,
+            "colour model",
+            format!("unknown colour model {model} (0 = view-independent RGB)"),
+        ));
+    }
+    let res = UVec3::new(u32_at(bytes, 16), u32_at(bytes, 20), u32_at(bytes, 24));
+    for (axis, n) in ["x", "y", "z"].iter().zip(res.to_array()) {
+        if !(2..=MAX_NODES_PER_AXIS).contains(&n) {
+            return Err(err(
+                path,
+                &format!("resolution.{axis}"),
+                format!("{n} nodes; must be 2..={MAX_NODES_PER_AXIS}"),
+            ));
+        }
+    }
+    let min = DVec3::new(
+        f32_at(bytes, 28) as f64,
+        f32_at(bytes, 32) as f64,
+        f32_at(bytes, 36) as f64,
+    );
+    let max = DVec3::new(
+        f32_at(bytes, 40) as f64,
+        f32_at(bytes, 44) as f64,
+        f32_at(bytes, 48) as f64,
+    );
+    let bounds = Aabb::new(min, max);
+    if !bounds.is_valid() {
+        return Err(err(
+            path,
+            "bounds",
+            format!("min {min} max {max}: must be finite with min < max on every axis"),
+        ));
+    }
+    let flags = u32_at(bytes, 52);
+    if flags != 0 {
+        return Err(err(path, "flags", format!("{flags:#x}; must be 0")));
+    }
+    let count = (res.x as usize) * (res.y as usize) * (res.z as usize);
+    let expected = HEADER_BYTES + 16 * count;
+    if bytes.len() != expected {
+        return Err(err(
+            path,
+            "nodes",
+            format!(
+                "{} bytes of node data for {}x{}x{} nodes, expected {} ({})",
+                bytes.len() - HEADER_BYTES,
+                res.x,
+                res.y,
+                res.z,
+                16 * count,
+                if bytes.len() < expected {
+                    "truncated"
+                } else {
+                    "trailing bytes"
+                }
+            ),
+        ));
+    }
+    let mut nodes = Vec::with_capacity(count);
+    for (n, chunk) in bytes[HEADER_BYTES..].chunks_exact(16).enumerate() {
+        let v: [f32; 4] = std::array::from_fn(|c| f32_at(chunk, 4 * c));
+        for (c, name) in ["r", "g", "b", "density"].iter().enumerate() {
+            if !v[c].is_finite() || v[c] < 0.0 {
+                let (i, j, k) = (
+                    n as u32 % res.x,
+                    (n as u32 / res.x) % res.y,
+                    n as u32 / (res.x * res.y),
+                );
+                return Err(err(
+                    path,
+                    &format!("node ({i}, {j}, {k}).{name}"),
+                    format!("{} is not a finite, non-negative number", v[c]),
+                ));
+            }
+        }
+        nodes.push(v);
+    }
+    Ok(GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK))
+}
+
+/// The bytes of `field` in the file format.
+pub fn field_bytes(field: &GridField) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER_BYTES + 16 * field.nodes.len());
+    out.extend_from_slice(FIELD_MAGIC);
+    out.extend_from_slice(&FIELD_VERSION.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    for v in field.resolution.to_array() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in field
+        .bounds
+        .min
+        .to_array()
+        .into_iter()
+        .chain(field.bounds.max.to_array())
+    {
+        out.extend_from_slice(&(v as f32).to_le_bytes());
+    }
+    out.extend_from_slice(&0u32.to_le_bytes());
+    for n in &field.nodes {
+        for c in n {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Writes `field` to `path`.
+pub fn save_field(path: &Path, field: &GridField) -> Result<(), FieldFormatError> {
+    std::fs::write(path, field_bytes(field)).map_err(|e| err(path, "file", e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> GridField {
+        let nodes = (0..8)
+            .map(|i| [i as f32, 1.0, 2.0, 0.5 * i as f32])
+            .collect();
+        GridField::new(
+            UVec3::splat(2),
+            Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            nodes,
+            8,
+        )
+    }
+
+    fn parse(bytes: &[u8]) -> Result<GridField, FieldFormatError> {
+        parse_field(Path::new("t.inlayfield"), bytes)
+    }
+
+    #[test]
+    fn round_trips() {
+        let f = small();
+        let g = parse(&field_bytes(&f)).unwrap();
+        assert_eq!(g.nodes, f.nodes);
+        assert_eq!(g.resolution, f.resolution);
+        assert_eq!(g.bounds, f.bounds);
+    }
+
+    #[test]
+    fn rejects_bad_files_naming_the_field() {
+        let good = field_bytes(&small());
+        let cases: Vec<(Vec<u8>, &str)> = vec![
+            (b"NOTAFILE".to_vec(), "magic"),
+            (good[..30].to_vec(), "header"),
+            (good[..good.len() - 3].to_vec(), "truncated"),
+            ([good.clone(), vec![0; 4]].concat(), "trailing"),
+            (
+                {
+                    let mut b = good.clone();
+                    b[8] = 2;
+                    b
+                },
+                "version 2",
+            ),
+            (
+                {
+                    let mut b = good.clone();
+                    b[16..20].copy_from_slice(&1u32.to_le_bytes());
+                    b
+                },
+                "resolution.x",
+            ),
+            (
+                {
+                    let mut b = good.clone();
+                    b[40..44].copy_from_slice(&(-5.0f32).to_le_bytes());
+                    b
+                },
+                "bounds",
+            ),
+            (
+                {
+                    let mut b = good.clone();
+                    let at = HEADER_BYTES + 16 * 3 + 12;
+                    b[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+                    b
+                },
+                "node (1, 1, 0).density",
+            ),
+            (
+                {
+                    let mut b = good.clone();
+                    let at = HEADER_BYTES + 16 * 7 + 12;
+                    b[at..at + 4].copy_from_slice(&(-1.0f32).to_le_bytes());
+                    b
+                },
+                "node (1, 1, 1).density",
+            ),
+            (
+                {
+                    let mut b = good.clone();
+                    let at = HEADER_BYTES + 4;
+                    b[at..at + 4].copy_from_slice(&f32::INFINITY.to_le_bytes());
+                    b
+                },
+                "node (0, 0, 0).g",
+            ),
+        ];
+        for (bytes, expect) in cases {
+            let e = parse(&bytes).expect_err(expect).to_string();
+            assert!(e.contains(expect), "`{e}` should mention `{expect}`");
+            assert!(e.starts_with("t.inlayfield: "), "{e}");
+        }
+    }
+}

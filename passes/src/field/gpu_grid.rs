@@ -1,0 +1,106 @@
+//! A grid field uploaded to the GPU, laid out for `shaders/field/grid.wgsl`:
+//! a uniform block of bounds and sizes, the nodes as vec4<f32>, and the
+//! occupancy cells as u32.
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph, PassBuilder};
+use inlay_engine::{vk, Buffer, Context, Push};
+
+use super::grid::GridField;
+
+/// Device copies of a grid field's data (bindings 0, 1, 2 of set 0).
+pub struct GpuGridField {
+    info: Arc<Buffer>,
+    nodes: Arc<Buffer>,
+    occupancy: Arc<Buffer>,
+    /// Bounds diagonal, for step sizes.
+    pub diagonal: f64,
+}
+
+/// The field's buffers as imported into one frame's graph.
+#[derive(Debug, Clone, Copy)]
+pub struct GridBindings {
+    /// `grid_info` (uniform).
+    pub info: BufferHandle,
+    /// `grid_nodes` (storage, read).
+    pub nodes: BufferHandle,
+    /// `grid_occupancy` (storage, read).
+    pub occupancy: BufferHandle,
+}
+
+impl GridBindings {
+    /// Declares read access to all three buffers on `pass`.
+    pub fn declare_reads(&self, pass: &mut PassBuilder<'_, '_>) {
+        pass.buffer(self.info, BufferAccess::Uniform);
+        pass.buffer(self.nodes, BufferAccess::StorageRead);
+        pass.buffer(self.occupancy, BufferAccess::StorageRead);
+    }
+}
+
+impl GpuGridField {
+    /// Uploads `field`. Fails with a clear message when the node array is
+    /// larger than the device's largest storage binding.
+    pub fn upload(ctx: &Arc<Context>, field: &GridField) -> anyhow::Result<Self> {
+        let node_bytes = 16 * field.nodes.len() as u64;
+        let limit = ctx.info().max_storage_buffer_range as u64;
+        if node_bytes > limit {
+            anyhow::bail!(
+                "the field's {}x{}x{} nodes take {} MiB, more than this device's largest storage \
+                 binding ({} MiB); bake it at a lower resolution",
+                field.resolution.x,
+                field.resolution.y,
+                field.resolution.z,
+                node_bytes >> 20,
+                limit >> 20
+            );
+        }
+        let b = field.bounds;
+        let occ = &field.occupancy;
+        let info = Push::new()
+            .f32(b.min.x as f32)
+            .f32(b.min.y as f32)
+            .f32(b.min.z as f32)
+            .u32(occ.block)
+            .f32(b.max.x as f32)
+            .f32(b.max.y as f32)
+            .f32(b.max.z as f32)
+            .u32(0)
+            .u32(field.resolution.x)
+            .u32(field.resolution.y)
+            .u32(field.resolution.z)
+            .u32(0)
+            .u32(occ.dims.x)
+            .u32(occ.dims.y)
+            .u32(occ.dims.z)
+            .u32(0);
+        let nodes: Vec<u8> = field
+            .nodes
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let cells: Vec<u8> = occ.cells.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(Self {
+            info: Arc::new(Buffer::with_data(
+                ctx,
+                "grid-info",
+                info.bytes(),
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+            )?),
+            nodes: Arc::new(Buffer::with_data(ctx, "grid-nodes", &nodes, storage)?),
+            occupancy: Arc::new(Buffer::with_data(ctx, "grid-occupancy", &cells, storage)?),
+            diagonal: field.bounds.diagonal(),
+        })
+    }
+
+    /// Imports the buffers into a frame's graph (read-only).
+    pub fn import(&self, graph: &mut FrameGraph<'_>) -> GridBindings {
+        GridBindings {
+            info: graph.import_buffer(&self.info, None),
+            nodes: graph.import_buffer(&self.nodes, None),
+            occupancy: graph.import_buffer(&self.occupancy, None),
+        }
+    }
+}

@@ -1,0 +1,42 @@
+//! Radiance fields: what every pass samples (density σ(x) and linear-HDR
+//! colour c(x, d) inside axis-aligned bounds), and the kinds the engine has.
+//!
+//! The first kind is [`GridField`], a voxel grid read with trilinear
+//! interpolation; fields trained from photos and instant-ngp snapshots are
+//! later kinds behind the same trait.
+
+mod format;
+mod gpu_grid;
+mod grid;
+mod occupancy;
+
+pub use format::{
+    field_bytes, load_field, parse_field, save_field, FieldFormatError, FIELD_MAGIC, FIELD_VERSION,
+};
+pub use gpu_grid::{GpuGridField, GridBindings};
+pub use grid::GridField;
+pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
+
+use glam::DVec3;
+
+use crate::geometry::Aabb;
+
+/// A radiance field as the CPU references see it (f64).
+pub trait RadianceField: Sync {
+    /// The region outside which density is zero.
+    fn bounds(&self) -> Aabb;
+    /// Density σ at `x` (1/length; zero outside the bounds).
+    fn density(&self, x: DVec3) -> f64;
+    /// Linear-HDR colour emitted towards direction `d` from `x`.
+    fn colour(&self, x: DVec3, d: DVec3) -> DVec3;
+    /// Density and colour together (kinds that share the lookup override it).
+    fn sample(&self, x: DVec3, d: DVec3) -> (f64, DVec3) {
+        (self.density(x), self.colour(x, d))
+    }
+    /// Empty-space information: `Some(t)` when the density is zero along
+    /// `origin + s·dir` for every s in [0, t) — the march may skip to `t`.
+    /// `None` means "may be occupied here". The default skips nothing.
+    fn empty_until(&self, _origin: DVec3, _dir: DVec3) -> Option<f64> {
+        None
+    }
+}

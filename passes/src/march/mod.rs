@@ -1,0 +1,11 @@
+//! The NeRF ray march (METHOD.md, "Volume rendering" and Fig. 2): per pixel
+//! colour Ĉ, opacity Ô and depth D̂, clipped at the object's depth. The GPU
+//! pass and its f64 CPU reference compute the same quadrature.
+
+mod knobs;
+mod pass;
+mod reference;
+
+pub use knobs::MarchKnobs;
+pub use pass::{MarchOutputs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
+pub use reference::{march_image, march_ray, MarchResult};

@@ -1,0 +1,435 @@
+//! Scene files (TOML): a field — a recipe of analytic primitives to bake or a
+//! field file — plus the distant environment light, cameras and quality
+//! knobs. `scenes/README.md` documents the format with an example.
+
+mod environment;
+mod shape;
+pub(crate) mod spec;
+
+pub use environment::{Environment, EquirectMap};
+pub use shape::Shape;
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use crate::bake::BakeKnobs;
+use crate::camera::CameraSpec;
+use crate::geometry::Aabb;
+use crate::march::MarchKnobs;
+use spec::{PrimitiveSpec, SceneSpec};
+
+/// Why a scene file could not be used: the file, the key and the problem.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {field}: {message}")]
+pub struct SceneError {
+    /// The scene file.
+    pub path: PathBuf,
+    /// The key (dotted path) the problem is in.
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Where a scene's field comes from.
+#[derive(Debug, Clone)]
+pub enum FieldSource {
+    /// Baked from analytic primitives.
+    Recipe(Recipe),
+    /// Read from a field file.
+    File(PathBuf),
+}
+
+/// Analytic primitives and the bounds of the field baked from them.
+#[derive(Debug, Clone)]
+pub struct Recipe {
+    /// The field's bounds; primitives outside still cast light and shadow.
+    pub bounds: Aabb,
+    /// The primitives.
+    pub primitives: Vec<Primitive>,
+}
+
+/// One primitive of a recipe with its material.
+#[derive(Debug, Clone)]
+pub struct Primitive {
+    /// Name, for messages.
+    pub name: String,
+    /// Geometry.
+    pub shape: Shape,
+    /// Lambertian albedo (surfaces) or single-scattering albedo (media).
+    pub albedo: DVec3,
+    /// Emitted radiance (spheres only).
+    pub emission: DVec3,
+    /// `Some(σ)`: a homogeneous, semi-transparent medium of density σ
+    /// scattering isotropically; `None`: an opaque surface.
+    pub medium_density: Option<f64>,
+    /// For emitters: whether the source lies inside the field's bounds.
+    pub in_field: Option<bool>,
+}
+
+impl Primitive {
+    /// Whether it emits light.
+    pub fn is_emitter(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
+
+impl Recipe {
+    /// Emitters inside the field's bounds, and those outside it.
+    pub fn lights(&self) -> (Vec<&Primitive>, Vec<&Primitive>) {
+        self.primitives
+            .iter()
+            .filter(|p| p.is_emitter())
+            .partition(|p| p.in_field == Some(true))
+    }
+}
+
+/// A validated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The file it was read from.
+    pub path: PathBuf,
+    /// Short name.
+    pub name: String,
+    /// One line on what it shows.
+    pub description: String,
+    /// The field.
+    pub field: FieldSource,
+    /// The distant light (outside the field).
+    pub environment: Environment,
+    /// Cameras (at least one).
+    pub cameras: Vec<CameraSpec>,
+    /// Bake knobs (recipes).
+    pub bake: BakeKnobs,
+    /// March knobs.
+    pub march: MarchKnobs,
+}
+
+impl Scene {
+    /// The camera named `which`, or at index `which`.
+    pub fn camera(&self, which: &str) -> Result<&CameraSpec, SceneError> {
+        let found = match which.parse::<usize>() {
+            Ok(i) => self.cameras.get(i),
+            Err(_) => self
+                .cameras
+                .iter()
+                .find(|c| c.name.as_deref() == Some(which)),
+        };
+        found.ok_or_else(|| SceneError {
+            path: self.path.clone(),
+            field: "cameras".into(),
+            message: format!(
+                "no camera `{which}`; the scene has {}: {}",
+                self.cameras.len(),
+                self.cameras
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| format!(
+                        "{i}{}",
+                        c.name
+                            .as_ref()
+                            .map(|n| format!(" ({n})"))
+                            .unwrap_or_default()
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })
+    }
+
+    /// The recipe, if the field is baked from one.
+    pub fn recipe(&self) -> Option<&Recipe> {
+        match &self.field {
+            FieldSource::Recipe(r) => Some(r),
+            FieldSource::File(_) => None,
+        }
+    }
+}
+
+/// Reads and validates a scene file.
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    let e = |field: &str, message: String| SceneError {
+        path: path.to_owned(),
+        field: field.to_owned(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|x| e("file", x.to_string()))?;
+    let spec: SceneSpec = toml::from_str(&text).map_err(|x| {
+        let at = x
+            .span()
+            .map(|s| {
+                let line = text[..s.start].lines().count().max(1);
+                format!("line {line}")
+            })
+            .unwrap_or_else(|| "toml".into());
+        e(&at, x.message().to_owned())
+    })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let field = match (spec.field, spec.recipe) {
+        (Some(f), None) => FieldSource::File(dir.join(f)),
+        (None, Some(r)) => FieldSource::Recipe(recipe(r, &e)?),
+        (Some(_), Some(_)) => {
+            return Err(e(
+                "field",
+                "give either `field` (a file) or `[recipe]`, not both".into(),
+            ))
+        }
+        (None, None) => {
+            return Err(e(
+                "field",
+                "missing: give `field = \"file.inlayfield\"` or a `[recipe]`".into(),
+            ))
+        }
+    };
+    let environment = match spec.environment {
+        None => Environment::Black,
+        Some(env) => {
+            let scale = env.scale.unwrap_or(1.0);
+            if !(scale.is_finite() && scale >= 0.0) {
+                return Err(e(
+                    "environment.scale",
+                    format!("{scale} must be finite and ≥ 0"),
+                ));
+            }
+            for (i, l) in env.lobes.iter().enumerate() {
+                let f = format!("environment.lobes[{i}]");
+                if !(l.direction.is_finite() && l.direction.length() > 1e-9) {
+                    return Err(e(&f, "direction must be a finite non-zero vector".into()));
+                }
+                if !(l.sharpness.is_finite() && l.sharpness > 0.0 && l.sharpness <= 1e4) {
+                    return Err(e(
+                        &f,
+                        format!("sharpness {} must be in (0, 1e4]", l.sharpness),
+                    ));
+                }
+                if !(l.amplitude.is_finite() && l.amplitude.min_element() >= 0.0) {
+                    return Err(e(&f, "amplitude must be finite and ≥ 0".into()));
+                }
+            }
+            match (env.equirect, env.lobes.is_empty()) {
+                (Some(_), false) => {
+                    return Err(e(
+                        "environment",
+                        "give `lobes` or `equirect`, not both".into(),
+                    ))
+                }
+                (Some(file), true) => Environment::Map(
+                    EquirectMap::load(&dir.join(&file), scale)
+                        .map_err(|m| e("environment.equirect", m))?,
+                ),
+                (None, _) => Environment::from_lobes(
+                    env.lobes
+                        .into_iter()
+                        .map(|mut l| {
+                            l.amplitude *= scale;
+                            l
+                        })
+                        .collect(),
+                ),
+            }
+        }
+    };
+    if spec.cameras.is_empty() {
+        return Err(e(
+            "cameras",
+            "a scene needs at least one [[cameras]] entry".into(),
+        ));
+    }
+    for (i, c) in spec.cameras.iter().enumerate() {
+        if let Some(p) = c.problem() {
+            return Err(e(&format!("cameras[{i}]"), p));
+        }
+    }
+    let bake =
+        BakeKnobs::from_spec(spec.bake.as_ref()).map_err(|(f, m)| e(&format!("bake.{f}"), m))?;
+    let march =
+        MarchKnobs::from_spec(spec.march.as_ref()).map_err(|(f, m)| e(&format!("march.{f}"), m))?;
+    let name = spec.name.unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    Ok(Scene {
+        path: path.to_owned(),
+        name,
+        description: spec.description.unwrap_or_default(),
+        field,
+        environment,
+        cameras: spec.cameras,
+        bake,
+        march,
+    })
+}
+
+fn recipe(
+    spec: spec::RecipeSpec,
+    e: &dyn Fn(&str, String) -> SceneError,
+) -> Result<Recipe, SceneError> {
+    let bounds = spec.bounds;
+    if !bounds.is_valid() {
+        return Err(e(
+            "recipe.bounds",
+            "min and max must be finite with min < max".into(),
+        ));
+    }
+    let extent = bounds.size();
+    if extent.min_element() < 1e-4 || extent.max_element() > 1e5 {
+        return Err(e(
+            "recipe.bounds",
+            format!("extent {extent} is outside the supported 1e-4 ..= 1e5 per axis"),
+        ));
+    }
+    let mut primitives = Vec::new();
+    for (i, p) in spec.primitives.into_iter().enumerate() {
+        let f = format!("recipe.primitives[{i}] ({})", p.name);
+        let prim = primitive(p, &bounds).map_err(|m| e(&f, m))?;
+        if primitives.iter().any(|q: &Primitive| q.name == prim.name) {
+            return Err(e(&f, "duplicate name".into()));
+        }
+        primitives.push(prim);
+    }
+    if primitives.is_empty() {
+        return Err(e(
+            "recipe.primitives",
+            "a recipe needs at least one primitive".into(),
+        ));
+    }
+    Ok(Recipe { bounds, primitives })
+}
+
+fn positive(name: &str, v: Option<f64>) -> Result<f64, String> {
+    match v {
+        None => Err(format!("missing `{name}`")),
+        Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Some(x) => Err(format!("`{name}` = {x} must be finite and > 0")),
+    }
+}
+
+fn vector(name: &str, v: Option<DVec3>) -> Result<DVec3, String> {
+    match v {
+        None => Err(format!("missing `{name}`")),
+        Some(x) if x.is_finite() => Ok(x),
+        Some(x) => Err(format!("`{name}` = {x} must be finite")),
+    }
+}
+
+fn direction(name: &str, v: Option<DVec3>) -> Result<DVec3, String> {
+    vector(name, v)?
+        .try_normalize()
+        .ok_or_else(|| format!("`{name}` must be non-zero"))
+}
+
+fn primitive(p: PrimitiveSpec, bounds: &Aabb) -> Result<Primitive, String> {
+    let given = |name: &str| match name {
+        "point" => p.point.is_some(),
+        "normal" => p.normal.is_some(),
+        "center" => p.center.is_some(),
+        "radius" => p.radius.is_some(),
+        "size" => p.size.is_some(),
+        "axis" => p.axis.is_some(),
+        "height" => p.height.is_some(),
+        _ => false,
+    };
+    let keys: &[&str] = match p.kind.as_str() {
+        "plane" => &["point", "normal"],
+        "sphere" => &["center", "radius"],
+        "box" => &["center", "size"],
+        "cylinder" => &["center", "axis", "radius", "height"],
+        other => {
+            return Err(format!(
+                "unknown type `{other}` (plane, sphere, box, cylinder)"
+            ))
+        }
+    };
+    for k in [
+        "point", "normal", "center", "radius", "size", "axis", "height",
+    ] {
+        if given(k) && !keys.contains(&k) {
+            return Err(format!("`{k}` does not apply to a {}", p.kind));
+        }
+    }
+    let shape = match p.kind.as_str() {
+        "plane" => Shape::Plane {
+            point: vector("point", p.point)?,
+            normal: direction("normal", p.normal)?,
+        },
+        "sphere" => Shape::Sphere {
+            centre: vector("center", p.center)?,
+            radius: positive("radius", p.radius)?,
+        },
+        "box" => {
+            let size = vector("size", p.size)?;
+            if size.min_element() <= 0.0 {
+                return Err(format!("`size` = {size} must be > 0 on every axis"));
+            }
+            Shape::Box {
+                centre: vector("center", p.center)?,
+                half: size * 0.5,
+            }
+        }
+        _ => Shape::Cylinder {
+            centre: vector("center", p.center)?,
+            axis: direction("axis", p.axis)?,
+            radius: positive("radius", p.radius)?,
+            half_height: positive("height", p.height)? * 0.5,
+        },
+    };
+    let albedo = p.albedo.unwrap_or(DVec3::splat(0.5));
+    if !(albedo.is_finite() && albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
+        return Err(format!(
+            "`albedo` = {albedo} must lie in [0, 1] per channel"
+        ));
+    }
+    let emission = p.emission.unwrap_or(DVec3::ZERO);
+    if !(emission.is_finite() && emission.min_element() >= 0.0) {
+        return Err(format!("`emission` = {emission} must be finite and ≥ 0"));
+    }
+    let medium_density = match p.density {
+        None => None,
+        Some(d) => {
+            if !shape.is_bounded() {
+                return Err("a plane cannot be a medium (`density`)".into());
+            }
+            if emission.max_element() > 0.0 {
+                return Err("a medium (`density`) cannot emit".into());
+            }
+            Some(positive("density", Some(d))?)
+        }
+    };
+    let prim = Primitive {
+        name: p.name,
+        shape,
+        albedo,
+        emission,
+        medium_density,
+        in_field: p.in_field,
+    };
+    if prim.is_emitter() {
+        if !matches!(prim.shape, Shape::Sphere { .. }) {
+            return Err(
+                "only spheres may emit (the path tracer samples emitters as spheres)".into(),
+            );
+        }
+        let b = prim.shape.bounds().expect("spheres are bounded");
+        match prim.in_field {
+            None => return Err(
+                "an emitter must say `in_field = true` or `false` (whether the field contains it)"
+                    .into(),
+            ),
+            Some(true) if !bounds.contains_box(&b) => {
+                return Err(
+                    "declared `in_field = true` but it is not inside the recipe's bounds".into(),
+                )
+            }
+            Some(false) if bounds.overlaps(&b) => {
+                return Err(
+                    "declared `in_field = false` but it overlaps the recipe's bounds".into(),
+                )
+            }
+            _ => {}
+        }
+    } else if prim.in_field.is_some() {
+        return Err("`in_field` applies to emitters only".into());
+    }
+    Ok(prim)
+}

@@ -1,0 +1,83 @@
+//! The raw TOML shape of a scene file, as serde reads it. [`super::load_scene`]
+//! validates it into a [`super::Scene`]; unknown keys are errors so typos
+//! do not pass silently.
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::camera::CameraSpec;
+use crate::sg::SgLobe;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneSpec {
+    pub name: Option<String>,
+    #[serde(default)]
+    pub description: Option<String>,
+    /// A field file, relative to the scene file.
+    pub field: Option<String>,
+    pub recipe: Option<RecipeSpec>,
+    #[serde(default)]
+    pub environment: Option<EnvironmentSpec>,
+    #[serde(default)]
+    pub cameras: Vec<CameraSpec>,
+    #[serde(default)]
+    pub bake: Option<BakeSpec>,
+    #[serde(default)]
+    pub march: Option<MarchSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RecipeSpec {
+    pub bounds: crate::geometry::Aabb,
+    #[serde(default)]
+    pub primitives: Vec<PrimitiveSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PrimitiveSpec {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub point: Option<DVec3>,
+    pub normal: Option<DVec3>,
+    pub center: Option<DVec3>,
+    pub radius: Option<f64>,
+    pub size: Option<DVec3>,
+    pub axis: Option<DVec3>,
+    pub height: Option<f64>,
+    pub albedo: Option<DVec3>,
+    pub emission: Option<DVec3>,
+    pub density: Option<f64>,
+    pub in_field: Option<bool>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct EnvironmentSpec {
+    #[serde(default)]
+    pub lobes: Vec<SgLobe>,
+    pub equirect: Option<String>,
+    pub scale: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BakeSpec {
+    pub resolution: Option<u32>,
+    pub samples: Option<u32>,
+    pub bounces: Option<u32>,
+    pub seed: Option<u64>,
+    pub falloff_voxels: Option<f64>,
+    pub density_scale: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MarchSpec {
+    pub samples_per_ray: Option<u32>,
+    pub termination: Option<f64>,
+    pub skip_empty: Option<bool>,
+}

@@ -1,0 +1,68 @@
+// The voxel-grid radiance field: trilinear lookup of (r, g, b, σ) nodes and
+// the coarse occupancy grid for empty-space skipping. Mirrors
+// passes/src/field/grid.rs and passes/src/field/occupancy.rs; the layout of
+// `GridInfo` is written by passes/src/field/gpu_grid.rs.
+
+struct GridInfo {
+    bounds_min: vec3<f32>,
+    occupancy_block: u32,
+    bounds_max: vec3<f32>,
+    _pad0: u32,
+    resolution: vec3<u32>,
+    _pad1: u32,
+    occupancy_dims: vec3<u32>,
+    _pad2: u32,
+}
+
+@group(0) @binding(0) var<uniform> grid_info: GridInfo;
+@group(0) @binding(1) var<storage, read> grid_nodes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> grid_occupancy: array<u32>;
+
+fn grid_node(i: vec3<u32>) -> vec4<f32> {
+    let r = grid_info.resolution;
+    return grid_nodes[i.x + r.x * (i.y + r.y * i.z)];
+}
+
+// Trilinear (r, g, b, σ) at x; zero outside the bounds.
+fn grid_sample(x: vec3<f32>) -> vec4<f32> {
+    if any(x < grid_info.bounds_min) || any(x > grid_info.bounds_max) {
+        return vec4<f32>(0.0);
+    }
+    let cells = vec3<f32>(grid_info.resolution - vec3<u32>(1u));
+    let u = (x - grid_info.bounds_min) / (grid_info.bounds_max - grid_info.bounds_min) * cells;
+    let base = clamp(floor(u), vec3<f32>(0.0), cells - vec3<f32>(1.0));
+    let f = clamp(u - base, vec3<f32>(0.0), vec3<f32>(1.0));
+    let i = vec3<u32>(base);
+    let x00 = mix(grid_node(i), grid_node(i + vec3<u32>(1u, 0u, 0u)), f.x);
+    let x10 = mix(grid_node(i + vec3<u32>(0u, 1u, 0u)), grid_node(i + vec3<u32>(1u, 1u, 0u)), f.x);
+    let x01 = mix(grid_node(i + vec3<u32>(0u, 0u, 1u)), grid_node(i + vec3<u32>(1u, 0u, 1u)), f.x);
+    let x11 = mix(grid_node(i + vec3<u32>(0u, 1u, 1u)), grid_node(i + vec3<u32>(1u, 1u, 1u)), f.x);
+    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+// When the coarse cell holding x is empty: the distance along dir from x to
+// the cell's exit. Negative when the cell is occupied.
+fn grid_empty_until(x: vec3<f32>, dir: vec3<f32>) -> f32 {
+    let cells = vec3<f32>(grid_info.resolution - vec3<u32>(1u));
+    let extent = grid_info.bounds_max - grid_info.bounds_min;
+    let u = (x - grid_info.bounds_min) / extent * cells;
+    let b = f32(grid_info.occupancy_block);
+    let dims = grid_info.occupancy_dims;
+    let c = clamp(floor(u / b), vec3<f32>(0.0), vec3<f32>(dims) - vec3<f32>(1.0));
+    let ci = vec3<u32>(c);
+    if grid_occupancy[ci.x + dims.x * (ci.y + dims.y * ci.z)] != 0u {
+        return -1.0;
+    }
+    let h = extent / cells;
+    let lo = grid_info.bounds_min + c * b * h;
+    let hi = grid_info.bounds_min + min((c + vec3<f32>(1.0)) * b, cells) * h;
+    var exit = 3.0e38;
+    for (var a = 0; a < 3; a++) {
+        if dir[a] > 0.0 {
+            exit = min(exit, (hi[a] - x[a]) / dir[a]);
+        } else if dir[a] < 0.0 {
+            exit = min(exit, (lo[a] - x[a]) / dir[a]);
+        }
+    }
+    return max(exit, 0.0);
+}

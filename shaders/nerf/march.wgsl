@@ -1,0 +1,52 @@
+// The NeRF ray-march pass: one camera ray per pixel through the grid field,
+// writing (Ĉ, Ô) and D̂. `main_clipped` cuts each ray at the object's depth
+// (distance along the ray, Fig. 2); `main_unclipped` is the same pass with
+// no object in the frame (no depth image is read).
+#include "common/camera.wgsl"
+#include "common/ray_box.wgsl"
+#include "field/grid.wgsl"
+#include "nerf/volume_march.wgsl"
+
+struct MarchPush {
+    origin: vec3<f32>,
+    width: u32,
+    right: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    step: f32,
+    forward: vec3<f32>,
+    termination: f32,
+}
+
+var<immediate> pc: MarchPush;
+
+@group(0) @binding(3) var out_colour: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(4) var out_depth: texture_storage_2d<r32float, write>;
+@group(0) @binding(5) var object_depth: texture_2d<f32>;
+
+// "No object in this pixel".
+const NO_OBJECT: f32 = 3.0e38;
+
+fn march_pixel(pixel: vec2<u32>, t_object: f32) {
+    let size = vec2<f32>(f32(pc.width), f32(pc.height));
+    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(pixel) + vec2<f32>(0.5));
+    let r = march_ray(pc.origin, dir, t_object, pc.step, pc.termination);
+    textureStore(out_colour, pixel, vec4<f32>(r.colour, r.opacity));
+    textureStore(out_depth, pixel, vec4<f32>(r.depth, 0.0, 0.0, 0.0));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main_unclipped(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    march_pixel(id.xy, NO_OBJECT);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main_clipped(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    march_pixel(id.xy, textureLoad(object_depth, id.xy, 0).r);
+}

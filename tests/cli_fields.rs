@@ -1,0 +1,184 @@
+//! `inlay bake-scene`, `render` and `reference` end to end, and their errors
+//! for bad scenes and field files.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use inlay_engine::HdrImage;
+
+fn inlay(args: &[&str], cache: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .args(args)
+        .env("INLAY_CACHE_DIR", cache)
+        .output()
+        .expect("the inlay binary runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("inlay-fields-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn scene_path(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn bake_render_and_reference_write_images() {
+    let dir = scratch("bake");
+    let field = dir.join("plants.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            &scene_path("plants.toml"),
+            "--out",
+            s(&field),
+            "--resolution",
+            "20",
+            "--samples",
+            "2",
+            "--bounces",
+            "0",
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("lights inside the field: lamp"), "{t}");
+    assert!(t.contains("lights outside the field: none"), "{t}");
+    let exr = dir.join("r.exr");
+    let o = inlay(
+        &[
+            "--validate",
+            "render",
+            &scene_path("plants.toml"),
+            "--field",
+            s(&field),
+            "--width",
+            "32",
+            "--height",
+            "20",
+            "--frames",
+            "2",
+            "--camera",
+            "high",
+            "--out",
+            s(&exr),
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("nerf-march"), "per-pass timings: {t}");
+    let img = HdrImage::load_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (32, 20));
+    assert_eq!(img.non_finite_count(), 0);
+    assert!(
+        img.pixels.iter().any(|p| p[3] > 0.9),
+        "the field is visible"
+    );
+    let refr = dir.join("ref.exr");
+    let o = inlay(
+        &[
+            "reference",
+            &scene_path("plants.toml"),
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--samples",
+            "2",
+            "--out",
+            s(&refr),
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let img = HdrImage::load_exr(&refr).unwrap();
+    assert_eq!((img.width, img.height), (24, 16));
+}
+
+#[test]
+fn bad_inputs_get_errors_naming_the_file_and_field() {
+    let dir = scratch("bad");
+    // A truncated field file.
+    let broken = dir.join("broken.inlayfield");
+    let mut bytes = b"INLAYFLD".to_vec();
+    bytes.extend_from_slice(&1u32.to_le_bytes());
+    bytes.extend_from_slice(&[0; 60]);
+    std::fs::write(&broken, &bytes).unwrap();
+    let cases: Vec<(Vec<String>, String)> = vec![
+        (
+            vec![
+                "render".into(),
+                scene_path("cups.toml"),
+                "--field".into(),
+                s(&broken).into(),
+            ],
+            format!("{}: resolution.x", broken.display()),
+        ),
+        (
+            vec!["render".into(), "/nonexistent/x.toml".into()],
+            "/nonexistent/x.toml: file".into(),
+        ),
+        (
+            vec![
+                "render".into(),
+                scene_path("cups.toml"),
+                "--camera".into(),
+                "9".into(),
+            ],
+            "no camera `9`".into(),
+        ),
+        (
+            vec![
+                "render".into(),
+                scene_path("cups.toml"),
+                "--samples-per-ray".into(),
+                "0".into(),
+            ],
+            "samples_per_ray".into(),
+        ),
+        (
+            vec![
+                "bake-scene".into(),
+                scene_path("cups.toml"),
+                "--resolution".into(),
+                "2".into(),
+            ],
+            "resolution".into(),
+        ),
+    ];
+    for (args, expect) in cases {
+        let args: Vec<&str> = args.iter().map(|a| a.as_str()).collect();
+        let o = inlay(&args, &dir);
+        let t = common::output_text(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            t.contains(&expect),
+            "{args:?}: `{t}` should mention `{expect}`"
+        );
+        assert!(!t.contains("panicked"), "{t}");
+    }
+    // A scene whose field is a file has no ground truth to trace.
+    let scene = dir.join("file-scene.toml");
+    std::fs::write(
+        &scene,
+        "field = \"broken.inlayfield\"\n[[cameras]]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n",
+    )
+    .unwrap();
+    let o = inlay(&["reference", s(&scene)], &dir);
+    assert!(!o.status.success());
+    assert!(common::output_text(&o).contains("not a [recipe]"));
+}

@@ -1,0 +1,195 @@
+//! Radiance fields, recipes and scene files on the CPU: the bundled scenes
+//! satisfy what they promise, empty-space skipping is exact, baking is
+//! reproducible, and bad scene files get errors that name the key.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use inlay_passes::bake::{bake_grid, BakeKnobs};
+use inlay_passes::camera::CameraFrame;
+use inlay_passes::field::{field_bytes, parse_field, GridField, RadianceField};
+use inlay_passes::march::{march_image, MarchKnobs};
+use inlay_passes::scene::{load_scene, Scene};
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+fn scene(name: &str) -> Scene {
+    load_scene(&scenes_dir().join(name)).unwrap()
+}
+
+fn bake(scene: &Scene, resolution: u32, samples: u32, bounces: u32) -> GridField {
+    let knobs = BakeKnobs {
+        resolution,
+        samples,
+        bounces,
+        ..scene.bake
+    };
+    bake_grid(
+        scene.recipe().unwrap(),
+        &scene.environment,
+        &knobs,
+        &|_, _| {},
+    )
+}
+
+fn mean_occupied_radiance(f: &GridField) -> f64 {
+    let occ: Vec<f64> = f
+        .nodes
+        .iter()
+        .filter(|n| n[3] > 0.0)
+        .map(|n| (n[0] + n[1] + n[2]) as f64 / 3.0)
+        .collect();
+    occ.iter().sum::<f64>() / occ.len() as f64
+}
+
+#[test]
+fn bundled_recipes_have_the_lights_and_volumes_they_promise() {
+    let names = ["plants.toml", "books.toml", "dog.toml", "cups.toml"];
+    let scenes: Vec<Scene> = names.iter().map(|n| scene(n)).collect();
+    // PLANTS: every light inside the field, no environment.
+    let plants = &scenes[0];
+    let (inside, outside) = plants.recipe().unwrap().lights();
+    assert!(!inside.is_empty() && outside.is_empty() && plants.environment.is_black());
+    // The other three have sources outside the field.
+    for s in &scenes[1..] {
+        let (_, outside) = s.recipe().unwrap().lights();
+        assert!(
+            !outside.is_empty() || !s.environment.is_black(),
+            "{}",
+            s.name
+        );
+    }
+    // Semi-transparent volumes: foliage (PLANTS) and glass (CUPS).
+    for s in [&scenes[0], &scenes[3]] {
+        assert!(s
+            .recipe()
+            .unwrap()
+            .primitives
+            .iter()
+            .any(|p| p.medium_density.is_some()));
+    }
+    // DOG: a tiny bulb ≥ 10⁴ × the field's mean radiance.
+    let dog = &scenes[2];
+    let bulb = dog
+        .recipe()
+        .unwrap()
+        .primitives
+        .iter()
+        .find(|p| p.name == "bulb")
+        .unwrap();
+    let field = bake(dog, 24, 8, 0);
+    let ratio = bulb.emission.max_element() / mean_occupied_radiance(&field);
+    assert!(ratio >= 1e4, "bulb / mean radiance = {ratio:.3e}");
+}
+
+#[test]
+fn skipping_empty_space_changes_nothing_and_saves_samples() {
+    let s = scene("cups.toml");
+    let field = bake(&s, 64, 1, 0);
+    assert!(field.occupancy.empty_fraction() > 0.3);
+    let camera = CameraFrame::new(&s.cameras[1], 40, 24);
+    let on = MarchKnobs::default();
+    let off = MarchKnobs {
+        skip_empty: false,
+        ..on
+    };
+    let a = march_image(&field, &camera, &on, &|_, _| f64::INFINITY);
+    let b = march_image(&field, &camera, &off, &|_, _| f64::INFINITY);
+    let (mut sa, mut sb) = (0u64, 0u64);
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(
+            (x.colour, x.opacity, x.depth),
+            (y.colour, y.opacity, y.depth)
+        );
+        sa += x.samples as u64;
+        sb += y.samples as u64;
+    }
+    assert!(
+        sa * 2 < sb,
+        "skipping evaluated {sa} samples, marching everything {sb}"
+    );
+}
+
+#[test]
+fn baking_is_reproducible_and_density_is_zero_away_from_surfaces() {
+    let s = scene("dog.toml");
+    let a = bake(&s, 16, 2, 1);
+    let b = bake(&s, 16, 2, 1);
+    assert_eq!(a.nodes, b.nodes, "same seed, same field");
+    // Bytes round-trip through the file format.
+    let back = parse_field(Path::new("x"), &field_bytes(&a)).unwrap();
+    assert_eq!(back.nodes, a.nodes);
+    // High above the dog there is nothing; under the floor it is solid.
+    assert_eq!(a.density(DVec3::new(-0.7, 0.8, -0.7)), 0.0);
+    assert!(a.density(DVec3::new(0.0, -0.08, 0.0)) > 100.0);
+    // Direct light only is darker than with a bounce.
+    let direct = bake(&s, 16, 2, 0);
+    assert!(mean_occupied_radiance(&direct) < mean_occupied_radiance(&a));
+}
+
+#[test]
+fn density_gradient_gives_surface_normals() {
+    let s = scene("cups.toml");
+    let field = bake(&s, 48, 1, 0);
+    // On the table (y = 0), away from the cups: −∇σ points up.
+    let x = DVec3::new(-0.6, 0.0, 0.6);
+    let h = 1e-3;
+    let g = DVec3::new(
+        field.density(x + DVec3::X * h) - field.density(x - DVec3::X * h),
+        field.density(x + DVec3::Y * h) - field.density(x - DVec3::Y * h),
+        field.density(x + DVec3::Z * h) - field.density(x - DVec3::Z * h),
+    );
+    let n = (-g).normalize();
+    assert!(n.dot(DVec3::Y) > 0.99, "normal {n}");
+}
+
+fn scene_error(text: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("inlay-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("s{}.toml", text.len()));
+    std::fs::write(&path, text).unwrap();
+    let e = load_scene(&path).unwrap_err().to_string();
+    assert!(e.contains(&path.display().to_string()), "{e}");
+    e
+}
+
+#[test]
+fn bad_scene_files_name_the_key() {
+    let base = std::fs::read_to_string(scenes_dir().join("dog.toml")).unwrap();
+    let cases = [
+        (base.replace("radius = 0.13", "radius = nan"), "radius"),
+        (base.replace("in_field = false", "in_field = true"), "bulb"),
+        (
+            base.replace("type = \"sphere\"", "type = \"torus\""),
+            "torus",
+        ),
+        (
+            base.replace("albedo = [0.5, 0.5, 0.5]", "albedo = [1.5, 0.5, 0.5]"),
+            "albedo",
+        ),
+        (base.replace("fov_y = 45", "fov_y = 0"), "cameras[0]"),
+        (
+            base.replace("resolution = 128", "resolution = 100000"),
+            "bake.resolution",
+        ),
+        (base.replace("[bake]", "[bake]\nsmaples = 3"), "smaples"),
+        (
+            base.replace("max = [0.9, 0.9, 0.9]", "max = [-2.0, 0.9, 0.9]"),
+            "recipe.bounds",
+        ),
+        (
+            base.replace("sharpness = 2.0", "sharpness = -1.0"),
+            "environment.lobes[0]",
+        ),
+    ];
+    for (text, expect) in cases {
+        let e = scene_error(&text);
+        assert!(e.contains(expect), "`{e}` should mention `{expect}`");
+    }
+    let missing = load_scene(Path::new("/nonexistent/scene.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(missing.contains("/nonexistent/scene.toml"), "{missing}");
+}

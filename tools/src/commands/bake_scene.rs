@@ -1,0 +1,100 @@
+//! `inlay bake-scene SCENE`: bakes a recipe into a grid-field file.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use glam::DVec3;
+use inlay_passes::field::save_field;
+use inlay_passes::scene::load_scene;
+
+use crate::field_source::bake_with_progress;
+
+/// Options of `bake-scene`.
+#[derive(Args, Debug)]
+pub struct BakeSceneArgs {
+    /// The scene file (TOML with a [recipe]).
+    pub scene: PathBuf,
+    /// Output field file (default: <scene name>.inlayfield in the current directory).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Nodes along the longest axis (overrides [bake] resolution).
+    #[arg(long)]
+    pub resolution: Option<u32>,
+    /// Path-traced samples per node (overrides [bake] samples).
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Indirect bounces after direct light; 0 = direct only (overrides [bake] bounces).
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// Random seed (overrides [bake] seed).
+    #[arg(long)]
+    pub seed: Option<u64>,
+}
+
+/// Runs `bake-scene`.
+pub fn run(args: &BakeSceneArgs) -> anyhow::Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let mut knobs = scene.bake;
+    knobs.resolution = args.resolution.unwrap_or(knobs.resolution);
+    knobs.samples = args.samples.unwrap_or(knobs.samples);
+    knobs.bounces = args.bounces.unwrap_or(knobs.bounces);
+    knobs.seed = args.seed.unwrap_or(knobs.seed);
+    let field = bake_with_progress(&scene, &knobs)?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}.inlayfield", scene.name)));
+    save_field(&out, &field)?;
+    let recipe = scene.recipe().expect("baked from a recipe");
+    let (inside, outside) = recipe.lights();
+    let names = |v: &[&inlay_passes::scene::Primitive]| {
+        if v.is_empty() {
+            "none".to_owned()
+        } else {
+            v.iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    };
+    let occupied: Vec<DVec3> = field
+        .nodes
+        .iter()
+        .filter(|n| n[3] > 0.0)
+        .map(|n| DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
+        .collect();
+    let mean =
+        occupied.iter().map(|c| c.element_sum() / 3.0).sum::<f64>() / occupied.len().max(1) as f64;
+    let brightest = recipe
+        .primitives
+        .iter()
+        .map(|p| p.emission.max_element())
+        .fold(0.0, f64::max);
+    println!("wrote {}", out.display());
+    println!(
+        "  {}x{}x{} nodes, {} MiB; {:.0}% of occupancy cells empty",
+        field.resolution.x,
+        field.resolution.y,
+        field.resolution.z,
+        (field.nodes.len() * 16) >> 20,
+        100.0 * field.occupancy.empty_fraction()
+    );
+    println!("  lights inside the field: {}", names(&inside));
+    println!(
+        "  lights outside the field: {}{}",
+        names(&outside),
+        if scene.environment.is_black() {
+            ""
+        } else {
+            " + the environment"
+        }
+    );
+    println!("  mean radiance of occupied nodes: {mean:.4}");
+    if brightest > 0.0 && mean > 0.0 {
+        println!(
+            "  brightest emitter / mean radiance: {:.3e}",
+            brightest / mean
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,178 @@
+//! `inlay bench-march SCENE`: the march's speed (rays/s and samples/s from
+//! its GPU timestamps) at several image sizes, and its error as the step
+//! size changes — against a very fine march of the same field (quadrature
+//! error) and against the path-traced reference (everything the field
+//! loses). Prints Markdown tables for `docs/benchmarks.md`.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use clap::Args;
+use inlay_engine::{Context, HdrImage};
+use inlay_passes::bake::{render_reference, ReferenceOptions};
+use inlay_passes::camera::CameraFrame;
+use inlay_passes::field::GpuGridField;
+use inlay_passes::march::{march_image, MarchKnobs, MarchPass};
+use inlay_passes::scene::load_scene;
+
+use crate::field_source::scene_field;
+use crate::field_view::FieldView;
+use crate::headless::run_headless;
+use crate::timings_table::quantile;
+
+/// Options of `bench-march`.
+#[derive(Args, Debug)]
+pub struct BenchMarchArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Use this field file instead of the scene's field or recipe.
+    #[arg(long)]
+    pub field: Option<PathBuf>,
+    /// Camera index or name.
+    #[arg(long, default_value = "0")]
+    pub camera: String,
+    /// Image sizes to time, WxH.
+    #[arg(long, value_delimiter = ',', default_values = ["320x180", "1280x720"])]
+    pub sizes: Vec<String>,
+    /// Frames per timing (the first is dropped).
+    #[arg(long, default_value_t = 9)]
+    pub frames: u32,
+    /// samples_per_ray values for the error table.
+    #[arg(long, value_delimiter = ',', default_values = ["32", "64", "128", "256", "512", "1024", "2048"])]
+    pub steps: Vec<u32>,
+    /// Size of the error-table images, WxH.
+    #[arg(long, default_value = "160x90")]
+    pub error_size: String,
+    /// Path-traced samples per pixel of the reference (recipe scenes only).
+    #[arg(long, default_value_t = 64)]
+    pub reference_samples: u32,
+}
+
+fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| anyhow::anyhow!("size `{s}` is not WxH"))?;
+    let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
+    anyhow::ensure!(
+        (1..=16384).contains(&w) && (1..=16384).contains(&h),
+        "size `{s}` is out of range"
+    );
+    Ok((w, h))
+}
+
+/// Mean |a − b| over rgb, divided by the mean of b.
+fn relative_error(a: &HdrImage, b: &[[f32; 4]]) -> f64 {
+    let (mut err, mut mean) = (0.0, 0.0);
+    for (p, q) in a.pixels.iter().zip(b) {
+        for c in 0..3 {
+            err += (p[c] - q[c]).abs() as f64;
+            mean += q[c] as f64;
+        }
+    }
+    err / mean.max(1e-30)
+}
+
+/// Runs `bench-march`.
+pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let spec = scene.camera(&args.camera)?.clone();
+    let field = scene_field(&scene, args.field.as_deref(), true)?;
+    let library = crate::shaders::library()?;
+    let gpu_field = GpuGridField::upload(ctx, &field)?;
+    let knobs = scene.march;
+    println!(
+        "Device: {} ({:?}); field {}x{}x{}; samples_per_ray {}, termination {:e}, skip_empty {}\n",
+        ctx.info().name,
+        ctx.info().kind,
+        field.resolution.x,
+        field.resolution.y,
+        field.resolution.z,
+        knobs.samples_per_ray,
+        knobs.termination,
+        knobs.skip_empty
+    );
+    println!("| image | march ms p50 | p95 | Mrays/s | samples/ray | Msamples/s |");
+    println!("| --- | --- | --- | --- | --- | --- |");
+    let mut view = FieldView {
+        march: MarchPass::new(ctx, &library, knobs)?,
+        field: gpu_field,
+        camera: spec.clone(),
+    };
+    for size in &args.sizes {
+        let (w, h) = parse_size(size)?;
+        let run = run_headless(ctx, &view, w, h, args.frames.max(2), 0.0)?;
+        let mut ms: Vec<f64> = run
+            .timings
+            .iter()
+            .skip(1)
+            .flat_map(|t| {
+                t.passes
+                    .iter()
+                    .filter(|p| p.name == "nerf-march")
+                    .map(|p| p.gpu_ms)
+            })
+            .collect();
+        ms.sort_by(f64::total_cmp);
+        let (p50, p95) = (quantile(&ms, 0.5), quantile(&ms, 0.95));
+        // The CPU mirror takes the same steps: count the samples it evaluates.
+        let frame = CameraFrame::new(&spec, w, h);
+        let samples: u64 = march_image(&field, &frame, &knobs, &|_, _| f64::INFINITY)
+            .iter()
+            .map(|r| r.samples as u64)
+            .sum();
+        let rays = (w * h) as f64;
+        println!(
+            "| {w}×{h} | {p50:.2} | {p95:.2} | {:.2} | {:.1} | {:.1} |",
+            rays / p50 / 1e3,
+            samples as f64 / rays,
+            samples as f64 / p50 / 1e3
+        );
+    }
+    let (w, h) = parse_size(&args.error_size)?;
+    let fine_knobs = MarchKnobs {
+        samples_per_ray: 8192,
+        termination: 0.0,
+        ..knobs
+    };
+    view.march = MarchPass::new(ctx, &library, fine_knobs)?;
+    let fine = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
+    let reference = scene.recipe().map(|recipe| {
+        render_reference(
+            recipe,
+            &scene.environment,
+            &CameraFrame::new(&spec, w, h),
+            &ReferenceOptions {
+                samples: args.reference_samples,
+                bounces: scene.bake.bounces,
+                seed: 1,
+                antialias: false,
+            },
+            &|_, _| {},
+        )
+    });
+    println!(
+        "\nError at {w}×{h} (mean |Δ| / mean radiance) against a march with 8192 samples per ray \
+         and no early termination, and against the path-traced reference ({} spp):\n",
+        args.reference_samples
+    );
+    println!("| samples_per_ray | step (scene units) | vs fine march | vs path-traced reference |");
+    println!("| --- | --- | --- | --- |");
+    for &n in &args.steps {
+        let k = MarchKnobs {
+            samples_per_ray: n,
+            ..knobs
+        };
+        view.march = MarchPass::new(ctx, &library, k)?;
+        let img = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
+        println!(
+            "| {n} | {:.4} | {:.4} | {} |",
+            k.step(field.bounds.diagonal()),
+            relative_error(&img, &fine.pixels),
+            reference
+                .as_ref()
+                .map(|r| format!("{:.4}", relative_error(&img, r)))
+                .unwrap_or_else(|| "–".into())
+        );
+    }
+    Ok(())
+}
