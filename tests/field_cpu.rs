@@ -2,10 +2,11 @@
 //! satisfy what they promise, empty-space skipping is exact, baking is
 //! reproducible, and bad scene files get errors that name the key.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
-use inlay_passes::bake::{bake_grid, BakeKnobs};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::field::{field_bytes, parse_field, GridField, RadianceField};
 use inlay_passes::march::{march_image, MarchKnobs};
@@ -16,22 +17,11 @@ fn scenes_dir() -> PathBuf {
 }
 
 fn scene(name: &str) -> Scene {
-    load_scene(&scenes_dir().join(name)).unwrap()
+    common::bundled_scene(name)
 }
 
 fn bake(scene: &Scene, resolution: u32, samples: u32, bounces: u32) -> GridField {
-    let knobs = BakeKnobs {
-        resolution,
-        samples,
-        bounces,
-        ..scene.bake
-    };
-    bake_grid(
-        scene.recipe().unwrap(),
-        &scene.environment,
-        &knobs,
-        &|_, _| {},
-    )
+    common::bake_small(scene, resolution, samples, bounces)
 }
 
 fn mean_occupied_radiance(f: &GridField) -> f64 {

@@ -5,7 +5,6 @@
 
 mod common;
 
-use std::path::Path;
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -13,36 +12,20 @@ use inlay::shaders::embedded_library;
 use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, PassKind};
 use inlay_engine::shader::{compile, ShaderStage};
 use inlay_engine::{ComputePipeline, Context, HdrImage, ImageDesc, Push, Readback, Renderer};
-use inlay_passes::bake::{bake_grid, render_reference, BakeKnobs, ReferenceOptions};
+use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::march::{
     march_image, MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT,
 };
-use inlay_passes::scene::{load_scene, Scene};
+use inlay_passes::scene::Scene;
 
 fn scene(name: &str) -> Scene {
-    load_scene(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
-            .join(name),
-    )
-    .unwrap()
+    common::bundled_scene(name)
 }
 
 fn small_field(scene: &Scene, resolution: u32, samples: u32) -> GridField {
-    let knobs = BakeKnobs {
-        resolution,
-        samples,
-        bounces: 0,
-        ..scene.bake
-    };
-    bake_grid(
-        scene.recipe().unwrap(),
-        &scene.environment,
-        &knobs,
-        &|_, _| {},
-    )
+    common::bake_small(scene, resolution, samples, 0)
 }
 
 /// Runs the march pass once; with `clip = Some((near, mid))`, an object-depth

@@ -32,3 +32,32 @@ pub fn output_text(o: &Output) -> String {
         String::from_utf8_lossy(&o.stderr)
     )
 }
+
+/// A bundled scene from `scenes/`.
+pub fn bundled_scene(name: &str) -> inlay_passes::scene::Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    inlay_passes::scene::load_scene(&path).unwrap()
+}
+
+/// A scene's recipe baked at test size.
+pub fn bake_small(
+    scene: &inlay_passes::scene::Scene,
+    resolution: u32,
+    samples: u32,
+    bounces: u32,
+) -> inlay_passes::field::GridField {
+    let knobs = inlay_passes::bake::BakeKnobs {
+        resolution,
+        samples,
+        bounces,
+        ..scene.bake
+    };
+    inlay_passes::bake::bake_grid(
+        scene.recipe().unwrap(),
+        &scene.environment,
+        &knobs,
+        &|_, _| {},
+    )
+}

@@ -82,3 +82,27 @@ pub fn run_headless(
         transients_created: renderer.transients_created(),
     })
 }
+
+impl HeadlessRun {
+    /// Writes the image to each of `outs` (.exr linear, .png tonemapped at
+    /// `exposure`) and prints the per-pass timing table for `ctx`'s device.
+    pub fn report(
+        &self,
+        ctx: &Context,
+        outs: &[std::path::PathBuf],
+        exposure: f32,
+    ) -> anyhow::Result<()> {
+        for out in outs {
+            self.image.save(out, exposure)?;
+            println!("wrote {}", out.display());
+        }
+        print!(
+            "{}",
+            crate::timings_table::format_table(
+                &self.timings,
+                &format!("{} ({:?})", ctx.info().name, ctx.info().kind)
+            )
+        );
+        Ok(())
+    }
+}

@@ -170,16 +170,5 @@ fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
     };
     let frames = args.frames.unwrap_or(8).clamp(1, 100_000) as u32;
     let run = run_headless(&ctx, &scene, args.width, args.height, frames, args.time)?;
-    for out in &args.out {
-        run.image.save(out, args.exposure)?;
-        println!("wrote {}", out.display());
-    }
-    print!(
-        "{}",
-        format_table(
-            &run.timings,
-            &format!("{} ({:?})", ctx.info().name, ctx.info().kind)
-        )
-    );
-    Ok(())
+    run.report(&ctx, &args.out, args.exposure)
 }

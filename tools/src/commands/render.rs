@@ -13,7 +13,6 @@ use inlay_passes::scene::load_scene;
 use crate::field_source::scene_field;
 use crate::field_view::FieldView;
 use crate::headless::run_headless;
-use crate::timings_table::format_table;
 
 /// Options of `render`.
 #[derive(Args, Debug)]
@@ -81,16 +80,5 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
     let run = run_headless(ctx, &view, args.width, args.height, args.frames.max(1), 0.0)?;
     let bad = run.image.non_finite_count();
     anyhow::ensure!(bad == 0, "the march produced {bad} non-finite pixels");
-    for out in &args.out {
-        run.image.save(out, args.exposure)?;
-        println!("wrote {}", out.display());
-    }
-    print!(
-        "{}",
-        format_table(
-            &run.timings,
-            &format!("{} ({:?})", ctx.info().name, ctx.info().kind)
-        )
-    );
-    Ok(())
+    run.report(ctx, &args.out, args.exposure)
 }
