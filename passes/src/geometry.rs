@@ -30,11 +30,6 @@ impl Aabb {
         self.size().length()
     }
 
-    /// Centre point.
-    pub fn centre(&self) -> DVec3 {
-        0.5 * (self.min + self.max)
-    }
-
     /// Whether every edge is finite and positive.
     pub fn is_valid(&self) -> bool {
         self.min.is_finite() && self.max.is_finite() && self.min.cmplt(self.max).all()

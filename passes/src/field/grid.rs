@@ -53,11 +53,6 @@ impl GridField {
         self.bounds.size() / (self.resolution.as_dvec3() - DVec3::ONE)
     }
 
-    /// World position of node (i, j, k).
-    pub fn node_position(&self, i: u32, j: u32, k: u32) -> DVec3 {
-        self.bounds.min + DVec3::new(i as f64, j as f64, k as f64) * self.spacing()
-    }
-
     /// Index of node (i, j, k) in [`Self::nodes`].
     pub fn index(&self, i: u32, j: u32, k: u32) -> usize {
         (i + self.resolution.x * (j + self.resolution.y * k)) as usize
@@ -86,11 +81,6 @@ impl GridField {
             }
         }
         out
-    }
-
-    /// The largest node density.
-    pub fn max_density(&self) -> f32 {
-        self.nodes.iter().map(|n| n[3]).fold(0.0, f32::max)
     }
 }
 
