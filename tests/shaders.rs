@@ -33,7 +33,11 @@ fn every_shipped_shader_compiles() {
             let name = decl.trim_start()[3..].split('(').next().unwrap().trim();
             // Knob constants some shaders expect from the pass that builds
             // them (unused ones are harmless).
-            let defines = [Define::Bool("SKIP_EMPTY", true)];
+            let defines = [
+                Define::Bool("SKIP_EMPTY", true),
+                Define::Bool("OCTAHEDRAL", true),
+                Define::Bool("ENVIRONMENT", true),
+            ];
             compile(&lib, path, name, stage, &defines).unwrap_or_else(|e| panic!("{e}"));
             compiled += 1;
         }

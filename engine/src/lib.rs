@@ -31,6 +31,6 @@ pub use image_io::HdrImage;
 pub use memory::{is_depth_format, Buffer, BufferLocation, Image, ImageDesc};
 pub use pipeline::{ComputePipeline, GraphicsDesc, GraphicsPipeline};
 pub use push::Push;
-pub use readback::Readback;
+pub use readback::{BufferReadback, Readback};
 pub use renderer::{FrameReport, FrameToken, Renderer, SubmitSync, DEFAULT_FRAMES_IN_FLIGHT};
 pub use validation::ValidationLog;

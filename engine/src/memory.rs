@@ -165,7 +165,7 @@ pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
 
 /// A 2D image with one mip level, its memory and a whole-image view.
 pub struct Image {
-    ctx: Arc<Context>,
+    pub(crate) ctx: Arc<Context>,
     pub(crate) raw: vk::Image,
     pub(crate) view: vk::ImageView,
     allocation: Option<Allocation>,

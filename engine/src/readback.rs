@@ -1,5 +1,6 @@
-//! Headless target support: copying a rendered HDR image into host-visible
-//! memory through a graph transfer pass, and decoding it on the CPU.
+//! Headless target support: copying a rendered HDR image (or any buffer)
+//! into host-visible memory through a graph transfer pass, and decoding it
+//! on the CPU.
 
 use std::sync::Arc;
 
@@ -8,7 +9,8 @@ use ash::vk;
 use crate::context::Context;
 use crate::error::{EngineError, Result};
 use crate::graph::{
-    texel_bytes, BufferAccess, FrameGraph, ImageAccess, ImageHandle, PassKind, SyncState,
+    texel_bytes, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
+    SyncState,
 };
 use crate::image_io::HdrImage;
 use crate::memory::{Buffer, BufferLocation, ImageDesc};
@@ -106,5 +108,55 @@ impl Readback {
             height: self.desc.height,
             pixels,
         })
+    }
+}
+
+/// A host-visible buffer that receives a copy of a device buffer at the end
+/// of a frame (results, statistics, fitted parameters).
+pub struct BufferReadback {
+    buffer: Arc<Buffer>,
+}
+
+impl BufferReadback {
+    /// A readback buffer of `size` bytes.
+    pub fn new(ctx: &Arc<Context>, name: &str, size: u64) -> Result<Self> {
+        let buffer = Buffer::new(
+            ctx,
+            name,
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Readback,
+        )?;
+        Ok(Self {
+            buffer: Arc::new(buffer),
+        })
+    }
+
+    /// Adds a transfer pass named `pass` copying `source` (which needs
+    /// transfer-source usage) into this buffer, left ready for host reads.
+    pub fn add_to_graph(&self, graph: &mut FrameGraph<'_>, pass: &str, source: BufferHandle) {
+        let export = SyncState {
+            stage: vk::PipelineStageFlags2::HOST,
+            access: vk::AccessFlags2::HOST_READ,
+            layout: vk::ImageLayout::UNDEFINED,
+        };
+        let buffer = graph.import_buffer(&self.buffer, Some(export));
+        let mut p = graph.add_pass(pass, PassKind::Transfer);
+        p.buffer(source, BufferAccess::TransferSrc);
+        p.buffer(buffer, BufferAccess::TransferDst);
+        p.exec(move |ctx| ctx.copy_buffer(source, buffer));
+    }
+
+    /// The buffer's content as little-endian f32s. Call after the frame
+    /// that filled it has finished.
+    pub fn read_f32(&self) -> Result<Vec<f32>> {
+        let bytes = self.buffer.mapped().ok_or_else(|| EngineError::Pass {
+            pass: "readback".into(),
+            message: "readback buffer is not host-visible".into(),
+        })?;
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
     }
 }

@@ -1,13 +1,15 @@
-//! One-off uploads: device-local buffers filled from the CPU through a
-//! staging buffer, for data that lives across frames (fields, tables).
+//! One-off uploads: device-local buffers and images filled from the CPU
+//! through a staging buffer, for data that lives across frames (fields,
+//! tables, probes of known content).
 
 use std::sync::Arc;
 
 use ash::vk;
 
+use crate::error::EngineError;
 use crate::error::{Result, VkContext};
 use crate::graph::SyncState;
-use crate::memory::{Buffer, BufferLocation};
+use crate::memory::{Buffer, BufferLocation, Image};
 use crate::Context;
 
 impl Buffer {
@@ -57,6 +59,98 @@ impl Buffer {
         })?;
         dst.set_sync_state(SyncState::FRESH);
         Ok(dst)
+    }
+}
+
+impl Image {
+    /// Replaces the whole content of an RGBA32F image (created with
+    /// transfer-destination usage) with `pixels`, row by row, through a
+    /// staging buffer in a one-time submission; waits for it. The image is
+    /// left in GENERAL layout with the copy visible to any later access.
+    pub fn write_rgba32f(&self, pixels: &[[f32; 4]]) -> Result<()> {
+        let desc = self.desc();
+        let n = desc.width as usize * desc.height as usize;
+        if desc.format != vk::Format::R32G32B32A32_SFLOAT || pixels.len() != n {
+            return Err(EngineError::Pass {
+                pass: "upload".into(),
+                message: format!(
+                    "write_rgba32f needs an RGBA32F image and {n} pixels; got {:?} and {}",
+                    desc.format,
+                    pixels.len()
+                ),
+            });
+        }
+        let ctx = &self.ctx;
+        let bytes: Vec<u8> = pixels
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let mut staging = Buffer::new(
+            ctx,
+            "image upload (staging)",
+            bytes.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            BufferLocation::Upload,
+        )?;
+        staging
+            .mapped_mut()
+            .expect("upload buffers are host-visible")[..bytes.len()]
+            .copy_from_slice(&bytes);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(1);
+        submit_once(ctx, |device, cmd| unsafe {
+            let to_dst = vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+                .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .image(self.raw)
+                .subresource_range(range);
+            let dep =
+                vk::DependencyInfo::default().image_memory_barriers(std::slice::from_ref(&to_dst));
+            device.cmd_pipeline_barrier2(cmd, &dep);
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .layer_count(1),
+                )
+                .image_extent(vk::Extent3D {
+                    width: desc.width,
+                    height: desc.height,
+                    depth: 1,
+                });
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                self.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            );
+            let to_general = vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .new_layout(vk::ImageLayout::GENERAL)
+                .image(self.raw)
+                .subresource_range(range);
+            let dep = vk::DependencyInfo::default()
+                .image_memory_barriers(std::slice::from_ref(&to_general));
+            device.cmd_pipeline_barrier2(cmd, &dep);
+        })?;
+        self.set_sync_state(SyncState {
+            stage: vk::PipelineStageFlags2::NONE,
+            access: vk::AccessFlags2::NONE,
+            layout: vk::ImageLayout::GENERAL,
+        });
+        Ok(())
     }
 }
 

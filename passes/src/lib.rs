@@ -5,8 +5,9 @@
 //! uses only the engine's safe API.
 //!
 //! So far: radiance fields ([`field`]), scene files and recipes ([`scene`]),
-//! baking recipes into fields and ground-truth images ([`bake`]), and the
-//! ray march ([`march`]).
+//! baking recipes into fields and ground-truth images ([`bake`]), the ray
+//! march ([`march`]), spherical Gaussians ([`sg`]), the incident-light
+//! probe ([`probe`]) and its Levenberg–Marquardt SG fit ([`sgfit`]).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -15,6 +16,8 @@ pub mod camera;
 pub mod field;
 pub mod geometry;
 pub mod march;
+pub mod probe;
 pub mod rng;
 pub mod scene;
 pub mod sg;
+pub mod sgfit;

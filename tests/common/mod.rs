@@ -61,3 +61,21 @@ pub fn bake_small(
         &|_, _| {},
     )
 }
+
+/// Builds one frame with `build`, runs it to completion and checks the
+/// validation layer.
+pub fn run_frame<'a>(
+    ctx: &std::sync::Arc<Context>,
+    build: impl FnOnce(&mut inlay_engine::graph::FrameGraph<'a>),
+) -> inlay_engine::FrameReport {
+    let mut renderer = inlay_engine::Renderer::new(ctx, 1).unwrap();
+    renderer.begin_frame().unwrap();
+    let mut graph = inlay_engine::graph::FrameGraph::new();
+    build(&mut graph);
+    let report = renderer
+        .submit(graph, &inlay_engine::SubmitSync::none())
+        .unwrap();
+    renderer.finish().unwrap();
+    assert_no_validation_errors(ctx);
+    report
+}

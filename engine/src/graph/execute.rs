@@ -78,6 +78,7 @@ pub struct PassContext<'r> {
     descriptors: &'r mut DescriptorArena,
     samplers: &'r Samplers,
     extent: vk::Extent2D,
+    dispatches: u32,
 }
 
 impl PassContext<'_> {
@@ -331,6 +332,10 @@ impl PassContext<'_> {
             bindings,
             push,
         )?;
+        if self.dispatches > 0 && self.writes_storage() {
+            self.order_after_previous_dispatch();
+        }
+        self.dispatches += 1;
         if groups.iter().all(|&g| g > 0) {
             unsafe {
                 self.ctx
@@ -339,6 +344,78 @@ impl PassContext<'_> {
             };
         }
         Ok(())
+    }
+
+    /// Records a dispatch whose bindings are looked up by binding number in
+    /// `table` (`table[n]` for `@binding(n)`), taking only those the entry
+    /// point uses, and the first bytes of `push` it takes: one table and one
+    /// push block serve all entry points of a multi-kernel shader.
+    pub fn dispatch_table(
+        &mut self,
+        pipeline: &ComputePipeline,
+        table: &[Binding],
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> Result<()> {
+        let core = &pipeline.core;
+        let mut bindings = Vec::with_capacity(core.bindings.len());
+        for r in &core.bindings {
+            match table.get(r.binding as usize) {
+                Some(b) => bindings.push(*b),
+                None => {
+                    return Err(self.error(format!(
+                        "pipeline {} uses binding {} (`{}`), which the table of {} lacks",
+                        core.name,
+                        r.binding,
+                        r.name,
+                        table.len()
+                    )))
+                }
+            }
+        }
+        let size = core.push_size as usize;
+        if push.len() < size {
+            return Err(self.error(format!(
+                "pipeline {} takes {size} bytes of push constants, got {}",
+                core.name,
+                push.len()
+            )));
+        }
+        self.dispatch(pipeline, &bindings, &push[..size], groups)
+    }
+
+    /// Whether the pass declared any storage write: then each of its
+    /// dispatches may read what the previous one wrote.
+    fn writes_storage(&self) -> bool {
+        self.pass.buffers.iter().any(|u| {
+            matches!(
+                u.access,
+                BufferAccess::StorageWrite | BufferAccess::StorageReadWrite
+            )
+        }) || self.pass.images.iter().any(|u| {
+            matches!(
+                u.access,
+                ImageAccess::StorageWrite | ImageAccess::StorageReadWrite
+            )
+        })
+    }
+
+    /// Orders a dispatch after the previous one of the same pass: the graph
+    /// orders passes, and within a pass that writes storage, successive
+    /// dispatches are ordered the same way (compute writes visible to
+    /// compute reads and writes).
+    fn order_after_previous_dispatch(&self) {
+        let barrier = vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .dst_access_mask(
+                vk::AccessFlags2::SHADER_STORAGE_READ
+                    | vk::AccessFlags2::SHADER_STORAGE_WRITE
+                    | vk::AccessFlags2::UNIFORM_READ,
+            );
+        let info = vk::DependencyInfo::default().memory_barriers(std::slice::from_ref(&barrier));
+        unsafe { self.ctx.device.cmd_pipeline_barrier2(self.cmd, &info) };
     }
 
     /// Records a non-indexed draw inside the raster pass's rendering.
@@ -704,6 +781,7 @@ pub(crate) fn record_graph(
                 descriptors,
                 samplers,
                 extent,
+                dispatches: 0,
             };
             f(&mut pc)?;
         }

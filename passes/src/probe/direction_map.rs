@@ -1,0 +1,183 @@
+//! Direction maps: how the texels of a probe image cover the sphere of
+//! directions. Mirrored by `shaders/common/direction_map.wgsl`.
+
+use std::f64::consts::PI;
+
+use glam::DVec3;
+use serde::Deserialize;
+
+/// The layout of a probe image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MapKind {
+    /// Latitude–longitude, 2n × n texels, +Y up (φ = atan2(z, x) across,
+    /// θ from +Y down), like the scenes' environment maps. Texels shrink
+    /// towards the poles.
+    Equirect,
+    /// The octahedral map, n × n texels: (u, v) ∈ [−1, 1]² is the point
+    /// (u, 1 − |u| − |v|, v) of the octahedron |x| + |y| + |z| = 1, the
+    /// lower half folded over the corners. Texel solid angles vary by at
+    /// most a factor of about 5 (equirect: unbounded).
+    Octahedral,
+}
+
+impl MapKind {
+    /// The name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            MapKind::Equirect => "equirect",
+            MapKind::Octahedral => "octahedral",
+        }
+    }
+}
+
+/// A direction map of a given size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionMap {
+    /// The layout.
+    pub kind: MapKind,
+    /// Texels across.
+    pub width: u32,
+    /// Texels down.
+    pub height: u32,
+}
+
+impl DirectionMap {
+    /// A map whose resolution knob is `n`: 2n × n (equirect) or n × n (octahedral).
+    pub fn new(kind: MapKind, n: u32) -> Self {
+        let width = match kind {
+            MapKind::Equirect => 2 * n,
+            MapKind::Octahedral => n,
+        };
+        Self {
+            kind,
+            width,
+            height: n,
+        }
+    }
+
+    /// Number of texels.
+    pub fn texels(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// The unit direction through the centre of texel (x, y).
+    pub fn direction(&self, x: u32, y: u32) -> DVec3 {
+        let u = (x as f64 + 0.5) / self.width as f64;
+        let v = (y as f64 + 0.5) / self.height as f64;
+        match self.kind {
+            MapKind::Equirect => {
+                let (phi, theta) = (2.0 * PI * u, PI * v);
+                DVec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                )
+            }
+            MapKind::Octahedral => octahedron_point(2.0 * u - 1.0, 2.0 * v - 1.0).normalize(),
+        }
+    }
+
+    /// The solid angle of texel (x, y): exact for equirect; for the
+    /// octahedral map the midpoint rule on dω = du dv / |p|³ (p the
+    /// octahedron point), whose sum over the map is 4π within 0.3 % at
+    /// n = 16 (tested).
+    pub fn solid_angle(&self, x: u32, y: u32) -> f64 {
+        match self.kind {
+            MapKind::Equirect => {
+                let h = self.height as f64;
+                let (t0, t1) = (PI * y as f64 / h, PI * (y as f64 + 1.0) / h);
+                2.0 * PI / self.width as f64 * (t0.cos() - t1.cos())
+            }
+            MapKind::Octahedral => {
+                let n = self.width as f64;
+                let u = 2.0 * (x as f64 + 0.5) / n - 1.0;
+                let v = 2.0 * (y as f64 + 0.5) / self.height as f64 - 1.0;
+                let p = octahedron_point(u, v);
+                4.0 / (n * self.height as f64) / p.length().powi(3)
+            }
+        }
+    }
+
+    /// The texel containing unit direction `d` (for writing probes of known
+    /// content in tests and tools).
+    pub fn texel_of(&self, d: DVec3) -> (u32, u32) {
+        let (u, v) = match self.kind {
+            MapKind::Equirect => {
+                let phi = d.z.atan2(d.x).rem_euclid(2.0 * PI);
+                (phi / (2.0 * PI), d.y.clamp(-1.0, 1.0).acos() / PI)
+            }
+            MapKind::Octahedral => {
+                let p = d / (d.x.abs() + d.y.abs() + d.z.abs());
+                let (mut a, mut b) = (p.x, p.z);
+                if p.y < 0.0 {
+                    let (fa, fb) = ((1.0 - b.abs()) * a.signum(), (1.0 - a.abs()) * b.signum());
+                    a = fa;
+                    b = fb;
+                }
+                (0.5 * (a + 1.0), 0.5 * (b + 1.0))
+            }
+        };
+        let x = ((u * self.width as f64) as u32).min(self.width - 1);
+        let y = ((v * self.height as f64) as u32).min(self.height - 1);
+        (x, y)
+    }
+}
+
+/// The point of the octahedron |x| + |y| + |z| = 1 for (u, v) ∈ [−1, 1]²:
+/// (u, 1 − |u| − |v|, v) inside the diamond |u| + |v| ≤ 1, folded to the
+/// lower half outside it.
+fn octahedron_point(u: f64, v: f64) -> DVec3 {
+    let y = 1.0 - u.abs() - v.abs();
+    if y >= 0.0 {
+        DVec3::new(u, y, v)
+    } else {
+        DVec3::new(
+            (1.0 - v.abs()) * u.signum(),
+            y,
+            (1.0 - u.abs()) * v.signum(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solid_angles_cover_the_sphere() {
+        for (kind, n, tol) in [
+            (MapKind::Equirect, 8, 1e-12),
+            (MapKind::Equirect, 64, 1e-12),
+            (MapKind::Octahedral, 16, 3e-3),
+            (MapKind::Octahedral, 64, 3e-4),
+        ] {
+            let map = DirectionMap::new(kind, n);
+            let mut total = 0.0;
+            for y in 0..map.height {
+                for x in 0..map.width {
+                    total += map.solid_angle(x, y);
+                    let d = map.direction(x, y);
+                    assert!((d.length() - 1.0).abs() < 1e-12);
+                    assert_eq!(map.texel_of(d), (x, y), "{kind:?} {n} texel ({x}, {y})");
+                }
+            }
+            assert!(
+                (total / (4.0 * PI) - 1.0).abs() < tol,
+                "{kind:?} {n}: {total}"
+            );
+        }
+    }
+
+    #[test]
+    fn octahedral_texels_are_nearly_uniform() {
+        let map = DirectionMap::new(MapKind::Octahedral, 32);
+        let w: Vec<f64> = (0..32 * 32)
+            .map(|i| map.solid_angle(i % 32, i / 32))
+            .collect();
+        let (lo, hi) = w
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!(hi / lo < 5.3, "{}", hi / lo);
+    }
+}

@@ -1,0 +1,164 @@
+//! The probe-trace pass on the GPU (`shaders/probe/trace.wgsl`), writing a
+//! persistent probe image that the SG fit reads.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
+use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, Push};
+
+use super::direction_map::{DirectionMap, MapKind};
+use super::knobs::ProbeKnobs;
+use crate::field::GpuGridField;
+use crate::march::MarchKnobs;
+use crate::sg::Sg64;
+
+/// Format of the probe image: L_i in rgb, Ô in alpha.
+pub const PROBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// The probe trace for one set of knobs and one environment light.
+pub struct ProbePass {
+    pipeline: ComputePipeline,
+    environment: Option<(Arc<Buffer>, u32)>,
+    image: Arc<Image>,
+    map: DirectionMap,
+    march: MarchKnobs,
+}
+
+impl ProbePass {
+    /// Compiles the pass and creates its probe image. `environment` is the
+    /// distant light L_env; when empty, the pass is built without the L_env
+    /// term.
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        knobs: ProbeKnobs,
+        march: MarchKnobs,
+        environment: &[Sg64],
+    ) -> anyhow::Result<Self> {
+        knobs
+            .check()
+            .map_err(|(k, m)| anyhow::anyhow!("probe knob `{k}`: {m}"))?;
+        march
+            .check()
+            .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
+        let defines = [
+            Define::Bool("SKIP_EMPTY", march.skip_empty),
+            Define::Bool("OCTAHEDRAL", knobs.map == MapKind::Octahedral),
+            Define::Bool("ENVIRONMENT", !environment.is_empty()),
+        ];
+        let shader = compile(
+            lib,
+            "probe/trace.wgsl",
+            "main",
+            ShaderStage::Compute,
+            &defines,
+        )?;
+        let pipeline = ComputePipeline::new(ctx, &shader)?;
+        let environment = if environment.is_empty() {
+            None
+        } else {
+            let bytes: Vec<u8> = environment
+                .iter()
+                .flat_map(|g| g.to_f32().packed())
+                .flat_map(f32::to_le_bytes)
+                .collect();
+            let buffer = Buffer::with_data(
+                ctx,
+                "environment-lobes",
+                &bytes,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?;
+            Some((Arc::new(buffer), environment.len() as u32))
+        };
+        let map = knobs.direction_map();
+        let image = Arc::new(Image::new(
+            ctx,
+            "probe",
+            ImageDesc {
+                width: map.width,
+                height: map.height,
+                format: PROBE_FORMAT,
+            },
+            vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        )?);
+        Ok(Self {
+            pipeline,
+            environment,
+            image,
+            map,
+            march,
+        })
+    }
+
+    /// The probe's direction map.
+    pub fn map(&self) -> DirectionMap {
+        self.map
+    }
+
+    /// The persistent probe image (what the last trace wrote).
+    pub fn image(&self) -> &Arc<Image> {
+        &self.image
+    }
+
+    /// Imports the probe image without tracing (for frames that reuse it).
+    pub fn import(&self, graph: &mut FrameGraph<'_>) -> ImageHandle {
+        graph.import_image(&self.image, "probe", None)
+    }
+
+    /// Adds the `probe-trace` pass tracing `field` from `origin`; returns
+    /// the written probe image.
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: &GpuGridField,
+        origin: DVec3,
+    ) -> ImageHandle {
+        let grid = field.import(graph);
+        let probe = self.import(graph);
+        let env = self
+            .environment
+            .as_ref()
+            .map(|(b, n)| (graph.import_buffer(b, None), *n));
+        let (w, h) = (self.map.width, self.map.height);
+        let o = origin.as_vec3();
+        let push = Push::new()
+            .f32(o.x)
+            .f32(o.y)
+            .f32(o.z)
+            .f32(self.march.step(field.diagonal) as f32)
+            .u32(w)
+            .u32(h)
+            .f32(self.march.termination as f32)
+            .u32(env.map_or(0, |(_, n)| n));
+        let mut pass = graph.add_pass("probe-trace", PassKind::Compute);
+        grid.declare_reads(&mut pass);
+        let probe = pass.image(probe, ImageAccess::StorageWrite);
+        if let Some((b, _)) = env {
+            pass.buffer(b, inlay_engine::graph::BufferAccess::StorageRead);
+        }
+        let pipeline = &self.pipeline;
+        pass.exec(move |ctx| {
+            let mut bindings = vec![
+                Binding::UniformBuffer(grid.info),
+                Binding::StorageBuffer(grid.nodes),
+                Binding::StorageBuffer(grid.occupancy),
+                Binding::StorageImage(probe),
+            ];
+            if let Some((b, _)) = env {
+                bindings.push(Binding::StorageBuffer(b));
+            }
+            ctx.dispatch(
+                pipeline,
+                &bindings,
+                push.bytes(),
+                pipeline.groups_for([w, h, 1]),
+            )
+        });
+        probe
+    }
+}

@@ -1,0 +1,19 @@
+//! Fitting M spherical Gaussians to the incident-light probe by
+//! Levenberg–Marquardt (METHOD.md "Spherical Gaussians", per-frame step 1):
+//! the model and parameterisation ([`model`]), the damped step
+//! ([`solve`]), the f64 CPU reference and the GPU pass with its warm start.
+
+mod knobs;
+pub mod model;
+mod pass;
+mod reference;
+pub mod solve;
+#[cfg(test)]
+mod tests;
+
+pub use knobs::{FitKnobs, MAX_ITERATIONS, MAX_LOBES};
+pub use model::ProbeSamples;
+pub use pass::{FitReport, FitStart, SgFitPass};
+pub use reference::{
+    fit_reference, relative_residual, FitOutcome, Start, DAMPING_DOWN, DAMPING_LIMIT, DAMPING_UP,
+};

@@ -1,0 +1,270 @@
+//! The fit's model, one definition mirrored by `shaders/sgfit/model.wgsl`:
+//! the parameterisation, the cold-start initialisation, the cost, the
+//! Jacobian rows and the step.
+//!
+//! Lobe k has six parameters around its current value (p, λ, μ):
+//! a_c = √μ_c (so μ = a² ≥ 0), s = ln λ (so λ > 0, clamped to
+//! [[`MIN_SHARPNESS`], [`MAX_SHARPNESS`]]) and (u, v), the axis moved in its
+//! tangent plane and renormalised (so |p| = 1). The residual of texel t,
+//! channel c is √w_t (Σ_k μ_kc G_k(v_t) − L_tc), w_t its solid angle: the
+//! cost approximates ∫ |fit − L|² dω. Texels with a NaN, infinite or
+//! negative channel get weight 0 and are counted.
+
+use std::f64::consts::PI;
+
+use glam::DVec3;
+
+use crate::probe::DirectionMap;
+use crate::sg::Sg64;
+
+/// Smallest sharpness a fitted lobe may take.
+pub const MIN_SHARPNESS: f64 = 1e-4;
+/// Largest sharpness a fitted lobe may take.
+pub const MAX_SHARPNESS: f64 = 1e4;
+/// Largest tangent-plane move of an axis in one step (radians, roughly).
+pub const MAX_AXIS_STEP: f64 = 1.0;
+/// The brightest texel seeds a lobe only when it exceeds the mean
+/// luminance by this factor (a small, bright source).
+pub const SEED_CONTRAST: f64 = 4.0;
+/// Parameters per lobe.
+pub const PARAMS_PER_LOBE: usize = 6;
+
+/// A probe as the fit sees it: per texel direction, solid angle, radiance.
+#[derive(Debug, Clone)]
+pub struct ProbeSamples {
+    /// Unit direction of each texel.
+    pub directions: Vec<DVec3>,
+    /// Solid angle of each texel (0 for invalid texels).
+    pub weights: Vec<f64>,
+    /// Radiance of each texel (0 for invalid texels).
+    pub radiance: Vec<DVec3>,
+    /// How many texels were NaN, infinite or negative.
+    pub invalid: usize,
+}
+
+impl ProbeSamples {
+    /// Reads `texels` (row by row, rgb + anything) laid out by `map`,
+    /// sanitising invalid ones.
+    pub fn new(map: &DirectionMap, texels: &[[f64; 4]]) -> Self {
+        let n = map.texels();
+        let mut s = Self {
+            directions: Vec::with_capacity(n),
+            weights: Vec::with_capacity(n),
+            radiance: Vec::with_capacity(n),
+            invalid: 0,
+        };
+        for (i, t) in texels.iter().enumerate().take(n) {
+            let (x, y) = (i as u32 % map.width, i as u32 / map.width);
+            s.directions.push(map.direction(x, y));
+            if texel_valid(t) {
+                s.weights.push(map.solid_angle(x, y));
+                s.radiance.push(DVec3::new(t[0], t[1], t[2]));
+            } else {
+                s.weights.push(0.0);
+                s.radiance.push(DVec3::ZERO);
+                s.invalid += 1;
+            }
+        }
+        s
+    }
+
+    /// Σ_t w_t |L_t|²: the cost of fitting nothing (the residual's scale).
+    pub fn energy(&self) -> f64 {
+        self.weights
+            .iter()
+            .zip(&self.radiance)
+            .map(|(w, l)| w * l.length_squared())
+            .sum()
+    }
+}
+
+/// Whether a texel's radiance is usable: every rgb channel finite and ≥ 0.
+pub fn texel_valid(t: &[f64; 4]) -> bool {
+    t[..3].iter().all(|c| c.is_finite() && *c >= 0.0)
+}
+
+/// Rec. 709 luminance.
+pub fn luminance(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// An orthonormal tangent basis (t1, t2) of unit `p` (Duff et al. 2017),
+/// the same on CPU and GPU.
+pub fn tangent_basis(p: DVec3) -> (DVec3, DVec3) {
+    let sign = if p.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + p.z);
+    let b = p.x * p.y * a;
+    (
+        DVec3::new(1.0 + sign * p.x * p.x * a, sign * b, -sign * p.x),
+        DVec3::new(b, sign + p.y * p.y * a, -p.y),
+    )
+}
+
+/// Axis k of M points spread evenly over the sphere (Fibonacci lattice, +Y up).
+pub fn fibonacci_axis(k: u32, m: u32) -> DVec3 {
+    let y = 1.0 - (2.0 * k as f64 + 1.0) / m as f64;
+    let r = (1.0 - y * y).max(0.0).sqrt();
+    let phi = k as f64 * PI * (3.0 - 5f64.sqrt());
+    DVec3::new(r * phi.cos(), y, r * phi.sin())
+}
+
+/// The cold-start sharpness of M lobes: neighbours (≈ √(4π/M) apart)
+/// overlap at half their peak value, λ = 8 ln 2 · M / 4π.
+pub fn initial_sharpness(m: u32) -> f64 {
+    8.0 * std::f64::consts::LN_2 * m as f64 / (4.0 * PI)
+}
+
+/// The cold start: Fibonacci axes at [`initial_sharpness`]; when the
+/// brightest texel exceeds [`SEED_CONTRAST`] × the mean luminance, the lobe
+/// nearest to it moves onto it with a sharpness matching the texel's size;
+/// then amplitudes μ_k = Σ w L G_k / Σ w G_k S with S = Σ_j G_j (each texel's
+/// radiance shared among the lobes covering it).
+pub fn cold_start(probe: &ProbeSamples, m: u32) -> Vec<Sg64> {
+    let l0 = initial_sharpness(m);
+    let mut lobes: Vec<Sg64> = (0..m)
+        .map(|k| Sg64 {
+            direction: fibonacci_axis(k, m),
+            sharpness: l0,
+            amplitude: DVec3::ZERO,
+        })
+        .collect();
+    // Brightest texel (lowest index on ties) and the mean luminance.
+    let (mut best, mut best_lum, mut sum_wl, mut sum_w) = (0usize, -1.0f64, 0.0, 0.0);
+    for (t, (l, w)) in probe.radiance.iter().zip(&probe.weights).enumerate() {
+        if *w <= 0.0 {
+            continue;
+        }
+        let lum = luminance(*l);
+        if lum > best_lum {
+            best = t;
+            best_lum = lum;
+        }
+        sum_wl += w * lum;
+        sum_w += w;
+    }
+    if sum_w > 0.0 && best_lum > SEED_CONTRAST * sum_wl / sum_w {
+        let d = probe.directions[best];
+        // Nearest axis (lowest index on ties).
+        let mut k_best = 0usize;
+        let mut dot_best = -2.0;
+        for (k, g) in lobes.iter().enumerate() {
+            let dot = g.direction.dot(d);
+            if dot > dot_best {
+                k_best = k;
+                dot_best = dot;
+            }
+        }
+        // Half value at the texel's radius r (w = π r²): λ = 2 ln 2 · π / w.
+        let sharp = 2.0 * std::f64::consts::LN_2 * PI / probe.weights[best];
+        lobes[k_best].direction = d;
+        lobes[k_best].sharpness = sharp.clamp(l0, MAX_SHARPNESS);
+    }
+    let cover: Vec<f64> = probe
+        .directions
+        .iter()
+        .map(|&v| lobes.iter().map(|g| g.weight(v)).sum())
+        .collect();
+    let amplitudes: Vec<DVec3> = lobes
+        .iter()
+        .map(|g| {
+            let mut num = DVec3::ZERO;
+            let mut den = 0.0;
+            for (t, cover) in cover.iter().enumerate() {
+                let gw = probe.weights[t] * g.weight(probe.directions[t]);
+                num += gw * probe.radiance[t];
+                den += gw * cover;
+            }
+            if den > 0.0 {
+                num / den
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect();
+    for (g, a) in lobes.iter_mut().zip(amplitudes) {
+        g.amplitude = a;
+    }
+    lobes
+}
+
+/// The model's radiance in direction `v`.
+pub fn model(lobes: &[Sg64], v: DVec3) -> DVec3 {
+    lobes.iter().map(|g| g.eval(v)).sum()
+}
+
+/// Σ_t w_t |model(v_t) − L_t|².
+pub fn cost(probe: &ProbeSamples, lobes: &[Sg64]) -> f64 {
+    (0..probe.directions.len())
+        .map(|t| {
+            let w = probe.weights[t];
+            if w <= 0.0 {
+                return 0.0;
+            }
+            w * (model(lobes, probe.directions[t]) - probe.radiance[t]).length_squared()
+        })
+        .sum()
+}
+
+/// The three Jacobian rows of texel t (channels r, g, b), each with
+/// 6M derivative columns followed by the residual.
+pub fn jacobian_rows(probe: &ProbeSamples, lobes: &[Sg64], t: usize, rows: &mut [Vec<f64>; 3]) {
+    let p = PARAMS_PER_LOBE * lobes.len();
+    for row in rows.iter_mut() {
+        row.clear();
+        row.resize(p + 1, 0.0);
+    }
+    let w = probe.weights[t];
+    if w <= 0.0 {
+        return;
+    }
+    let sw = w.sqrt();
+    let v = probe.directions[t];
+    let m = model(lobes, v);
+    for (k, g) in lobes.iter().enumerate() {
+        let e = g.weight(v);
+        let (t1, t2) = tangent_basis(g.direction);
+        let ds = -0.5 * g.sharpness * (v - g.direction).length_squared();
+        let (du, dv) = (g.sharpness * v.dot(t1), g.sharpness * v.dot(t2));
+        for (c, row) in rows.iter_mut().enumerate() {
+            let mu = g.amplitude[c];
+            let base = PARAMS_PER_LOBE * k;
+            row[base + c] = sw * 2.0 * mu.sqrt() * e;
+            row[base + 3] = sw * mu * e * ds;
+            row[base + 4] = sw * mu * e * du;
+            row[base + 5] = sw * mu * e * dv;
+        }
+    }
+    for (c, row) in rows.iter_mut().enumerate() {
+        row[p] = sw * (m[c] - probe.radiance[t][c]);
+    }
+}
+
+/// Lobes moved by the parameter step `delta` (6 per lobe).
+pub fn apply_step(lobes: &[Sg64], delta: &[f64]) -> Vec<Sg64> {
+    lobes
+        .iter()
+        .enumerate()
+        .map(|(k, g)| {
+            let d = &delta[PARAMS_PER_LOBE * k..PARAMS_PER_LOBE * (k + 1)];
+            let a = DVec3::new(
+                g.amplitude.x.sqrt() + d[0],
+                g.amplitude.y.sqrt() + d[1],
+                g.amplitude.z.sqrt() + d[2],
+            );
+            let s = (g.sharpness.max(MIN_SHARPNESS).ln() + d[3])
+                .clamp(MIN_SHARPNESS.ln(), MAX_SHARPNESS.ln());
+            let (mut u, mut v) = (d[4], d[5]);
+            let len = (u * u + v * v).sqrt();
+            if len > MAX_AXIS_STEP {
+                u *= MAX_AXIS_STEP / len;
+                v *= MAX_AXIS_STEP / len;
+            }
+            let (t1, t2) = tangent_basis(g.direction);
+            Sg64 {
+                direction: (g.direction + u * t1 + v * t2).normalize(),
+                sharpness: s.exp(),
+                amplitude: a * a,
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,307 @@
+//! The SG fit on the GPU (`shaders/sgfit/fit.wgsl`): one graph pass,
+//! `sg-fit`, recording the cold start, the start selection and the
+//! iterations as successive dispatches. The current lobes and the fit's
+//! state (cost, damping, residual log) persist across frames for the warm
+//! start; the Jacobian, normal matrix and solver workspace are transient.
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{
+    Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
+};
+use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
+
+use super::knobs::{FitKnobs, MAX_ITERATIONS};
+use super::reference::relative_residual;
+use crate::probe::{DirectionMap, MapKind};
+use crate::sg::Sg32;
+
+/// Where a GPU fit starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FitStart {
+    /// From the cold-start initialisation.
+    Cold,
+    /// From the lobes of the previous fit, unless the cold start fits better.
+    Warm,
+}
+
+/// Indices into the fit's state buffer (mirrors the `S_*` constants of
+/// `shaders/sgfit/fit.wgsl`).
+mod slot {
+    pub const DAMPING: usize = 1;
+    pub const ENERGY: usize = 3;
+    pub const INVALID: usize = 4;
+    pub const STARTED_COLD: usize = 5;
+    pub const ITERATIONS: usize = 6;
+    pub const ACCEPTED: usize = 7;
+    pub const LOG: usize = 16;
+}
+const STATE_FLOATS: usize = slot::LOG + MAX_ITERATIONS as usize + 1;
+
+/// What the last GPU fit reported (read back after its frame).
+#[derive(Debug, Clone)]
+pub struct FitReport {
+    /// The fitted lobes.
+    pub lobes: Vec<Sg32>,
+    /// Cost after each iteration (index 0: at the start).
+    pub costs: Vec<f64>,
+    /// Σ w |L|² of the probe.
+    pub energy: f64,
+    /// Whether the fit started cold.
+    pub started_cold: bool,
+    /// Accepted steps.
+    pub accepted: u32,
+    /// Probe texels ignored as NaN, infinite or negative.
+    pub invalid: u32,
+    /// Damping at the end.
+    pub damping: f64,
+}
+
+impl FitReport {
+    /// The final relative residual √(cost / energy).
+    pub fn relative_residual(&self) -> f64 {
+        relative_residual(*self.costs.last().unwrap_or(&0.0), self.energy)
+    }
+}
+
+struct Kernels {
+    init_cold: ComputePipeline,
+    cost: ComputePipeline,
+    select_start: ComputePipeline,
+    jacobian: ComputePipeline,
+    normal_tile: ComputePipeline,
+    solve: ComputePipeline,
+    decide: ComputePipeline,
+}
+
+/// Sizes derived from the knobs and the probe.
+#[derive(Debug, Clone, Copy)]
+struct Shape {
+    cols: u32,
+    rows: u32,
+    groups: u32,
+}
+
+/// The GPU fit for one set of knobs and one probe layout.
+pub struct SgFitPass {
+    kernels: Kernels,
+    knobs: FitKnobs,
+    map: DirectionMap,
+    shape: Shape,
+    lobes: Arc<Buffer>,
+    state: Arc<Buffer>,
+    lobes_readback: BufferReadback,
+    state_readback: BufferReadback,
+}
+
+fn round_up(x: u32, m: u32) -> u32 {
+    x.div_ceil(m) * m
+}
+
+impl SgFitPass {
+    /// Compiles the kernels and creates the persistent buffers; fails with
+    /// a clear message when the Jacobian would not fit one storage binding.
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        knobs: FitKnobs,
+        map: DirectionMap,
+    ) -> anyhow::Result<Self> {
+        knobs
+            .check()
+            .map_err(|(k, m)| anyhow::anyhow!("fit knob `{k}`: {m}"))?;
+        let texels = map.texels() as u32;
+        let shape = Shape {
+            cols: round_up(knobs.parameters() as u32 + 1, 16),
+            rows: round_up(3 * texels, 16),
+            groups: texels.div_ceil(64),
+        };
+        let jacobian_bytes = shape.rows as u64 * shape.cols as u64 * 4;
+        let limit = ctx.info().max_storage_buffer_range as u64;
+        if jacobian_bytes > limit {
+            anyhow::bail!(
+                "the fit's Jacobian ({} rows × {} columns, {} MiB) exceeds this device's largest \
+                 storage binding ({} MiB): lower the probe resolution or the lobe count",
+                shape.rows,
+                shape.cols,
+                jacobian_bytes >> 20,
+                limit >> 20
+            );
+        }
+        let defines = [Define::Bool("OCTAHEDRAL", map.kind == MapKind::Octahedral)];
+        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(lib, "sgfit/fit.wgsl", entry, ShaderStage::Compute, &defines)?;
+            Ok(ComputePipeline::new(ctx, &shader)?)
+        };
+        let kernels = Kernels {
+            init_cold: build("init_cold")?,
+            cost: build("cost")?,
+            select_start: build("select_start")?,
+            jacobian: build("jacobian")?,
+            normal_tile: build("normal_tile")?,
+            solve: build("solve")?,
+            decide: build("decide")?,
+        };
+        let lobe_bytes = 2 * knobs.lobes as u64 * 32;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let lobes = Buffer::with_data(ctx, "sg-lobes", &vec![0u8; lobe_bytes as usize], usage)?;
+        let state_bytes = (STATE_FLOATS * 4) as u64;
+        let state =
+            Buffer::with_data(ctx, "sg-fit-state", &vec![0u8; state_bytes as usize], usage)?;
+        Ok(Self {
+            kernels,
+            knobs,
+            map,
+            shape,
+            lobes: Arc::new(lobes),
+            state: Arc::new(state),
+            lobes_readback: BufferReadback::new(ctx, "sg-lobes (readback)", lobe_bytes)?,
+            state_readback: BufferReadback::new(ctx, "sg-fit-state (readback)", state_bytes)?,
+        })
+    }
+
+    /// The knobs it was built for.
+    pub fn knobs(&self) -> &FitKnobs {
+        &self.knobs
+    }
+
+    /// The persistent lobe buffer: M current lobes (two vec4 each: (p, λ),
+    /// (μ, 0)), then M candidate lobes. Shading passes read the first M.
+    pub fn lobes(&self) -> &Arc<Buffer> {
+        &self.lobes
+    }
+
+    /// Replaces the current lobes (the next warm start begins from them).
+    pub fn set_lobes(&mut self, ctx: &Arc<Context>, lobes: &[Sg32]) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            lobes.len() == self.knobs.lobes as usize,
+            "{} lobes given to a fit of {}",
+            lobes.len(),
+            self.knobs.lobes
+        );
+        let mut floats: Vec<f32> = lobes.iter().flat_map(|g| g.packed()).collect();
+        floats.resize(2 * floats.len(), 0.0);
+        let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        self.lobes = Arc::new(Buffer::with_data(ctx, "sg-lobes", &bytes, usage)?);
+        Ok(())
+    }
+
+    fn push(&self, slot: u32, warm: bool) -> Push {
+        Push::new()
+            .u32(self.map.width)
+            .u32(self.map.height)
+            .u32(self.knobs.lobes)
+            .u32(self.shape.cols)
+            .u32(self.shape.rows)
+            .u32(slot)
+            .u32(warm as u32)
+            .u32(self.shape.groups)
+            .f32(self.knobs.damping as f32)
+            .u32(0)
+            .u32(0)
+            .u32(0)
+    }
+
+    /// Adds the `sg-fit` pass fitting the lobes to `probe` (an image laid
+    /// out by this pass's direction map) from `start` for `iterations`
+    /// iterations; returns the lobe buffer as written.
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        probe: ImageHandle,
+        start: FitStart,
+        iterations: u32,
+    ) -> anyhow::Result<BufferHandle> {
+        anyhow::ensure!(
+            iterations <= MAX_ITERATIONS,
+            "{iterations} iterations: at most {MAX_ITERATIONS} per fit"
+        );
+        let s = self.shape;
+        let n = self.knobs.parameters() as u64;
+        let lobes = graph.import_buffer(&self.lobes, None);
+        let state = graph.import_buffer(&self.state, None);
+        let partials = graph.create_buffer("sg-fit-partials", 2 * s.groups as u64 * 16);
+        let jacobian = graph.create_buffer("sg-fit-jacobian", s.rows as u64 * s.cols as u64 * 4);
+        let normal = graph.create_buffer("sg-fit-normal", s.cols as u64 * s.cols as u64 * 4);
+        let work = graph.create_buffer("sg-fit-work", (n * n + 2 * n) * 4);
+        // The transients are written before they are read within the pass
+        // (StorageWrite: no previous content); the lobes and the state
+        // carry over from the previous fit.
+        let mut pass = graph.add_pass("sg-fit", PassKind::Compute);
+        pass.image(probe, ImageAccess::Sampled);
+        let lobes = pass.buffer(lobes, BufferAccess::StorageReadWrite);
+        let state = pass.buffer(state, BufferAccess::StorageReadWrite);
+        let partials = pass.buffer(partials, BufferAccess::StorageWrite);
+        let jacobian = pass.buffer(jacobian, BufferAccess::StorageWrite);
+        let normal = pass.buffer(normal, BufferAccess::StorageWrite);
+        let work = pass.buffer(work, BufferAccess::StorageWrite);
+        let table = [
+            Binding::SampledImage(probe),
+            Binding::StorageBuffer(lobes),
+            Binding::StorageBuffer(state),
+            Binding::StorageBuffer(partials),
+            Binding::StorageBuffer(jacobian),
+            Binding::StorageBuffer(normal),
+            Binding::StorageBuffer(work),
+        ];
+        let warm = start == FitStart::Warm;
+        let candidate = self.push(1, warm);
+        let current = self.push(0, warm);
+        let k = &self.kernels;
+        let tiles = s.cols / 16;
+        pass.exec(move |ctx| {
+            let mut run = |p: &ComputePipeline, push: &Push, groups: [u32; 3]| {
+                ctx.dispatch_table(p, &table, push.bytes(), groups)
+            };
+            run(&k.init_cold, &candidate, [self.knobs.lobes, 1, 1])?;
+            run(&k.cost, &candidate, [s.groups, 1, 1])?;
+            if warm {
+                run(&k.cost, &current, [s.groups, 1, 1])?;
+            }
+            run(&k.select_start, &candidate, [1, 1, 1])?;
+            for _ in 0..iterations {
+                run(&k.jacobian, &candidate, [s.groups, 1, 1])?;
+                run(&k.normal_tile, &candidate, [tiles, tiles, 1])?;
+                run(&k.solve, &candidate, [1, 1, 1])?;
+                run(&k.cost, &candidate, [s.groups, 1, 1])?;
+                run(&k.decide, &candidate, [1, 1, 1])?;
+            }
+            Ok(())
+        });
+        Ok(lobes)
+    }
+
+    /// Adds transfer passes copying the lobes and the state to the host;
+    /// [`Self::read_report`] reads them once the frame has finished.
+    pub fn add_readback(&self, graph: &mut FrameGraph<'_>) {
+        let lobes = graph.import_buffer(&self.lobes, None);
+        let state = graph.import_buffer(&self.state, None);
+        self.lobes_readback
+            .add_to_graph(graph, "sg-lobes-readback", lobes);
+        self.state_readback
+            .add_to_graph(graph, "sg-fit-state-readback", state);
+    }
+
+    /// The report of the fit whose frame carried [`Self::add_readback`].
+    pub fn read_report(&self) -> anyhow::Result<FitReport> {
+        let l = self.lobes_readback.read_f32()?;
+        let st = self.state_readback.read_f32()?;
+        let m = self.knobs.lobes as usize;
+        let lobes = (0..m).map(|k| Sg32::unpack(&l[8 * k..8 * k + 8])).collect();
+        let iterations = (st[slot::ITERATIONS] as usize).min(MAX_ITERATIONS as usize);
+        Ok(FitReport {
+            lobes,
+            costs: st[slot::LOG..=slot::LOG + iterations]
+                .iter()
+                .map(|&c| c as f64)
+                .collect(),
+            energy: st[slot::ENERGY] as f64,
+            started_cold: st[slot::STARTED_COLD] != 0.0,
+            accepted: st[slot::ACCEPTED] as u32,
+            invalid: st[slot::INVALID] as u32,
+            damping: st[slot::DAMPING] as f64,
+        })
+    }
+}

@@ -1,0 +1,524 @@
+// Levenberg–Marquardt fit of M spherical Gaussians to the probe, mirroring
+// passes/src/sgfit/{model,solve,reference}.rs. Entry points, dispatched in
+// this order by passes/src/sgfit/pass.rs (one graph pass; the graph orders
+// successive dispatches):
+//   init_cold (M groups)       cold-start lobes into slot 1
+//   cost (slot 1 [, slot 0])   partial sums of the cost of a slot's lobes
+//   select (1 thread)          warm lobes (slot 0) or the cold start, state reset
+//   per iteration: jacobian, normal, solve, cost (slot 1), decide.
+// The lobe buffer holds two slots (0: current, 1: candidate) of M lobes,
+// two vec4 each. `state` holds the scalars listed below and the cost after
+// every iteration.
+#include "common/sg.wgsl"
+#include "common/direction_map.wgsl"
+#include "sgfit/model.wgsl"
+
+struct FitPush {
+    width: u32,
+    height: u32,
+    lobe_count: u32,
+    // Columns of the Jacobian and normal matrices: 6M + 1 rounded up to 16.
+    cols: u32,
+    // Rows of the Jacobian: 3 × texels rounded up to 16.
+    rows: u32,
+    slot: u32,
+    warm: u32,
+    // Cost-partial workgroups (texels / 64, rounded up).
+    groups: u32,
+    damping: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+var<immediate> pc: FitPush;
+
+@group(0) @binding(0) var probe: texture_2d<f32>;
+@group(0) @binding(1) var<storage, read_write> lobes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> state: array<f32>;
+@group(0) @binding(3) var<storage, read_write> partials: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> jac: array<f32>;
+@group(0) @binding(5) var<storage, read_write> normal: array<f32>;
+@group(0) @binding(6) var<storage, read_write> work: array<f32>;
+
+// `state` layout (mirrored by passes/src/sgfit/pass.rs).
+const S_COST: u32 = 0u;
+const S_DAMPING: u32 = 1u;
+const S_NORMAL_VALID: u32 = 2u;
+const S_ENERGY: u32 = 3u;
+const S_INVALID: u32 = 4u;
+const S_STARTED_COLD: u32 = 5u;
+const S_ITERATIONS: u32 = 6u;
+const S_ACCEPTED: u32 = 7u;
+const S_COLD_COST: u32 = 8u;
+const S_WARM_COST: u32 = 9u;
+const S_CANDIDATE_OK: u32 = 10u;
+const S_LOG: u32 = 16u;
+
+const DAMPING_DOWN: f32 = 0.333333333;
+const DAMPING_UP: f32 = 4.0;
+const DAMPING_LIMIT: f32 = 1e-9;
+const RELATIVE_DIAGONAL_FLOOR: f32 = 1e-12;
+const ABSOLUTE_DIAGONAL_FLOOR: f32 = 1e-30;
+
+fn texel_count() -> u32 {
+    return pc.width * pc.height;
+}
+
+fn texel_xy(t: u32) -> vec2<u32> {
+    return vec2<u32>(t % pc.width, t / pc.width);
+}
+
+fn lobe(slot: u32, k: u32) -> Sg {
+    let i = 2u * (slot * pc.lobe_count + k);
+    return sg_unpack(lobes[i], lobes[i + 1u]);
+}
+
+fn store_lobe(slot: u32, k: u32, g: Sg) {
+    let i = 2u * (slot * pc.lobe_count + k);
+    lobes[i] = vec4<f32>(g.direction, g.sharpness);
+    lobes[i + 1u] = vec4<f32>(g.amplitude, 0.0);
+}
+
+fn copy_candidate_to_current() {
+    for (var k = 0u; k < pc.lobe_count; k++) {
+        store_lobe(0u, k, lobe(1u, k));
+    }
+}
+
+// ---- cold start -----------------------------------------------------------
+
+var<workgroup> red_a: array<f32, 64>;
+var<workgroup> red_b: array<f32, 64>;
+var<workgroup> red_c: array<f32, 64>;
+var<workgroup> red_i: array<u32, 64>;
+var<workgroup> red_v: array<vec3<f32>, 64>;
+
+// The cold-start axis and sharpness of lobe j, given the seeded lobe.
+fn cold_lobe(j: u32, seeded: u32, seed_dir: vec3<f32>, seed_sharpness: f32) -> Sg {
+    if j == seeded {
+        return Sg(seed_dir, seed_sharpness, vec3<f32>(0.0));
+    }
+    return Sg(fit_fibonacci_axis(j, pc.lobe_count), fit_initial_sharpness(pc.lobe_count), vec3<f32>(0.0));
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let k = wg.x;
+    let n = texel_count();
+    let size = vec2<u32>(pc.width, pc.height);
+    // Brightest valid texel (lowest index on ties), Σ w·lum and Σ w.
+    var best_lum = -1.0;
+    var best = 0u;
+    var sum_wl = 0.0;
+    var sum_w = 0.0;
+    for (var t = lid; t < n; t += 64u) {
+        let l = textureLoad(probe, texel_xy(t), 0).rgb;
+        if !fit_texel_valid(l) {
+            continue;
+        }
+        let w = dm_solid_angle(texel_xy(t), size);
+        let lum = fit_luminance(l);
+        if lum > best_lum {
+            best_lum = lum;
+            best = t;
+        }
+        sum_wl += w * lum;
+        sum_w += w;
+    }
+    red_a[lid] = best_lum;
+    red_i[lid] = best;
+    red_b[lid] = sum_wl;
+    red_c[lid] = sum_w;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s >>= 1u) {
+        if lid < s {
+            let o = lid + s;
+            if red_a[o] > red_a[lid] || (red_a[o] == red_a[lid] && red_i[o] < red_i[lid]) {
+                red_a[lid] = red_a[o];
+                red_i[lid] = red_i[o];
+            }
+            red_b[lid] += red_b[o];
+            red_c[lid] += red_c[o];
+        }
+        workgroupBarrier();
+    }
+    let m = pc.lobe_count;
+    let l0 = fit_initial_sharpness(m);
+    var seeded = m;
+    var seed_dir = vec3<f32>(0.0, 1.0, 0.0);
+    var seed_sharpness = l0;
+    if red_c[0] > 0.0 && red_a[0] > FIT_SEED_CONTRAST * red_b[0] / red_c[0] {
+        let bt = texel_xy(red_i[0]);
+        seed_dir = dm_direction(bt, size);
+        var dot_best = -2.0;
+        for (var j = 0u; j < m; j++) {
+            let d = dot(fit_fibonacci_axis(j, m), seed_dir);
+            if d > dot_best {
+                dot_best = d;
+                seeded = j;
+            }
+        }
+        let sharp = 2.0 * FIT_LN_2 * FIT_PI / dm_solid_angle(bt, size);
+        seed_sharpness = clamp(sharp, l0, FIT_MAX_SHARPNESS);
+    }
+    workgroupBarrier();
+    // μ_k = Σ w L G_k / Σ w G_k S, S = Σ_j G_j.
+    let g = cold_lobe(k, seeded, seed_dir, seed_sharpness);
+    var num = vec3<f32>(0.0);
+    var den = 0.0;
+    for (var t = lid; t < n; t += 64u) {
+        let l = textureLoad(probe, texel_xy(t), 0).rgb;
+        if !fit_texel_valid(l) {
+            continue;
+        }
+        let v = dm_direction(texel_xy(t), size);
+        var cover = 0.0;
+        for (var j = 0u; j < m; j++) {
+            cover += sg_weight(cold_lobe(j, seeded, seed_dir, seed_sharpness), v);
+        }
+        let gw = dm_solid_angle(texel_xy(t), size) * sg_weight(g, v);
+        num += gw * l;
+        den += gw * cover;
+    }
+    red_v[lid] = num;
+    red_a[lid] = den;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s >>= 1u) {
+        if lid < s {
+            red_v[lid] += red_v[lid + s];
+            red_a[lid] += red_a[lid + s];
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        var amplitude = vec3<f32>(0.0);
+        if red_a[0] > 0.0 {
+            amplitude = red_v[0] / red_a[0];
+        }
+        store_lobe(1u, k, Sg(g.direction, g.sharpness, amplitude));
+    }
+}
+
+// ---- cost -------------------------------------------------------------------
+
+// Partial sums over 64 texels of (Σ w|fit − L|², Σ w|L|², invalid texels)
+// for the lobes of slot pc.slot, into partials[slot · groups + group].
+@compute @workgroup_size(64, 1, 1)
+fn cost(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let t = id.x;
+    var c = 0.0;
+    var e = 0.0;
+    var invalid = 0.0;
+    if t < texel_count() {
+        let xy = texel_xy(t);
+        let l = textureLoad(probe, xy, 0).rgb;
+        if fit_texel_valid(l) {
+            let size = vec2<u32>(pc.width, pc.height);
+            let v = dm_direction(xy, size);
+            let w = dm_solid_angle(xy, size);
+            var model = vec3<f32>(0.0);
+            for (var k = 0u; k < pc.lobe_count; k++) {
+                model += sg_eval(lobe(pc.slot, k), v);
+            }
+            let r = model - l;
+            c = w * dot(r, r);
+            e = w * dot(l, l);
+        } else {
+            invalid = 1.0;
+        }
+    }
+    red_a[lid] = c;
+    red_b[lid] = e;
+    red_c[lid] = invalid;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s >>= 1u) {
+        if lid < s {
+            red_a[lid] += red_a[lid + s];
+            red_b[lid] += red_b[lid + s];
+            red_c[lid] += red_c[lid + s];
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        partials[pc.slot * pc.groups + wg.x] = vec4<f32>(red_a[0], red_b[0], red_c[0], 0.0);
+    }
+}
+
+fn sum_partials(slot: u32) -> vec4<f32> {
+    var s = vec4<f32>(0.0);
+    for (var g = 0u; g < pc.groups; g++) {
+        s += partials[slot * pc.groups + g];
+    }
+    return s;
+}
+
+// ---- start --------------------------------------------------------------------
+
+// Starts the fit from the previous lobes (slot 0) when warm and no worse
+// than the cold start, else from the cold start; resets the state.
+@compute @workgroup_size(1, 1, 1)
+fn select_start() {
+    let cold = sum_partials(1u);
+    var warm_cost = -1.0;
+    var use_warm = false;
+    if pc.warm != 0u {
+        warm_cost = sum_partials(0u).x;
+        use_warm = fit_finite(warm_cost) && warm_cost <= cold.x;
+    }
+    if !use_warm {
+        copy_candidate_to_current();
+    }
+    let c = select(cold.x, warm_cost, use_warm);
+    state[S_COST] = c;
+    state[S_DAMPING] = pc.damping;
+    state[S_NORMAL_VALID] = 0.0;
+    state[S_ENERGY] = cold.y;
+    state[S_INVALID] = cold.z;
+    state[S_STARTED_COLD] = select(1.0, 0.0, use_warm);
+    state[S_ITERATIONS] = 0.0;
+    state[S_ACCEPTED] = 0.0;
+    state[S_COLD_COST] = cold.x;
+    state[S_WARM_COST] = warm_cost;
+    state[S_CANDIDATE_OK] = 0.0;
+    state[S_LOG] = c;
+}
+
+// ---- one iteration --------------------------------------------------------
+
+// Three rows (r, g, b) of [J | r] per texel; skipped while the normal
+// equations of the current lobes are still valid (after a rejected step).
+@compute @workgroup_size(64, 1, 1)
+fn jacobian(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = id.x;
+    if t >= texel_count() || state[S_NORMAL_VALID] != 0.0 {
+        return;
+    }
+    let m = pc.lobe_count;
+    let p = 6u * m;
+    let xy = texel_xy(t);
+    let l = textureLoad(probe, xy, 0).rgb;
+    let valid = fit_texel_valid(l);
+    let size = vec2<u32>(pc.width, pc.height);
+    let v = dm_direction(xy, size);
+    let sw = sqrt(dm_solid_angle(xy, size));
+    let row0 = 3u * t * pc.cols;
+    var model = vec3<f32>(0.0);
+    for (var k = 0u; k < m; k++) {
+        let g = lobe(0u, k);
+        let e = sg_weight(g, v);
+        model += g.amplitude * e;
+        let b = fit_tangent_basis(g.direction);
+        let dv = v - g.direction;
+        let ds = -0.5 * g.sharpness * dot(dv, dv);
+        let du = g.sharpness * dot(v, b.t1);
+        let dw = g.sharpness * dot(v, b.t2);
+        for (var c = 0u; c < 3u; c++) {
+            let row = row0 + c * pc.cols + 6u * k;
+            let mu = g.amplitude[c];
+            let f = select(0.0, sw * mu * e, valid);
+            for (var c2 = 0u; c2 < 3u; c2++) {
+                jac[row + c2] = select(0.0, sw * 2.0 * sqrt(mu) * e, valid && c2 == c);
+            }
+            jac[row + 3u] = f * ds;
+            jac[row + 4u] = f * du;
+            jac[row + 5u] = f * dw;
+        }
+    }
+    for (var c = 0u; c < 3u; c++) {
+        let row = row0 + c * pc.cols;
+        jac[row + p] = select(0.0, sw * (model[c] - l[c]), valid);
+        for (var j = p + 1u; j < pc.cols; j++) {
+            jac[row + j] = 0.0;
+        }
+    }
+}
+
+var<workgroup> tile_a: array<f32, 256>;
+var<workgroup> tile_b: array<f32, 256>;
+var<workgroup> wg_flag: u32;
+
+// One 16 × 16 tile of [J | r]ᵀ[J | r] (upper tiles only): JᵀJ, Jᵀr in
+// column 6M. Skipped while the normal equations are still valid.
+@compute @workgroup_size(16, 16, 1)
+fn normal_tile(@builtin(local_invocation_id) l: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
+    if l.x == 0u && l.y == 0u {
+        wg_flag = u32(state[S_NORMAL_VALID] != 0.0);
+    }
+    let skip = workgroupUniformLoad(&wg_flag);
+    if skip != 0u || wg.y > wg.x {
+        return;
+    }
+    let real_rows = 3u * texel_count();
+    let ci = wg.y * 16u + l.y;
+    let cj = wg.x * 16u + l.x;
+    var acc = 0.0;
+    for (var r0 = 0u; r0 < pc.rows; r0 += 16u) {
+        let r = r0 + l.y;
+        var a = 0.0;
+        var b = 0.0;
+        if r < real_rows {
+            a = jac[r * pc.cols + wg.y * 16u + l.x];
+            b = jac[r * pc.cols + wg.x * 16u + l.x];
+        }
+        tile_a[l.y * 16u + l.x] = a;
+        tile_b[l.y * 16u + l.x] = b;
+        workgroupBarrier();
+        for (var k = 0u; k < 16u; k++) {
+            acc += tile_a[k * 16u + l.y] * tile_b[k * 16u + l.x];
+        }
+        workgroupBarrier();
+    }
+    normal[ci * pc.cols + cj] = acc;
+}
+
+var<workgroup> red_max: array<f32, 256>;
+var<workgroup> wg_fail: u32;
+var<workgroup> wg_bad_step: atomic<u32>;
+
+// The damped, Jacobi-scaled step by Cholesky in one workgroup, applied to
+// the current lobes into slot 1 (see passes/src/sgfit/solve.rs). Layout of
+// `work`: n × n lower triangle, then √D (n), then the right-hand side (n).
+@compute @workgroup_size(256, 1, 1)
+fn solve(@builtin(local_invocation_index) lid: u32) {
+    let n = 6u * pc.lobe_count;
+    let cols = pc.cols;
+    let d_at = n * n;
+    let y_at = n * n + n;
+    var mx = 0.0;
+    for (var i = lid; i < n; i += 256u) {
+        mx = max(mx, normal[i * cols + i]);
+    }
+    red_max[lid] = mx;
+    if lid == 0u {
+        wg_fail = 0u;
+        atomicStore(&wg_bad_step, 0u);
+    }
+    workgroupBarrier();
+    for (var s = 128u; s > 0u; s >>= 1u) {
+        if lid < s {
+            red_max[lid] = max(red_max[lid], red_max[lid + s]);
+        }
+        workgroupBarrier();
+    }
+    let diag_floor = max(RELATIVE_DIAGONAL_FLOOR * red_max[0], ABSOLUTE_DIAGONAL_FLOOR);
+    let eta = state[S_DAMPING];
+    for (var i = lid; i < n; i += 256u) {
+        let d = sqrt(max(normal[i * cols + i], diag_floor));
+        work[d_at + i] = d;
+        work[y_at + i] = -normal[i * cols + n] / d;
+    }
+    storageBarrier();
+    for (var idx = lid; idx < n * n; idx += 256u) {
+        let i = idx / n;
+        let j = idx % n;
+        if j <= i {
+            // (j, i) lies in the upper triangle the normal kernel wrote.
+            let a = normal[j * cols + i] / (work[d_at + i] * work[d_at + j]);
+            work[idx] = a + select(0.0, eta, i == j);
+        }
+    }
+    storageBarrier();
+    // Cholesky, column by column.
+    for (var j = 0u; j < n; j++) {
+        if lid == 0u {
+            let pivot = work[j * n + j];
+            if pivot > 0.0 && fit_finite(pivot) {
+                work[j * n + j] = sqrt(pivot);
+            } else {
+                wg_fail = 1u;
+            }
+        }
+        storageBarrier();
+        if workgroupUniformLoad(&wg_fail) != 0u {
+            break;
+        }
+        let ljj = work[j * n + j];
+        for (var i = j + 1u + lid; i < n; i += 256u) {
+            work[i * n + j] /= ljj;
+        }
+        storageBarrier();
+        for (var i = j + 1u + lid; i < n; i += 256u) {
+            let lij = work[i * n + j];
+            for (var k = j + 1u; k <= i; k++) {
+                work[i * n + k] -= lij * work[k * n + j];
+            }
+        }
+        storageBarrier();
+    }
+    if workgroupUniformLoad(&wg_fail) != 0u {
+        if lid == 0u {
+            state[S_CANDIDATE_OK] = 0.0;
+        }
+        return;
+    }
+    // L z = y, then Lᵀ x = z.
+    for (var j = 0u; j < n; j++) {
+        if lid == 0u {
+            work[y_at + j] /= work[j * n + j];
+        }
+        storageBarrier();
+        let yj = work[y_at + j];
+        for (var i = j + 1u + lid; i < n; i += 256u) {
+            work[y_at + i] -= work[i * n + j] * yj;
+        }
+        storageBarrier();
+    }
+    for (var jj = 0u; jj < n; jj++) {
+        let j = n - 1u - jj;
+        if lid == 0u {
+            work[y_at + j] /= work[j * n + j];
+        }
+        storageBarrier();
+        let yj = work[y_at + j];
+        for (var i = lid; i < j; i += 256u) {
+            work[y_at + i] -= work[j * n + i] * yj;
+        }
+        storageBarrier();
+    }
+    for (var i = lid; i < n; i += 256u) {
+        let delta = work[y_at + i] / work[d_at + i];
+        work[y_at + i] = delta;
+        if !fit_finite(delta) {
+            atomicStore(&wg_bad_step, 1u);
+        }
+    }
+    storageBarrier();
+    if lid == 0u {
+        wg_fail = atomicLoad(&wg_bad_step);
+    }
+    let failed = workgroupUniformLoad(&wg_fail);
+    if failed == 0u {
+        for (var k = lid; k < pc.lobe_count; k += 256u) {
+            let b = y_at + 6u * k;
+            let d0 = vec4<f32>(work[b], work[b + 1u], work[b + 2u], work[b + 3u]);
+            let d1 = vec2<f32>(work[b + 4u], work[b + 5u]);
+            store_lobe(1u, k, fit_apply_step(lobe(0u, k), d0, d1));
+        }
+    }
+    if lid == 0u {
+        state[S_CANDIDATE_OK] = select(1.0, 0.0, failed != 0u);
+    }
+}
+
+// Accepts the candidate (slot 1) if its cost is finite and lower, adapts
+// the damping and logs the cost.
+@compute @workgroup_size(1, 1, 1)
+fn decide() {
+    let c = sum_partials(1u).x;
+    let current = state[S_COST];
+    let eta = state[S_DAMPING];
+    if state[S_CANDIDATE_OK] != 0.0 && fit_finite(c) && c < current {
+        copy_candidate_to_current();
+        state[S_COST] = c;
+        state[S_DAMPING] = max(eta * DAMPING_DOWN, DAMPING_LIMIT);
+        state[S_NORMAL_VALID] = 0.0;
+        state[S_ACCEPTED] += 1.0;
+    } else {
+        state[S_DAMPING] = min(eta * DAMPING_UP, 1.0 / DAMPING_LIMIT);
+        state[S_NORMAL_VALID] = 1.0;
+    }
+    let it = u32(state[S_ITERATIONS]) + 1u;
+    state[S_ITERATIONS] = f32(it);
+    state[S_LOG + it] = state[S_COST];
+}

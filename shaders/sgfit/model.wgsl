@@ -1,0 +1,67 @@
+// The SG fit's model, mirroring passes/src/sgfit/model.rs: tangent basis,
+// Fibonacci axes, cold-start sharpness, texel validity, the step.
+// Needs: common/sg.wgsl.
+
+const FIT_PI: f32 = 3.14159265358979;
+const FIT_LN_2: f32 = 0.693147180559945;
+const FIT_MIN_SHARPNESS: f32 = 1e-4;
+const FIT_MAX_SHARPNESS: f32 = 1e4;
+const FIT_MAX_AXIS_STEP: f32 = 1.0;
+const FIT_SEED_CONTRAST: f32 = 4.0;
+
+struct Basis {
+    t1: vec3<f32>,
+    t2: vec3<f32>,
+}
+
+// Orthonormal tangent basis of unit p (Duff et al. 2017).
+fn fit_tangent_basis(p: vec3<f32>) -> Basis {
+    let s = select(-1.0, 1.0, p.z >= 0.0);
+    let a = -1.0 / (s + p.z);
+    let b = p.x * p.y * a;
+    return Basis(
+        vec3<f32>(1.0 + s * p.x * p.x * a, s * b, -s * p.x),
+        vec3<f32>(b, s + p.y * p.y * a, -p.y),
+    );
+}
+
+// Axis k of m Fibonacci-lattice points (+Y up).
+fn fit_fibonacci_axis(k: u32, m: u32) -> vec3<f32> {
+    let y = 1.0 - (2.0 * f32(k) + 1.0) / f32(m);
+    let r = sqrt(max(1.0 - y * y, 0.0));
+    // Golden angle π(3 − √5); the product is reduced mod 2π first to keep
+    // f32 accuracy for large k.
+    let phi = (f32(k) * 2.39996322972865332) % (2.0 * FIT_PI);
+    return vec3<f32>(r * cos(phi), y, r * sin(phi));
+}
+
+fn fit_initial_sharpness(m: u32) -> f32 {
+    return 8.0 * FIT_LN_2 * f32(m) / (4.0 * FIT_PI);
+}
+
+fn fit_luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// Finite (by the exponent bits, which no fast-math can assume away) and ≥ 0.
+fn fit_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+fn fit_texel_valid(c: vec3<f32>) -> bool {
+    return fit_finite(c.x) && fit_finite(c.y) && fit_finite(c.z) && all(c >= vec3<f32>(0.0));
+}
+
+// Lobe g moved by its six parameter steps d0 = (Δa_r, Δa_g, Δa_b, Δs),
+// d1 = (Δu, Δv).
+fn fit_apply_step(g: Sg, d0: vec4<f32>, d1: vec2<f32>) -> Sg {
+    let a = sqrt(g.amplitude) + d0.xyz;
+    let s = clamp(log(max(g.sharpness, FIT_MIN_SHARPNESS)) + d0.w, log(FIT_MIN_SHARPNESS), log(FIT_MAX_SHARPNESS));
+    var uv = d1;
+    let len = length(uv);
+    if len > FIT_MAX_AXIS_STEP {
+        uv *= FIT_MAX_AXIS_STEP / len;
+    }
+    let b = fit_tangent_basis(g.direction);
+    return Sg(normalize(g.direction + uv.x * b.t1 + uv.y * b.t2), exp(s), a * a);
+}
