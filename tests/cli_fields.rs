@@ -182,3 +182,79 @@ fn bad_inputs_get_errors_naming_the_file_and_field() {
     assert!(!o.status.success());
     assert!(common::output_text(&o).contains("not a [recipe]"));
 }
+
+#[test]
+fn probe_writes_probe_fit_and_error_and_rejects_bad_points() {
+    let dir = scratch("probe");
+    let field = dir.join("plants.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            &scene_path("plants.toml"),
+            "--out",
+            s(&field),
+            "--resolution",
+            "20",
+            "--samples",
+            "2",
+            "--bounces",
+            "0",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let exr = dir.join("probe.exr");
+    let probe = |extra: &[&str]| {
+        let mut args = vec![
+            "--validate",
+            "probe",
+            &scene_path("plants.toml"),
+            "--field",
+            s(&field),
+            "--resolution",
+            "8",
+            "--iterations",
+            "6",
+            "--out",
+            s(&exr),
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        inlay(&refs, &dir)
+    };
+    let o = probe(&[
+        "--at",
+        "0,0.4,0",
+        "--lobes",
+        "4",
+        "--cpu-check",
+        "--zoom",
+        "2",
+    ]);
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("environment: none (L_env not evaluated)"), "{t}");
+    assert!(
+        t.contains("relative residual") && t.contains("CPU reference"),
+        "{t}"
+    );
+    assert!(t.contains("sg-fit:") && t.contains("probe-trace:"), "{t}");
+    let img = HdrImage::load_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (3 * 8 * 2, 8 * 2));
+    assert_eq!(img.non_finite_count(), 0);
+    for (at, expect) in [
+        ("nan,0,0", "three finite numbers"),
+        ("1,2", "three finite numbers"),
+        ("1e9,0,0", "scene units from the field"),
+    ] {
+        let o = probe(&["--at", at]);
+        let t = common::output_text(&o);
+        assert!(!o.status.success() && t.contains(expect), "--at {at}: {t}");
+    }
+    let o = probe(&["--at", "0,0.4,0", "--lobes", "0"]);
+    let t = common::output_text(&o);
+    assert!(!o.status.success() && t.contains("fit knob `lobes`"), "{t}");
+}

@@ -36,7 +36,6 @@ fn every_shipped_shader_compiles() {
             let defines = [
                 Define::Bool("SKIP_EMPTY", true),
                 Define::Bool("OCTAHEDRAL", true),
-                Define::Bool("ENVIRONMENT", true),
             ];
             compile(&lib, path, name, stage, &defines).unwrap_or_else(|e| panic!("{e}"));
             compiled += 1;

@@ -15,6 +15,7 @@ pub mod bake;
 pub mod camera;
 pub mod field;
 pub mod geometry;
+pub mod lighting;
 pub mod march;
 pub mod probe;
 pub mod rng;

@@ -1,8 +1,8 @@
 // The incident-light probe (METHOD.md eq. 1): from the object's centre,
 // one ray per texel of the direction map through the field, writing
-// L_i = (1 − Ô)·L_env + Ĉ in rgb and Ô in alpha. Built with ENVIRONMENT =
-// false when the scene has no environment light: the L_env term is then
-// not evaluated at all (and `env_lobes` is not bound).
+// L_i = (1 − Ô)·L_env + Ĉ in rgb and Ô in alpha (`main_with_environment`).
+// When the scene has no environment light, `main_field_only` writes Ĉ: the
+// L_env term is not evaluated at all and `env_lobes` is not bound.
 // Mirrors passes/src/probe/reference.rs.
 #include "common/ray_box.wgsl"
 #include "common/sg.wgsl"
@@ -36,17 +36,31 @@ fn environment(d: vec3<f32>) -> vec3<f32> {
     return sum;
 }
 
+struct ProbeRay {
+    dir: vec3<f32>,
+    march: MarchResult,
+}
+
+fn probe_ray(t: vec2<u32>) -> ProbeRay {
+    let d = dm_direction(t, vec2<u32>(pc.width, pc.height));
+    return ProbeRay(d, march_ray(pc.origin, d, PROBE_NO_OBJECT, pc.step, pc.termination));
+}
+
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main_with_environment(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= pc.width || id.y >= pc.height {
         return;
     }
-    let size = vec2<u32>(pc.width, pc.height);
-    let d = dm_direction(id.xy, size);
-    let r = march_ray(pc.origin, d, PROBE_NO_OBJECT, pc.step, pc.termination);
-    var radiance = r.colour;
-    if ENVIRONMENT {
-        radiance += (1.0 - r.opacity) * environment(d);
+    let p = probe_ray(id.xy);
+    let radiance = p.march.colour + (1.0 - p.march.opacity) * environment(p.dir);
+    textureStore(probe, id.xy, vec4<f32>(radiance, p.march.opacity));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main_field_only(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
     }
-    textureStore(probe, id.xy, vec4<f32>(radiance, r.opacity));
+    let p = probe_ray(id.xy);
+    textureStore(probe, id.xy, vec4<f32>(p.march.colour, p.march.opacity));
 }

@@ -56,6 +56,10 @@ enum Command {
     BenchMarch(inlay::commands::bench_march::BenchMarchArgs),
     /// Path trace the ground-truth image of a recipe scene's camera (no field).
     Reference(inlay::commands::reference::ReferenceArgs),
+    /// Trace the incident-light probe at a point and fit SG lighting to it; writes probe | fit | error.
+    Probe(inlay::commands::probe::ProbeArgs),
+    /// Measure the SG fit: residual against iterations and lobes, time per iteration and per probe trace.
+    BenchSg(inlay::commands::bench_sg::BenchSgArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -110,6 +114,12 @@ fn main() -> ExitCode {
         Command::BenchMarch(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::bench_march::run(&ctx, args)),
+        Command::Probe(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::probe::run(&ctx, args)),
+        Command::BenchSg(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::bench_sg::run(&ctx, args)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

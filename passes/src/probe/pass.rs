@@ -28,8 +28,8 @@ pub struct ProbePass {
 
 impl ProbePass {
     /// Compiles the pass and creates its probe image. `environment` is the
-    /// distant light L_env; when empty, the pass is built without the L_env
-    /// term.
+    /// distant light L_env; when empty, the pass runs the entry point
+    /// without the L_env term.
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
@@ -46,12 +46,16 @@ impl ProbePass {
         let defines = [
             Define::Bool("SKIP_EMPTY", march.skip_empty),
             Define::Bool("OCTAHEDRAL", knobs.map == MapKind::Octahedral),
-            Define::Bool("ENVIRONMENT", !environment.is_empty()),
         ];
+        let entry = if environment.is_empty() {
+            "main_field_only"
+        } else {
+            "main_with_environment"
+        };
         let shader = compile(
             lib,
             "probe/trace.wgsl",
-            "main",
+            entry,
             ShaderStage::Compute,
             &defines,
         )?;

@@ -1,6 +1,9 @@
-//! The field commands of `inlay`: `bake-scene`, `render` and `reference`.
+//! The field commands of `inlay`: `bake-scene`, `render`, `reference`,
+//! `probe` and the benchmarks.
 
 pub mod bake_scene;
 pub mod bench_march;
+pub mod bench_sg;
+pub mod probe;
 pub mod reference;
 pub mod render;

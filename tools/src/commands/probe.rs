@@ -1,0 +1,271 @@
+//! `inlay probe SCENE --at x,y,z`: traces the incident-light probe at a
+//! point of a scene's field, fits M spherical Gaussians to it on the GPU,
+//! and writes the probe, the fitted lighting and their difference side by
+//! side, so a person can look at the fit.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use clap::{Args, ValueEnum};
+use glam::DVec3;
+use inlay_engine::{Context, HdrImage, ImageDesc, Readback, Renderer, SubmitSync};
+use inlay_passes::field::GpuGridField;
+use inlay_passes::lighting::environment_lobes;
+use inlay_passes::probe::{MapKind, ProbeKnobs, ProbePass, PROBE_FORMAT};
+use inlay_passes::scene::load_scene;
+use inlay_passes::sg::Sg32;
+use inlay_passes::sgfit::{
+    fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, SgFitPass, Start,
+};
+
+use crate::field_source::scene_field;
+
+/// The probe layout on the command line.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MapArg {
+    /// n × n octahedral map.
+    Octahedral,
+    /// 2n × n latitude–longitude map.
+    Equirect,
+}
+
+/// Options of `probe`.
+#[derive(Args, Debug)]
+pub struct ProbeArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Where the object's centre is: x,y,z in scene units.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        required = true
+    )]
+    pub at: Vec<f64>,
+    /// Probe layout.
+    #[arg(long, value_enum, default_value_t = MapArg::Octahedral)]
+    pub map: MapArg,
+    /// Probe resolution n (n × n octahedral, 2n × n equirect).
+    #[arg(long, default_value_t = ProbeKnobs::default().resolution)]
+    pub resolution: u32,
+    /// Number of SG lobes M.
+    #[arg(long, default_value_t = FitKnobs::default().lobes)]
+    pub lobes: u32,
+    /// Levenberg–Marquardt iterations (cold start).
+    #[arg(long, default_value_t = FitKnobs::default().cold_iterations)]
+    pub iterations: u32,
+    /// Initial damping.
+    #[arg(long, default_value_t = FitKnobs::default().damping)]
+    pub damping: f64,
+    /// Output image: probe | fit | |fit − probe|; .exr is linear, .png tonemapped. Repeatable.
+    #[arg(long, default_values = ["inlay-probe.exr"])]
+    pub out: Vec<PathBuf>,
+    /// Exposure multiplier for PNG output.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Texels are drawn as zoom × zoom pixel blocks.
+    #[arg(long, default_value_t = 4)]
+    pub zoom: u32,
+    /// Also fit the same probe with the f64 CPU reference and print its residual.
+    #[arg(long)]
+    pub cpu_check: bool,
+    /// Use this field file instead of the scene's field or recipe.
+    #[arg(long)]
+    pub field: Option<PathBuf>,
+    /// Segments across the field's diagonal (overrides [march] samples_per_ray).
+    #[arg(long)]
+    pub samples_per_ray: Option<u32>,
+    /// Bake the recipe again even if a cached field exists.
+    #[arg(long)]
+    pub no_cache: bool,
+}
+
+/// Runs `probe`.
+pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
+    let scene = load_scene(&args.scene)?;
+    anyhow::ensure!(
+        args.at.len() == 3 && args.at.iter().all(|v| v.is_finite()),
+        "--at needs three finite numbers x,y,z, got {:?}",
+        args.at
+    );
+    let at = DVec3::new(args.at[0], args.at[1], args.at[2]);
+    let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    let centre = 0.5 * (field.bounds.min + field.bounds.max);
+    let diagonal = field.bounds.diagonal();
+    anyhow::ensure!(
+        (at - centre).length() <= 1e3 * diagonal,
+        "--at {at} is {:.3e} scene units from the field (diagonal {diagonal:.3}): the probe would see nothing of it",
+        (at - centre).length()
+    );
+    let probe_knobs = ProbeKnobs {
+        map: match args.map {
+            MapArg::Octahedral => MapKind::Octahedral,
+            MapArg::Equirect => MapKind::Equirect,
+        },
+        resolution: args.resolution,
+    };
+    let fit_knobs = FitKnobs {
+        lobes: args.lobes,
+        cold_iterations: args.iterations,
+        damping: args.damping,
+        ..FitKnobs::default()
+    };
+    let mut march = scene.march;
+    march.samples_per_ray = args.samples_per_ray.unwrap_or(march.samples_per_ray);
+    let env = environment_lobes(&scene.environment);
+    let library = crate::shaders::library()?;
+    let probe = ProbePass::new(ctx, &library, probe_knobs, march, &env)?;
+    let fit = SgFitPass::new(ctx, &library, fit_knobs, probe.map())?;
+    let gpu_field = GpuGridField::upload(ctx, &field)?;
+    let map = probe.map();
+    let readback = Readback::new(
+        ctx,
+        ImageDesc {
+            width: map.width,
+            height: map.height,
+            format: PROBE_FORMAT,
+        },
+    )?;
+    let mut renderer = Renderer::new(ctx, 1)?;
+    renderer.begin_frame()?;
+    let mut graph = inlay_engine::graph::FrameGraph::new();
+    let image = probe.add(&mut graph, &gpu_field, at);
+    fit.add(&mut graph, image, FitStart::Cold, args.iterations)?;
+    readback.add_to_graph(&mut graph, image);
+    fit.add_readback(&mut graph);
+    renderer.submit(graph, &SubmitSync::none())?;
+    renderer.finish()?;
+    let probe_image = readback.read()?;
+    let report = fit.read_report()?;
+    print_report(
+        ctx,
+        &scene.name,
+        at,
+        &probe_knobs,
+        &fit_knobs,
+        &env,
+        &report,
+        &renderer,
+    );
+    if args.cpu_check {
+        let texels: Vec<[f64; 4]> = probe_image
+            .pixels
+            .iter()
+            .map(|p| p.map(|v| v as f64))
+            .collect();
+        let cpu = fit_reference(
+            &ProbeSamples::new(&map, &texels),
+            &fit_knobs,
+            Start::Cold,
+            args.iterations,
+        );
+        println!(
+            "CPU reference (f64, same start and rule): relative residual {:.5}, {} of {} steps accepted",
+            cpu.relative_residual(),
+            cpu.accepted,
+            args.iterations
+        );
+    }
+    anyhow::ensure!((1..=64).contains(&args.zoom), "--zoom must be in 1..=64");
+    let panels = side_by_side(&probe_image, &report.lobes, &map, args.zoom);
+    anyhow::ensure!(
+        panels.non_finite_count() == 0,
+        "the fit produced non-finite values"
+    );
+    for out in &args.out {
+        panels.save(out, args.exposure)?;
+        println!("wrote {} (probe | SG fit | |fit − probe|)", out.display());
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn print_report(
+    ctx: &Context,
+    scene: &str,
+    at: DVec3,
+    probe: &ProbeKnobs,
+    fit: &FitKnobs,
+    env: &[inlay_passes::sg::Sg64],
+    report: &FitReport,
+    renderer: &Renderer,
+) {
+    let map = probe.direction_map();
+    println!(
+        "{scene}: probe at {at}, {} {}×{} ({} texels), environment: {}",
+        probe.map.name(),
+        map.width,
+        map.height,
+        map.texels(),
+        if env.is_empty() {
+            "none (L_env not evaluated)".to_string()
+        } else {
+            format!("{} SG lobes", env.len())
+        }
+    );
+    if report.invalid > 0 {
+        println!(
+            "warning: {} probe texels were NaN, infinite or negative and were ignored",
+            report.invalid
+        );
+    }
+    let first = inlay_passes::sgfit::relative_residual(report.costs[0], report.energy);
+    println!(
+        "fit: {} lobes, {} iterations ({} steps accepted), relative residual {:.5} at the cold start → {:.5}",
+        fit.lobes,
+        report.costs.len() - 1,
+        report.accepted,
+        first,
+        report.relative_residual()
+    );
+    if let Some(t) = renderer.latest_timings() {
+        for name in ["probe-trace", "sg-fit"] {
+            if let Some(ms) = t.gpu_ms(name) {
+                println!("{name}: {ms:.3} ms GPU on {}", ctx.info().name);
+            }
+        }
+    }
+}
+
+/// probe | fit | |fit − probe| in one image, each texel a zoom × zoom block.
+fn side_by_side(
+    probe: &HdrImage,
+    lobes: &[Sg32],
+    map: &inlay_passes::probe::DirectionMap,
+    zoom: u32,
+) -> HdrImage {
+    let (w, h) = (map.width, map.height);
+    let width = 3 * w * zoom;
+    let mut pixels = vec![[0.0f32, 0.0, 0.0, 1.0]; (width * h * zoom) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let d = map.direction(x, y).as_vec3();
+            let fit: glam::Vec3 = lobes.iter().map(|g| g.eval(d)).sum();
+            let p = probe.at(x, y);
+            let panels = [
+                [p[0], p[1], p[2], 1.0],
+                [fit.x, fit.y, fit.z, 1.0],
+                [
+                    (fit.x - p[0]).abs(),
+                    (fit.y - p[1]).abs(),
+                    (fit.z - p[2]).abs(),
+                    1.0,
+                ],
+            ];
+            for (k, value) in panels.into_iter().enumerate() {
+                for dy in 0..zoom {
+                    for dx in 0..zoom {
+                        let px = (k as u32 * w + x) * zoom + dx;
+                        let py = y * zoom + dy;
+                        pixels[(py * width + px) as usize] = value;
+                    }
+                }
+            }
+        }
+    }
+    HdrImage {
+        width,
+        height: h * zoom,
+        pixels,
+    }
+}
