@@ -178,6 +178,13 @@ fn black_and_uniform_probes() {
     let ctx = common::gpu();
     let (fit, map) = small_fit(&ctx);
     let black = vec![[0.0f32; 4]; map.texels()];
+    // A warm start before any fit begins from legal, dark lobes.
+    let r = gpu_fit(&ctx, &fit, &map, &black, FitStart::Warm, 3);
+    assert_sane("black, warm before any fit", &r);
+    assert!(
+        !r.started_cold,
+        "nothing beats the dark lobes on a black probe"
+    );
     let r = gpu_fit(&ctx, &fit, &map, &black, FitStart::Cold, 10);
     assert_sane("black", &r);
     assert_eq!(r.relative_residual(), 0.0);

@@ -13,6 +13,7 @@ use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
 
 use super::knobs::{FitKnobs, MAX_ITERATIONS};
+use super::model;
 use super::reference::relative_residual;
 use crate::probe::{DirectionMap, MapKind};
 use crate::sg::Sg32;
@@ -95,6 +96,25 @@ pub struct SgFitPass {
     state_readback: BufferReadback,
 }
 
+/// Both slots of the lobe buffer holding `lobes` (axes normalised).
+fn lobe_bytes_of(lobes: &[Sg32]) -> Vec<u8> {
+    let packed: Vec<f32> = lobes
+        .iter()
+        .flat_map(|g| {
+            Sg32 {
+                direction: g.direction.normalize_or(glam::Vec3::Y),
+                ..*g
+            }
+            .packed()
+        })
+        .collect();
+    packed
+        .iter()
+        .chain(&packed)
+        .flat_map(|f| f.to_le_bytes())
+        .collect()
+}
+
 fn round_up(x: u32, m: u32) -> u32 {
     x.div_ceil(m) * m
 }
@@ -145,7 +165,16 @@ impl SgFitPass {
         };
         let lobe_bytes = 2 * knobs.lobes as u64 * 32;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        let lobes = Buffer::with_data(ctx, "sg-lobes", &vec![0u8; lobe_bytes as usize], usage)?;
+        // Before any fit: legal, dark lobes (a warm start from them is a
+        // fit of nothing, which the cold start beats on any lit probe).
+        let dark: Vec<Sg32> = (0..knobs.lobes)
+            .map(|k| Sg32 {
+                direction: model::fibonacci_axis(k, knobs.lobes).as_vec3(),
+                sharpness: model::initial_sharpness(knobs.lobes) as f32,
+                amplitude: glam::Vec3::ZERO,
+            })
+            .collect();
+        let lobes = Buffer::with_data(ctx, "sg-lobes", &lobe_bytes_of(&dark), usage)?;
         let state_bytes = (STATE_FLOATS * 4) as u64;
         let state =
             Buffer::with_data(ctx, "sg-fit-state", &vec![0u8; state_bytes as usize], usage)?;
@@ -180,11 +209,13 @@ impl SgFitPass {
             lobes.len(),
             self.knobs.lobes
         );
-        let mut floats: Vec<f32> = lobes.iter().flat_map(|g| g.packed()).collect();
-        floats.resize(2 * floats.len(), 0.0);
-        let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        self.lobes = Arc::new(Buffer::with_data(ctx, "sg-lobes", &bytes, usage)?);
+        self.lobes = Arc::new(Buffer::with_data(
+            ctx,
+            "sg-lobes",
+            &lobe_bytes_of(lobes),
+            usage,
+        )?);
         Ok(())
     }
 
