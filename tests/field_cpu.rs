@@ -166,6 +166,18 @@ fn bad_scene_files_name_the_key() {
         ),
         (base.replace("[bake]", "[bake]\nsmaples = 3"), "smaples"),
         (
+            format!("{base}\n[lighting]\nlobes = 100\n"),
+            "lighting.lobes",
+        ),
+        (
+            format!("{base}\n[lighting]\nprobe_resolution = 1\n"),
+            "lighting.probe_resolution",
+        ),
+        (
+            format!("{base}\n[lighting]\nprobe_map = \"cube\"\n"),
+            "cube",
+        ),
+        (
             base.replace("max = [0.9, 0.9, 0.9]", "max = [-2.0, 0.9, 0.9]"),
             "recipe.bounds",
         ),
@@ -182,4 +194,30 @@ fn bad_scene_files_name_the_key() {
         .unwrap_err()
         .to_string();
     assert!(missing.contains("/nonexistent/scene.toml"), "{missing}");
+}
+
+#[test]
+fn lighting_knobs_come_from_the_scene_file() {
+    let base = std::fs::read_to_string(scenes_dir().join("dog.toml")).unwrap();
+    let dir = std::env::temp_dir().join(format!("inlay-lighting-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("lit.toml");
+    let text = format!("{base}\n[lighting]\nprobe_map = \"equirect\"\nprobe_resolution = 12\nlobes = 8\nwarm_iterations = 3\n");
+    std::fs::write(&path, text).unwrap();
+    let s = load_scene(&path).unwrap();
+    assert_eq!(s.lighting.probe.map, inlay_passes::probe::MapKind::Equirect);
+    assert_eq!(s.lighting.probe.resolution, 12);
+    assert_eq!(
+        (s.lighting.fit.lobes, s.lighting.fit.warm_iterations),
+        (8, 3)
+    );
+    assert_eq!(
+        s.lighting.fit.cold_iterations, 40,
+        "unset knobs keep their defaults"
+    );
+    let plain = common::bundled_scene("dog.toml");
+    assert_eq!(
+        plain.lighting,
+        inlay_passes::scene::LightingKnobs::default()
+    );
 }

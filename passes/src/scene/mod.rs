@@ -103,6 +103,43 @@ pub struct Scene {
     pub bake: BakeKnobs,
     /// March knobs.
     pub march: MarchKnobs,
+    /// Incident-light knobs: the probe and the SG fit (`[lighting]`).
+    pub lighting: LightingKnobs,
+}
+
+/// The probe's and the SG fit's knobs, as a scene file sets them.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LightingKnobs {
+    /// Probe layout and resolution.
+    pub probe: crate::probe::ProbeKnobs,
+    /// Lobes, iterations, damping.
+    pub fit: crate::sgfit::FitKnobs,
+}
+
+impl LightingKnobs {
+    fn from_spec(spec: Option<&spec::LightingSpec>) -> Result<Self, (String, String)> {
+        let d = Self::default();
+        let Some(s) = spec else {
+            return Ok(d);
+        };
+        let k = Self {
+            probe: crate::probe::ProbeKnobs {
+                map: s.probe_map.unwrap_or(d.probe.map),
+                resolution: s.probe_resolution.unwrap_or(d.probe.resolution),
+            },
+            fit: crate::sgfit::FitKnobs {
+                lobes: s.lobes.unwrap_or(d.fit.lobes),
+                cold_iterations: s.cold_iterations.unwrap_or(d.fit.cold_iterations),
+                warm_iterations: s.warm_iterations.unwrap_or(d.fit.warm_iterations),
+                damping: s.damping.unwrap_or(d.fit.damping),
+            },
+        };
+        k.probe
+            .check()
+            .map_err(|(f, m)| (format!("probe_{f}"), m))?;
+        k.fit.check()?;
+        Ok(k)
+    }
 }
 
 impl Scene {
@@ -244,6 +281,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         BakeKnobs::from_spec(spec.bake.as_ref()).map_err(|(f, m)| e(&format!("bake.{f}"), m))?;
     let march =
         MarchKnobs::from_spec(spec.march.as_ref()).map_err(|(f, m)| e(&format!("march.{f}"), m))?;
+    let lighting = LightingKnobs::from_spec(spec.lighting.as_ref())
+        .map_err(|(f, m)| e(&format!("lighting.{f}"), m))?;
     let name = spec.name.unwrap_or_else(|| {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -258,6 +297,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         cameras: spec.cameras,
         bake,
         march,
+        lighting,
     })
 }
 

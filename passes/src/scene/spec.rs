@@ -25,6 +25,8 @@ pub(crate) struct SceneSpec {
     pub bake: Option<BakeSpec>,
     #[serde(default)]
     pub march: Option<MarchSpec>,
+    #[serde(default)]
+    pub lighting: Option<LightingSpec>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -80,4 +82,15 @@ pub(crate) struct MarchSpec {
     pub samples_per_ray: Option<u32>,
     pub termination: Option<f64>,
     pub skip_empty: Option<bool>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LightingSpec {
+    pub probe_map: Option<crate::probe::MapKind>,
+    pub probe_resolution: Option<u32>,
+    pub lobes: Option<u32>,
+    pub cold_iterations: Option<u32>,
+    pub warm_iterations: Option<u32>,
+    pub damping: Option<f64>,
 }

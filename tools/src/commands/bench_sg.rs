@@ -35,9 +35,9 @@ pub struct BenchSgArgs {
         required = true
     )]
     pub at: Vec<f64>,
-    /// Probe layout.
-    #[arg(long, value_enum, default_value_t = MapArg::Octahedral)]
-    pub map: MapArg,
+    /// Probe layout (default: the scene's [lighting] probe_map).
+    #[arg(long, value_enum)]
+    pub map: Option<MapArg>,
     /// Probe resolutions to measure.
     #[arg(long, value_delimiter = ',', default_values = ["16", "32"])]
     pub resolutions: Vec<u32>,
@@ -103,10 +103,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let env = environment_lobes(&scene.environment);
     let library = crate::shaders::library()?;
-    let map = match args.map {
-        MapArg::Octahedral => inlay_passes::probe::MapKind::Octahedral,
-        MapArg::Equirect => inlay_passes::probe::MapKind::Equirect,
-    };
+    let map = args.map.map_or(scene.lighting.probe.map, MapArg::kind);
     let max_iterations = args.iterations.iter().copied().max().unwrap_or(0);
     println!(
         "Device: {} ({:?}); scene {}, probe at {at}, {} map, environment {} lobes\n",
@@ -116,7 +113,8 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
         map.name(),
         env.len()
     );
-    let default_lobes = FitKnobs::default().lobes;
+    let base = scene.lighting.fit;
+    let default_lobes = base.lobes;
     let mut timing_rows = Vec::new();
     println!("Relative residual √(cost / Σ w|L|²) against iterations, M = {default_lobes}, cold start:\n");
     let header: Vec<String> = args.iterations.iter().map(|i| i.to_string()).collect();
@@ -125,7 +123,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
     for &n in &args.resolutions {
         let knobs = ProbeKnobs { map, resolution: n };
         let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env)?;
-        let fit = SgFitPass::new(ctx, &library, FitKnobs::default(), probe.map())?;
+        let fit = SgFitPass::new(ctx, &library, base, probe.map())?;
         let (report, trace, t_max) = measure(
             ctx,
             &probe,
@@ -166,10 +164,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
         let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env)?;
         let mut cells = Vec::new();
         for &m in &args.lobes {
-            let fit_knobs = FitKnobs {
-                lobes: m,
-                ..FitKnobs::default()
-            };
+            let fit_knobs = FitKnobs { lobes: m, ..base };
             let fit = SgFitPass::new(ctx, &library, fit_knobs, probe.map())?;
             let (report, _, t) =
                 measure(ctx, &probe, &fit, &gpu_field, at, args.fit_iterations, 1)?;

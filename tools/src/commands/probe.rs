@@ -29,6 +29,16 @@ pub enum MapArg {
     Equirect,
 }
 
+impl MapArg {
+    /// The layout it names.
+    pub fn kind(self) -> MapKind {
+        match self {
+            MapArg::Octahedral => MapKind::Octahedral,
+            MapArg::Equirect => MapKind::Equirect,
+        }
+    }
+}
+
 /// Options of `probe`.
 #[derive(Args, Debug)]
 pub struct ProbeArgs {
@@ -42,21 +52,21 @@ pub struct ProbeArgs {
         required = true
     )]
     pub at: Vec<f64>,
-    /// Probe layout.
-    #[arg(long, value_enum, default_value_t = MapArg::Octahedral)]
-    pub map: MapArg,
-    /// Probe resolution n (n × n octahedral, 2n × n equirect).
-    #[arg(long, default_value_t = ProbeKnobs::default().resolution)]
-    pub resolution: u32,
-    /// Number of SG lobes M.
-    #[arg(long, default_value_t = FitKnobs::default().lobes)]
-    pub lobes: u32,
-    /// Levenberg–Marquardt iterations (cold start).
-    #[arg(long, default_value_t = FitKnobs::default().cold_iterations)]
-    pub iterations: u32,
-    /// Initial damping.
-    #[arg(long, default_value_t = FitKnobs::default().damping)]
-    pub damping: f64,
+    /// Probe layout (overrides [lighting] probe_map; default octahedral).
+    #[arg(long, value_enum)]
+    pub map: Option<MapArg>,
+    /// Probe resolution n: n × n octahedral, 2n × n equirect (overrides [lighting] probe_resolution).
+    #[arg(long)]
+    pub resolution: Option<u32>,
+    /// Number of SG lobes M (overrides [lighting] lobes).
+    #[arg(long)]
+    pub lobes: Option<u32>,
+    /// Levenberg–Marquardt iterations from the cold start (overrides [lighting] cold_iterations).
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Initial damping (overrides [lighting] damping).
+    #[arg(long)]
+    pub damping: Option<f64>,
     /// Output image: probe | fit | |fit − probe|; .exr is linear, .png tonemapped. Repeatable.
     #[arg(long, default_values = ["inlay-probe.exr"])]
     pub out: Vec<PathBuf>,
@@ -97,19 +107,18 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
         "--at {at} is {:.3e} scene units from the field (diagonal {diagonal:.3}): the probe would see nothing of it",
         (at - centre).length()
     );
+    let knobs = scene.lighting;
     let probe_knobs = ProbeKnobs {
-        map: match args.map {
-            MapArg::Octahedral => MapKind::Octahedral,
-            MapArg::Equirect => MapKind::Equirect,
-        },
-        resolution: args.resolution,
+        map: args.map.map_or(knobs.probe.map, MapArg::kind),
+        resolution: args.resolution.unwrap_or(knobs.probe.resolution),
     };
     let fit_knobs = FitKnobs {
-        lobes: args.lobes,
-        cold_iterations: args.iterations,
-        damping: args.damping,
-        ..FitKnobs::default()
+        lobes: args.lobes.unwrap_or(knobs.fit.lobes),
+        cold_iterations: args.iterations.unwrap_or(knobs.fit.cold_iterations),
+        damping: args.damping.unwrap_or(knobs.fit.damping),
+        ..knobs.fit
     };
+    let iterations = fit_knobs.cold_iterations;
     let mut march = scene.march;
     march.samples_per_ray = args.samples_per_ray.unwrap_or(march.samples_per_ray);
     let env = environment_lobes(&scene.environment);
@@ -130,7 +139,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     renderer.begin_frame()?;
     let mut graph = inlay_engine::graph::FrameGraph::new();
     let image = probe.add(&mut graph, &gpu_field, at);
-    fit.add(&mut graph, image, FitStart::Cold, args.iterations)?;
+    fit.add(&mut graph, image, FitStart::Cold, iterations)?;
     readback.add_to_graph(&mut graph, image);
     fit.add_readback(&mut graph);
     renderer.submit(graph, &SubmitSync::none())?;
@@ -157,13 +166,13 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
             &ProbeSamples::new(&map, &texels),
             &fit_knobs,
             Start::Cold,
-            args.iterations,
+            iterations,
         );
         println!(
             "CPU reference (f64, same start and rule): relative residual {:.5}, {} of {} steps accepted",
             cpu.relative_residual(),
             cpu.accepted,
-            args.iterations
+            iterations
         );
     }
     anyhow::ensure!((1..=64).contains(&args.zoom), "--zoom must be in 1..=64");
