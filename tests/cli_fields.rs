@@ -30,13 +30,9 @@ fn scene_path(name: &str) -> String {
         .to_string()
 }
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-#[test]
-fn bake_render_and_reference_write_images() {
-    let dir = scratch("bake");
+/// `inlay bake-scene` of PLANTS at test size into `dir`: the field file and
+/// the command's output.
+fn bake_small_plants(dir: &Path) -> (PathBuf, String) {
     let field = dir.join("plants.inlayfield");
     let o = inlay(
         &[
@@ -51,10 +47,21 @@ fn bake_render_and_reference_write_images() {
             "--bounces",
             "0",
         ],
-        &dir,
+        dir,
     );
     let t = common::output_text(&o);
     assert!(o.status.success(), "{t}");
+    (field, t)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn bake_render_and_reference_write_images() {
+    let dir = scratch("bake");
+    let (field, t) = bake_small_plants(&dir);
     assert!(t.contains("lights inside the field: lamp"), "{t}");
     assert!(t.contains("lights outside the field: none"), "{t}");
     let exr = dir.join("r.exr");
@@ -186,23 +193,7 @@ fn bad_inputs_get_errors_naming_the_file_and_field() {
 #[test]
 fn probe_writes_probe_fit_and_error_and_rejects_bad_points() {
     let dir = scratch("probe");
-    let field = dir.join("plants.inlayfield");
-    let o = inlay(
-        &[
-            "bake-scene",
-            &scene_path("plants.toml"),
-            "--out",
-            s(&field),
-            "--resolution",
-            "20",
-            "--samples",
-            "2",
-            "--bounces",
-            "0",
-        ],
-        &dir,
-    );
-    assert!(o.status.success(), "{}", common::output_text(&o));
+    let (field, _) = bake_small_plants(&dir);
     let exr = dir.join("probe.exr");
     let probe = |extra: &[&str]| {
         let mut args = vec![

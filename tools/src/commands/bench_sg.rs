@@ -18,7 +18,7 @@ use inlay_passes::probe::{ProbeKnobs, ProbePass};
 use inlay_passes::scene::load_scene;
 use inlay_passes::sgfit::{relative_residual, FitKnobs, FitReport, FitStart, SgFitPass};
 
-use crate::commands::probe::MapArg;
+use crate::commands::probe::PlacementArgs;
 use crate::field_source::scene_field;
 use crate::timings_table::quantile;
 
@@ -27,17 +27,9 @@ use crate::timings_table::quantile;
 pub struct BenchSgArgs {
     /// The scene file.
     pub scene: PathBuf,
-    /// Probe position x,y,z.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        allow_negative_numbers = true,
-        required = true
-    )]
-    pub at: Vec<f64>,
-    /// Probe layout (default: the scene's [lighting] probe_map).
-    #[arg(long, value_enum)]
-    pub map: Option<MapArg>,
+    /// Probe position and layout.
+    #[command(flatten)]
+    pub placement: PlacementArgs,
     /// Probe resolutions to measure.
     #[arg(long, value_delimiter = ',', default_values = ["16", "32"])]
     pub resolutions: Vec<u32>,
@@ -93,17 +85,13 @@ fn measure(
 
 /// Runs `bench-sg`.
 pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.at.len() == 3 && args.at.iter().all(|v| v.is_finite()),
-        "--at needs three finite numbers x,y,z"
-    );
-    let at = DVec3::new(args.at[0], args.at[1], args.at[2]);
+    let at = args.placement.point()?;
     let scene = load_scene(&args.scene)?;
     let field = scene_field(&scene, args.field.as_deref(), true)?;
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let env = environment_lobes(&scene.environment);
     let library = crate::shaders::library()?;
-    let map = args.map.map_or(scene.lighting.probe.map, MapArg::kind);
+    let map = args.placement.map_or(scene.lighting.probe.map);
     let max_iterations = args.iterations.iter().copied().max().unwrap_or(0);
     println!(
         "Device: {} ({:?}); scene {}, probe at {at}, {} map, environment {} lobes\n",

@@ -39,11 +39,9 @@ impl MapArg {
     }
 }
 
-/// Options of `probe`.
+/// Where a probe is traced and how it is laid out (shared by `probe` and `bench-sg`).
 #[derive(Args, Debug)]
-pub struct ProbeArgs {
-    /// The scene file.
-    pub scene: PathBuf,
+pub struct PlacementArgs {
     /// Where the object's centre is: x,y,z in scene units.
     #[arg(
         long,
@@ -55,6 +53,33 @@ pub struct ProbeArgs {
     /// Probe layout (overrides [lighting] probe_map; default octahedral).
     #[arg(long, value_enum)]
     pub map: Option<MapArg>,
+}
+
+impl PlacementArgs {
+    /// The point given by `--at`.
+    pub fn point(&self) -> anyhow::Result<DVec3> {
+        anyhow::ensure!(
+            self.at.len() == 3 && self.at.iter().all(|v| v.is_finite()),
+            "--at needs three finite numbers x,y,z, got {:?}",
+            self.at
+        );
+        Ok(DVec3::new(self.at[0], self.at[1], self.at[2]))
+    }
+
+    /// The layout: `--map`, else the scene's.
+    pub fn map_or(&self, scene: MapKind) -> MapKind {
+        self.map.map_or(scene, MapArg::kind)
+    }
+}
+
+/// Options of `probe`.
+#[derive(Args, Debug)]
+pub struct ProbeArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Probe position and layout.
+    #[command(flatten)]
+    pub placement: PlacementArgs,
     /// Probe resolution n: n × n octahedral, 2n × n equirect (overrides [lighting] probe_resolution).
     #[arg(long)]
     pub resolution: Option<u32>,
@@ -93,12 +118,7 @@ pub struct ProbeArgs {
 /// Runs `probe`.
 pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
-    anyhow::ensure!(
-        args.at.len() == 3 && args.at.iter().all(|v| v.is_finite()),
-        "--at needs three finite numbers x,y,z, got {:?}",
-        args.at
-    );
-    let at = DVec3::new(args.at[0], args.at[1], args.at[2]);
+    let at = args.placement.point()?;
     let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
     let centre = 0.5 * (field.bounds.min + field.bounds.max);
     let diagonal = field.bounds.diagonal();
@@ -109,7 +129,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     );
     let knobs = scene.lighting;
     let probe_knobs = ProbeKnobs {
-        map: args.map.map_or(knobs.probe.map, MapArg::kind),
+        map: args.placement.map_or(knobs.probe.map),
         resolution: args.resolution.unwrap_or(knobs.probe.resolution),
     };
     let fit_knobs = FitKnobs {
