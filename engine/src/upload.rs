@@ -34,17 +34,7 @@ impl Buffer {
         if bytes.is_empty() {
             return Ok(dst);
         }
-        let mut staging = Buffer::new(
-            ctx,
-            &format!("{name} (staging)"),
-            size,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            BufferLocation::Upload,
-        )?;
-        staging
-            .mapped_mut()
-            .expect("upload buffers are host-visible")[..bytes.len()]
-            .copy_from_slice(bytes);
+        let staging = staging_buffer(ctx, &format!("{name} (staging)"), bytes)?;
         submit_once(ctx, |device, cmd| unsafe {
             let region = vk::BufferCopy::default().size(size);
             device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &[region]);
@@ -86,17 +76,7 @@ impl Image {
             .flatten()
             .flat_map(|v| v.to_le_bytes())
             .collect();
-        let mut staging = Buffer::new(
-            ctx,
-            "image upload (staging)",
-            bytes.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            BufferLocation::Upload,
-        )?;
-        staging
-            .mapped_mut()
-            .expect("upload buffers are host-visible")[..bytes.len()]
-            .copy_from_slice(&bytes);
+        let staging = staging_buffer(ctx, "image upload (staging)", &bytes)?;
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .level_count(1)
@@ -152,6 +132,22 @@ impl Image {
         });
         Ok(())
     }
+}
+
+/// A host-visible transfer source holding `bytes`.
+fn staging_buffer(ctx: &Arc<Context>, name: &str, bytes: &[u8]) -> Result<Buffer> {
+    let mut staging = Buffer::new(
+        ctx,
+        name,
+        bytes.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        BufferLocation::Upload,
+    )?;
+    staging
+        .mapped_mut()
+        .expect("upload buffers are host-visible")[..bytes.len()]
+        .copy_from_slice(bytes);
+    Ok(staging)
 }
 
 /// Records `record` into a fresh command buffer, submits it and waits.
