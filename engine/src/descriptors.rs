@@ -101,33 +101,44 @@ pub(crate) struct Samplers {
     ctx: Arc<Context>,
     pub(crate) linear_clamp: vk::Sampler,
     pub(crate) nearest_clamp: vk::Sampler,
+    pub(crate) linear_repeat: vk::Sampler,
 }
 
 impl Samplers {
     pub(crate) fn new(ctx: &Arc<Context>) -> Result<Self> {
-        let make = |filter: vk::Filter| {
+        let make = |filter: vk::Filter, mode: vk::SamplerAddressMode| {
             let info = vk::SamplerCreateInfo::default()
                 .mag_filter(filter)
                 .min_filter(filter)
                 .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_u(mode)
+                .address_mode_v(mode)
+                .address_mode_w(mode)
                 .max_lod(0.0);
             unsafe { ctx.device.create_sampler(&info, None) }.vk("vkCreateSampler")
         };
-        let linear_clamp = make(vk::Filter::LINEAR)?;
-        let nearest_clamp = match make(vk::Filter::NEAREST) {
-            Ok(s) => s,
-            Err(e) => {
-                unsafe { ctx.device.destroy_sampler(linear_clamp, None) };
-                return Err(e);
+        let clamp = vk::SamplerAddressMode::CLAMP_TO_EDGE;
+        let made = [
+            make(vk::Filter::LINEAR, clamp),
+            make(vk::Filter::NEAREST, clamp),
+            make(vk::Filter::LINEAR, vk::SamplerAddressMode::REPEAT),
+        ];
+        if made.iter().any(|m| m.is_err()) {
+            let mut first_error = None;
+            for m in made {
+                match m {
+                    Ok(s) => unsafe { ctx.device.destroy_sampler(s, None) },
+                    Err(e) => first_error = first_error.or(Some(e)),
+                }
             }
-        };
+            return Err(first_error.expect("one failed"));
+        }
+        let [linear_clamp, nearest_clamp, linear_repeat] = made.map(|m| m.unwrap_or_default());
         Ok(Self {
             ctx: ctx.clone(),
             linear_clamp,
             nearest_clamp,
+            linear_repeat,
         })
     }
 }
@@ -137,6 +148,7 @@ impl Drop for Samplers {
         unsafe {
             self.ctx.device.destroy_sampler(self.linear_clamp, None);
             self.ctx.device.destroy_sampler(self.nearest_clamp, None);
+            self.ctx.device.destroy_sampler(self.linear_repeat, None);
         }
     }
 }

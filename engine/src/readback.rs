@@ -23,19 +23,20 @@ pub struct Readback {
 }
 
 impl Readback {
-    /// A readback buffer for images of this shape (RGBA16F, RGBA32F, or R32F
-    /// which reads back as (v, 0, 0, 1)).
+    /// A readback buffer for images of this shape (RGBA16F, RGBA32F, R32F
+    /// which reads back as (v, 0, 0, 1), or RG32F as (r, g, 0, 1)).
     pub fn new(ctx: &Arc<Context>, desc: ImageDesc) -> Result<Self> {
         if !matches!(
             desc.format,
             vk::Format::R16G16B16A16_SFLOAT
                 | vk::Format::R32G32B32A32_SFLOAT
                 | vk::Format::R32_SFLOAT
+                | vk::Format::R32G32_SFLOAT
         ) {
             return Err(EngineError::Pass {
                 pass: "readback".into(),
                 message: format!(
-                    "reads back RGBA16F, RGBA32F or R32F images, not {:?}",
+                    "reads back RGBA16F, RGBA32F, RG32F or R32F images, not {:?}",
                     desc.format
                 ),
             });
@@ -92,6 +93,14 @@ impl Readback {
                 .chunks_exact(4)
                 .take(n)
                 .map(|c| [f32::from_le_bytes([c[0], c[1], c[2], c[3]]), 0.0, 0.0, 1.0])
+                .collect(),
+            vk::Format::R32G32_SFLOAT => bytes
+                .chunks_exact(8)
+                .take(n)
+                .map(|c| {
+                    let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
+                    [f(0), f(4), 0.0, 1.0]
+                })
                 .collect(),
             _ => bytes
                 .chunks_exact(16)

@@ -54,29 +54,49 @@ impl Buffer {
 
 impl Image {
     /// Replaces the whole content of an RGBA32F image (created with
-    /// transfer-destination usage) with `pixels`, row by row, through a
-    /// staging buffer in a one-time submission; waits for it. The image is
-    /// left in GENERAL layout with the copy visible to any later access.
+    /// transfer-destination usage) with `pixels`; see [`Image::write_texels`].
     pub fn write_rgba32f(&self, pixels: &[[f32; 4]]) -> Result<()> {
         let desc = self.desc();
-        let n = desc.width as usize * desc.height as usize;
-        if desc.format != vk::Format::R32G32B32A32_SFLOAT || pixels.len() != n {
+        if desc.format != vk::Format::R32G32B32A32_SFLOAT {
             return Err(EngineError::Pass {
                 pass: "upload".into(),
                 message: format!(
-                    "write_rgba32f needs an RGBA32F image and {n} pixels; got {:?} and {}",
-                    desc.format,
-                    pixels.len()
+                    "write_rgba32f needs an RGBA32F image, got {:?}",
+                    desc.format
                 ),
             });
         }
-        let ctx = &self.ctx;
         let bytes: Vec<u8> = pixels
             .iter()
             .flatten()
             .flat_map(|v| v.to_le_bytes())
             .collect();
-        let staging = staging_buffer(ctx, "image upload (staging)", &bytes)?;
+        self.write_texels(&bytes)
+    }
+
+    /// Replaces the whole content of an image (created with
+    /// transfer-destination usage) with tightly packed texels, row by row,
+    /// through a staging buffer in a one-time submission; waits for it. The
+    /// image is left in GENERAL layout with the copy visible to any later
+    /// access.
+    pub fn write_texels(&self, bytes: &[u8]) -> Result<()> {
+        let desc = self.desc();
+        let n = desc.width as usize * desc.height as usize;
+        let texel = crate::graph::texel_bytes(desc.format);
+        if texel.is_none_or(|t| bytes.len() != n * t as usize) {
+            return Err(EngineError::Pass {
+                pass: "upload".into(),
+                message: format!(
+                    "write_texels: {} bytes do not fill a {}x{} {:?} image",
+                    bytes.len(),
+                    desc.width,
+                    desc.height,
+                    desc.format
+                ),
+            });
+        }
+        let ctx = &self.ctx;
+        let staging = staging_buffer(ctx, "image upload (staging)", bytes)?;
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .level_count(1)

@@ -7,18 +7,26 @@
 //! So far: radiance fields ([`field`]), scene files and recipes ([`scene`]),
 //! baking recipes into fields and ground-truth images ([`bake`]), the ray
 //! march ([`march`]), spherical Gaussians ([`sg`]), the incident-light
-//! probe ([`probe`]) and its Levenberg–Marquardt SG fit ([`sgfit`]).
+//! probe ([`probe`]) and its Levenberg–Marquardt SG fit ([`sgfit`]), glTF
+//! objects ([`object`]), their BRDF and SG shading ([`brdf`]), and the
+//! G-buffer, shading and compositing passes ([`gbuffer`], [`shade`],
+//! [`composite`]).
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod bake;
+pub mod brdf;
 pub mod camera;
+pub mod composite;
 pub mod field;
+pub mod gbuffer;
 pub mod geometry;
 pub mod lighting;
 pub mod march;
+pub mod object;
 pub mod probe;
 pub mod rng;
 pub mod scene;
 pub mod sg;
 pub mod sgfit;
+pub mod shade;

@@ -35,7 +35,7 @@ pub struct IncidentLight {
     pub probe: ProbePass,
     /// The SG fit.
     pub fit: SgFitPass,
-    last: Option<([u64; 3], u64)>,
+    last: std::sync::Mutex<Option<([u64; 3], u64)>>,
 }
 
 impl IncidentLight {
@@ -53,17 +53,19 @@ impl IncidentLight {
         Ok(Self {
             probe,
             fit,
-            last: None,
+            last: Default::default(),
         })
     }
 
     /// Decides this frame's work for an object centred at `centre` in a
     /// field whose lighting is at `version` (bump it whenever the field or
-    /// the environment light changes), and remembers them.
-    pub fn plan(&mut self, centre: DVec3, version: u64) -> LightingWork {
+    /// the environment light changes), and remembers them (interior
+    /// mutability, so a view that builds frames through `&self` can plan).
+    pub fn plan(&self, centre: DVec3, version: u64) -> LightingWork {
         let key = (centre.to_array().map(f64::to_bits), version);
         let knobs = *self.fit.knobs();
-        let work = match self.last {
+        let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+        let work = match *last {
             None => LightingWork::Update {
                 start: FitStart::Cold,
                 iterations: knobs.cold_iterations,
@@ -74,13 +76,13 @@ impl IncidentLight {
             },
             Some(_) => LightingWork::Reuse,
         };
-        self.last = Some(key);
+        *last = Some(key);
         work
     }
 
     /// Forgets the last fit: the next frame starts cold.
-    pub fn reset(&mut self) {
-        self.last = None;
+    pub fn reset(&self) {
+        *self.last.lock().unwrap_or_else(|p| p.into_inner()) = None;
     }
 
     /// Adds the probe trace and the fit when `work` asks for them; returns

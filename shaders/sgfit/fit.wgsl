@@ -160,7 +160,7 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
             }
         }
         let sharp = 2.0 * FIT_LN_2 * FIT_PI / dm_solid_angle(bt, size);
-        seed_sharpness = clamp(sharp, l0, FIT_MAX_SHARPNESS);
+        seed_sharpness = clamp(sharp, min(l0, FIT_MAX_SHARPNESS), FIT_MAX_SHARPNESS);
     }
     workgroupBarrier();
     // μ_k = Σ w L G_k / Σ w G_k S, S = Σ_j G_j.

@@ -5,7 +5,7 @@
 const FIT_PI: f32 = 3.14159265358979;
 const FIT_LN_2: f32 = 0.693147180559945;
 const FIT_MIN_SHARPNESS: f32 = 1e-4;
-const FIT_MAX_SHARPNESS: f32 = 1e4;
+// FIT_MAX_SHARPNESS (f32) is defined by the pass: passes/src/sgfit/model.rs `max_sharpness`.
 const FIT_MAX_AXIS_STEP: f32 = 1.0;
 const FIT_SEED_CONTRAST: f32 = 4.0;
 

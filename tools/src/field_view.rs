@@ -26,11 +26,12 @@ impl Scene for FieldView {
         width: u32,
         height: u32,
         _time: f32,
-    ) -> ImageHandle {
+    ) -> anyhow::Result<ImageHandle> {
         let frame = CameraFrame::new(&self.camera, width, height);
-        self.march
+        Ok(self
+            .march
             .add(graph, &self.field, &frame, None)
-            .colour_opacity
+            .colour_opacity)
     }
 
     fn output_format(&self) -> vk::Format {

@@ -20,7 +20,7 @@ pub trait Scene {
         width: u32,
         height: u32,
         time: f32,
-    ) -> ImageHandle;
+    ) -> anyhow::Result<ImageHandle>;
 
     /// Format of the image [`Scene::build`] returns (RGBA16F unless the
     /// scene says otherwise; RGBA32F is the other readable one).
@@ -68,7 +68,7 @@ pub fn run_headless(
     for i in 0..frames.max(1) {
         renderer.begin_frame()?;
         let mut graph = FrameGraph::new();
-        let hdr = scene.build(&mut graph, width, height, time + i as f32 / 60.0);
+        let hdr = scene.build(&mut graph, width, height, time + i as f32 / 60.0)?;
         readback.add_to_graph(&mut graph, hdr);
         let report = renderer.submit(graph, &SubmitSync::none())?;
         culled = report.culled;

@@ -8,6 +8,7 @@ pub mod demo;
 pub mod field_source;
 pub mod field_view;
 pub mod headless;
+pub mod insertion_view;
 pub mod present;
 pub mod shaders;
 pub mod timings_table;

@@ -173,7 +173,7 @@ impl App {
         let (w, h) = r.target.extent();
         let time = r.started.elapsed().as_secs_f32();
         let mut graph = FrameGraph::new();
-        let hdr = r.scene.build(&mut graph, w, h, time);
+        let hdr = r.scene.build(&mut graph, w, h, time)?;
         let swapchain = r.target.import(&mut graph, acquired);
         r.present
             .add_pass(&mut graph, hdr, swapchain, self.options.exposure);

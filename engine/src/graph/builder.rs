@@ -146,15 +146,42 @@ impl<'a> FrameGraph<'a> {
         }
     }
 
+    /// A transient buffer holding `bytes` (at most 65536, a multiple of 4),
+    /// written by a transfer pass `upload {name}` from the command buffer:
+    /// the way to hand a frame small data that changes every frame (camera,
+    /// object poses, materials) without host writes racing frames in flight.
+    pub fn upload_buffer(&mut self, name: &str, bytes: Vec<u8>) -> BufferHandle {
+        let buffer = self.create_buffer(name, bytes.len().max(4) as u64);
+        let mut pass = self.add_pass(&format!("upload {name}"), PassKind::Transfer);
+        let written = pass.buffer(buffer, BufferAccess::TransferDst);
+        pass.exec(move |ctx| ctx.update_buffer(written, &bytes));
+        written
+    }
+
     /// Imports an image that lives across frames. Its state from the previous
     /// frame is picked up automatically; `export`, when given, is the state
     /// it is left in at the end of the frame. Passes writing it are never culled.
+    /// Importing an image already imported into this graph returns its
+    /// latest version (one resource, one state track), adopting `export`
+    /// if the first import gave none.
     pub fn import_image(
         &mut self,
         image: &Arc<Image>,
         name: &str,
         export: Option<SyncState>,
     ) -> ImageHandle {
+        let found = self.images.iter_mut().enumerate().find(|(_, d)| {
+            matches!(&d.import, Some(Import { backing: ImageBacking::Owned(i), .. }) if Arc::ptr_eq(i, image))
+        });
+        if let Some((id, decl)) = found {
+            if let Some(import) = decl.import.as_mut() {
+                import.export = import.export.or(export);
+            }
+            return ImageHandle {
+                id: id as u32,
+                version: decl.versions.len() as u32 - 1,
+            };
+        }
         let initial = image.sync_state();
         self.push_imported_image(
             name,
@@ -209,12 +236,25 @@ impl<'a> FrameGraph<'a> {
         }
     }
 
-    /// Imports a buffer that lives across frames (see [`Self::import_image`]).
+    /// Imports a buffer that lives across frames (see [`Self::import_image`];
+    /// a second import of the same buffer likewise returns its latest version).
     pub fn import_buffer(
         &mut self,
         buffer: &Arc<Buffer>,
         export: Option<SyncState>,
     ) -> BufferHandle {
+        let found = self.buffers.iter_mut().enumerate().find(|(_, d)| {
+            matches!(&d.import, Some(Import { backing: BufferBacking::Owned(b), .. }) if Arc::ptr_eq(b, buffer))
+        });
+        if let Some((id, decl)) = found {
+            if let Some(import) = decl.import.as_mut() {
+                import.export = import.export.or(export);
+            }
+            return BufferHandle {
+                id: id as u32,
+                version: decl.versions.len() as u32 - 1,
+            };
+        }
         let initial = buffer.sync_state();
         self.push_imported_buffer(
             buffer.name(),

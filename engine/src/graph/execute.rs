@@ -24,6 +24,8 @@ pub enum SamplerKind {
     LinearClamp,
     /// Nearest texel, clamped to the edge.
     NearestClamp,
+    /// Bilinear, repeating outside [0, 1] (tiled textures).
+    LinearRepeat,
 }
 
 /// A resource bound to one binding of a pipeline, in binding order.
@@ -231,6 +233,7 @@ impl PassContext<'_> {
                     let sampler = match s {
                         SamplerKind::LinearClamp => self.samplers.linear_clamp,
                         SamplerKind::NearestClamp => self.samplers.nearest_clamp,
+                        SamplerKind::LinearRepeat => self.samplers.linear_repeat,
                     };
                     image_infos.push((
                         r.binding,
@@ -524,6 +527,34 @@ impl PassContext<'_> {
         Ok(())
     }
 
+    /// Writes `bytes` at the start of `dst` from the command buffer itself
+    /// (vkCmdUpdateBuffer: the data is copied at record time, so a frame's
+    /// small per-frame data never races a frame still in flight). At most
+    /// 65536 bytes, a multiple of 4.
+    pub fn update_buffer(&mut self, dst: BufferHandle, bytes: &[u8]) -> Result<()> {
+        let d = self.buffer(
+            dst,
+            |a| a == BufferAccess::TransferDst,
+            "an update destination",
+        )?;
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        if bytes.len() > 65536 || bytes.len() % 4 != 0 || bytes.len() as u64 > d.size {
+            return Err(self.error(format!(
+                "update_buffer takes 4..=65536 bytes in multiples of 4 that fit the buffer ({} bytes); got {}",
+                d.size,
+                bytes.len()
+            )));
+        }
+        unsafe {
+            self.ctx
+                .device
+                .cmd_update_buffer(self.cmd, d.buffer, 0, bytes)
+        };
+        Ok(())
+    }
+
     /// Fills a whole buffer with a repeated 32-bit value.
     pub fn fill_buffer(&mut self, dst: BufferHandle, value: u32) -> Result<()> {
         let d = self.buffer(
@@ -571,6 +602,7 @@ pub(crate) fn texel_bytes(format: vk::Format) -> Option<u32> {
         | vk::Format::B8G8R8A8_SRGB
         | vk::Format::R32_SFLOAT
         | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R32G32_SFLOAT => 8,
         vk::Format::R16_SFLOAT => 2,
         _ => return None,
     })

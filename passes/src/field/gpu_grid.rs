@@ -16,6 +16,8 @@ pub struct GpuGridField {
     occupancy: Arc<Buffer>,
     /// Bounds diagonal, for step sizes.
     pub diagonal: f64,
+    /// The field's bounds.
+    pub bounds: crate::geometry::Aabb,
 }
 
 /// The field's buffers as imported into one frame's graph.
@@ -92,6 +94,7 @@ impl GpuGridField {
             nodes: Arc::new(Buffer::with_data(ctx, "grid-nodes", &nodes, storage)?),
             occupancy: Arc::new(Buffer::with_data(ctx, "grid-occupancy", &cells, storage)?),
             diagonal: field.bounds.diagonal(),
+            bounds: field.bounds,
         })
     }
 

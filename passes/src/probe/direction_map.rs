@@ -65,16 +65,28 @@ impl DirectionMap {
     pub fn direction(&self, x: u32, y: u32) -> DVec3 {
         let u = (x as f64 + 0.5) / self.width as f64;
         let v = (y as f64 + 0.5) / self.height as f64;
+        self.direction_and_density(u, v).0
+    }
+
+    /// The unit direction at map coordinates (u, v) ∈ [0, 1]² and the
+    /// solid angle per unit of map area there, dω/(du dv) (4π on average):
+    /// sin θ · 2π² for equirect, 4/|p|³ for the octahedral map.
+    pub fn direction_and_density(&self, u: f64, v: f64) -> (DVec3, f64) {
         match self.kind {
             MapKind::Equirect => {
                 let (phi, theta) = (2.0 * PI * u, PI * v);
-                DVec3::new(
+                let d = DVec3::new(
                     theta.sin() * phi.cos(),
                     theta.cos(),
                     theta.sin() * phi.sin(),
-                )
+                );
+                (d, 2.0 * PI * PI * theta.sin())
             }
-            MapKind::Octahedral => octahedron_point(2.0 * u - 1.0, 2.0 * v - 1.0).normalize(),
+            MapKind::Octahedral => {
+                let p = octahedron_point(2.0 * u - 1.0, 2.0 * v - 1.0);
+                let len = p.length();
+                (p / len, 4.0 / len.powi(3))
+            }
         }
     }
 

@@ -10,6 +10,7 @@ pub use environment::{Environment, EquirectMap};
 pub use shape::Shape;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glam::DVec3;
 
@@ -17,6 +18,7 @@ use crate::bake::BakeKnobs;
 use crate::camera::CameraSpec;
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
+use crate::object::{load_gltf, ObjectMesh, PlacedObject, Pose};
 use spec::{PrimitiveSpec, SceneSpec};
 
 /// Why a scene file could not be used: the file, the key and the problem.
@@ -105,6 +107,24 @@ pub struct Scene {
     pub march: MarchKnobs,
     /// Incident-light knobs: the probe and the SG fit (`[lighting]`).
     pub lighting: LightingKnobs,
+    /// Object shading knobs (`[shading]`).
+    pub shading: ShadingKnobs,
+    /// Virtual objects placed in the field (`[[objects]]`).
+    pub objects: Vec<PlacedObject>,
+}
+
+/// The object shading's knobs, as a scene file sets them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShadingKnobs {
+    /// SG lobes standing for GGX's distribution of normals (1 is the usual
+    /// single lobe; see [`crate::brdf::NdfLobes`]).
+    pub ndf_lobes: u32,
+}
+
+impl Default for ShadingKnobs {
+    fn default() -> Self {
+        Self { ndf_lobes: 1 }
+    }
 }
 
 /// The probe's and the SG fit's knobs, as a scene file sets them.
@@ -283,6 +303,50 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         MarchKnobs::from_spec(spec.march.as_ref()).map_err(|(f, m)| e(&format!("march.{f}"), m))?;
     let lighting = LightingKnobs::from_spec(spec.lighting.as_ref())
         .map_err(|(f, m)| e(&format!("lighting.{f}"), m))?;
+    let shading = ShadingKnobs {
+        ndf_lobes: spec
+            .shading
+            .as_ref()
+            .and_then(|s| s.ndf_lobes)
+            .unwrap_or(ShadingKnobs::default().ndf_lobes),
+    };
+    crate::brdf::NdfLobes::new(shading.ndf_lobes).map_err(|m| e("shading.ndf_lobes", m))?;
+    let mut objects = Vec::with_capacity(spec.objects.len());
+    let mut meshes: std::collections::HashMap<PathBuf, Arc<ObjectMesh>> = Default::default();
+    for (i, o) in spec.objects.into_iter().enumerate() {
+        let f = |k: &str| format!("objects[{i}].{k}");
+        let pose = Pose {
+            position: o.position,
+            rotation: o.rotation,
+            scale: o.scale,
+        };
+        if let Some((k, m)) = pose.problem() {
+            return Err(e(&f(k), m));
+        }
+        if let Some((k, m)) = o.material.problem() {
+            return Err(e(&f(&format!("material.{k}")), m));
+        }
+        let file = dir.join(&o.file);
+        let mesh = match meshes.get(&file) {
+            Some(m) => m.clone(),
+            None => {
+                let m = Arc::new(load_gltf(&file).map_err(|x| e(&f("file"), x.to_string()))?);
+                meshes.insert(file.clone(), m.clone());
+                m
+            }
+        };
+        let name = o.name.unwrap_or_else(|| {
+            file.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+        objects.push(PlacedObject {
+            name,
+            mesh,
+            pose,
+            material: o.material,
+        });
+    }
     let name = spec.name.unwrap_or_else(|| {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -298,6 +362,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         bake,
         march,
         lighting,
+        shading,
+        objects,
     })
 }
 

@@ -27,6 +27,32 @@ pub(crate) struct SceneSpec {
     pub march: Option<MarchSpec>,
     #[serde(default)]
     pub lighting: Option<LightingSpec>,
+    #[serde(default)]
+    pub shading: Option<ShadingSpec>,
+    #[serde(default)]
+    pub objects: Vec<ObjectSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShadingSpec {
+    pub ndf_lobes: Option<u32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ObjectSpec {
+    pub name: Option<String>,
+    /// A .gltf or .glb file, relative to the scene file.
+    pub file: String,
+    #[serde(default)]
+    pub position: DVec3,
+    #[serde(default)]
+    pub rotation: DVec3,
+    #[serde(default)]
+    pub scale: crate::object::Scale,
+    #[serde(default)]
+    pub material: crate::object::MaterialOverride,
 }
 
 #[derive(Debug, Deserialize)]

@@ -19,8 +19,17 @@ use crate::sg::Sg64;
 
 /// Smallest sharpness a fitted lobe may take.
 pub const MIN_SHARPNESS: f64 = 1e-4;
-/// Largest sharpness a fitted lobe may take.
+/// Largest sharpness a fitted lobe may take at any probe resolution.
 pub const MAX_SHARPNESS: f64 = 1e4;
+
+/// Largest sharpness a lobe fitted to a probe of `texels` texels may take:
+/// a lobe's integral 2πμ/λ must not shrink below one texel's solid angle
+/// (4π/texels), or a needle lobe on one texel centre fits that texel with
+/// an unconstrained energy (λ ≤ texels/2, 512 at 32 × 32), and never past
+/// [`MAX_SHARPNESS`]. `shaders/sgfit/fit.wgsl` gets it as a define.
+pub fn max_sharpness(texels: usize) -> f64 {
+    (texels as f64 / 2.0).clamp(1.0, MAX_SHARPNESS)
+}
 /// Largest tangent-plane move of an axis in one step (radians, roughly).
 pub const MAX_AXIS_STEP: f64 = 1.0;
 /// The brightest texel seeds a lobe only when it exceeds the mean
@@ -157,7 +166,8 @@ pub fn cold_start(probe: &ProbeSamples, m: u32) -> Vec<Sg64> {
         // Half value at the texel's radius r (w = π r²): λ = 2 ln 2 · π / w.
         let sharp = 2.0 * std::f64::consts::LN_2 * PI / probe.weights[best];
         lobes[k_best].direction = d;
-        lobes[k_best].sharpness = sharp.clamp(l0, MAX_SHARPNESS);
+        let cap = max_sharpness(probe.directions.len());
+        lobes[k_best].sharpness = sharp.clamp(l0.min(cap), cap);
     }
     let cover: Vec<f64> = probe
         .directions
@@ -239,8 +249,9 @@ pub fn jacobian_rows(probe: &ProbeSamples, lobes: &[Sg64], t: usize, rows: &mut 
     }
 }
 
-/// Lobes moved by the parameter step `delta` (6 per lobe).
-pub fn apply_step(lobes: &[Sg64], delta: &[f64]) -> Vec<Sg64> {
+/// Lobes moved by the parameter step `delta` (6 per lobe), sharpness kept
+/// in [[`MIN_SHARPNESS`], `max_sharp`].
+pub fn apply_step(lobes: &[Sg64], delta: &[f64], max_sharp: f64) -> Vec<Sg64> {
     lobes
         .iter()
         .enumerate()
@@ -252,7 +263,7 @@ pub fn apply_step(lobes: &[Sg64], delta: &[f64]) -> Vec<Sg64> {
                 g.amplitude.z.sqrt() + d[2],
             );
             let s = (g.sharpness.max(MIN_SHARPNESS).ln() + d[3])
-                .clamp(MIN_SHARPNESS.ln(), MAX_SHARPNESS.ln());
+                .clamp(MIN_SHARPNESS.ln(), max_sharp.ln());
             let (mut u, mut v) = (d[4], d[5]);
             let len = (u * u + v * v).sqrt();
             if len > MAX_AXIS_STEP {

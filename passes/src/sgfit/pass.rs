@@ -149,7 +149,13 @@ impl SgFitPass {
                 limit >> 20
             );
         }
-        let defines = [Define::Bool("OCTAHEDRAL", map.kind == MapKind::Octahedral)];
+        let defines = [
+            Define::Bool("OCTAHEDRAL", map.kind == MapKind::Octahedral),
+            Define::F32(
+                "FIT_MAX_SHARPNESS",
+                super::model::max_sharpness(map.texels()) as f32,
+            ),
+        ];
         let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
             let shader = compile(lib, "sgfit/fit.wgsl", entry, ShaderStage::Compute, &defines)?;
             Ok(ComputePipeline::new(ctx, &shader)?)

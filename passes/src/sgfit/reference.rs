@@ -4,7 +4,9 @@
 use rayon::prelude::*;
 
 use super::knobs::FitKnobs;
-use super::model::{apply_step, cold_start, cost, jacobian_rows, ProbeSamples, PARAMS_PER_LOBE};
+use super::model::{
+    apply_step, cold_start, cost, jacobian_rows, max_sharpness, ProbeSamples, PARAMS_PER_LOBE,
+};
 use super::solve::damped_step;
 use crate::sg::Sg64;
 
@@ -115,7 +117,8 @@ pub fn fit_reference(
     let mut normal: Option<(Vec<f64>, Vec<f64>)> = None;
     for _ in 0..iterations {
         let (a, b) = normal.get_or_insert_with(|| normal_equations(probe, &lobes));
-        let candidate = damped_step(a, b, p, eta).map(|d| apply_step(&lobes, &d));
+        let candidate = damped_step(a, b, p, eta)
+            .map(|d| apply_step(&lobes, &d, max_sharpness(probe.directions.len())));
         let candidate_cost = candidate.as_ref().map(|c| cost(probe, c));
         match (candidate, candidate_cost) {
             (Some(c), Some(cc)) if cc.is_finite() && cc < current => {

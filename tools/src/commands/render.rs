@@ -1,5 +1,6 @@
-//! `inlay render SCENE`: renders a scene's field headless from one of its
-//! cameras through the frame graph's march pass.
+//! `inlay render SCENE`: renders a scene headless from one of its cameras:
+//! the field with the scene's objects inserted (probe, SG fit, G-buffer,
+//! clipped march, SG shading, compositing), or the bare field.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -11,8 +12,8 @@ use inlay_passes::march::MarchPass;
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::scene_field;
-use crate::field_view::FieldView;
 use crate::headless::run_headless;
+use crate::insertion_view::InsertionView;
 
 /// Options of `render`.
 #[derive(Args, Debug)]
@@ -28,7 +29,7 @@ pub struct RenderArgs {
     /// Height in pixels.
     #[arg(long, default_value_t = 360)]
     pub height: u32,
-    /// Output images: .exr holds (Ĉ, Ô) linear; .png is tonemapped over black. Repeatable.
+    /// Output images: .exr holds linear (colour, coverage); .png is tonemapped over black. Repeatable.
     #[arg(long, default_values = ["inlay-render.png"])]
     pub out: Vec<PathBuf>,
     /// Use this field file instead of the scene's field or recipe.
@@ -52,6 +53,12 @@ pub struct RenderArgs {
     /// Bake the recipe again even if a cached field exists.
     #[arg(long)]
     pub no_cache: bool,
+    /// Render the bare field, without the scene's objects.
+    #[arg(long)]
+    pub no_objects: bool,
+    /// SG lobes for GGX's normal distribution (overrides [shading] ndf_lobes).
+    #[arg(long)]
+    pub ndf_lobes: Option<u32>,
 }
 
 /// Runs `render` on a context made with `options`.
@@ -61,7 +68,11 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         "--exposure must be a positive number, got {}",
         args.exposure
     );
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    if args.no_objects {
+        scene.objects.clear();
+    }
+    scene.shading.ndf_lobes = args.ndf_lobes.unwrap_or(scene.shading.ndf_lobes);
     let camera = scene.camera(&args.camera)?.clone();
     let mut knobs = scene.march;
     knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
@@ -72,13 +83,16 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
     let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
     let library = crate::shaders::library()?;
-    let view = FieldView {
-        march: MarchPass::new(ctx, &library, knobs)?,
-        field: GpuGridField::upload(ctx, &field)?,
+    let view = InsertionView::new(
+        ctx,
+        &library,
+        &scene,
+        MarchPass::new(ctx, &library, knobs)?,
+        GpuGridField::upload(ctx, &field)?,
         camera,
-    };
+    )?;
     let run = run_headless(ctx, &view, args.width, args.height, args.frames.max(1), 0.0)?;
     let bad = run.image.non_finite_count();
-    anyhow::ensure!(bad == 0, "the march produced {bad} non-finite pixels");
+    anyhow::ensure!(bad == 0, "the frame has {bad} non-finite pixels");
     run.report(ctx, &args.out, args.exposure)
 }

@@ -170,11 +170,11 @@ impl crate::headless::Scene for DemoScene {
         width: u32,
         height: u32,
         time: f32,
-    ) -> ImageHandle {
+    ) -> anyhow::Result<ImageHandle> {
         let out = add_demo_passes(graph, &self.pipelines, width, height, time);
         if self.keep_heatmap {
             graph.mark_output_image(out.heatmap);
         }
-        out.hdr
+        Ok(out.hdr)
     }
 }

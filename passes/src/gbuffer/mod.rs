@@ -1,0 +1,232 @@
+//! The object G-buffer pass (`object-gbuffer`, raster with dynamic
+//! rendering; METHOD.md §4.4 step 2): every part of every placed object is
+//! drawn with its pose and material from a per-frame draw table, writing
+//! normal + roughness, base colour + metallic, and the distance along the
+//! camera ray with the object's index. The distance feeds the march's
+//! clipping; poses and materials change per frame without new pipelines.
+
+mod projection;
+
+pub use projection::view_projection;
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use inlay_engine::graph::{
+    Binding, BufferAccess, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind, SamplerKind,
+};
+use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, Image, ImageDesc, Push};
+
+use crate::camera::CameraFrame;
+use crate::object::{GpuObject, PlacedObject};
+
+/// Format of the normal + roughness target.
+pub const NORMAL_ROUGHNESS_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Format of the base colour + metallic target.
+pub const ALBEDO_METALLIC_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Format of the (distance along the ray, object index) target.
+pub const DISTANCE_ID_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
+/// Format of the raster depth buffer.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// What the distance target holds where no object is: the march's
+/// "no object" distance and index −1.
+pub const EMPTY_DISTANCE_ID: [f32; 4] = [3.0e38, -1.0, 0.0, 0.0];
+
+/// Bytes of one draw record (`Draw` in `shaders/object/gbuffer.wgsl`).
+const DRAW_BYTES: usize = 128;
+/// Most draws (object parts) in one frame: the draw table is uploaded from
+/// the command buffer, which takes at most 64 KiB.
+pub const MAX_DRAWS: usize = 65536 / DRAW_BYTES;
+
+/// What the G-buffer pass writes.
+#[derive(Debug, Clone, Copy)]
+pub struct GBuffer {
+    /// World normal (xyz) and roughness (w).
+    pub normal_roughness: ImageHandle,
+    /// Base colour (rgb) and metallic (a).
+    pub albedo_metallic: ImageHandle,
+    /// Distance along the camera ray (r; [`EMPTY_DISTANCE_ID`] where empty)
+    /// and object index (g).
+    pub distance_id: ImageHandle,
+}
+
+/// An object to draw: its placement and its uploaded mesh.
+#[derive(Clone, Copy)]
+pub struct ObjectDraw<'a> {
+    /// Pose, materials.
+    pub placed: &'a PlacedObject,
+    /// Buffers and textures.
+    pub gpu: &'a GpuObject,
+}
+
+/// The G-buffer pipeline.
+pub struct GBufferPass {
+    pipeline: GraphicsPipeline,
+}
+
+impl GBufferPass {
+    /// Compiles the pass.
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
+        let v = compile(
+            lib,
+            "object/gbuffer.wgsl",
+            "vs_main",
+            ShaderStage::Vertex,
+            &[],
+        )?;
+        let f = compile(
+            lib,
+            "object/gbuffer.wgsl",
+            "fs_main",
+            ShaderStage::Fragment,
+            &[],
+        )?;
+        let desc = GraphicsDesc {
+            color_formats: vec![
+                NORMAL_ROUGHNESS_FORMAT,
+                ALBEDO_METALLIC_FORMAT,
+                DISTANCE_ID_FORMAT,
+            ],
+            depth_format: Some(DEPTH_FORMAT),
+            depth_test: true,
+            depth_write: true,
+            blend: false,
+            // Meshes may be open or mirrored: draw both sides.
+            cull_back: false,
+        };
+        Ok(Self {
+            pipeline: GraphicsPipeline::new(ctx, &v, &f, &desc)?,
+        })
+    }
+
+    /// Adds the `object-gbuffer` pass drawing `objects` from `camera`
+    /// (object index = position in `objects`).
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        camera: &CameraFrame,
+        objects: &[ObjectDraw<'_>],
+    ) -> anyhow::Result<GBuffer> {
+        let (width, height) = (camera.width, camera.height);
+        let spheres: Vec<_> = objects.iter().map(|o| o.placed.sphere()).collect();
+        let view_proj = view_projection(camera, &spheres);
+        let mut camera_bytes = Vec::with_capacity(80);
+        for v in view_proj.to_cols_array() {
+            camera_bytes.extend_from_slice(&(v as f32).to_le_bytes());
+        }
+        for v in camera.origin.extend(1.0).to_array() {
+            camera_bytes.extend_from_slice(&(v as f32).to_le_bytes());
+        }
+        // One draw per mesh part, in object order.
+        let mut draw_bytes = Vec::new();
+        let mut draws = Vec::new();
+        for (index, o) in objects.iter().enumerate() {
+            let m = o.placed.pose.matrix();
+            let nm = o.placed.pose.normal_matrix();
+            for (p, part) in o.placed.mesh.parts.iter().enumerate() {
+                let mat = o.placed.material_of(p);
+                let mut rec: Vec<f32> = Vec::with_capacity(32);
+                for r in 0..3 {
+                    rec.extend(m.row(r).to_array().map(|x| x as f32));
+                }
+                for r in 0..3 {
+                    rec.extend(nm.row(r).extend(0.0).to_array().map(|x| x as f32));
+                }
+                rec.extend(mat.base_colour.to_array().map(|x| x as f32));
+                rec.extend([mat.roughness as f32, mat.metallic as f32, index as f32, 0.0]);
+                draw_bytes.extend(rec.iter().flat_map(|x| x.to_le_bytes()));
+                draws.push((o.gpu, *part, mat));
+            }
+        }
+        anyhow::ensure!(
+            draws.len() <= MAX_DRAWS,
+            "{} object parts in one frame; the G-buffer draws at most {MAX_DRAWS}",
+            draws.len()
+        );
+        let camera_buffer = graph.upload_buffer("object-camera", camera_bytes);
+        let draw_buffer = graph.upload_buffer("object-draws", draw_bytes);
+        let mut imported_buffers = HashMap::new();
+        let mut imported_images: HashMap<*const Image, ImageHandle> = HashMap::new();
+        let mut bound = Vec::with_capacity(draws.len());
+        for (gpu, part, mat) in &draws {
+            let key = Arc::as_ptr(&gpu.vertices);
+            let (vb, ib) = *imported_buffers.entry(key).or_insert_with(|| {
+                (
+                    graph.import_buffer(&gpu.vertices, None),
+                    graph.import_buffer(&gpu.indices, None),
+                )
+            });
+            let mut image = |img: &Arc<Image>, name: &str| {
+                *imported_images
+                    .entry(Arc::as_ptr(img))
+                    .or_insert_with(|| graph.import_image(img, name, None))
+            };
+            let base = image(
+                gpu.texture(mat.base_colour_texture, true),
+                "base-colour texture",
+            );
+            let mr = image(
+                gpu.texture(mat.metallic_roughness_texture, false),
+                "metallic-roughness texture",
+            );
+            bound.push((vb, ib, base, mr, *part));
+        }
+        let target = |graph: &mut FrameGraph<'a>, name: &str, format| {
+            graph.create_image(
+                name,
+                ImageDesc {
+                    width,
+                    height,
+                    format,
+                },
+            )
+        };
+        let nr = target(graph, "gbuffer-normal-roughness", NORMAL_ROUGHNESS_FORMAT);
+        let am = target(graph, "gbuffer-albedo-metallic", ALBEDO_METALLIC_FORMAT);
+        let di = target(graph, "gbuffer-distance-id", DISTANCE_ID_FORMAT);
+        let depth = target(graph, "gbuffer-depth", DEPTH_FORMAT);
+        let mut pass = graph.add_pass("object-gbuffer", PassKind::Raster);
+        pass.buffer(camera_buffer, BufferAccess::Uniform);
+        pass.buffer(draw_buffer, BufferAccess::StorageRead);
+        // Each resource is declared once, however many draws use it.
+        for (vb, ib) in imported_buffers.values() {
+            pass.buffer(*vb, BufferAccess::StorageRead);
+            pass.buffer(*ib, BufferAccess::StorageRead);
+        }
+        for img in imported_images.values() {
+            pass.image(*img, ImageAccess::Sampled);
+        }
+        let clear = |c: [f32; 4]| ImageAccess::ColorAttachment(LoadOp::Clear(c));
+        let nr = pass.image(nr, clear([0.0, 0.0, 0.0, 0.0]));
+        let am = pass.image(am, clear([0.0, 0.0, 0.0, 0.0]));
+        let di = pass.image(di, clear(EMPTY_DISTANCE_ID));
+        pass.image(depth, ImageAccess::DepthAttachment(LoadOp::Clear(1.0)));
+        pass.exec(move |ctx| {
+            for (i, (vb, ib, base, mr, part)) in bound.iter().enumerate() {
+                let push = Push::new().u32(i as u32).u32(part.first_index);
+                ctx.draw(
+                    &self.pipeline,
+                    &[
+                        Binding::UniformBuffer(camera_buffer),
+                        Binding::StorageBuffer(draw_buffer),
+                        Binding::StorageBuffer(*vb),
+                        Binding::StorageBuffer(*ib),
+                        Binding::SampledImage(*base),
+                        Binding::SampledImage(*mr),
+                        Binding::Sampler(SamplerKind::LinearRepeat),
+                    ],
+                    push.bytes(),
+                    part.index_count,
+                    1,
+                )?;
+            }
+            Ok(())
+        });
+        Ok(GBuffer {
+            normal_roughness: nr,
+            albedo_metallic: am,
+            distance_id: di,
+        })
+    }
+}

@@ -1,0 +1,139 @@
+//! An object's geometry and materials in object space, as loaded from
+//! glTF: one vertex and index array for all primitives, a material per
+//! primitive, and the textures the materials use.
+
+use glam::{DVec3, Vec3};
+
+use super::material::Material;
+use crate::geometry::Aabb;
+
+/// One vertex: position, normal and texture coordinates (object space).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MeshVertex {
+    /// Position.
+    pub position: Vec3,
+    /// Unit normal.
+    pub normal: Vec3,
+    /// Texture coordinates (TEXCOORD_0; zero when absent).
+    pub uv: [f32; 2],
+}
+
+impl MeshVertex {
+    /// The GPU layout: position, u, normal, v (32 bytes, std430).
+    pub fn to_bytes(&self) -> [u8; 32] {
+        let v = [
+            self.position.x,
+            self.position.y,
+            self.position.z,
+            self.uv[0],
+            self.normal.x,
+            self.normal.y,
+            self.normal.z,
+            self.uv[1],
+        ];
+        let mut out = [0u8; 32];
+        for (i, f) in v.iter().enumerate() {
+            out[i * 4..i * 4 + 4].copy_from_slice(&f.to_le_bytes());
+        }
+        out
+    }
+}
+
+/// A run of triangles sharing one material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MeshPart {
+    /// First index in [`ObjectMesh::indices`].
+    pub first_index: u32,
+    /// Number of indices (3 per triangle).
+    pub index_count: u32,
+    /// Index into [`ObjectMesh::materials`].
+    pub material: usize,
+}
+
+/// An RGBA8 texture (row-major from the top).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Texels, 4 bytes each.
+    pub rgba8: Vec<u8>,
+}
+
+impl Texture {
+    /// Bilinear lookup with repeat wrapping (texel centres at half
+    /// integers, as Vulkan samples), each byte decoded by `decode` before
+    /// filtering (linear: b/255; sRGB: its transfer function).
+    pub fn sample_with(&self, uv: [f64; 2], decode: impl Fn(u8) -> f64) -> [f64; 4] {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = uv[0] * w as f64 - 0.5;
+        let y = uv[1] * h as f64 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let texel = |xi: i64, yi: i64| -> [f64; 4] {
+            let (xi, yi) = (xi.rem_euclid(w), yi.rem_euclid(h));
+            let o = ((yi * w + xi) * 4) as usize;
+            std::array::from_fn(|c| decode(self.rgba8[o + c]))
+        };
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let (a, b, c, d) = (
+            texel(x0, y0),
+            texel(x0 + 1, y0),
+            texel(x0, y0 + 1),
+            texel(x0 + 1, y0 + 1),
+        );
+        std::array::from_fn(|i| {
+            (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy) + (c[i] * (1.0 - fx) + d[i] * fx) * fy
+        })
+    }
+}
+
+/// A loaded object in object space.
+#[derive(Debug, Clone)]
+pub struct ObjectMesh {
+    /// Where it came from (messages).
+    pub name: String,
+    /// All vertices.
+    pub vertices: Vec<MeshVertex>,
+    /// Triangle indices into `vertices`.
+    pub indices: Vec<u32>,
+    /// Runs of triangles by material.
+    pub parts: Vec<MeshPart>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Textures the materials refer to.
+    pub textures: Vec<Texture>,
+}
+
+impl ObjectMesh {
+    /// The bounding box of the vertices.
+    pub fn bounds(&self) -> Aabb {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for v in &self.vertices {
+            lo = lo.min(v.position.as_dvec3());
+            hi = hi.max(v.position.as_dvec3());
+        }
+        Aabb::new(lo, hi)
+    }
+
+    /// The bounding sphere used by the method: centred on the bounding
+    /// box's centre (the object centre x_o where the probe is traced), with
+    /// the radius reaching the farthest vertex.
+    pub fn bounding_sphere(&self) -> (DVec3, f64) {
+        let b = self.bounds();
+        let c = (b.min + b.max) * 0.5;
+        let r = self
+            .vertices
+            .iter()
+            .map(|v| (v.position.as_dvec3() - c).length())
+            .fold(0.0, f64::max);
+        (c, r)
+    }
+
+    /// Number of triangles.
+    pub fn triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+}

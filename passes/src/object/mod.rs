@@ -1,0 +1,48 @@
+//! Virtual objects: glTF meshes and materials ([`load_gltf`]), their pose
+//! and material overrides as a scene places them ([`PlacedObject`]), and
+//! their upload to the GPU ([`GpuObject`]).
+
+mod gltf_load;
+mod gpu;
+mod material;
+mod mesh;
+mod pose;
+
+pub use gltf_load::{load_gltf, ObjectError};
+pub use gpu::GpuObject;
+pub use material::{srgb_to_linear, Material, MaterialOverride};
+pub use mesh::{MeshPart, MeshVertex, ObjectMesh, Texture};
+pub use pose::{Pose, Scale, SCALE_RANGE};
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+/// One object as a scene places it: its mesh, pose and material override.
+/// Pose and override may change every frame; the mesh is shared.
+#[derive(Debug, Clone)]
+pub struct PlacedObject {
+    /// Name (from the scene file, or the file's stem).
+    pub name: String,
+    /// The loaded mesh.
+    pub mesh: Arc<ObjectMesh>,
+    /// Where it stands.
+    pub pose: Pose,
+    /// Material replacements applied to every material of the mesh.
+    pub material: MaterialOverride,
+}
+
+impl PlacedObject {
+    /// The world-space bounding sphere; its centre is x_o, where the probe
+    /// is traced.
+    pub fn sphere(&self) -> (DVec3, f64) {
+        let (c, r) = self.mesh.bounding_sphere();
+        self.pose.sphere(c, r)
+    }
+
+    /// The effective material of mesh part `part`.
+    pub fn material_of(&self, part: usize) -> Material {
+        let m = &self.mesh.materials[self.mesh.parts[part].material];
+        self.material.apply(m)
+    }
+}

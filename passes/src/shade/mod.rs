@@ -1,0 +1,137 @@
+//! The object's SG shading pass (`object-shade`, compute; METHOD.md eq. 5)
+//! over the G-buffer, with the brute-force CPU reference it is judged by
+//! ([`shade_probe_reference`]). One dispatch per object shades that
+//! object's pixels with its own fitted lobes; the output is the object's
+//! radiance I_v with coverage in alpha, before any shadow.
+
+mod reference;
+
+pub use reference::{shade_probe_reference, shade_reference_with};
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{
+    Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
+};
+use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc, Push};
+
+use crate::brdf::NdfLobes;
+use crate::camera::CameraFrame;
+use crate::gbuffer::GBuffer;
+
+/// Format of the object radiance image.
+pub const OBJECT_COLOUR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// The shading pipeline and the NDF mixture it uses.
+pub struct ShadePass {
+    pipeline: ComputePipeline,
+    ndf: Arc<Buffer>,
+    ndf_lobes: NdfLobes,
+}
+
+impl ShadePass {
+    /// Compiles the pass for an `ndf_lobes`-lobe GGX mixture.
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, ndf_lobes: u32) -> anyhow::Result<Self> {
+        let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
+        let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
+        let shader = compile(lib, "object/shade.wgsl", "main", ShaderStage::Compute, &[])?;
+        Ok(Self {
+            pipeline: ComputePipeline::new(ctx, &shader)?,
+            ndf: Arc::new(Buffer::with_data(
+                ctx,
+                "ndf lobes",
+                &bytes,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?),
+            ndf_lobes: ndf,
+        })
+    }
+
+    /// The NDF mixture it shades with.
+    pub fn ndf_lobes(&self) -> &NdfLobes {
+        &self.ndf_lobes
+    }
+
+    /// Adds `object-shade`: object i's pixels (index i in the G-buffer) are
+    /// shaded with `lobes[i]` (an SG fit's lobe buffer).
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        camera: &CameraFrame,
+        gbuffer: &GBuffer,
+        lobes: &[BufferHandle],
+    ) -> ImageHandle {
+        let (width, height) = (camera.width, camera.height);
+        let out = graph.create_image(
+            "object-colour",
+            ImageDesc {
+                width,
+                height,
+                format: OBJECT_COLOUR_FORMAT,
+            },
+        );
+        let ndf = graph.import_buffer(&self.ndf, None);
+        let mut pass = graph.add_pass("object-shade", PassKind::Compute);
+        for img in [
+            gbuffer.normal_roughness,
+            gbuffer.albedo_metallic,
+            gbuffer.distance_id,
+        ] {
+            pass.image(img, ImageAccess::Sampled);
+        }
+        let mut declared = Vec::new();
+        for l in lobes {
+            if !declared.contains(l) {
+                pass.buffer(*l, BufferAccess::StorageRead);
+                declared.push(*l);
+            }
+        }
+        pass.buffer(ndf, BufferAccess::StorageRead);
+        let out = pass.image(out, ImageAccess::StorageWrite);
+        let g = *gbuffer;
+        let lobes = lobes.to_vec();
+        let (o, r, u, f) = (
+            camera.origin.as_vec3(),
+            camera.right.as_vec3(),
+            camera.up.as_vec3(),
+            camera.forward.as_vec3(),
+        );
+        pass.exec(move |ctx| {
+            for (i, l) in lobes.iter().enumerate() {
+                let push = Push::new()
+                    .f32(o.x)
+                    .f32(o.y)
+                    .f32(o.z)
+                    .u32(width)
+                    .f32(r.x)
+                    .f32(r.y)
+                    .f32(r.z)
+                    .u32(height)
+                    .f32(u.x)
+                    .f32(u.y)
+                    .f32(u.z)
+                    .f32(i as f32)
+                    .f32(f.x)
+                    .f32(f.y)
+                    .f32(f.z)
+                    .u32((i == 0) as u32);
+                ctx.dispatch(
+                    &self.pipeline,
+                    &[
+                        Binding::SampledImage(g.normal_roughness),
+                        Binding::SampledImage(g.albedo_metallic),
+                        Binding::SampledImage(g.distance_id),
+                        Binding::StorageBuffer(*l),
+                        Binding::StorageBuffer(ndf),
+                        Binding::StorageImage(out),
+                    ],
+                    push.bytes(),
+                    self.pipeline.groups_for([width, height, 1]),
+                )?;
+            }
+            Ok(())
+        });
+        out
+    }
+}

@@ -1,0 +1,22 @@
+// Compositing (eq. 6): I = I_c + (1 − I_α)·I_v, the field (clipped at the
+// object, premultiplied) over the object's radiance.
+#include "composite/over.wgsl"
+
+struct CompositePush {
+    width: u32,
+    height: u32,
+}
+
+var<immediate> pc: CompositePush;
+@group(0) @binding(0) var field_colour: texture_2d<f32>;
+@group(0) @binding(1) var object_colour: texture_2d<f32>;
+@group(0) @binding(2) var out_colour: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    let p = vec2<i32>(id.xy);
+    textureStore(out_colour, p, composite_over(textureLoad(field_colour, p, 0), textureLoad(object_colour, p, 0)));
+}

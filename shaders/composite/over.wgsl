@@ -1,0 +1,5 @@
+// Premultiplied "over" (eq. 6), mirroring passes/src/composite/mod.rs:
+// colour c + (1 − c.a)·v, coverage c.a + (1 − c.a)·v.a.
+fn composite_over(front: vec4<f32>, back: vec4<f32>) -> vec4<f32> {
+    return front + (1.0 - front.a) * back;
+}
