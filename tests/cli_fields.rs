@@ -249,3 +249,102 @@ fn probe_writes_probe_fit_and_error_and_rejects_bad_points() {
     let t = common::output_text(&o);
     assert!(!o.status.success() && t.contains("fit knob `lobes`"), "{t}");
 }
+
+/// `render` and `reference` insert the scene's objects (PLANTS has a toy
+/// behind its foliage); `--no-objects` leaves the bare field, and bad
+/// object entries are errors naming the scene file and the key.
+#[test]
+fn render_and_reference_insert_objects() {
+    let dir = scratch("objects");
+    let (field, _) = bake_small_plants(&dir);
+    let plants = scene_path("plants.toml");
+    let run = |extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "--validate",
+            "render",
+            &plants,
+            "--field",
+            s(&field),
+            "--width",
+            "48",
+            "--height",
+            "27",
+            "--frames",
+            "2",
+            "--camera",
+            "high",
+            "--out",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        let o = inlay(&args, &dir);
+        let t = common::output_text(&o);
+        assert!(o.status.success(), "{t}");
+        (t, HdrImage::load_exr(out).unwrap())
+    };
+    let (t, with) = run(&[], &dir.join("with.exr"));
+    for pass in [
+        "probe-trace",
+        "sg-fit",
+        "object-gbuffer",
+        "object-shade",
+        "composite",
+    ] {
+        assert!(t.contains(pass), "{pass} missing: {t}");
+    }
+    assert_eq!(with.non_finite_count(), 0);
+    let (t, without) = run(&["--no-objects"], &dir.join("without.exr"));
+    assert!(!t.contains("object-shade") && !t.contains("sg-fit"), "{t}");
+    let changed = with
+        .pixels
+        .iter()
+        .zip(&without.pixels)
+        .filter(|(a, b)| (a[0] - b[0]).abs() > 1e-3)
+        .count();
+    assert!(changed >= 3, "{changed} pixels changed by the object");
+
+    let reference = |extra: &[&str], name: &str| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "reference",
+            &plants,
+            "--width",
+            "24",
+            "--height",
+            "14",
+            "--samples",
+            "2",
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        let o = inlay(&args, &dir);
+        assert!(o.status.success(), "{}", common::output_text(&o));
+        HdrImage::load_exr(&out).unwrap()
+    };
+    let a = reference(&[], "ref-with.exr");
+    let b = reference(&["--no-objects"], "ref-without.exr");
+    assert_ne!(a.pixels, b.pixels);
+
+    // Bad object entries.
+    let scene_text = std::fs::read_to_string(&plants).unwrap();
+    let objects_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects");
+    for (edit, field_key) in [
+        ("file = \"objects/toy.glb\"", "objects[0].file"),
+        ("scale = 0.3", "objects[0].scale"),
+    ] {
+        let replaced = match field_key {
+            "objects[0].file" => scene_text.replace(edit, "file = \"objects/none.glb\""),
+            _ => scene_text.replace(edit, "scale = 1e9"),
+        };
+        let bad = dir.join("bad-objects.toml");
+        std::fs::write(&bad, replaced).unwrap();
+        // The scene refers to objects beside it.
+        let _ = std::fs::create_dir_all(dir.join("objects"));
+        let _ = std::fs::copy(objects_dir.join("toy.glb"), dir.join("objects/toy.glb"));
+        let o = inlay(&["render", s(&bad), "--field", s(&field)], &dir);
+        let t = common::output_text(&o);
+        assert!(!o.status.success(), "{t}");
+        assert!(t.contains(&format!("bad-objects.toml: {field_key}")), "{t}");
+    }
+}

@@ -13,8 +13,10 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
     v[rank - 1]
 }
 
-/// A table of each pass's GPU and CPU time (median and p95) over `frames`,
-/// with the culled passes and the frame total.
+/// A table of each pass's GPU and CPU time (median and p95) over the
+/// frames it ran in (passes that ran in only some frames, such as the
+/// probe and the SG fit, say in how many), with the culled passes and the
+/// frame total.
 pub fn format_table(frames: &[FrameTimings], device: &str) -> String {
     let mut out = String::new();
     let Some(last) = frames.last() else {
@@ -28,20 +30,34 @@ pub fn format_table(frames: &[FrameTimings], device: &str) -> String {
         "{:<16} {:>12} {:>12} {:>12}\n",
         "pass", "gpu ms p50", "gpu ms p95", "cpu ms p50"
     ));
-    for pass in &last.passes {
+    // Every pass that ran in any frame, in first-seen order.
+    let mut names: Vec<&str> = Vec::new();
+    for f in frames {
+        for p in &f.passes {
+            if !names.contains(&p.name.as_str()) {
+                names.push(&p.name);
+            }
+        }
+    }
+    for name in names {
         let gpu: Vec<f64> = frames
             .iter()
-            .filter_map(|f| f.passes.iter().find(|p| p.name == pass.name))
+            .filter_map(|f| f.passes.iter().find(|p| p.name == name))
             .map(|p| p.gpu_ms)
             .collect();
         let cpu: Vec<f64> = frames
             .iter()
-            .filter_map(|f| f.passes.iter().find(|p| p.name == pass.name))
+            .filter_map(|f| f.passes.iter().find(|p| p.name == name))
             .map(|p| p.cpu_ms)
             .collect();
+        let ran = if gpu.len() < frames.len() {
+            format!("  (ran in {} of {} frames)", gpu.len(), frames.len())
+        } else {
+            String::new()
+        };
         out.push_str(&format!(
-            "{:<16} {:>12.3} {:>12.3} {:>12.3}\n",
-            pass.name,
+            "{:<16} {:>12.3} {:>12.3} {:>12.3}{ran}\n",
+            name,
             quantile(&gpu, 0.5),
             quantile(&gpu, 0.95),
             quantile(&cpu, 0.5)

@@ -1,12 +1,15 @@
 //! Turning recipes into fields and ground truth: the path tracer over
-//! analytic primitives, the grid bake, and reference camera images.
+//! analytic primitives and placed objects (triangles in a BVH), the grid
+//! bake, and reference camera images.
 
 mod grid_bake;
 mod knobs;
+mod mesh_bvh;
 mod path_tracer;
 mod reference_image;
 
 pub use grid_bake::{bake_grid, edge_profile, grid_resolution};
 pub use knobs::BakeKnobs;
+pub use mesh_bvh::{MeshHit, MeshScene, MeshSurface};
 pub use path_tracer::{Event, PathTracer, Scatter};
 pub use reference_image::{render_reference, ReferenceOptions};

@@ -4,13 +4,18 @@
 //! fraction of its samples that met a surface or scattered in a medium.
 //! Where the bounds cut through a solid, the cut face shows the radiance of
 //! the nearest surface point, which is what the bake stores inside solids.
+//! Placed objects are seen wherever they are (inside the bounds or not),
+//! cut the field's rays, cast shadows and count as covered pixels: the
+//! ground truth of the full insertion.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::mesh_bvh::MeshScene;
 use super::path_tracer::{Event, PathTracer};
 use crate::camera::CameraFrame;
 use crate::geometry::ray_box;
+use crate::object::PlacedObject;
 use crate::rng::Pcg32;
 use crate::scene::{Environment, Recipe};
 
@@ -33,11 +38,13 @@ pub struct ReferenceOptions {
 pub fn render_reference(
     recipe: &Recipe,
     env: &Environment,
+    objects: &[PlacedObject],
     camera: &CameraFrame,
     options: &ReferenceOptions,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Vec<[f32; 4]> {
-    let tracer = PathTracer::new(recipe, env, options.bounces);
+    let meshes = MeshScene::new(objects);
+    let tracer = PathTracer::new(recipe, env, options.bounces).with_objects(&meshes);
     let (w, h) = (camera.width, camera.height);
     let done = std::sync::atomic::AtomicU64::new(0);
     let rows: Vec<Vec<[f32; 4]>> = (0..h)
@@ -55,10 +62,20 @@ pub fn render_reference(
                             (0.5, 0.5)
                         };
                         let ray = camera.ray(x as f64 + jx, y as f64 + jy);
-                        let Some((t_near, t_far)) = ray_box(&ray, &recipe.bounds) else {
-                            continue;
+                        let object = tracer.nearest_object(&ray, 0.0, f64::INFINITY);
+                        let t_object = object.map_or(f64::INFINITY, |(t, _)| t);
+                        let event = match ray_box(&ray, &recipe.bounds) {
+                            Some((t_near, t_far)) if t_near < t_object => {
+                                tracer.trace(&ray, t_near, t_far.min(t_object), &mut rng)
+                            }
+                            _ => Event::Escape,
                         };
-                        match tracer.trace(&ray, t_near, t_far, &mut rng) {
+                        if let (Event::Escape, Some((_, surface))) = (&event, &object) {
+                            sum += tracer.object_radiance(surface, -ray.dir, &mut rng);
+                            cover += 1.0;
+                            continue;
+                        }
+                        match event {
                             Event::Surface { t, prim } => {
                                 let shape = &recipe.primitives[prim].shape;
                                 let mut p = ray.at(t);

@@ -140,6 +140,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
         render_reference(
             recipe,
             &scene.environment,
+            &[],
             &CameraFrame::new(&spec, w, h),
             &ReferenceOptions {
                 samples: args.reference_samples,

@@ -1,5 +1,6 @@
 //! `inlay reference SCENE`: the ground-truth image of a recipe's camera,
-//! path traced over the analytic primitives (no field).
+//! path traced over the analytic primitives (no field) with the scene's
+//! objects inserted (triangles in a BVH, the same BRDF as the shading).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -44,6 +45,9 @@ pub struct ReferenceArgs {
     /// Exposure multiplier for PNG output.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// Trace the bare scene, without its objects.
+    #[arg(long)]
+    pub no_objects: bool,
 }
 
 /// Runs `reference`.
@@ -71,9 +75,19 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
     };
     let started = Instant::now();
     let bar = progress_bar("tracing", args.height as u64);
-    let pixels = render_reference(recipe, &scene.environment, &camera, &options, &|d, _| {
-        bar.set_position(d)
-    });
+    let objects = if args.no_objects {
+        &[][..]
+    } else {
+        &scene.objects[..]
+    };
+    let pixels = render_reference(
+        recipe,
+        &scene.environment,
+        objects,
+        &camera,
+        &options,
+        &|d, _| bar.set_position(d),
+    );
     bar.finish_and_clear();
     eprintln!(
         "traced {}x{} at {} samples per pixel in {:.2} s",
