@@ -274,6 +274,7 @@ fn marched_field_matches_the_path_traced_reference() {
     let reference = render_reference(
         s.recipe().unwrap(),
         &s.environment,
+        &[],
         &camera,
         &ReferenceOptions {
             samples: 128,

@@ -319,8 +319,8 @@ use inlay_passes::shade::{shade_probe_reference, shade_reference_with};
 /// sample pixels facing the camera (n·v ≥ 0.5).
 ///
 /// The criterion is the L1 error over the sample pixels, split by the
-/// triangle inequality: Σ|SG − brute(probe)| ≤ Σ|brute(fit) − brute(probe)|
-/// + Σ|SG − brute(fit)|. The first term is the fit's own error seen
+/// triangle inequality: Σ|SG − brute(probe)| is at most
+/// Σ|brute(fit) − brute(probe)| plus Σ|SG − brute(fit)|. The first term is the fit's own error seen
 /// through the BRDF, measured here exactly (brute force against the fitted
 /// lobes at every sub-texel direction). The second is the SG form's error,
 /// bounded by `brdf::tests::SG_FORM_ERROR` (12 %, 30 %, 12 %, worst cases
@@ -518,9 +518,9 @@ fn composite_hides_the_object_partly_behind_foliage() {
     let (mut partly, mut fully) = (0, 0);
     for i in 0..(w * h) as usize {
         let expect = composite_over(clipped.pixels[i], object.pixels[i]);
-        for c in 0..4 {
+        for (got, want) in out.pixels[i].iter().zip(expect) {
             assert!(
-                (out.pixels[i][c] - expect[c]).abs() <= 1e-5 * expect[c].abs().max(1.0),
+                (got - want).abs() <= 1e-5 * want.abs().max(1.0),
                 "pixel {i}"
             );
         }

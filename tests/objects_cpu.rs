@@ -109,7 +109,8 @@ fn edited(name: &str, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
 /// What the engine cannot use is refused with the file and the element.
 #[test]
 fn unsupported_gltf_is_a_clear_error() {
-    let cases: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>, &str, &str)> = vec![
+    type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(&str, Edit, &str, &str)> = vec![
         (
             "draco",
             Box::new(|d| {

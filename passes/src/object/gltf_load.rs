@@ -182,8 +182,8 @@ fn add_mesh(
         match &normals {
             Some(ns) => {
                 let base = out.vertices.len() as u32;
-                for i in 0..positions.len() {
-                    let n = (normal_matrix * DVec3::from_array(ns[i].map(f64::from)))
+                for (i, normal) in ns.iter().enumerate() {
+                    let n = (normal_matrix * DVec3::from_array(normal.map(f64::from)))
                         .normalize_or(DVec3::Y);
                     out.vertices.push(MeshVertex {
                         position: point(i).as_vec3(),
