@@ -202,6 +202,13 @@ fn lighting_knobs_come_from_the_scene_file() {
     let dir = std::env::temp_dir().join(format!("inlay-lighting-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("lit.toml");
+    // The scene's object file, beside the copy.
+    std::fs::create_dir_all(dir.join("objects")).unwrap();
+    std::fs::copy(
+        scenes_dir().join("objects/metal-sphere.gltf"),
+        dir.join("objects/metal-sphere.gltf"),
+    )
+    .unwrap();
     let text = format!("{base}\n[lighting]\nprobe_map = \"equirect\"\nprobe_resolution = 12\nlobes = 8\nwarm_iterations = 3\n");
     std::fs::write(&path, text).unwrap();
     let s = load_scene(&path).unwrap();

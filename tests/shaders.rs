@@ -36,7 +36,7 @@ fn every_shipped_shader_compiles() {
             let defines = [
                 Define::Bool("SKIP_EMPTY", true),
                 Define::Bool("OCTAHEDRAL", true),
-                Define::F32("FIT_MAX_SHARPNESS", 512.0),
+                Define::F32("FIT_MAX_SHARPNESS", 1024.0),
             ];
             compile(&lib, path, name, stage, &defines).unwrap_or_else(|e| panic!("{e}"));
             compiled += 1;

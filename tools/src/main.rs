@@ -60,6 +60,8 @@ enum Command {
     Probe(inlay::commands::probe::ProbeArgs),
     /// Measure the SG fit: residual against iterations and lobes, time per iteration and per probe trace.
     BenchSg(inlay::commands::bench_sg::BenchSgArgs),
+    /// Measure the SG shading's error against brute force as the light's and the NDF's lobe counts change.
+    BenchShade(inlay::commands::bench_shade::BenchShadeArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -120,6 +122,7 @@ fn main() -> ExitCode {
         Command::BenchSg(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::bench_sg::run(&ctx, args)),
+        Command::BenchShade(args) => inlay::commands::bench_shade::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

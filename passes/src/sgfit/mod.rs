@@ -12,7 +12,7 @@ pub mod solve;
 mod tests;
 
 pub use knobs::{FitKnobs, MAX_ITERATIONS, MAX_LOBES};
-pub use model::{texel_valid, ProbeSamples};
+pub use model::{fibonacci_axis, texel_valid, ProbeSamples};
 pub use pass::{FitReport, FitStart, SgFitPass};
 pub use reference::{
     fit_reference, relative_residual, FitOutcome, Start, DAMPING_DOWN, DAMPING_LIMIT, DAMPING_UP,

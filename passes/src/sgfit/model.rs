@@ -23,12 +23,12 @@ pub const MIN_SHARPNESS: f64 = 1e-4;
 pub const MAX_SHARPNESS: f64 = 1e4;
 
 /// Largest sharpness a lobe fitted to a probe of `texels` texels may take:
-/// a lobe's integral 2πμ/λ must not shrink below one texel's solid angle
+/// a lobe's solid angle 2π/λ must not shrink below half a texel's
 /// (4π/texels), or a needle lobe on one texel centre fits that texel with
-/// an unconstrained energy (λ ≤ texels/2, 512 at 32 × 32), and never past
+/// an unconstrained energy (λ ≤ texels, 1024 at 32 × 32), and never past
 /// [`MAX_SHARPNESS`]. `shaders/sgfit/fit.wgsl` gets it as a define.
 pub fn max_sharpness(texels: usize) -> f64 {
-    (texels as f64 / 2.0).clamp(1.0, MAX_SHARPNESS)
+    (texels as f64).clamp(1.0, MAX_SHARPNESS)
 }
 /// Largest tangent-plane move of an axis in one step (radians, roughly).
 pub const MAX_AXIS_STEP: f64 = 1.0;

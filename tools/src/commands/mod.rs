@@ -4,6 +4,7 @@
 pub mod bake_scene;
 pub mod bench_march;
 pub mod bench_sg;
+pub mod bench_shade;
 pub mod probe;
 pub mod reference;
 pub mod render;
