@@ -108,6 +108,34 @@ impl CameraFrame {
     pub fn pixel_ray(&self, px: u32, py: u32) -> Ray {
         self.ray(px as f64 + 0.5, py as f64 + 0.5)
     }
+
+    /// The push-constant prefix the camera shaders share (`MarchPush`,
+    /// `ShadePush`): origin, width, right, height, up, `after_up`, forward;
+    /// the caller appends the block's last word.
+    pub fn push_prefix(&self, after_up: f32) -> inlay_engine::Push {
+        let (o, r, u, f) = (
+            self.origin.as_vec3(),
+            self.right.as_vec3(),
+            self.up.as_vec3(),
+            self.forward.as_vec3(),
+        );
+        inlay_engine::Push::new()
+            .f32(o.x)
+            .f32(o.y)
+            .f32(o.z)
+            .u32(self.width)
+            .f32(r.x)
+            .f32(r.y)
+            .f32(r.z)
+            .u32(self.height)
+            .f32(u.x)
+            .f32(u.y)
+            .f32(u.z)
+            .f32(after_up)
+            .f32(f.x)
+            .f32(f.y)
+            .f32(f.z)
+    }
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
 use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
-use inlay_engine::{vk, ComputePipeline, Context, ImageDesc, Push};
+use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::knobs::MarchKnobs;
 use crate::camera::CameraFrame;
@@ -90,29 +90,7 @@ impl MarchPass {
         );
         let step = self.knobs.step(field.diagonal) as f32;
         let termination = self.knobs.termination as f32;
-        let (o, r, u, f) = (
-            camera.origin.as_vec3(),
-            camera.right.as_vec3(),
-            camera.up.as_vec3(),
-            camera.forward.as_vec3(),
-        );
-        let push = Push::new()
-            .f32(o.x)
-            .f32(o.y)
-            .f32(o.z)
-            .u32(width)
-            .f32(r.x)
-            .f32(r.y)
-            .f32(r.z)
-            .u32(height)
-            .f32(u.x)
-            .f32(u.y)
-            .f32(u.z)
-            .f32(step)
-            .f32(f.x)
-            .f32(f.y)
-            .f32(f.z)
-            .f32(termination);
+        let push = camera.push_prefix(step).f32(termination);
         let mut pass = graph.add_pass("nerf-march", PassKind::Compute);
         grid.declare_reads(&mut pass);
         let colour = pass.image(colour, ImageAccess::StorageWrite);

@@ -14,7 +14,7 @@ use inlay_engine::graph::{
     Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
 };
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
-use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc, Push};
+use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
 use crate::brdf::NdfLobes;
 use crate::camera::CameraFrame;
@@ -91,31 +91,10 @@ impl ShadePass {
         let out = pass.image(out, ImageAccess::StorageWrite);
         let g = *gbuffer;
         let lobes = lobes.to_vec();
-        let (o, r, u, f) = (
-            camera.origin.as_vec3(),
-            camera.right.as_vec3(),
-            camera.up.as_vec3(),
-            camera.forward.as_vec3(),
-        );
+        let cam = *camera;
         pass.exec(move |ctx| {
             for (i, l) in lobes.iter().enumerate() {
-                let push = Push::new()
-                    .f32(o.x)
-                    .f32(o.y)
-                    .f32(o.z)
-                    .u32(width)
-                    .f32(r.x)
-                    .f32(r.y)
-                    .f32(r.z)
-                    .u32(height)
-                    .f32(u.x)
-                    .f32(u.y)
-                    .f32(u.z)
-                    .f32(i as f32)
-                    .f32(f.x)
-                    .f32(f.y)
-                    .f32(f.z)
-                    .u32((i == 0) as u32);
+                let push = cam.push_prefix(i as f32).u32((i == 0) as u32);
                 ctx.dispatch(
                     &self.pipeline,
                     &[
