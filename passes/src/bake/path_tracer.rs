@@ -397,6 +397,21 @@ mod tests {
         }
     }
 
+    /// A small bright sphere light 3 units above the origin, outside the field.
+    fn bulb() -> Primitive {
+        Primitive {
+            name: "bulb".into(),
+            shape: Shape::Sphere {
+                centre: DVec3::new(0.0, 3.0, 0.0),
+                radius: 0.05,
+            },
+            albedo: DVec3::ZERO,
+            emission: DVec3::splat(1e4),
+            medium_density: None,
+            in_field: Some(false),
+        }
+    }
+
     fn recipe(primitives: Vec<Primitive>) -> Recipe {
         Recipe {
             bounds: Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
@@ -426,18 +441,7 @@ mod tests {
     /// Under a small sphere light straight above: L_o = a/π · L_e · π (r/D)².
     #[test]
     fn floor_under_a_sphere_light_matches_the_solid_angle_formula() {
-        let light = Primitive {
-            name: "bulb".into(),
-            shape: Shape::Sphere {
-                centre: DVec3::new(0.0, 3.0, 0.0),
-                radius: 0.05,
-            },
-            albedo: DVec3::ZERO,
-            emission: DVec3::splat(1e4),
-            medium_density: None,
-            in_field: Some(false),
-        };
-        let r = recipe(vec![floor(0.8), light]);
+        let r = recipe(vec![floor(0.8), bulb()]);
         let env = Environment::Black;
         let t = PathTracer::new(&r, &env, 0);
         let l = mean_radiance(&t, DVec3::ZERO, DVec3::Y, 4000);
@@ -505,18 +509,7 @@ mod tests {
     /// Lambertian part) plus a few percent of specular (F0 = 0.02).
     #[test]
     fn objects_cast_shadows_and_receive_light() {
-        let light = Primitive {
-            name: "bulb".into(),
-            shape: Shape::Sphere {
-                centre: DVec3::new(0.0, 3.0, 0.0),
-                radius: 0.05,
-            },
-            albedo: DVec3::ZERO,
-            emission: DVec3::splat(1e4),
-            medium_density: None,
-            in_field: Some(false),
-        };
-        let r = recipe(vec![floor(0.8), light]);
+        let r = recipe(vec![floor(0.8), bulb()]);
         let env = Environment::Black;
         let white = crate::object::MaterialOverride {
             base_color: Some(DVec3::splat(0.5)),
