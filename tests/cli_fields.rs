@@ -80,6 +80,7 @@ fn bake_render_and_reference_write_images() {
             "2",
             "--camera",
             "high",
+            "--no-shadows",
             "--out",
             s(&exr),
         ],
@@ -273,6 +274,10 @@ fn render_and_reference_insert_objects() {
             "2",
             "--camera",
             "high",
+            "--ssdf-grid",
+            "4",
+            "--ssdf-directions",
+            "8",
             "--out",
             s(out),
         ];
@@ -288,6 +293,7 @@ fn render_and_reference_insert_objects() {
         "sg-fit",
         "object-gbuffer",
         "object-shade",
+        "cast-shadow",
         "composite",
     ] {
         assert!(t.contains(pass), "{pass} missing: {t}");
@@ -295,6 +301,8 @@ fn render_and_reference_insert_objects() {
     assert_eq!(with.non_finite_count(), 0);
     let (t, without) = run(&["--no-objects"], &dir.join("without.exr"));
     assert!(!t.contains("object-shade") && !t.contains("sg-fit"), "{t}");
+    let (t, _) = run(&["--no-shadows"], &dir.join("unshadowed.exr"));
+    assert!(!t.contains("cast-shadow") && !t.contains("ssdf"), "{t}");
     let changed = with
         .pixels
         .iter()
@@ -347,4 +355,217 @@ fn render_and_reference_insert_objects() {
         assert!(!o.status.success(), "{t}");
         assert!(t.contains(&format!("bad-objects.toml: {field_key}")), "{t}");
     }
+}
+
+/// Every bundled scene renders headless with its object, the object's
+/// self-shadows and its cast shadow (small fields, a 4³ SSDF grid of 8²
+/// directions baked on first use): the cast shadow only ever darkens the
+/// field, and darkens some of it.
+#[test]
+fn every_bundled_scene_renders_with_shadows() {
+    let dir = scratch("shadows");
+    for name in ["books", "cups", "dog", "plants"] {
+        let scene = scene_path(&format!("{name}.toml"));
+        let field = dir.join(format!("{name}.inlayfield"));
+        let o = inlay(
+            &[
+                "bake-scene",
+                &scene,
+                "--out",
+                s(&field),
+                "--resolution",
+                "24",
+                "--samples",
+                "2",
+                "--bounces",
+                "0",
+            ],
+            &dir,
+        );
+        assert!(o.status.success(), "{}", common::output_text(&o));
+        let render = |extra: &[&str], out: &Path| {
+            let mut args = vec![
+                "--validate",
+                "render",
+                &scene,
+                "--field",
+                s(&field),
+                "--width",
+                "64",
+                "--height",
+                "36",
+                "--frames",
+                "1",
+                "--ssdf-grid",
+                "4",
+                "--ssdf-directions",
+                "8",
+                "--out",
+                s(out),
+            ];
+            args.extend_from_slice(extra);
+            let o = inlay(&args, &dir);
+            let t = common::output_text(&o);
+            assert!(o.status.success(), "{name}: {t}");
+            (t, HdrImage::load_exr(out).unwrap())
+        };
+        let (t, shadowed) = render(&[], &dir.join(format!("{name}.exr")));
+        for pass in ["object-shade", "cast-shadow", "composite"] {
+            assert!(t.contains(pass), "{name}: {pass} missing: {t}");
+        }
+        assert_eq!(shadowed.non_finite_count(), 0, "{name}");
+        let (_, plain) = render(
+            &["--no-cast-shadow"],
+            &dir.join(format!("{name}-plain.exr")),
+        );
+        let mut darker = 0;
+        for (a, b) in shadowed.pixels.iter().zip(&plain.pixels) {
+            for c in 0..3 {
+                assert!(
+                    a[c] <= b[c] * (1.0 + 1e-5) + 1e-6,
+                    "{name}: the cast shadow brightened a pixel: {a:?} vs {b:?}"
+                );
+            }
+            darker += (a[1] < b[1] * 0.995) as u32;
+        }
+        assert!(darker >= 1, "{name}: no pixel is in the cast shadow");
+    }
+}
+
+/// `inlay bake-ssdf` prints its time, sizes and compression ratio and
+/// writes a field a scene can name; a corrupt field file is an error naming
+/// the file and the field.
+#[test]
+fn bake_ssdf_writes_a_field_scenes_can_use() {
+    let dir = scratch("bake-ssdf");
+    let objects = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects");
+    let out = dir.join("sphere.inlayssdf");
+    let o = inlay(
+        &[
+            "--validate",
+            "bake-ssdf",
+            s(&objects.join("metal-sphere.gltf")),
+            "--out",
+            s(&out),
+            "--grid",
+            "4",
+            "--directions",
+            "8",
+            "--components",
+            "4",
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    for what in ["bake", "raw", "compressed", "% of raw", "PCA error"] {
+        assert!(t.contains(what), "{what} missing: {t}");
+    }
+    let field = inlay_passes::shadow::load_ssdf(&out).unwrap();
+    assert_eq!(
+        (field.grid.nodes, field.directions, field.components),
+        (4, 8, 4)
+    );
+    let o = inlay(
+        &[
+            "bake-ssdf",
+            s(&objects.join("metal-sphere.gltf")),
+            "--grid",
+            "1",
+        ],
+        &dir,
+    );
+    assert!(!o.status.success());
+    assert!(
+        common::output_text(&o).contains("--grid"),
+        "{}",
+        common::output_text(&o)
+    );
+
+    // A scene naming the baked field, and one naming a corrupt copy.
+    let text = std::fs::read_to_string(scene_path("books.toml")).unwrap();
+    let text = text.replace(
+        "objects/metal-sphere.gltf",
+        s(&objects.join("metal-sphere.gltf")),
+    );
+    let named = dir.join("named.toml");
+    std::fs::write(
+        &named,
+        text.replace(
+            "scale = 0.1",
+            &format!("scale = 0.1\nssdf = \"{}\"", s(&out)),
+        ),
+    )
+    .unwrap();
+    let bad_file = dir.join("bad.inlayssdf");
+    let mut bytes = std::fs::read(&out).unwrap();
+    bytes.truncate(bytes.len() - 4);
+    std::fs::write(&bad_file, bytes).unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        text.replace(
+            "scale = 0.1",
+            &format!("scale = 0.1\nssdf = \"{}\"", s(&bad_file)),
+        ),
+    )
+    .unwrap();
+    let field_file = dir.join("books.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            s(&named),
+            "--out",
+            s(&field_file),
+            "--resolution",
+            "16",
+            "--samples",
+            "1",
+            "--bounces",
+            "0",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let args = |scene: &Path, out: &Path| -> Vec<String> {
+        [
+            "render",
+            s(scene),
+            "--field",
+            s(&field_file),
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--frames",
+            "1",
+            "--out",
+            s(out),
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let o = inlay(
+        &args(&named, &dir.join("named.exr"))
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        !t.contains("baked the SSDF"),
+        "the named field is used: {t}"
+    );
+    let o = inlay(
+        &args(&bad, &dir.join("bad.exr"))
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(!o.status.success());
+    assert!(t.contains("bad.inlayssdf") && t.contains("data"), "{t}");
 }

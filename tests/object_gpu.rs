@@ -270,7 +270,7 @@ fn shading_kernel_matches_its_f64_mirror() {
             .iter()
             .map(|b| graph.import_buffer(b, None))
             .collect();
-        let c = shade.add(graph, &cam, &g, &lobes);
+        let c = shade.add(graph, &cam, &g, &lobes, &[]);
         (g, c)
     });
     let mut counted = [0; 3];
@@ -392,7 +392,7 @@ fn sg_shading_matches_brute_force_against_the_probe() {
                     }],
                 )
                 .unwrap();
-            let c = shade.add(graph, &cam, &g, &[lobes]);
+            let c = shade.add(graph, &cam, &g, &[lobes], &[]);
             (g, c)
         });
         if class == 0 {
@@ -507,8 +507,8 @@ fn composite_hides_the_object_partly_behind_foliage() {
             .unwrap();
         let bare = march.add(graph, &gpu_field, &cam, None);
         let clipped = march.add(graph, &gpu_field, &cam, Some(g.distance_id));
-        let object = shade.add(graph, &cam, &g, &[lobes]);
-        let out = composite.add(graph, clipped.colour_opacity, object);
+        let object = shade.add(graph, &cam, &g, &[lobes], &[]);
+        let out = composite.add(graph, clipped.colour_opacity, object, None);
         rb[0].add_to_graph(graph, bare.colour_opacity);
         rb[1].add_to_graph(graph, clipped.colour_opacity);
         rb[2].add_to_graph(graph, object);

@@ -33,11 +33,14 @@ fn every_shipped_shader_compiles() {
             let name = decl.trim_start()[3..].split('(').next().unwrap().trim();
             // Knob constants some shaders expect from the pass that builds
             // them (unused ones are harmless).
-            let defines = [
+            let mut defines = vec![
                 Define::Bool("SKIP_EMPTY", true),
                 Define::Bool("OCTAHEDRAL", true),
                 Define::F32("FIT_MAX_SHARPNESS", 1024.0),
+                Define::U32("ARC_PIECES", 4),
+                Define::F32("OUTSIDE_OFFSET", 2e-3),
             ];
+            defines.extend(inlay_passes::shadow::shadow_defines());
             compile(&lib, path, name, stage, &defines).unwrap_or_else(|e| panic!("{e}"));
             compiled += 1;
         }

@@ -30,3 +30,4 @@ pub mod scene;
 pub mod sg;
 pub mod sgfit;
 pub mod shade;
+pub mod shadow;

@@ -3,3 +3,8 @@
 fn composite_over(front: vec4<f32>, back: vec4<f32>) -> vec4<f32> {
     return front + (1.0 - front.a) * back;
 }
+
+// The field's colour darkened by the cast-shadow factor ρ (its opacity kept).
+fn composite_shade_field(field: vec4<f32>, rho: vec3<f32>) -> vec4<f32> {
+    return vec4<f32>(field.rgb * rho, field.a);
+}

@@ -1,69 +1,13 @@
-// The object's SG shading pass (eq. 5) over the G-buffer: one dispatch per
-// object, shading the pixels holding that object with its fitted lobes;
-// the first dispatch also writes zero where no object is. Output: the
-// object's radiance I_v with coverage in alpha.
-#include "common/camera.wgsl"
-#include "object/sg_shading.wgsl"
+// The object's SG shading pass (eq. 5) without self-shadows (Γ_k = 1).
+#include "object/shade_body.wgsl"
 
-struct ShadePush {
-    origin: vec3<f32>,
-    width: u32,
-    right: vec3<f32>,
-    height: u32,
-    up: vec3<f32>,
-    object_index: f32,
-    forward: vec3<f32>,
-    write_empty: u32,
-}
-
-var<immediate> pc: ShadePush;
-@group(0) @binding(0) var normal_roughness: texture_2d<f32>;
-@group(0) @binding(1) var albedo_metallic: texture_2d<f32>;
-@group(0) @binding(2) var distance_id: texture_2d<f32>;
-// The SG fit's lobe buffer: slot 0 holds the current M lobes as (p, λ), (μ, 0).
-@group(0) @binding(3) var<storage, read> light_lobes: array<vec4<f32>>;
-// (c_j, k_j) of the NDF mixture (passes/src/brdf/ndf_lobes.rs).
-@group(0) @binding(4) var<storage, read> ndf_lobes: array<vec2<f32>>;
-@group(0) @binding(5) var out_object: texture_storage_2d<rgba32float, write>;
-
-fn shading_light_count() -> u32 {
-    return arrayLength(&light_lobes) / 4u;
-}
-
-fn shading_light(k: u32) -> Sg {
-    return sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
-}
-
-// Γ_k: no self-shadowing yet.
 fn shading_attenuation(k: u32) -> f32 {
     return 1.0;
 }
 
-fn shading_ndf_count() -> u32 {
-    return arrayLength(&ndf_lobes);
-}
-
-fn shading_ndf(j: u32) -> vec2<f32> {
-    return ndf_lobes[j];
-}
+fn shading_prepare(x: vec3<f32>) {}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
-        return;
-    }
-    let pixel = vec2<i32>(id.xy);
-    let object = textureLoad(distance_id, pixel, 0).g;
-    if object != pc.object_index {
-        if object < 0.0 && pc.write_empty != 0u {
-            textureStore(out_object, pixel, vec4<f32>(0.0));
-        }
-        return;
-    }
-    let nr = textureLoad(normal_roughness, pixel, 0);
-    let am = textureLoad(albedo_metallic, pixel, 0);
-    let size = vec2<f32>(f32(pc.width), f32(pc.height));
-    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(id.xy) + vec2<f32>(0.5));
-    let radiance = shade_sg(normalize(nr.xyz), -dir, am.rgb, nr.w, am.a);
-    textureStore(out_object, pixel, vec4<f32>(max(radiance, vec3<f32>(0.0)), 1.0));
+    shade_pixel(id);
 }

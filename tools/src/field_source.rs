@@ -60,7 +60,7 @@ pub fn bake_with_progress(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Gr
 }
 
 /// The directory baked fields are cached in, if one can be used.
-fn cache_dir() -> Option<PathBuf> {
+pub(crate) fn cache_dir() -> Option<PathBuf> {
     if let Some(d) = std::env::var_os(CACHE_ENV) {
         return Some(PathBuf::from(d));
     }
@@ -71,7 +71,7 @@ fn cache_dir() -> Option<PathBuf> {
 }
 
 /// FNV-1a: a stable hash for cache keys.
-fn fnv1a(bytes: &[u8], mut h: u64) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8], mut h: u64) -> u64 {
     for b in bytes {
         h ^= *b as u64;
         h = h.wrapping_mul(0x100000001b3);

@@ -1,9 +1,10 @@
 //! A radiance field with virtual objects inserted, seen from one camera:
 //! the per-frame passes of METHOD.md §4.4 in one frame graph — per object
 //! the probe trace and SG fit (only when the object moved), the object
-//! G-buffer, the march clipped at the object, SG shading and compositing.
-//! Without objects it is the bare march: no pass runs whose result the
-//! frame does not need.
+//! G-buffer, the march clipped at the object, SG shading with self-shadows,
+//! the cast shadow on the field and compositing. Without objects it is the
+//! bare march, without shadows no SSDF is read: no pass runs whose result
+//! the frame does not need.
 
 use std::sync::{Arc, Mutex};
 
@@ -18,7 +19,9 @@ use inlay_passes::lighting::{environment_lobes, IncidentLight};
 use inlay_passes::march::MarchPass;
 use inlay_passes::object::{GpuObject, PlacedObject};
 use inlay_passes::scene::Scene as SceneFile;
-use inlay_passes::shade::ShadePass;
+use inlay_passes::scene::ShadowKnobs;
+use inlay_passes::shade::{SelfShadow, ShadePass};
+use inlay_passes::shadow::{CastShadowPass, GpuFhTable, GpuSsdf};
 
 /// One object of the view: its placement (changeable between frames), its
 /// uploaded mesh and its incident light.
@@ -29,6 +32,8 @@ pub struct ViewObject {
     pub gpu: GpuObject,
     /// Probe and SG fit at the object's centre.
     pub light: IncidentLight,
+    /// Its SSDF field on the GPU (when the scene draws shadows).
+    pub ssdf: Option<GpuSsdf>,
 }
 
 /// The field, its objects and the passes that insert them.
@@ -41,14 +46,21 @@ pub struct InsertionView {
     pub camera: CameraSpec,
     /// The objects (may be empty).
     pub objects: Vec<ViewObject>,
+    /// Which shadows are drawn (changeable between frames; objects need
+    /// their SSDF fields, loaded when the scene asked for shadows).
+    pub shadows: Mutex<ShadowKnobs>,
     gbuffer: GBufferPass,
     shade: ShadePass,
     composite: CompositePass,
+    cast: Option<CastShadowPass>,
+    fh: Option<GpuFhTable>,
 }
 
 impl InsertionView {
     /// Builds the passes for `scene`'s objects (knobs from the scene file)
-    /// over `field`, seen from `camera`.
+    /// over `field`, seen from `camera`. With shadows on, each object's
+    /// SSDF field is loaded, or baked and cached (`use_cache`).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
@@ -56,7 +68,9 @@ impl InsertionView {
         march: MarchPass,
         field: GpuGridField,
         camera: CameraSpec,
+        use_cache: bool,
     ) -> anyhow::Result<Self> {
+        let shadows = scene.shadows.any() && !scene.objects.is_empty();
         let env = environment_lobes(&scene.environment);
         let mut objects = Vec::with_capacity(scene.objects.len());
         anyhow::ensure!(
@@ -65,7 +79,7 @@ impl InsertionView {
             scene.path.display(),
             scene.objects.len()
         );
-        for placed in &scene.objects {
+        for (placed, source) in scene.objects.iter().zip(&scene.object_sources) {
             let (centre, _) = placed.sphere();
             if !field.bounds.contains(centre) {
                 log::warn!(
@@ -84,12 +98,37 @@ impl InsertionView {
                     *march.knobs(),
                     &env,
                 )?,
+                ssdf: if shadows {
+                    let f = crate::ssdf_source::object_ssdf(
+                        ctx,
+                        lib,
+                        &placed.mesh,
+                        &source.file,
+                        source.ssdf.as_deref(),
+                        &scene.shadows.bake,
+                        use_cache,
+                    )?;
+                    Some(GpuSsdf::upload(ctx, Arc::new(f))?)
+                } else {
+                    None
+                },
             });
         }
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, lib)?,
             shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes)?,
             composite: CompositePass::new(ctx, lib)?,
+            cast: if shadows {
+                Some(CastShadowPass::new(ctx, lib)?)
+            } else {
+                None
+            },
+            fh: if shadows {
+                Some(GpuFhTable::new(ctx)?)
+            } else {
+                None
+            },
+            shadows: Mutex::new(scene.shadows),
             march,
             field,
             camera,
@@ -138,8 +177,49 @@ impl crate::headless::Scene for InsertionView {
         let field = self
             .march
             .add(graph, &self.field, &frame, Some(g.distance_id));
-        let object = self.shade.add(graph, &frame, &g, &lobes);
-        Ok(self.composite.add(graph, field.colour_opacity, object))
+        let knobs = *self.shadows.lock().unwrap_or_else(|e| e.into_inner());
+        let fh = self.fh.as_ref().map(|t| t.import(graph));
+        // Each object's SSDF bindings this frame (None: no shadows for it).
+        let ssdf: Vec<_> = self
+            .objects
+            .iter()
+            .zip(&placed)
+            .map(|(o, p)| match (&o.ssdf, fh) {
+                (Some(s), Some(_)) if knobs.any() => Some(s.import(graph, p, knobs.outside)),
+                _ => None,
+            })
+            .collect();
+        let self_shadow: Vec<Option<SelfShadow>> = ssdf
+            .iter()
+            .map(|s| match (s, fh) {
+                (Some(ssdf), Some(fh_table)) if knobs.self_shadow => Some(SelfShadow {
+                    fh_table,
+                    ssdf: *ssdf,
+                }),
+                _ => None,
+            })
+            .collect();
+        let object = self.shade.add(graph, &frame, &g, &lobes, &self_shadow);
+        let mut shadow = None;
+        if let (true, Some(cast), Some(fh_table)) = (knobs.cast, &self.cast, fh) {
+            for (s, l) in ssdf.iter().zip(&lobes) {
+                if let Some(s) = s {
+                    shadow = Some(cast.add(
+                        graph,
+                        &self.field,
+                        &frame,
+                        &field,
+                        *l,
+                        fh_table,
+                        *s,
+                        shadow,
+                    ));
+                }
+            }
+        }
+        Ok(self
+            .composite
+            .add(graph, field.colour_opacity, object, shadow))
     }
 
     fn output_format(&self) -> vk::Format {

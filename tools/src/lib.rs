@@ -11,5 +11,6 @@ pub mod headless;
 pub mod insertion_view;
 pub mod present;
 pub mod shaders;
+pub mod ssdf_source;
 pub mod timings_table;
 pub mod window_app;

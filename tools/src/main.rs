@@ -50,6 +50,8 @@ enum Command {
     Demo(DemoArgs),
     /// Bake a scene's recipe of analytic primitives into a grid-field file (path traced).
     BakeScene(inlay::commands::bake_scene::BakeSceneArgs),
+    /// Bake an object's SSDF field (its visibility from around it, for shadows) on the GPU.
+    BakeSsdf(inlay::commands::bake_ssdf::BakeSsdfArgs),
     /// Render a scene's radiance field headless from one of its cameras.
     Render(inlay::commands::render::RenderArgs),
     /// Measure the march: rays/s and samples/s per image size, and its error as the step size changes.
@@ -109,6 +111,9 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Demo(args) => demo(&cli.gpu, args),
         Command::BakeScene(args) => inlay::commands::bake_scene::run(args),
+        Command::BakeSsdf(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::bake_ssdf::run(&ctx, args)),
         Command::Render(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::render::run(&ctx, args)),

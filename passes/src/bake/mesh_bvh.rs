@@ -235,6 +235,72 @@ impl MeshScene {
         self.traverse(ray, t_min, t_max, true).is_some()
     }
 
+    /// The hierarchy in f32 for `shaders/shadow/mesh_bvh.wgsl`: nodes as
+    /// two vec4s (min, first as bits), (max, count as bits), boxes widened
+    /// by 10⁻⁶ of their size so f32 rounding loses no hit; triangles as
+    /// three vec4s (corners, w unused).
+    pub fn packed(&self) -> (Vec<f32>, Vec<f32>) {
+        let mut nodes = Vec::with_capacity(self.nodes.len() * 8);
+        for n in &self.nodes {
+            let pad = (n.bounds.max - n.bounds.min).max_element() * 1e-6 + 1e-9;
+            let (lo, hi) = (n.bounds.min - pad, n.bounds.max + pad);
+            nodes.extend([
+                lo.x as f32,
+                lo.y as f32,
+                lo.z as f32,
+                f32::from_bits(n.first),
+            ]);
+            nodes.extend([
+                hi.x as f32,
+                hi.y as f32,
+                hi.z as f32,
+                f32::from_bits(n.count),
+            ]);
+        }
+        let mut tris = Vec::with_capacity(self.triangles.len() * 12);
+        for t in &self.triangles {
+            for p in t.p {
+                tris.extend([p.x as f32, p.y as f32, p.z as f32, 0.0]);
+            }
+        }
+        (nodes, tris)
+    }
+
+    /// Whether `p` is inside a closed mesh: most of six axis rays from it
+    /// first hit a triangle from behind (its winding faces away).
+    pub fn inside(&self, p: DVec3) -> bool {
+        let mut behind = 0;
+        for dir in [
+            DVec3::X,
+            DVec3::NEG_X,
+            DVec3::Y,
+            DVec3::NEG_Y,
+            DVec3::Z,
+            DVec3::NEG_Z,
+        ] {
+            let ray = Ray { origin: p, dir };
+            if let Some(hit) = self.intersect(&ray, 0.0, f64::INFINITY) {
+                let t = &self.triangles[hit.tri];
+                behind += ((t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).dot(dir) > 0.0) as u32;
+            }
+        }
+        behind >= 4
+    }
+
+    /// The point of the mesh nearest to `p` and the unit normal (by
+    /// winding) of its triangle; brute force over every triangle.
+    pub fn nearest_point(&self, p: DVec3) -> Option<(DVec3, DVec3)> {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let q = closest_point_on_triangle(p, t.p);
+                let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
+                (q.distance_squared(p), q, n)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, q, n)| (q, n))
+    }
+
     /// The surface at `hit` of `ray`.
     pub fn surface(&self, ray: &Ray, hit: &MeshHit) -> MeshSurface {
         let t = &self.triangles[hit.tri];
@@ -257,6 +323,41 @@ impl MeshScene {
             material: m.at(uv, &self.textures[*object]),
         }
     }
+}
+
+/// The point of triangle `t` nearest to `p` (Ericson, Real-Time Collision
+/// Detection §5.1.5: Voronoi regions of corners, edges and face).
+fn closest_point_on_triangle(p: DVec3, t: [DVec3; 3]) -> DVec3 {
+    let [a, b, c] = t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
 }
 
 #[cfg(test)]

@@ -1,8 +1,10 @@
 //! The compositing pass (`composite`, compute; METHOD.md eq. 6): the field
 //! rendered with object clipping (premultiplied colour I_c, opacity I_α)
 //! over the object's radiance I_v, I = I_c + (1 − I_α)·I_v, so the field
-//! hides the object fully or partly. [`composite_over`] is the CPU mirror
-//! of `shaders/composite/over.wgsl`.
+//! hides the object fully or partly, the field's colour first darkened by
+//! the cast shadow ρ when there is one. [`composite_over`] and
+//! [`composite_shade_field`] are the CPU mirrors of
+//! `shaders/composite/over.wgsl`.
 
 use std::sync::Arc;
 
@@ -18,32 +20,51 @@ pub fn composite_over(front: [f32; 4], back: [f32; 4]) -> [f32; 4] {
     std::array::from_fn(|i| front[i] + (1.0 - front[3]) * back[i])
 }
 
-/// The compositing pipeline.
+/// The field's colour darkened by the cast-shadow factor `rho` (eq. 7),
+/// its opacity kept: only the field's part of the pixel is shadowed.
+pub fn composite_shade_field(field: [f32; 4], rho: [f32; 3]) -> [f32; 4] {
+    [
+        field[0] * rho[0],
+        field[1] * rho[1],
+        field[2] * rho[2],
+        field[3],
+    ]
+}
+
+/// The compositing pipelines (without and with a cast shadow).
 pub struct CompositePass {
     pipeline: ComputePipeline,
+    shadowed: ComputePipeline,
 }
 
 impl CompositePass {
     /// Compiles the pass.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let shader = compile(
-            lib,
-            "composite/composite.wgsl",
-            "main",
-            ShaderStage::Compute,
-            &[],
-        )?;
+        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(
+                lib,
+                "composite/composite.wgsl",
+                entry,
+                ShaderStage::Compute,
+                &[],
+            )?;
+            Ok(ComputePipeline::new(ctx, &shader)?)
+        };
         Ok(Self {
-            pipeline: ComputePipeline::new(ctx, &shader)?,
+            pipeline: build("main")?,
+            shadowed: build("main_shadowed")?,
         })
     }
 
-    /// Adds `composite`: `field` (Ĉ, Ô) over `object` (I_v, coverage).
+    /// Adds `composite`: `field` (Ĉ, Ô), its colour multiplied by the
+    /// cast-shadow factor image `shadow` when given, over `object` (I_v,
+    /// coverage).
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         field: ImageHandle,
         object: ImageHandle,
+        shadow: Option<ImageHandle>,
     ) -> ImageHandle {
         let desc = graph.image_desc(field).unwrap_or(ImageDesc {
             width: 1,
@@ -62,18 +83,30 @@ impl CompositePass {
         let mut pass = graph.add_pass("composite", PassKind::Compute);
         pass.image(field, ImageAccess::Sampled);
         pass.image(object, ImageAccess::Sampled);
+        if let Some(s) = shadow {
+            pass.image(s, ImageAccess::Sampled);
+        }
         let out = pass.image(out, ImageAccess::StorageWrite);
         let push = Push::new().u32(width).u32(height);
+        let pipeline = if shadow.is_some() {
+            &self.shadowed
+        } else {
+            &self.pipeline
+        };
         pass.exec(move |ctx| {
+            let mut bindings = vec![
+                Binding::SampledImage(field),
+                Binding::SampledImage(object),
+                Binding::StorageImage(out),
+            ];
+            if let Some(s) = shadow {
+                bindings.push(Binding::SampledImage(s));
+            }
             ctx.dispatch(
-                &self.pipeline,
-                &[
-                    Binding::SampledImage(field),
-                    Binding::SampledImage(object),
-                    Binding::StorageImage(out),
-                ],
+                pipeline,
+                &bindings,
                 push.bytes(),
-                self.pipeline.groups_for([width, height, 1]),
+                pipeline.groups_for([width, height, 1]),
             )
         });
         out

@@ -18,6 +18,8 @@ pub struct GpuGridField {
     pub diagonal: f64,
     /// The field's bounds.
     pub bounds: crate::geometry::Aabb,
+    /// Nodes per axis.
+    pub resolution: glam::UVec3,
 }
 
 /// The field's buffers as imported into one frame's graph.
@@ -95,6 +97,7 @@ impl GpuGridField {
             occupancy: Arc::new(Buffer::with_data(ctx, "grid-occupancy", &cells, storage)?),
             diagonal: field.bounds.diagonal(),
             bounds: field.bounds,
+            resolution: field.resolution,
         })
     }
 

@@ -119,21 +119,25 @@ impl DirectionMap {
                 let phi = d.z.atan2(d.x).rem_euclid(2.0 * PI);
                 (phi / (2.0 * PI), d.y.clamp(-1.0, 1.0).acos() / PI)
             }
-            MapKind::Octahedral => {
-                let p = d / (d.x.abs() + d.y.abs() + d.z.abs());
-                let (mut a, mut b) = (p.x, p.z);
-                if p.y < 0.0 {
-                    let (fa, fb) = ((1.0 - b.abs()) * a.signum(), (1.0 - a.abs()) * b.signum());
-                    a = fa;
-                    b = fb;
-                }
-                (0.5 * (a + 1.0), 0.5 * (b + 1.0))
-            }
+            MapKind::Octahedral => octahedral_uv(d),
         };
         let x = ((u * self.width as f64) as u32).min(self.width - 1);
         let y = ((v * self.height as f64) as u32).min(self.height - 1);
         (x, y)
     }
+}
+
+/// The octahedral map coordinates (u, v) ∈ [0, 1]² of unit direction `d`
+/// (the inverse of the map's direction). Mirrored by `dm_octahedral_uv`.
+pub fn octahedral_uv(d: DVec3) -> (f64, f64) {
+    let p = d / (d.x.abs() + d.y.abs() + d.z.abs());
+    let (mut a, mut b) = (p.x, p.z);
+    if p.y < 0.0 {
+        let (fa, fb) = ((1.0 - b.abs()) * a.signum(), (1.0 - a.abs()) * b.signum());
+        a = fa;
+        b = fb;
+    }
+    (0.5 * (a + 1.0), 0.5 * (b + 1.0))
 }
 
 /// The point of the octahedron |x| + |y| + |z| = 1 for (u, v) ∈ [−1, 1]²:

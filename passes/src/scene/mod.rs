@@ -111,6 +111,51 @@ pub struct Scene {
     pub shading: ShadingKnobs,
     /// Virtual objects placed in the field (`[[objects]]`).
     pub objects: Vec<PlacedObject>,
+    /// Where each object (same order) comes from and its SSDF field file.
+    pub object_sources: Vec<ObjectSource>,
+    /// Shadow knobs (`[shadows]`).
+    pub shadows: ShadowKnobs,
+}
+
+/// An object's files, as the scene names them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectSource {
+    /// The glTF file.
+    pub file: PathBuf,
+    /// Its baked SSDF field, if the scene names one (else it is baked on
+    /// first use and cached).
+    pub ssdf: Option<PathBuf>,
+}
+
+/// Which shadows a scene draws and how (`[shadows]`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowKnobs {
+    /// Self-shadows on the objects (eq. 9).
+    pub self_shadow: bool,
+    /// Shadows cast onto the field (eq. 7–8).
+    pub cast: bool,
+    /// How the SSDF is read outside its grid.
+    pub outside: crate::shadow::OutsideMode,
+    /// Knobs of the SSDF bakes this scene triggers.
+    pub bake: crate::shadow::SsdfKnobs,
+}
+
+impl Default for ShadowKnobs {
+    fn default() -> Self {
+        Self {
+            self_shadow: true,
+            cast: true,
+            outside: crate::shadow::OutsideMode::Correct,
+            bake: crate::shadow::SsdfKnobs::default(),
+        }
+    }
+}
+
+impl ShadowKnobs {
+    /// Whether any shadow is drawn.
+    pub fn any(&self) -> bool {
+        self.self_shadow || self.cast
+    }
 }
 
 /// The object shading's knobs, as a scene file sets them.
@@ -311,7 +356,26 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             .unwrap_or(ShadingKnobs::default().ndf_lobes),
     };
     crate::brdf::NdfLobes::new(shading.ndf_lobes).map_err(|m| e("shading.ndf_lobes", m))?;
+    let shadows = {
+        let d = ShadowKnobs::default();
+        let sp = spec.shadows.as_ref();
+        let bake = crate::shadow::SsdfKnobs {
+            grid: sp.and_then(|s| s.grid).unwrap_or(d.bake.grid),
+            directions: sp.and_then(|s| s.directions).unwrap_or(d.bake.directions),
+            components: sp.and_then(|s| s.components).unwrap_or(d.bake.components),
+        };
+        if let Some((k, m)) = bake.problem() {
+            return Err(e(&format!("shadows.{k}"), m));
+        }
+        ShadowKnobs {
+            self_shadow: sp.and_then(|s| s.self_shadow).unwrap_or(d.self_shadow),
+            cast: sp.and_then(|s| s.cast).unwrap_or(d.cast),
+            outside: sp.and_then(|s| s.outside).unwrap_or(d.outside),
+            bake,
+        }
+    };
     let mut objects = Vec::with_capacity(spec.objects.len());
+    let mut object_sources = Vec::with_capacity(spec.objects.len());
     let mut meshes: std::collections::HashMap<PathBuf, Arc<ObjectMesh>> = Default::default();
     for (i, o) in spec.objects.into_iter().enumerate() {
         let f = |k: &str| format!("objects[{i}].{k}");
@@ -346,6 +410,16 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             pose,
             material: o.material,
         });
+        let ssdf = o.ssdf.map(|f| dir.join(f));
+        if let Some(path) = &ssdf {
+            if !path.is_file() {
+                return Err(e(
+                    &f("ssdf"),
+                    format!("{} does not exist (bake it with `inlay bake-ssdf`, or leave `ssdf` out to bake it on first use)", path.display()),
+                ));
+            }
+        }
+        object_sources.push(ObjectSource { file, ssdf });
     }
     let name = spec.name.unwrap_or_else(|| {
         path.file_stem()
@@ -364,6 +438,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         lighting,
         shading,
         objects,
+        object_sources,
+        shadows,
     })
 }
 

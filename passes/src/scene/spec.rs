@@ -30,7 +30,23 @@ pub(crate) struct SceneSpec {
     #[serde(default)]
     pub shading: Option<ShadingSpec>,
     #[serde(default)]
+    pub shadows: Option<ShadowsSpec>,
+    #[serde(default)]
     pub objects: Vec<ObjectSpec>,
+}
+
+/// `[shadows]`: which shadows are drawn, how the SSDF is read outside its
+/// grid, and the knobs of SSDF bakes the scene triggers.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShadowsSpec {
+    #[serde(rename = "self")]
+    pub self_shadow: Option<bool>,
+    pub cast: Option<bool>,
+    pub outside: Option<crate::shadow::OutsideMode>,
+    pub grid: Option<u32>,
+    pub directions: Option<u32>,
+    pub components: Option<u32>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -53,6 +69,7 @@ pub(crate) struct ObjectSpec {
     pub scale: crate::object::Scale,
     #[serde(default)]
     pub material: crate::object::MaterialOverride,
+    pub ssdf: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -19,13 +19,26 @@ use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 use crate::brdf::NdfLobes;
 use crate::camera::CameraFrame;
 use crate::gbuffer::GBuffer;
+use crate::shadow::{shadow_defines, SsdfBindings};
 
 /// Format of the object radiance image.
 pub const OBJECT_COLOUR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
-/// The shading pipeline and the NDF mixture it uses.
+/// One object's self-shadow inputs for [`ShadePass::add`]: the f_h table
+/// and its SSDF field's bindings.
+#[derive(Debug, Clone, Copy)]
+pub struct SelfShadow {
+    /// The f_h table.
+    pub fh_table: BufferHandle,
+    /// The object's SSDF field and per-frame block.
+    pub ssdf: SsdfBindings,
+}
+
+/// The shading pipelines (without and with self-shadows) and the NDF
+/// mixture they use.
 pub struct ShadePass {
     pipeline: ComputePipeline,
+    self_shadowed: ComputePipeline,
     ndf: Arc<Buffer>,
     ndf_lobes: NdfLobes,
 }
@@ -36,8 +49,16 @@ impl ShadePass {
         let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
         let shader = compile(lib, "object/shade.wgsl", "main", ShaderStage::Compute, &[])?;
+        let shadowed = compile(
+            lib,
+            "object/shade_self_shadow.wgsl",
+            "main",
+            ShaderStage::Compute,
+            &shadow_defines(),
+        )?;
         Ok(Self {
             pipeline: ComputePipeline::new(ctx, &shader)?,
+            self_shadowed: ComputePipeline::new(ctx, &shadowed)?,
             ndf: Arc::new(Buffer::with_data(
                 ctx,
                 "ndf lobes",
@@ -54,13 +75,15 @@ impl ShadePass {
     }
 
     /// Adds `object-shade`: object i's pixels (index i in the G-buffer) are
-    /// shaded with `lobes[i]` (an SG fit's lobe buffer).
+    /// shaded with `lobes[i]` (an SG fit's lobe buffer), self-shadowed
+    /// (eq. 9) where `self_shadow[i]` is given.
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         camera: &CameraFrame,
         gbuffer: &GBuffer,
         lobes: &[BufferHandle],
+        self_shadow: &[Option<SelfShadow>],
     ) -> ImageHandle {
         let (width, height) = (camera.width, camera.height);
         let out = graph.create_image(
@@ -88,25 +111,52 @@ impl ShadePass {
             }
         }
         pass.buffer(ndf, BufferAccess::StorageRead);
+        for s in self_shadow.iter().flatten() {
+            for (b, access) in [
+                (s.fh_table, BufferAccess::StorageRead),
+                (s.ssdf.object, BufferAccess::Uniform),
+                (s.ssdf.rows, BufferAccess::StorageRead),
+                (s.ssdf.coefs, BufferAccess::StorageRead),
+            ] {
+                if !declared.contains(&b) {
+                    pass.buffer(b, access);
+                    declared.push(b);
+                }
+            }
+        }
         let out = pass.image(out, ImageAccess::StorageWrite);
+        let shadows = self_shadow.to_vec();
         let g = *gbuffer;
         let lobes = lobes.to_vec();
         let cam = *camera;
         pass.exec(move |ctx| {
             for (i, l) in lobes.iter().enumerate() {
                 let push = cam.push_prefix(i as f32).u32((i == 0) as u32);
+                let mut bindings = vec![
+                    Binding::SampledImage(g.normal_roughness),
+                    Binding::SampledImage(g.albedo_metallic),
+                    Binding::SampledImage(g.distance_id),
+                    Binding::StorageBuffer(*l),
+                    Binding::StorageBuffer(ndf),
+                    Binding::StorageImage(out),
+                ];
+                let pipeline = match shadows.get(i).copied().flatten() {
+                    Some(s) => {
+                        bindings.extend([
+                            Binding::StorageBuffer(s.fh_table),
+                            Binding::UniformBuffer(s.ssdf.object),
+                            Binding::StorageBuffer(s.ssdf.rows),
+                            Binding::StorageBuffer(s.ssdf.coefs),
+                        ]);
+                        &self.self_shadowed
+                    }
+                    None => &self.pipeline,
+                };
                 ctx.dispatch(
-                    &self.pipeline,
-                    &[
-                        Binding::SampledImage(g.normal_roughness),
-                        Binding::SampledImage(g.albedo_metallic),
-                        Binding::SampledImage(g.distance_id),
-                        Binding::StorageBuffer(*l),
-                        Binding::StorageBuffer(ndf),
-                        Binding::StorageImage(out),
-                    ],
+                    pipeline,
+                    &bindings,
                     push.bytes(),
-                    self.pipeline.groups_for([width, height, 1]),
+                    pipeline.groups_for([width, height, 1]),
                 )?;
             }
             Ok(())

@@ -1,7 +1,8 @@
-//! The field commands of `inlay`: `bake-scene`, `render`, `reference`,
-//! `probe` and the benchmarks.
+//! The field commands of `inlay`: `bake-scene`, `bake-ssdf`, `render`,
+//! `reference`, `probe` and the benchmarks.
 
 pub mod bake_scene;
+pub mod bake_ssdf;
 pub mod bench_march;
 pub mod bench_sg;
 pub mod bench_shade;

@@ -10,6 +10,7 @@ use inlay_engine::Context;
 use inlay_passes::field::GpuGridField;
 use inlay_passes::march::MarchPass;
 use inlay_passes::scene::load_scene;
+use inlay_passes::shadow::OutsideMode;
 
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
@@ -59,6 +60,34 @@ pub struct RenderArgs {
     /// SG lobes for GGX's normal distribution (overrides [shading] ndf_lobes).
     #[arg(long)]
     pub ndf_lobes: Option<u32>,
+    /// Draw no shadows (neither self-shadows nor the cast shadow).
+    #[arg(long)]
+    pub no_shadows: bool,
+    /// Draw no self-shadows on the objects.
+    #[arg(long)]
+    pub no_self_shadow: bool,
+    /// Draw no shadow cast onto the field.
+    #[arg(long)]
+    pub no_cast_shadow: bool,
+    /// How the SSDF is read outside its grid: correct, clamp or infinity (overrides [shadows] outside).
+    #[arg(long, value_parser = parse_outside)]
+    pub shadow_outside: Option<OutsideMode>,
+    /// SSDF grid nodes per axis for objects baked on first use (overrides [shadows] grid).
+    #[arg(long)]
+    pub ssdf_grid: Option<u32>,
+    /// SSDF direction map side for objects baked on first use (overrides [shadows] directions).
+    #[arg(long)]
+    pub ssdf_directions: Option<u32>,
+    /// SSDF PCA components for objects baked on first use (overrides [shadows] components).
+    #[arg(long)]
+    pub ssdf_components: Option<u32>,
+}
+
+fn parse_outside(s: &str) -> Result<OutsideMode, String> {
+    OutsideMode::ALL
+        .into_iter()
+        .find(|m| m.name() == s)
+        .ok_or_else(|| format!("`{s}` is not one of correct, clamp, infinity"))
 }
 
 /// Runs `render` on a context made with `options`.
@@ -73,6 +102,20 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         scene.objects.clear();
     }
     scene.shading.ndf_lobes = args.ndf_lobes.unwrap_or(scene.shading.ndf_lobes);
+    scene.shadows.self_shadow &= !(args.no_shadows || args.no_self_shadow);
+    scene.shadows.cast &= !(args.no_shadows || args.no_cast_shadow);
+    scene.shadows.outside = args.shadow_outside.unwrap_or(scene.shadows.outside);
+    let bake = &mut scene.shadows.bake;
+    bake.grid = args.ssdf_grid.unwrap_or(bake.grid);
+    bake.directions = args.ssdf_directions.unwrap_or(bake.directions);
+    bake.components = args
+        .ssdf_components
+        .unwrap_or(bake.components)
+        .min(bake.directions.pow(2))
+        .min(bake.grid.pow(3));
+    if let Some((k, m)) = bake.problem() {
+        anyhow::bail!("--ssdf-{k}: {m}");
+    }
     let camera = scene.camera(&args.camera)?.clone();
     let mut knobs = scene.march;
     knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
@@ -90,6 +133,7 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         MarchPass::new(ctx, &library, knobs)?,
         GpuGridField::upload(ctx, &field)?,
         camera,
+        !args.no_cache,
     )?;
     let run = run_headless(ctx, &view, args.width, args.height, args.frames.max(1), 0.0)?;
     let bad = run.image.non_finite_count();

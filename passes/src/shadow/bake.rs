@@ -1,0 +1,308 @@
+//! Baking an object's SSDF field (METHOD.md "SSDF field"): S(d; x) at every
+//! direction texel of an octahedral map, at every node of the grid, on the
+//! GPU (`shaders/shadow/ssdf_bake.wgsl`, batches of nodes per submission so
+//! progress can be shown), with [`bake_reference`] its f64 CPU mirror.
+//!
+//! **Nodes inside the object** see it in every direction (S = −π
+//! everywhere), which would drag every interpolated value near the surface
+//! to "fully blocked" and self-shadow even a convex object. Such nodes take
+//! instead the SSDF seen from the nearest surface point, lifted off the
+//! surface by 10⁻³ of the radius along its face normal: the field then
+//! continues across the surface the way it approaches it from outside.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::DVec3;
+use inlay_engine::graph::{Binding, BufferAccess, FrameGraph, PassKind};
+use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
+
+use super::grid::SsdfGrid;
+use super::silhouette::{SilhouetteMesh, ARC_PIECES, OUTSIDE_OFFSET};
+use crate::bake::MeshScene;
+use crate::object::{ObjectMesh, PlacedObject, Pose};
+use crate::probe::{DirectionMap, MapKind};
+
+/// The knobs of an SSDF bake.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SsdfKnobs {
+    /// Nodes along each axis of the grid (paper: 16).
+    pub grid: u32,
+    /// Side of the octahedral direction map (texels = directions²).
+    pub directions: u32,
+    /// PCA components kept.
+    pub components: u32,
+}
+
+impl Default for SsdfKnobs {
+    fn default() -> Self {
+        Self {
+            grid: 16,
+            directions: 32,
+            components: 16,
+        }
+    }
+}
+
+/// Upper limits of the knobs.
+pub const MAX_SSDF_GRID: u32 = 64;
+/// Largest direction map side.
+pub const MAX_SSDF_DIRECTIONS: u32 = 128;
+/// Most PCA components (the runtime keeps one coefficient vector per pixel).
+pub const MAX_SSDF_COMPONENTS: u32 = 64;
+
+impl SsdfKnobs {
+    /// The first knob out of range, with why.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        if !(2..=MAX_SSDF_GRID).contains(&self.grid) {
+            return Some((
+                "grid",
+                format!("{} is not in 2..={MAX_SSDF_GRID}", self.grid),
+            ));
+        }
+        if !(4..=MAX_SSDF_DIRECTIONS).contains(&self.directions) {
+            return Some((
+                "directions",
+                format!("{} is not in 4..={MAX_SSDF_DIRECTIONS}", self.directions),
+            ));
+        }
+        let most = MAX_SSDF_COMPONENTS
+            .min(self.directions * self.directions)
+            .min(self.grid.pow(3));
+        if !(1..=most).contains(&self.components) {
+            return Some((
+                "components",
+                format!("{} is not in 1..={most} (at most the directions, the nodes and {MAX_SSDF_COMPONENTS})", self.components),
+            ));
+        }
+        None
+    }
+
+    /// The direction map.
+    pub fn map(&self) -> DirectionMap {
+        DirectionMap::new(MapKind::Octahedral, self.directions)
+    }
+}
+
+/// Raw SSDF samples: S per (node, direction texel), node-major.
+#[derive(Debug, Clone)]
+pub struct SsdfSamples {
+    /// The grid.
+    pub grid: SsdfGrid,
+    /// Side of the octahedral direction map.
+    pub directions: u32,
+    /// S values, `grid.count()` rows of `directions²`.
+    pub values: Vec<f32>,
+    /// Seconds the bake took.
+    pub seconds: f64,
+}
+
+/// The object in its own frame as a ray-casting scene.
+pub fn object_scene(mesh: &Arc<ObjectMesh>) -> MeshScene {
+    MeshScene::new(&[PlacedObject {
+        name: mesh.name.clone(),
+        mesh: mesh.clone(),
+        pose: Pose::default(),
+        material: Default::default(),
+    }])
+}
+
+/// The grid of `nodes`³ around `mesh`'s bounding sphere.
+pub fn grid_for(mesh: &ObjectMesh, nodes: u32) -> SsdfGrid {
+    let (centre, radius) = mesh.bounding_sphere();
+    SsdfGrid {
+        centre,
+        radius: radius.max(1e-12),
+        nodes,
+    }
+}
+
+/// The point each node's SSDF is computed from: the node itself, or for a
+/// node inside the object the nearest surface point lifted off the surface.
+pub fn lookup_points(scene: &MeshScene, grid: &SsdfGrid) -> Vec<DVec3> {
+    use rayon::prelude::*;
+    (0..grid.count())
+        .into_par_iter()
+        .map(|i| {
+            let p = grid.position_of(i);
+            if !scene.inside(p) {
+                return p;
+            }
+            match scene.nearest_point(p) {
+                Some((q, n)) => q + n * (1e-3 * grid.radius),
+                None => p,
+            }
+        })
+        .collect()
+}
+
+/// S at every direction texel seen from each of `points`, in f64 (the
+/// kernel's CPU mirror).
+pub fn bake_reference(
+    mesh: &ObjectMesh,
+    scene: &MeshScene,
+    points: &[DVec3],
+    directions: u32,
+) -> Vec<f64> {
+    use rayon::prelude::*;
+    let sil = SilhouetteMesh::new(mesh);
+    let map = DirectionMap::new(MapKind::Octahedral, directions);
+    points
+        .par_iter()
+        .flat_map_iter(|&x| {
+            let hits = |o: DVec3, d: DVec3| super::reference::hits(scene, o, d);
+            let view = sil.view_from(x, hits);
+            (0..map.texels() as u32)
+                .map(|t| {
+                    let d = map.direction(t % directions, t / directions);
+                    view.signed_angle(d, hits(x, d))
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The bake kernel.
+pub struct SsdfBaker {
+    pipeline: ComputePipeline,
+}
+
+/// Nodes per submission: small enough that progress moves and no single
+/// submission runs long on a slow device.
+const NODES_PER_BATCH: usize = 32;
+
+impl SsdfBaker {
+    /// Compiles the kernel.
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
+        let shader = compile(
+            lib,
+            "shadow/ssdf_bake.wgsl",
+            "main",
+            ShaderStage::Compute,
+            &[
+                Define::U32("ARC_PIECES", ARC_PIECES),
+                Define::F32("OUTSIDE_OFFSET", OUTSIDE_OFFSET as f32),
+                Define::Bool("OCTAHEDRAL", true),
+            ],
+        )?;
+        Ok(Self {
+            pipeline: ComputePipeline::new(ctx, &shader)?,
+        })
+    }
+
+    /// Bakes S for `mesh` with `knobs` (`progress(done, total)` after each
+    /// batch of nodes).
+    pub fn bake(
+        &self,
+        ctx: &Arc<Context>,
+        mesh: &Arc<ObjectMesh>,
+        knobs: &SsdfKnobs,
+        progress: &dyn Fn(usize, usize),
+    ) -> anyhow::Result<SsdfSamples> {
+        if let Some((k, m)) = knobs.problem() {
+            anyhow::bail!("ssdf knob `{k}`: {m}");
+        }
+        anyhow::ensure!(
+            mesh.triangles() > 0,
+            "{}: the object has no triangles to cast a shadow",
+            mesh.name
+        );
+        let started = Instant::now();
+        let grid = grid_for(mesh, knobs.grid);
+        let scene = object_scene(mesh);
+        let points = lookup_points(&scene, &grid);
+        let values = self.run(ctx, mesh, &scene, &points, knobs.directions, progress)?;
+        Ok(SsdfSamples {
+            grid,
+            directions: knobs.directions,
+            values,
+            seconds: started.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// S at every direction texel from each of `points` on the GPU.
+    pub fn run(
+        &self,
+        ctx: &Arc<Context>,
+        mesh: &ObjectMesh,
+        scene: &MeshScene,
+        points: &[DVec3],
+        directions: u32,
+        progress: &dyn Fn(usize, usize),
+    ) -> anyhow::Result<Vec<f32>> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let bytes = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+        let pts: Vec<f32> = points
+            .iter()
+            .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
+            .collect();
+        let sil = SilhouetteMesh::new(mesh);
+        let mut edges = Vec::with_capacity(sil.edges.len() * 24);
+        for e in &sil.edges {
+            let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+            edges.extend(v4(e.a, e.always as u32 as f64));
+            edges.extend(v4(e.b, 0.0));
+            for p in e.planes {
+                edges.extend(p.to_array().map(|x| x as f32));
+            }
+            edges.extend(v4(e.opposite[0], 0.0));
+            edges.extend(v4(e.opposite[1], 0.0));
+        }
+        let (nodes, tris) = scene.packed();
+        let upload = |name: &str, v: &[f32]| -> anyhow::Result<Arc<Buffer>> {
+            let mut b = bytes(v);
+            b.resize(b.len().max(16), 0);
+            Ok(Arc::new(Buffer::with_data(ctx, name, &b, storage)?))
+        };
+        let points_buf = upload("ssdf points", &pts)?;
+        let edges_buf = upload("ssdf edges", &edges)?;
+        let nodes_buf = upload("ssdf bvh nodes", &nodes)?;
+        let tris_buf = upload("ssdf bvh triangles", &tris)?;
+        let texels = (directions * directions) as usize;
+        let edge_count = sil.edges.len() as u32;
+        let mut out = Vec::with_capacity(points.len() * texels);
+        let mut renderer = Renderer::new(ctx, 1)?;
+        for start in (0..points.len()).step_by(NODES_PER_BATCH) {
+            let count = NODES_PER_BATCH.min(points.len() - start);
+            let size = (count * texels * 4) as u64;
+            let readback = BufferReadback::new(ctx, "ssdf readback", size)?;
+            renderer.begin_frame()?;
+            let mut graph = FrameGraph::new();
+            let target = graph.create_buffer("ssdf batch", size);
+            let bound = [&points_buf, &edges_buf, &nodes_buf, &tris_buf]
+                .map(|b| graph.import_buffer(b, None));
+            let mut pass = graph.add_pass("ssdf-bake", PassKind::Compute);
+            for b in bound {
+                pass.buffer(b, BufferAccess::StorageRead);
+            }
+            let written = pass.buffer(target, BufferAccess::StorageWrite);
+            let push: Vec<u8> = [start as u32, directions, edge_count, count as u32]
+                .iter()
+                .flat_map(|x| x.to_le_bytes())
+                .collect();
+            let pipeline = &self.pipeline;
+            let groups = [(texels as u32).div_ceil(64), count as u32, 1];
+            pass.exec(move |c| {
+                c.dispatch(
+                    pipeline,
+                    &[
+                        Binding::StorageBuffer(bound[0]),
+                        Binding::StorageBuffer(bound[1]),
+                        Binding::StorageBuffer(bound[2]),
+                        Binding::StorageBuffer(bound[3]),
+                        Binding::StorageBuffer(written),
+                    ],
+                    &push,
+                    groups,
+                )
+            });
+            readback.add_to_graph(&mut graph, "ssdf readback", written);
+            renderer.submit(graph, &SubmitSync::none())?;
+            renderer.finish()?;
+            out.extend(readback.read_f32()?);
+            progress(start + count, points.len());
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,120 @@
+//! The cast-shadow pass (`cast-shadow`, compute; METHOD.md §4.4 step 5):
+//! ρ per pixel from the field's depth and density gradient, the object's
+//! fitted lighting and its SSDF field (`shaders/shadow/cast.wgsl`, mirrored
+//! by [`super::cast_shadow_factor`]). One pass per object; each after the
+//! first multiplies the previous object's ρ.
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{
+    Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
+};
+use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
+
+use super::gpu::{shadow_defines, SsdfBindings};
+use crate::camera::CameraFrame;
+use crate::field::GpuGridField;
+use crate::march::MarchOutputs;
+
+/// Format of the ρ image (rgb: per-channel factor).
+pub const SHADOW_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// The cast-shadow pipelines.
+pub struct CastShadowPass {
+    first: ComputePipeline,
+    chained: ComputePipeline,
+}
+
+impl CastShadowPass {
+    /// Compiles the pass.
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
+        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(
+                lib,
+                "shadow/cast.wgsl",
+                entry,
+                ShaderStage::Compute,
+                &shadow_defines(),
+            )?;
+            Ok(ComputePipeline::new(ctx, &shader)?)
+        };
+        Ok(Self {
+            first: build("main")?,
+            chained: build("main_chained")?,
+        })
+    }
+
+    /// Adds `cast-shadow` for one object lit by `lobes`, multiplying
+    /// `previous` (another object's ρ) when given; returns the ρ image.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: &GpuGridField,
+        camera: &CameraFrame,
+        march: &MarchOutputs,
+        lobes: BufferHandle,
+        fh_table: BufferHandle,
+        ssdf: SsdfBindings,
+        previous: Option<ImageHandle>,
+    ) -> ImageHandle {
+        let (width, height) = (camera.width, camera.height);
+        let grid = field.import(graph);
+        let out = graph.create_image(
+            "shadow",
+            ImageDesc {
+                width,
+                height,
+                format: SHADOW_FORMAT,
+            },
+        );
+        let step = (field.bounds.size() / (field.resolution.as_dvec3() - 1.0)).min_element() as f32;
+        let push = camera.push_prefix(step).u32(0);
+        let mut pass = graph.add_pass("cast-shadow", PassKind::Compute);
+        // The occupancy grid is not read (binding 2 is compiled out).
+        pass.buffer(grid.info, BufferAccess::Uniform);
+        pass.buffer(grid.nodes, BufferAccess::StorageRead);
+        pass.image(march.colour_opacity, ImageAccess::Sampled);
+        pass.image(march.depth, ImageAccess::Sampled);
+        pass.buffer(lobes, BufferAccess::StorageRead);
+        pass.buffer(fh_table, BufferAccess::StorageRead);
+        pass.buffer(ssdf.object, BufferAccess::Uniform);
+        pass.buffer(ssdf.rows, BufferAccess::StorageRead);
+        pass.buffer(ssdf.coefs, BufferAccess::StorageRead);
+        if let Some(p) = previous {
+            pass.image(p, ImageAccess::Sampled);
+        }
+        let out = pass.image(out, ImageAccess::StorageWrite);
+        let m = *march;
+        let pipeline = if previous.is_some() {
+            &self.chained
+        } else {
+            &self.first
+        };
+        pass.exec(move |ctx| {
+            let mut bindings = vec![
+                Binding::UniformBuffer(grid.info),
+                Binding::StorageBuffer(grid.nodes),
+                Binding::SampledImage(m.colour_opacity),
+                Binding::SampledImage(m.depth),
+                Binding::StorageBuffer(lobes),
+                Binding::StorageBuffer(fh_table),
+                Binding::UniformBuffer(ssdf.object),
+                Binding::StorageBuffer(ssdf.rows),
+                Binding::StorageBuffer(ssdf.coefs),
+            ];
+            if let Some(p) = previous {
+                bindings.push(Binding::SampledImage(p));
+            }
+            bindings.push(Binding::StorageImage(out));
+            ctx.dispatch(
+                pipeline,
+                &bindings,
+                push.bytes(),
+                pipeline.groups_for([width, height, 1]),
+            )
+        });
+        out
+    }
+}

@@ -1,0 +1,125 @@
+//! Shadow data on the GPU: an object's compressed SSDF field, the f_h
+//! table, the per-frame object block (`SsdfObject` in
+//! `shaders/shadow/ssdf.wgsl`) and the defines every shadow shader needs.
+
+use std::sync::Arc;
+
+use glam::DMat4;
+use inlay_engine::graph::{BufferHandle, FrameGraph};
+use inlay_engine::shader::Define;
+use inlay_engine::{vk, Buffer, Context};
+
+use super::bake::MAX_SSDF_COMPONENTS;
+use super::fh::{FhTable, FH_COLUMNS, FH_ROWS, FH_SHARPNESS_RANGE};
+use super::field::{OutsideMode, SsdfField};
+use crate::object::PlacedObject;
+
+/// The defines of `shadow/fh.wgsl` and `shadow/ssdf.wgsl`.
+pub fn shadow_defines() -> Vec<Define> {
+    vec![
+        Define::U32("FH_COLUMNS", FH_COLUMNS),
+        Define::U32("FH_ROWS", FH_ROWS),
+        Define::F32("FH_SHARPNESS_MIN", FH_SHARPNESS_RANGE.0 as f32),
+        Define::F32("FH_SHARPNESS_MAX", FH_SHARPNESS_RANGE.1 as f32),
+        Define::U32("SSDF_MAX_COMPONENTS", MAX_SSDF_COMPONENTS),
+    ]
+}
+
+fn storage(ctx: &Arc<Context>, name: &str, values: &[f32]) -> anyhow::Result<Arc<Buffer>> {
+    let mut bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.resize(bytes.len().max(16), 0);
+    Ok(Arc::new(Buffer::with_data(
+        ctx,
+        name,
+        &bytes,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+    )?))
+}
+
+/// The f_h table, uploaded once.
+pub struct GpuFhTable {
+    /// The table (also used by the CPU mirrors).
+    pub table: FhTable,
+    buffer: Arc<Buffer>,
+}
+
+impl GpuFhTable {
+    /// Tabulates and uploads.
+    pub fn new(ctx: &Arc<Context>) -> anyhow::Result<Self> {
+        let table = FhTable::new();
+        let buffer = storage(ctx, "fh table", table.values())?;
+        Ok(Self { table, buffer })
+    }
+
+    /// The buffer in `graph`.
+    pub fn import(&self, graph: &mut FrameGraph<'_>) -> BufferHandle {
+        graph.import_buffer(&self.buffer, None)
+    }
+}
+
+/// An object's SSDF field on the GPU.
+pub struct GpuSsdf {
+    /// The field (for the CPU mirrors and the per-frame block).
+    pub field: Arc<SsdfField>,
+    rows: Arc<Buffer>,
+    coefs: Arc<Buffer>,
+}
+
+/// A [`GpuSsdf`]'s buffers in one frame's graph.
+#[derive(Debug, Clone, Copy)]
+pub struct SsdfBindings {
+    /// The per-frame `SsdfObject` block (uniform).
+    pub object: BufferHandle,
+    /// Per texel: mean and basis.
+    pub rows: BufferHandle,
+    /// Per node: coefficients.
+    pub coefs: BufferHandle,
+}
+
+impl GpuSsdf {
+    /// Uploads `field`.
+    pub fn upload(ctx: &Arc<Context>, field: Arc<SsdfField>) -> anyhow::Result<Self> {
+        Ok(Self {
+            rows: storage(ctx, "ssdf rows", &field.texel_rows)?,
+            coefs: storage(ctx, "ssdf coefficients", &field.coefficients)?,
+            field,
+        })
+    }
+
+    /// Imports the field and uploads this frame's block for `placed`.
+    pub fn import(
+        &self,
+        graph: &mut FrameGraph<'_>,
+        placed: &PlacedObject,
+        mode: OutsideMode,
+    ) -> SsdfBindings {
+        SsdfBindings {
+            object: graph.upload_buffer("ssdf object", object_block(&self.field, placed, mode)),
+            rows: graph.import_buffer(&self.rows, None),
+            coefs: graph.import_buffer(&self.coefs, None),
+        }
+    }
+}
+
+/// The world → object map of `placed`.
+pub fn world_to_object(placed: &PlacedObject) -> DMat4 {
+    placed.pose.matrix().inverse()
+}
+
+/// The `SsdfObject` block: world → object rows, grid, world sphere, dims.
+pub fn object_block(field: &SsdfField, placed: &PlacedObject, mode: OutsideMode) -> Vec<u8> {
+    let m = world_to_object(placed);
+    let mut f: Vec<f32> = Vec::with_capacity(20);
+    for r in 0..3 {
+        f.extend(m.row(r).to_array().map(|x| x as f32));
+    }
+    let g = &field.grid;
+    f.extend([g.centre.x, g.centre.y, g.centre.z, g.radius].map(|x| x as f32));
+    let (c, r) = placed.sphere();
+    f.extend([c.x, c.y, c.z, r].map(|x| x as f32));
+    let mut bytes: Vec<u8> = f.iter().flat_map(|v| v.to_le_bytes()).collect();
+    for u in [g.nodes, field.directions, field.components, mode.index()] {
+        bytes.extend(u.to_le_bytes());
+    }
+    bytes
+}

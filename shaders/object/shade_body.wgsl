@@ -1,0 +1,69 @@
+// The body of the object's SG shading pass (eq. 5) over the G-buffer: one
+// dispatch per object, shading the pixels holding that object with its
+// fitted lobes; the first dispatch also writes zero where no object is.
+// Output: the object's radiance I_v with coverage in alpha. The including
+// shader (object/shade.wgsl, object/shade_self_shadow.wgsl) defines the
+// entry point, calling shade_pixel, and the hooks
+//   shading_attenuation(k) -> f32 (Γ_k) and shading_prepare(x) (called with
+//   the pixel's world-space surface point before shading).
+#include "common/camera.wgsl"
+#include "object/sg_shading.wgsl"
+
+struct ShadePush {
+    origin: vec3<f32>,
+    width: u32,
+    right: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    object_index: f32,
+    forward: vec3<f32>,
+    write_empty: u32,
+}
+
+var<immediate> pc: ShadePush;
+@group(0) @binding(0) var normal_roughness: texture_2d<f32>;
+@group(0) @binding(1) var albedo_metallic: texture_2d<f32>;
+@group(0) @binding(2) var distance_id: texture_2d<f32>;
+// The SG fit's lobe buffer: slot 0 holds the current M lobes as (p, λ), (μ, 0).
+@group(0) @binding(3) var<storage, read> light_lobes: array<vec4<f32>>;
+// (c_j, k_j) of the NDF mixture (passes/src/brdf/ndf_lobes.rs).
+@group(0) @binding(4) var<storage, read> ndf_lobes: array<vec2<f32>>;
+@group(0) @binding(5) var out_object: texture_storage_2d<rgba32float, write>;
+
+fn shading_light_count() -> u32 {
+    return arrayLength(&light_lobes) / 4u;
+}
+
+fn shading_light(k: u32) -> Sg {
+    return sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+}
+
+fn shading_ndf_count() -> u32 {
+    return arrayLength(&ndf_lobes);
+}
+
+fn shading_ndf(j: u32) -> vec2<f32> {
+    return ndf_lobes[j];
+}
+
+fn shade_pixel(id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let hit = textureLoad(distance_id, pixel, 0);
+    let object = hit.g;
+    if object != pc.object_index {
+        if object < 0.0 && pc.write_empty != 0u {
+            textureStore(out_object, pixel, vec4<f32>(0.0));
+        }
+        return;
+    }
+    let nr = textureLoad(normal_roughness, pixel, 0);
+    let am = textureLoad(albedo_metallic, pixel, 0);
+    let size = vec2<f32>(f32(pc.width), f32(pc.height));
+    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(id.xy) + vec2<f32>(0.5));
+    shading_prepare(pc.origin + dir * hit.r);
+    let radiance = shade_sg(normalize(nr.xyz), -dir, am.rgb, nr.w, am.a);
+    textureStore(out_object, pixel, vec4<f32>(max(radiance, vec3<f32>(0.0)), 1.0));
+}

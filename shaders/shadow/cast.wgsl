@@ -1,0 +1,116 @@
+// The cast shadow (eq. 7-8) of one object on the field: per pixel, the
+// point at the field's expected depth D̂/Ô, the normal −∇σ there, and
+// ρ = Σ_k w_k q(S(p'_k), λ'_k) / Σ_k w_k over the lobes L_k ⊗ cosine
+// (w_k = μ'_k f_h(π/2, λ'_k)); lobes whose direction clears the object's
+// bounding sphere by a quarter turn skip the SSDF (q = 1). Mirrors
+// passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
+// multiplies the previous object's ρ image. Output: ρ in rgb.
+// Needs: the shadow defines (passes/src/shadow/gpu.rs).
+#include "field/grid.wgsl"
+#include "common/camera.wgsl"
+#include "common/sg.wgsl"
+
+struct CastPush {
+    origin: vec3<f32>,
+    width: u32,
+    right: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    normal_step: f32,
+    forward: vec3<f32>,
+    _pad: u32,
+}
+
+var<immediate> pc: CastPush;
+@group(0) @binding(3) var field_colour: texture_2d<f32>;
+@group(0) @binding(4) var field_depth: texture_2d<f32>;
+@group(0) @binding(5) var<storage, read> light_lobes: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> fh_table: array<f32>;
+@group(0) @binding(7) var<uniform> ssdf: SsdfObject;
+@group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
+@group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
+@group(0) @binding(10) var previous: texture_2d<f32>;
+@group(0) @binding(11) var out_shadow: texture_storage_2d<rgba32float, write>;
+
+#include "shadow/fh.wgsl"
+#include "shadow/ssdf.wgsl"
+
+const CAST_HALF_PI: f32 = 1.57079632679490;
+
+fn density(x: vec3<f32>) -> f32 {
+    return grid_sample(x).w;
+}
+
+fn clears_sphere(x: vec3<f32>, dir: vec3<f32>) -> bool {
+    let to = ssdf.world_sphere.xyz - x;
+    let dist = length(to);
+    let r = ssdf.world_sphere.w;
+    if dist <= r {
+        return false;
+    }
+    return ssdf_angle_between(dir, to / dist) - asin(r / dist) >= CAST_HALF_PI;
+}
+
+fn cast_factor(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let cosine = sg_clamped_cosine(n);
+    var num = vec3<f32>(0.0);
+    var den = vec3<f32>(0.0);
+    var prepared = false;
+    let m = arrayLength(&light_lobes) / 4u;
+    for (var k = 0u; k < m; k++) {
+        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+        let p = sg_product(g, cosine);
+        let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
+        den += w;
+        var q = 1.0;
+        if !clears_sphere(x, p.direction) {
+            if !prepared {
+                ssdf_prepare(ssdf_to_object_point(x));
+                prepared = true;
+            }
+            q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
+        }
+        num += w * q;
+    }
+    return select(vec3<f32>(1.0), num / max(den, vec3<f32>(1e-30)), den > vec3<f32>(0.0));
+}
+
+// ρ at pixel `pixel` (1 where the field is empty or flat).
+fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
+    let opacity = textureLoad(field_colour, pixel, 0).a;
+    if opacity <= 1e-4 {
+        return vec3<f32>(1.0);
+    }
+    let size = vec2<f32>(f32(pc.width), f32(pc.height));
+    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(pixel) + vec2<f32>(0.5));
+    let x = pc.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
+    let h = pc.normal_step;
+    let g = vec3<f32>(
+        density(x + vec3<f32>(h, 0.0, 0.0)) - density(x - vec3<f32>(h, 0.0, 0.0)),
+        density(x + vec3<f32>(0.0, h, 0.0)) - density(x - vec3<f32>(0.0, h, 0.0)),
+        density(x + vec3<f32>(0.0, 0.0, h)) - density(x - vec3<f32>(0.0, 0.0, h)),
+    );
+    if length(g) <= 1e-12 {
+        return vec3<f32>(1.0);
+    }
+    return cast_factor(x, -normalize(g));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    textureStore(out_shadow, pixel, vec4<f32>(pixel_factor(pixel), 1.0));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main_chained(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let rho = pixel_factor(pixel) * textureLoad(previous, pixel, 0).rgb;
+    textureStore(out_shadow, pixel, vec4<f32>(rho, 1.0));
+}

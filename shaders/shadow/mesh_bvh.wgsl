@@ -1,0 +1,72 @@
+// Any-hit ray casts against a triangle mesh in a bounding-volume hierarchy,
+// the f32 mirror of MeshScene::occluded (passes/src/bake/mesh_bvh.rs), in
+// the layout of MeshScene::packed: nodes as two vec4s (min, first as bits),
+// (max, count as bits), count 0 for inner nodes whose children are first
+// and first + 1; triangles as three vec4s (corners).
+// Needs: storage buffers `bvh_nodes` and `bvh_triangles` (array<vec4<f32>>).
+
+const BVH_STACK: u32 = 48u;
+
+fn bvh_hits_triangle(o: vec3<f32>, d: vec3<f32>, t: u32) -> bool {
+    let p0 = bvh_triangles[3u * t].xyz;
+    let e1 = bvh_triangles[3u * t + 1u].xyz - p0;
+    let e2 = bvh_triangles[3u * t + 2u].xyz - p0;
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if abs(det) < 1e-30 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let tv = o - p0;
+    let u = dot(tv, pv) * inv;
+    if u < 0.0 || u > 1.0 {
+        return false;
+    }
+    let qv = cross(tv, e1);
+    let v = dot(d, qv) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    return dot(e2, qv) * inv > 0.0;
+}
+
+// Whether the ray from `o` along unit `d` hits any triangle (t > 0).
+fn bvh_occluded(o: vec3<f32>, d: vec3<f32>) -> bool {
+    if arrayLength(&bvh_triangles) < 3u {
+        return false;
+    }
+    let safe = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
+    let inv = 1.0 / safe;
+    var stack: array<u32, BVH_STACK>;
+    var sp = 1u;
+    stack[0] = 0u;
+    while sp > 0u {
+        sp -= 1u;
+        let i = stack[sp];
+        let lo = bvh_nodes[2u * i];
+        let hi = bvh_nodes[2u * i + 1u];
+        let t0 = (lo.xyz - o) * inv;
+        let t1 = (hi.xyz - o) * inv;
+        let near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z));
+        let far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z));
+        if far < max(near, 0.0) {
+            continue;
+        }
+        let first = bitcast<u32>(lo.w);
+        let count = bitcast<u32>(hi.w);
+        if count == 0u {
+            if sp + 2u <= BVH_STACK {
+                stack[sp] = first;
+                stack[sp + 1u] = first + 1u;
+                sp += 2u;
+            }
+            continue;
+        }
+        for (var k = first; k < first + count; k++) {
+            if bvh_hits_triangle(o, d, k) {
+                return true;
+            }
+        }
+    }
+    return false;
+}

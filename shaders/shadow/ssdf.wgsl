@@ -1,0 +1,175 @@
+// S(d; x) from an object's compressed SSDF field, mirroring SsdfField::sample
+// (passes/src/shadow/field.rs): per pixel, ssdf_prepare(x) blends the
+// coefficients of the 8 nodes around x (inside the grid) or takes the
+// nearest node's (outside); then ssdf_value(d) reads the direction map
+// bilinearly and, outside, applies the mode: 0 clamp, 1 infinity (π),
+// 2 correct (turn towards the centre and shrink by the angular radii).
+// Needs: uniform `ssdf: SsdfObject`; storage buffers `ssdf_rows` (per
+// texel: mean, k basis values) and `ssdf_coefs` (per node: k values), both
+// array<f32>; define SSDF_MAX_COMPONENTS (u32).
+#include "shadow/angles.wgsl"
+
+struct SsdfObject {
+    // Rows of the affine world → object map (directions use .xyz).
+    to_object: array<vec4<f32>, 3>,
+    // Grid centre (object space) and bounding-sphere radius.
+    grid: vec4<f32>,
+    // World-space bounding sphere (centre, radius), for culling.
+    world_sphere: vec4<f32>,
+    // Nodes per axis, direction map side, components, outside mode.
+    dims: vec4<u32>,
+}
+
+var<private> ssdf_coef: array<f32, SSDF_MAX_COMPONENTS>;
+// 0 inside, 1 outside (nearest node), 2 outside in infinity mode.
+var<private> ssdf_state: u32;
+var<private> ssdf_x: vec3<f32>;
+var<private> ssdf_xb: vec3<f32>;
+
+fn ssdf_to_object_point(x: vec3<f32>) -> vec3<f32> {
+    let p = vec4<f32>(x, 1.0);
+    return vec3<f32>(dot(ssdf.to_object[0], p), dot(ssdf.to_object[1], p), dot(ssdf.to_object[2], p));
+}
+
+fn ssdf_to_object_dir(d: vec3<f32>) -> vec3<f32> {
+    let v = vec3<f32>(dot(ssdf.to_object[0].xyz, d), dot(ssdf.to_object[1].xyz, d), dot(ssdf.to_object[2].xyz, d));
+    return normalize(v);
+}
+
+fn ssdf_spacing() -> f32 {
+    return 3.0 * ssdf.grid.w / f32(ssdf.dims.x - 1u);
+}
+
+fn ssdf_node_position(n: vec3<u32>) -> vec3<f32> {
+    return ssdf.grid.xyz - vec3<f32>(1.5 * ssdf.grid.w) + vec3<f32>(n) * ssdf_spacing();
+}
+
+fn ssdf_node_index(n: vec3<u32>) -> u32 {
+    let s = ssdf.dims.x;
+    return n.x + s * (n.y + s * n.z);
+}
+
+// Fills the coefficients for object-space point x.
+fn ssdf_prepare(x: vec3<f32>) {
+    let k = ssdf.dims.z;
+    let top = f32(ssdf.dims.x - 1u);
+    let l = (x - ssdf.grid.xyz + vec3<f32>(1.5 * ssdf.grid.w)) / ssdf_spacing();
+    ssdf_x = x;
+    for (var c = 0u; c < k; c++) {
+        ssdf_coef[c] = 0.0;
+    }
+    if all(l >= vec3<f32>(0.0)) && all(l <= vec3<f32>(top)) {
+        ssdf_state = 0u;
+        let base = max(min(floor(l), vec3<f32>(top - 1.0)), vec3<f32>(0.0));
+        let f = l - base;
+        let b = vec3<u32>(base);
+        for (var corner = 0u; corner < 8u; corner++) {
+            let o = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, corner >> 2u);
+            let w3 = select(vec3<f32>(1.0) - f, f, o == vec3<u32>(1u));
+            let w = w3.x * w3.y * w3.z;
+            let node = ssdf_node_index(b + o);
+            for (var c = 0u; c < k; c++) {
+                ssdf_coef[c] += w * ssdf_coefs[node * k + c];
+            }
+        }
+        return;
+    }
+    if ssdf.dims.w == 1u {
+        ssdf_state = 2u;
+        return;
+    }
+    ssdf_state = 1u;
+    let n = vec3<u32>(clamp(round(l), vec3<f32>(0.0), vec3<f32>(top)));
+    ssdf_xb = ssdf_node_position(n);
+    let node = ssdf_node_index(n);
+    for (var c = 0u; c < k; c++) {
+        ssdf_coef[c] = ssdf_coefs[node * k + c];
+    }
+}
+
+// The octahedral map's edges fold onto themselves (SsdfField's wrap_octahedral).
+fn ssdf_wrap(t: vec2<i32>, n: i32) -> u32 {
+    var x = t.x;
+    var y = t.y;
+    if x < 0 {
+        x = 0;
+        y = n - 1 - y;
+    } else if x >= n {
+        x = n - 1;
+        y = n - 1 - y;
+    }
+    if y < 0 {
+        y = 0;
+        x = n - 1 - x;
+    } else if y >= n {
+        y = n - 1;
+        x = n - 1 - x;
+    }
+    return u32(clamp(y, 0, n - 1) * n + clamp(x, 0, n - 1));
+}
+
+fn ssdf_texel_value(texel: u32) -> f32 {
+    let k = ssdf.dims.z;
+    let base = texel * (k + 1u);
+    var s = ssdf_rows[base];
+    for (var c = 0u; c < k; c++) {
+        s += ssdf_coef[c] * ssdf_rows[base + 1u + c];
+    }
+    return s;
+}
+
+// Octahedral map coordinates in [0, 1]² of unit d (probe::octahedral_uv).
+fn ssdf_octahedral_uv(d: vec3<f32>) -> vec2<f32> {
+    let p = d / (abs(d.x) + abs(d.y) + abs(d.z));
+    var a = p.x;
+    var b = p.z;
+    if p.y < 0.0 {
+        let sa = select(-1.0, 1.0, a >= 0.0);
+        let sb = select(-1.0, 1.0, b >= 0.0);
+        let fa = (1.0 - abs(b)) * sa;
+        let fb = (1.0 - abs(a)) * sb;
+        a = fa;
+        b = fb;
+    }
+    return vec2<f32>(0.5 * (a + 1.0), 0.5 * (b + 1.0));
+}
+
+fn ssdf_direction_value(d: vec3<f32>) -> f32 {
+    let n = i32(ssdf.dims.y);
+    let p = ssdf_octahedral_uv(d) * f32(n) - vec2<f32>(0.5);
+    let b = floor(p);
+    let f = p - b;
+    let t = vec2<i32>(b);
+    let v00 = ssdf_texel_value(ssdf_wrap(t, n));
+    let v10 = ssdf_texel_value(ssdf_wrap(t + vec2<i32>(1, 0), n));
+    let v01 = ssdf_texel_value(ssdf_wrap(t + vec2<i32>(0, 1), n));
+    let v11 = ssdf_texel_value(ssdf_wrap(t + vec2<i32>(1, 1), n));
+    return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
+}
+
+// S along unit object-space direction d from the prepared point.
+fn ssdf_value(d: vec3<f32>) -> f32 {
+    if ssdf_state == 2u {
+        return SSDF_PI;
+    }
+    if ssdf_state == 0u || ssdf.dims.w == 0u {
+        return ssdf_direction_value(d);
+    }
+    let o = ssdf.grid.xyz;
+    let r = ssdf.grid.w;
+    let df = length(o - ssdf_x);
+    let db = length(o - ssdf_xb);
+    let cf = (o - ssdf_x) / df;
+    let cb = (o - ssdf_xb) / db;
+    let shrink = asin(min(r / df, 1.0)) / asin(min(r / db, 1.0));
+    let alpha = ssdf_angle_between(d, cf);
+    // The smallest rotation taking cf to cb, applied to d.
+    let axis = cross(cf, cb);
+    let c = dot(cf, cb);
+    var db_dir = -d;
+    if c > -1.0 + 1e-6 {
+        db_dir = d * c + cross(axis, d) + axis * (dot(axis, d) / (1.0 + c));
+    }
+    let sb = ssdf_direction_value(normalize(db_dir));
+    return alpha - shrink * (alpha - sb);
+}
