@@ -5,9 +5,8 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::reference::{hits, ssdf_by_ray_casting};
-use super::SilhouetteMesh;
-use crate::bake::MeshScene;
-use crate::object::{load_gltf, ObjectMesh, PlacedObject, Pose};
+use super::{object_scene, SilhouetteMesh};
+use crate::object::{load_gltf, ObjectMesh};
 use crate::rng::Pcg32;
 
 /// A bundled object from `scenes/objects/`.
@@ -16,16 +15,6 @@ pub(crate) fn bundled_mesh(file: &str) -> Arc<ObjectMesh> {
         .join("../scenes/objects")
         .join(file);
     Arc::new(load_gltf(&path).unwrap())
-}
-
-/// The mesh in its own frame, as a ray-casting scene.
-pub(crate) fn object_scene(mesh: &Arc<ObjectMesh>) -> MeshScene {
-    MeshScene::new(&[PlacedObject {
-        name: mesh.name.clone(),
-        mesh: mesh.clone(),
-        pose: Pose::default(),
-        material: Default::default(),
-    }])
 }
 
 pub(crate) fn random_direction(rng: &mut Pcg32) -> DVec3 {
