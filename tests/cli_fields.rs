@@ -336,7 +336,7 @@ fn render_and_reference_insert_objects() {
 
     // Bad object entries.
     let scene_text = std::fs::read_to_string(&plants).unwrap();
-    let objects_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects");
+    let objects_dir = common::objects_dir();
     for (edit, field_key) in [
         ("file = \"objects/toy.glb\"", "objects[0].file"),
         ("scale = 0.3", "objects[0].scale"),
@@ -438,7 +438,7 @@ fn every_bundled_scene_renders_with_shadows() {
 #[test]
 fn bake_ssdf_writes_a_field_scenes_can_use() {
     let dir = scratch("bake-ssdf");
-    let objects = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects");
+    let objects = common::objects_dir();
     let out = dir.join("sphere.inlayssdf");
     let o = inlay(
         &[

@@ -12,9 +12,7 @@ use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::gbuffer::{GBufferPass, ObjectDraw, DISTANCE_ID_FORMAT, NORMAL_ROUGHNESS_FORMAT};
 use inlay_passes::object::{load_gltf, GpuObject, MaterialOverride, PlacedObject, Pose, Scale};
 
-fn objects_dir() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects")
-}
+use common::objects_dir;
 
 fn sphere_at(centre: DVec3, radius: f64) -> PlacedObject {
     PlacedObject {

@@ -6,15 +6,10 @@ mod common;
 use std::sync::Arc;
 
 use inlay::shaders::embedded_library;
-use inlay_passes::object::{load_gltf, ObjectMesh};
+use inlay_passes::object::ObjectMesh;
 use inlay_passes::shadow::{bake_reference, grid_for, lookup_points, object_scene, SsdfBaker};
 
-fn bundled(file: &str) -> Arc<ObjectMesh> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes/objects")
-        .join(file);
-    Arc::new(load_gltf(&path).unwrap())
-}
+use common::bundled_object as bundled;
 
 /// The bake kernel (f32) against the f64 CPU mirror on a 4³ grid with
 /// 8 × 8 directions: the same silhouettes and the same signs, so the

@@ -33,6 +33,16 @@ pub fn output_text(o: &Output) -> String {
     )
 }
 
+/// The bundled objects' directory, `scenes/objects/`.
+pub fn objects_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects")
+}
+
+/// A bundled object from `scenes/objects/`, loaded.
+pub fn bundled_object(file: &str) -> std::sync::Arc<inlay_passes::object::ObjectMesh> {
+    std::sync::Arc::new(inlay_passes::object::load_gltf(&objects_dir().join(file)).unwrap())
+}
+
 /// A bundled scene from `scenes/`.
 pub fn bundled_scene(name: &str) -> inlay_passes::scene::Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
