@@ -569,3 +569,124 @@ fn bake_ssdf_writes_a_field_scenes_can_use() {
     assert!(!o.status.success());
     assert!(t.contains("bad.inlayssdf") && t.contains("data"), "{t}");
 }
+
+#[test]
+fn estimate_env_writes_a_file_render_can_light_objects_with() {
+    let dir = scratch("estimate-env");
+    let scene = scene_path("books.toml");
+    let field = dir.join("books.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            &scene,
+            "--out",
+            s(&field),
+            "--resolution",
+            "24",
+            "--samples",
+            "2",
+            "--bounces",
+            "0",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let env = dir.join("books-env.toml");
+    let picture = dir.join("books-env.exr");
+    let compare = dir.join("compare.png");
+    let args = [
+        "--validate",
+        "estimate-env",
+        &scene,
+        "--field",
+        s(&field),
+        "--out",
+        s(&env),
+        "--picture",
+        s(&picture),
+        "--views",
+        "3",
+        "--view-size",
+        "32",
+        "--pixels",
+        "8",
+        "--rays",
+        "64",
+        "--iterations",
+        "20",
+        "--batch",
+        "16",
+        "--lobes",
+        "4",
+        "--albedo-width",
+        "8",
+        "--compare",
+        s(&compare),
+        "--compare-width",
+        "48",
+        "--compare-height",
+        "27",
+    ];
+    let o = inlay(&args, &dir);
+    let text = common::output_text(&o);
+    assert!(o.status.success(), "{text}");
+    for want in [
+        "views: 3 kept",
+        "near field",
+        "hidden-light irradiance error",
+        "mean relative difference",
+    ] {
+        assert!(text.contains(want), "no `{want}` in:\n{text}");
+    }
+    let lobes = inlay_passes::envest::load_environment_file(&env).unwrap();
+    assert_eq!(lobes.len(), 4);
+    let img = HdrImage::load_exr(&picture).unwrap();
+    assert_eq!((img.width, img.height), (256, 128));
+    assert_eq!(img.non_finite_count(), 0);
+    assert!(compare.exists());
+    // The same seed writes the same lobes.
+    let again = dir.join("again.toml");
+    let mut args2 = args.to_vec();
+    args2[6] = s(&again);
+    let o = inlay(&args2[..args2.len() - 6], &dir);
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    assert_eq!(
+        inlay_passes::envest::load_environment_file(&again).unwrap(),
+        lobes
+    );
+    // render lights the objects with it; a bad file is named.
+    let out = dir.join("lit.png");
+    let render = |env: &Path| {
+        inlay(
+            &[
+                "--validate",
+                "render",
+                &scene,
+                "--field",
+                s(&field),
+                "--environment",
+                s(env),
+                "--width",
+                "48",
+                "--height",
+                "27",
+                "--frames",
+                "1",
+                "--no-shadows",
+                "--out",
+                s(&out),
+            ],
+            &dir,
+        )
+    };
+    let o = render(&env);
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let bad = dir.join("bad-env.toml");
+    std::fs::write(&bad, "format = \"inlay-environment\"\nversion = 1\n[[lobes]]\ndirection = [0, 1, 0]\nsharpness = -2.0\namplitude = [1, 1, 1]\n").unwrap();
+    let o = render(&bad);
+    let text = common::output_text(&o);
+    assert!(
+        !o.status.success() && text.contains("bad-env.toml") && text.contains("lobes[0]"),
+        "{text}"
+    );
+}

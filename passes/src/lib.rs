@@ -18,6 +18,7 @@ pub mod bake;
 pub mod brdf;
 pub mod camera;
 pub mod composite;
+pub mod envest;
 pub mod field;
 pub mod gbuffer;
 pub mod geometry;

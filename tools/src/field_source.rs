@@ -86,7 +86,11 @@ fn cache_path(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBuf
     let text = std::fs::read(&scene.path)
         .with_context(|| format!("{}: cannot read", scene.path.display()))?;
     let mut h = fnv1a(&text, 0xcbf29ce484222325);
-    let key = format!("{knobs:?} v{FIELD_VERSION} {}", env!("CARGO_PKG_VERSION"));
+    let key = format!(
+        "{knobs:?} v{FIELD_VERSION} r{} {}",
+        inlay_passes::bake::BAKE_REVISION,
+        env!("CARGO_PKG_VERSION")
+    );
     h = fnv1a(key.as_bytes(), h);
     Ok(Some(
         dir.join(format!("{}-{h:016x}.inlayfield", scene.name)),

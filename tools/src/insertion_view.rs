@@ -15,7 +15,7 @@ use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::composite::{CompositePass, COMPOSITE_FORMAT};
 use inlay_passes::field::GpuGridField;
 use inlay_passes::gbuffer::{GBufferPass, ObjectDraw};
-use inlay_passes::lighting::{environment_lobes, IncidentLight};
+use inlay_passes::lighting::IncidentLight;
 use inlay_passes::march::MarchPass;
 use inlay_passes::object::{GpuObject, PlacedObject};
 use inlay_passes::scene::Scene as SceneFile;
@@ -71,7 +71,7 @@ impl InsertionView {
         use_cache: bool,
     ) -> anyhow::Result<Self> {
         let shadows = scene.shadows.any() && !scene.objects.is_empty();
-        let env = environment_lobes(&scene.environment);
+        let env = scene.object_light_lobes();
         let mut objects = Vec::with_capacity(scene.objects.len());
         anyhow::ensure!(
             scene.objects.len() <= 64,

@@ -52,6 +52,8 @@ enum Command {
     BakeScene(inlay::commands::bake_scene::BakeSceneArgs),
     /// Bake an object's SSDF field (its visibility from around it, for shadows) on the GPU.
     BakeSsdf(inlay::commands::bake_ssdf::BakeSsdfArgs),
+    /// Estimate the distant environment light the field does not show (SG lobes) and write it as an environment file.
+    EstimateEnv(inlay::commands::estimate_env::EstimateEnvArgs),
     /// Render a scene's radiance field headless from one of its cameras.
     Render(inlay::commands::render::RenderArgs),
     /// Measure the march: rays/s and samples/s per image size, and its error as the step size changes.
@@ -114,6 +116,9 @@ fn main() -> ExitCode {
         Command::BakeSsdf(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::bake_ssdf::run(&ctx, args)),
+        Command::EstimateEnv(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::estimate_env::run(&ctx, args)),
         Command::Render(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::render::run(&ctx, args)),

@@ -4,6 +4,14 @@
 //! density through the same profile. Colour: path-traced radiance of the
 //! nearest surface point (emission + Lambertian reflection) and/or the
 //! medium's in-scattered light, mixed by density.
+//!
+//! **Emitters keep their power**: the smooth edge makes a sphere's field
+//! look larger than the sphere (its density reaches out by the falloff
+//! width), so a small lamp would light the field's surroundings more than
+//! the recipe's lamp lights them. Each emitting sphere's colour is scaled
+//! by [`emitter_power_scale`], the ratio of the sphere's cross-section to
+//! the field's effective one (∫ (1 − e^{−τ(b)}) 2πb db over impact
+//! parameters b), so the field emits the recipe's power.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -21,6 +29,32 @@ use crate::scene::{Environment, Recipe};
 pub fn edge_profile(s: f64) -> f64 {
     let t = ((1.0 - s) * 0.5).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
+}
+
+/// Changes whenever baking would give different nodes for the same recipe
+/// and knobs (cached bakes carry it in their key).
+pub const BAKE_REVISION: u32 = 2;
+
+/// The factor that gives an emitting sphere of `radius` the recipe's power
+/// in a field whose edge profile has half-width `width` and peak density
+/// `sigma_max`: πr² over the field's effective cross-section.
+pub fn emitter_power_scale(radius: f64, width: f64, sigma_max: f64) -> f64 {
+    let outer = radius + width;
+    let (nb, nt) = (256, 512);
+    let mut area = 0.0;
+    for ib in 0..nb {
+        let b = outer * (ib as f64 + 0.5) / nb as f64;
+        let half = (outer * outer - b * b).max(0.0).sqrt();
+        let dt = 2.0 * half / nt as f64;
+        let tau: f64 = (0..nt)
+            .map(|it| {
+                let t = -half + (it as f64 + 0.5) * dt;
+                sigma_max * edge_profile(((b * b + t * t).sqrt() - radius) / width) * dt
+            })
+            .sum();
+        area += (1.0 - (-tau).exp()) * 2.0 * std::f64::consts::PI * b * outer / nb as f64;
+    }
+    std::f64::consts::PI * radius * radius / area.max(1e-300)
 }
 
 /// Nodes per axis for a bake at `resolution` along the longest axis.
@@ -48,6 +82,16 @@ pub fn bake_grid(
     // Nodes whose trilinear cells can reach non-zero density need a colour.
     let band = width + 2.0 * voxel;
     let tracer = PathTracer::new(recipe, env, knobs.bounces);
+    let emitter_scale: Vec<f64> = recipe
+        .primitives
+        .iter()
+        .map(|p| match p.shape {
+            crate::scene::Shape::Sphere { radius, .. } if p.is_emitter() => {
+                emitter_power_scale(radius, width, sigma_max)
+            }
+            _ => 1.0,
+        })
+        .collect();
     let done = AtomicU64::new(0);
     let slices: Vec<Vec<[f32; 4]>> = (0..res.z)
         .into_par_iter()
@@ -66,6 +110,7 @@ pub fn bake_grid(
                         sigma_max,
                         band,
                         knobs.samples,
+                        &emitter_scale,
                         &mut rng,
                     ));
                 }
@@ -88,6 +133,7 @@ fn bake_node(
     sigma_max: f64,
     band: f64,
     samples: u32,
+    emitter_scale: &[f64],
     rng: &mut Pcg32,
 ) -> [f32; 4] {
     // Nearest opaque primitive, and the media around x.
@@ -120,7 +166,7 @@ fn bake_node(
         for _ in 0..samples {
             sum += tracer.surface_radiance(i, p, normal, rng);
         }
-        sum / n
+        sum / n * emitter_scale[i]
     });
     let medium_colour = medium_near.filter(|(d, _)| *d <= band).map(|(_, i)| {
         let mut sum = DVec3::ZERO;

@@ -8,7 +8,7 @@ mod mesh_bvh;
 mod path_tracer;
 mod reference_image;
 
-pub use grid_bake::{bake_grid, edge_profile, grid_resolution};
+pub use grid_bake::{bake_grid, edge_profile, emitter_power_scale, grid_resolution, BAKE_REVISION};
 pub use knobs::BakeKnobs;
 pub use mesh_bvh::{MeshHit, MeshScene, MeshSurface};
 pub use path_tracer::{Event, PathTracer, Scatter};

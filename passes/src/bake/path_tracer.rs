@@ -206,7 +206,7 @@ impl<'a> PathTracer<'a> {
 
     /// Visibility along `ray` up to `t_max`: 0 when a surface blocks it,
     /// otherwise the media's transmittance.
-    fn visibility(&self, ray: &Ray, t_max: f64) -> f64 {
+    pub fn visibility(&self, ray: &Ray, t_max: f64) -> f64 {
         if self.nearest_surface(ray, 0.0, t_max).is_some()
             || self.objects.is_some_and(|o| o.occluded(ray, 0.0, t_max))
         {

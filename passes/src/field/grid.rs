@@ -53,6 +53,14 @@ impl GridField {
         self.bounds.size() / (self.resolution.as_dvec3() - DVec3::ONE)
     }
 
+    /// ∇σ at `x` by central differences one node spacing (the smallest
+    /// axis's) wide. The field's surface normal is −∇σ normalised.
+    pub fn density_gradient(&self, x: DVec3) -> DVec3 {
+        let h = self.spacing().min_element();
+        let d = |e: DVec3| self.density(x + e * h) - self.density(x - e * h);
+        DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * h)
+    }
+
     /// Index of node (i, j, k) in [`Self::nodes`].
     pub fn index(&self, i: u32, j: u32, k: u32) -> usize {
         (i + self.resolution.x * (j + self.resolution.y * k)) as usize

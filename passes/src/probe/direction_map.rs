@@ -140,6 +140,50 @@ pub fn octahedral_uv(d: DVec3) -> (f64, f64) {
     (0.5 * (a + 1.0), 0.5 * (b + 1.0))
 }
 
+/// The texel (x, y) of an n × n octahedral map for indices up to one
+/// outside it: the map's edges fold onto themselves (u = ±1 mirrored about
+/// v = 0, v = ±1 about u = 0). Mirrored by `ssdf_wrap` in the shader.
+pub fn wrap_octahedral(mut x: i64, mut y: i64, n: i64) -> (i64, i64) {
+    if x < 0 {
+        x = 0;
+        y = n - 1 - y;
+    } else if x >= n {
+        x = n - 1;
+        y = n - 1 - y;
+    }
+    if y < 0 {
+        y = 0;
+        x = n - 1 - x;
+    } else if y >= n {
+        y = n - 1;
+        x = n - 1 - x;
+    }
+    (x.clamp(0, n - 1), y.clamp(0, n - 1))
+}
+
+/// The bilinear read along unit `d` of an n × n octahedral map whose texel
+/// `y·n + x` holds `value(y·n + x)`; neighbours across the map's edges
+/// come from [`wrap_octahedral`]. Used for SSDF direction maps and cached
+/// opacity maps.
+pub fn octahedral_bilinear(n: u32, d: DVec3, mut value: impl FnMut(usize) -> f64) -> f64 {
+    let n = n as i64;
+    let (u, v) = octahedral_uv(d);
+    let (px, py) = (u * n as f64 - 0.5, v * n as f64 - 0.5);
+    let (x0, y0) = (px.floor(), py.floor());
+    let (fx, fy) = (px - x0, py - y0);
+    let mut s = 0.0;
+    for (dx, dy, w) in [
+        (0, 0, (1.0 - fx) * (1.0 - fy)),
+        (1, 0, fx * (1.0 - fy)),
+        (0, 1, (1.0 - fx) * fy),
+        (1, 1, fx * fy),
+    ] {
+        let (x, y) = wrap_octahedral(x0 as i64 + dx, y0 as i64 + dy, n);
+        s += w * value((y * n + x) as usize);
+    }
+    s
+}
+
 /// The point of the octahedron |x| + |y| + |z| = 1 for (u, v) ∈ [−1, 1]²:
 /// (u, 1 − |u| − |v|, v) inside the diamond |u| + |v| ≤ 1, folded to the
 /// lower half outside it.

@@ -8,7 +8,9 @@ mod knobs;
 mod pass;
 mod reference;
 
-pub use direction_map::{octahedral_uv, DirectionMap, MapKind};
+pub use direction_map::{
+    octahedral_bilinear, octahedral_uv, wrap_octahedral, DirectionMap, MapKind,
+};
 pub use knobs::ProbeKnobs;
 pub use pass::{ProbePass, PROBE_FORMAT};
 pub use reference::trace_probe;

@@ -115,6 +115,18 @@ pub struct Scene {
     pub object_sources: Vec<ObjectSource>,
     /// Shadow knobs (`[shadows]`).
     pub shadows: ShadowKnobs,
+    /// The distant light objects are lit with instead of [`Self::environment`]
+    /// (`[lighting] environment`, an estimated environment file), if any.
+    pub object_environment: Option<ObjectEnvironment>,
+}
+
+/// Distant light for the objects from an environment file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectEnvironment {
+    /// The file it was read from (or what it stands for).
+    pub file: PathBuf,
+    /// Its lobes.
+    pub lobes: Vec<crate::sg::Sg64>,
 }
 
 /// An object's files, as the scene names them.
@@ -239,6 +251,16 @@ impl Scene {
         })
     }
 
+    /// The distant light L_env the objects are lit with, as SG lobes: the
+    /// environment file's if the scene names one, otherwise the declared
+    /// environment's ([`crate::lighting::environment_lobes`]).
+    pub fn object_light_lobes(&self) -> Vec<crate::sg::Sg64> {
+        match &self.object_environment {
+            Some(o) => o.lobes.clone(),
+            None => crate::lighting::environment_lobes(&self.environment),
+        }
+    }
+
     /// The recipe, if the field is baked from one.
     pub fn recipe(&self) -> Option<&Recipe> {
         match &self.field {
@@ -294,18 +316,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
                 ));
             }
             for (i, l) in env.lobes.iter().enumerate() {
-                let f = format!("environment.lobes[{i}]");
-                if !(l.direction.is_finite() && l.direction.length() > 1e-9) {
-                    return Err(e(&f, "direction must be a finite non-zero vector".into()));
-                }
-                if !(l.sharpness.is_finite() && l.sharpness > 0.0 && l.sharpness <= 1e4) {
-                    return Err(e(
-                        &f,
-                        format!("sharpness {} must be in (0, 1e4]", l.sharpness),
-                    ));
-                }
-                if !(l.amplitude.is_finite() && l.amplitude.min_element() >= 0.0) {
-                    return Err(e(&f, "amplitude must be finite and ≥ 0".into()));
+                if let Some(m) = crate::envest::file::lobe_problem(l) {
+                    return Err(e(&format!("environment.lobes[{i}]"), m));
                 }
             }
             match (env.equirect, env.lobes.is_empty()) {
@@ -348,6 +360,15 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         MarchKnobs::from_spec(spec.march.as_ref()).map_err(|(f, m)| e(&format!("march.{f}"), m))?;
     let lighting = LightingKnobs::from_spec(spec.lighting.as_ref())
         .map_err(|(f, m)| e(&format!("lighting.{f}"), m))?;
+    let object_environment = match spec.lighting.as_ref().and_then(|l| l.environment.as_ref()) {
+        None => None,
+        Some(file) => {
+            let file = dir.join(file);
+            let lobes = crate::envest::load_environment_file(&file)
+                .map_err(|x| e("lighting.environment", x.to_string()))?;
+            Some(ObjectEnvironment { file, lobes })
+        }
+    };
     let shading = ShadingKnobs {
         ndf_lobes: spec
             .shading
@@ -440,6 +461,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         objects,
         object_sources,
         shadows,
+        object_environment,
     })
 }
 

@@ -136,4 +136,5 @@ pub(crate) struct LightingSpec {
     pub cold_iterations: Option<u32>,
     pub warm_iterations: Option<u32>,
     pub damping: Option<f64>,
+    pub environment: Option<String>,
 }

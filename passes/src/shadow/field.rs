@@ -17,7 +17,7 @@ use serde::Deserialize;
 use super::bake::SsdfSamples;
 use super::grid::SsdfGrid;
 use super::pca::pca;
-use crate::probe::octahedral_uv;
+use crate::probe::octahedral_bilinear;
 
 /// How S is found at points outside the grid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
@@ -132,22 +132,7 @@ impl SsdfField {
 
     /// S for coefficients `coef` along unit `d`, bilinear over the map.
     pub fn direction_value(&self, coef: &[f32], d: DVec3) -> f64 {
-        let n = self.directions as i64;
-        let (u, v) = octahedral_uv(d);
-        let (px, py) = (u * n as f64 - 0.5, v * n as f64 - 0.5);
-        let (x0, y0) = (px.floor(), py.floor());
-        let (fx, fy) = (px - x0, py - y0);
-        let mut s = 0.0;
-        for (dx, dy, w) in [
-            (0, 0, (1.0 - fx) * (1.0 - fy)),
-            (1, 0, fx * (1.0 - fy)),
-            (0, 1, (1.0 - fx) * fy),
-            (1, 1, fx * fy),
-        ] {
-            let (x, y) = wrap_octahedral(x0 as i64 + dx, y0 as i64 + dy, n);
-            s += w * self.texel_value(coef, (y * n + x) as usize);
-        }
-        s
+        octahedral_bilinear(self.directions, d, |t| self.texel_value(coef, t))
     }
 
     /// The trilinear blend of the coefficients of the 8 nodes around
@@ -203,27 +188,6 @@ impl SsdfField {
         let sb = self.direction_value(coef, rotate_between(cf, cb, d));
         alpha - shrink * (alpha - sb)
     }
-}
-
-/// The texel (x, y) of an n × n octahedral map for indices up to one
-/// outside it: the map's edges fold onto themselves (u = ±1 mirrored about
-/// v = 0, v = ±1 about u = 0). Mirrored by `ssdf_wrap` in the shader.
-pub fn wrap_octahedral(mut x: i64, mut y: i64, n: i64) -> (i64, i64) {
-    if x < 0 {
-        x = 0;
-        y = n - 1 - y;
-    } else if x >= n {
-        x = n - 1;
-        y = n - 1 - y;
-    }
-    if y < 0 {
-        y = 0;
-        x = n - 1 - x;
-    } else if y >= n {
-        y = n - 1;
-        x = n - 1 - x;
-    }
-    (x.clamp(0, n - 1), y.clamp(0, n - 1))
 }
 
 /// `v` turned by the smallest rotation taking unit `from` to unit `to`.

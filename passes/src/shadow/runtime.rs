@@ -17,7 +17,6 @@ use glam::DVec3;
 use super::fh::{hemisphere_integral, FhTable};
 use super::field::{OutsideMode, SsdfField};
 use super::gpu::world_to_object;
-use crate::field::RadianceField;
 use crate::object::PlacedObject;
 use crate::sg::Sg64;
 
@@ -99,14 +98,10 @@ pub fn cast_shadow_factor(
     )
 }
 
-/// The field's surface normal at `x`: −∇σ by central differences one node
-/// spacing wide, normalised (None where σ is flat).
+/// The field's surface normal at `x`: −∇σ
+/// ([`GridField::density_gradient`](crate::field::GridField::density_gradient))
+/// normalised (None where σ is flat).
 pub fn field_normal(field: &crate::field::GridField, x: DVec3) -> Option<DVec3> {
-    let h = field.spacing().min_element();
-    let g = DVec3::new(
-        field.density(x + DVec3::X * h) - field.density(x - DVec3::X * h),
-        field.density(x + DVec3::Y * h) - field.density(x - DVec3::Y * h),
-        field.density(x + DVec3::Z * h) - field.density(x - DVec3::Z * h),
-    );
+    let g = field.density_gradient(x);
     (g.length() > 1e-12).then(|| -g.normalize())
 }

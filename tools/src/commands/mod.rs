@@ -1,4 +1,4 @@
-//! The field commands of `inlay`: `bake-scene`, `bake-ssdf`, `render`,
+//! The field commands of `inlay`: `bake-scene`, `bake-ssdf`, `estimate-env`, `render`,
 //! `reference`, `probe` and the benchmarks.
 
 pub mod bake_scene;
@@ -6,6 +6,7 @@ pub mod bake_ssdf;
 pub mod bench_march;
 pub mod bench_sg;
 pub mod bench_shade;
+pub mod estimate_env;
 pub mod probe;
 pub mod reference;
 pub mod render;

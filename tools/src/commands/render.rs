@@ -7,9 +7,10 @@ use std::sync::Arc;
 
 use clap::Args;
 use inlay_engine::Context;
+use inlay_passes::envest::load_environment_file;
 use inlay_passes::field::GpuGridField;
 use inlay_passes::march::MarchPass;
-use inlay_passes::scene::load_scene;
+use inlay_passes::scene::{load_scene, ObjectEnvironment};
 use inlay_passes::shadow::OutsideMode;
 
 use crate::field_source::scene_field;
@@ -36,6 +37,9 @@ pub struct RenderArgs {
     /// Use this field file instead of the scene's field or recipe.
     #[arg(long)]
     pub field: Option<PathBuf>,
+    /// Light the objects with this environment file (`inlay estimate-env`) instead of the scene's.
+    #[arg(long)]
+    pub environment: Option<PathBuf>,
     /// Segments across the field's diagonal (overrides [march] samples_per_ray).
     #[arg(long)]
     pub samples_per_ray: Option<u32>,
@@ -100,6 +104,12 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
     let mut scene = load_scene(&args.scene)?;
     if args.no_objects {
         scene.objects.clear();
+    }
+    if let Some(file) = &args.environment {
+        scene.object_environment = Some(ObjectEnvironment {
+            lobes: load_environment_file(file)?,
+            file: file.clone(),
+        });
     }
     scene.shading.ndf_lobes = args.ndf_lobes.unwrap_or(scene.shading.ndf_lobes);
     scene.shadows.self_shadow &= !(args.no_shadows || args.no_self_shadow);

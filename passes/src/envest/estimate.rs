@@ -1,0 +1,208 @@
+//! The whole estimate: render random views of the field on the GPU, reject
+//! poor ones, draw surface points, trace their near-field light on the GPU,
+//! then fit the albedo MLP and the environment's lobes on the CPU.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use inlay_engine::graph::FrameGraph;
+use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::{Context, ImageDesc, Readback, Renderer, SubmitSync};
+
+use super::fit::{fit_environment, FitData, FitResult};
+use super::knobs::EnvEstimateKnobs;
+use super::near_field::{NearField, NearFieldTracer};
+use super::quality::{view_quality, QualityScore, ViewImage};
+use super::surface::{surface_points, SurfacePoint};
+use super::views::random_view;
+use crate::camera::CameraFrame;
+use crate::field::{GpuGridField, GridField};
+use crate::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
+use crate::rng::Pcg32;
+
+/// Which stage an estimate is in, for progress reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Rendering and scoring views (done = views kept).
+    Views,
+    /// Tracing the near-field light (done = points traced).
+    NearField,
+    /// Fitting (done = steps; the loss comes along).
+    Fit,
+}
+
+/// Receives progress: stage, done, total and (in the fit) the batch loss.
+pub type Progress<'a> = &'a (dyn Fn(Stage, usize, usize, Option<f64>) + Sync);
+
+/// The surface points and how the views went.
+#[derive(Debug, Clone)]
+pub struct SurfaceSample {
+    /// Every point drawn.
+    pub points: Vec<SurfacePoint>,
+    /// Views rendered.
+    pub views_tried: u32,
+    /// Views kept.
+    pub views_kept: u32,
+    /// The score of every view tried, in order, and whether it was kept.
+    pub scores: Vec<(QualityScore, bool)>,
+    /// Covered pixels left out as light sources, over all kept views.
+    pub emitters: usize,
+}
+
+/// A finished estimate.
+#[derive(Debug, Clone)]
+pub struct EnvEstimate {
+    /// The surface points and view statistics.
+    pub surface: SurfaceSample,
+    /// Their near-field light.
+    pub near: NearField,
+    /// The fit and its lobes.
+    pub fit: FitResult,
+    /// Seconds spent on views, near-field light and the fit.
+    pub seconds: [f64; 3],
+}
+
+/// Renders `frame` with the march and reads it back.
+fn render_view(
+    ctx: &Arc<Context>,
+    renderer: &mut Renderer,
+    march: &MarchPass,
+    gpu: &GpuGridField,
+    frame: &CameraFrame,
+) -> anyhow::Result<ViewImage> {
+    let desc = |format| ImageDesc {
+        width: frame.width,
+        height: frame.height,
+        format,
+    };
+    let colour = Readback::new(ctx, desc(MARCH_COLOUR_FORMAT))?;
+    let depth = Readback::new(ctx, desc(MARCH_DEPTH_FORMAT))?;
+    renderer.begin_frame()?;
+    let mut graph = FrameGraph::new();
+    let out = march.add(&mut graph, gpu, frame, None);
+    colour.add_to_graph(&mut graph, out.colour_opacity);
+    depth.add_to_graph(&mut graph, out.depth);
+    renderer.submit(graph, &SubmitSync::none())?;
+    renderer.finish()?;
+    Ok(ViewImage {
+        width: frame.width,
+        height: frame.height,
+        colour_opacity: colour.read()?.pixels,
+        depth: depth.read()?.pixels.iter().map(|p| p[0]).collect(),
+    })
+}
+
+/// Random views, scored, until `knobs.views` are kept (or the tries run
+/// out), and their surface points.
+pub fn sample_surface(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    field: &GridField,
+    gpu: &GpuGridField,
+    march: MarchKnobs,
+    knobs: &EnvEstimateKnobs,
+    progress: Progress,
+) -> anyhow::Result<SurfaceSample> {
+    let pass = MarchPass::new(ctx, lib, march)?;
+    let mut renderer = Renderer::new(ctx, 1)?;
+    let distance = 0.5 * field.bounds.size().max_element();
+    let max_tries = knobs.views * knobs.max_tries_per_view;
+    let mut out = SurfaceSample {
+        points: Vec::new(),
+        views_tried: 0,
+        views_kept: 0,
+        scores: Vec::new(),
+        emitters: 0,
+    };
+    while out.views_kept < knobs.views && out.views_tried < max_tries {
+        let spec = random_view(&field.bounds, knobs.seed, out.views_tried as u64);
+        out.views_tried += 1;
+        let frame = CameraFrame::new(&spec, knobs.view_size, knobs.view_size);
+        let image = render_view(ctx, &mut renderer, &pass, gpu, &frame)?;
+        let score = view_quality(&image, distance);
+        let mut keep = score.score <= knobs.quality_threshold;
+        if keep {
+            let mut rng = Pcg32::new(knobs.seed, 0x5E1E_C700_0000 | out.views_tried as u64);
+            let drawn = surface_points(
+                field,
+                &frame,
+                &image,
+                out.views_tried - 1,
+                knobs.pixels_per_view as usize,
+                knobs.emitter_ratio,
+                &mut rng,
+            );
+            // A view with no surface to draw from is as poor as an empty one.
+            keep = !drawn.points.is_empty();
+            out.emitters += drawn.emitters;
+            out.points.extend(drawn.points);
+        }
+        out.scores.push((score, keep));
+        if keep {
+            out.views_kept += 1;
+            progress(
+                Stage::Views,
+                out.views_kept as usize,
+                knobs.views as usize,
+                None,
+            );
+        }
+    }
+    anyhow::ensure!(
+        !out.points.is_empty(),
+        "no view of the field passed the quality check ({} tried, threshold {}): is the field empty?",
+        out.views_tried,
+        knobs.quality_threshold
+    );
+    Ok(out)
+}
+
+/// Runs the whole estimate on `field`.
+pub fn estimate_environment(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    field: &GridField,
+    march: MarchKnobs,
+    knobs: &EnvEstimateKnobs,
+    progress: Progress,
+) -> anyhow::Result<EnvEstimate> {
+    if let Some((k, m)) = knobs.problem() {
+        anyhow::bail!("estimate knob `{k}`: {m}");
+    }
+    let gpu = GpuGridField::upload(ctx, field)?;
+    let t0 = Instant::now();
+    let surface = sample_surface(ctx, lib, field, &gpu, march, knobs, progress)?;
+    let t1 = Instant::now();
+    let tracer = NearFieldTracer::new(ctx, lib, march)?;
+    let near = tracer.trace(
+        ctx,
+        field,
+        &gpu,
+        &surface.points,
+        knobs.rays_per_point,
+        knobs.opacity_map,
+        knobs.seed,
+        &|done, total| progress(Stage::NearField, done, total, None),
+    )?;
+    ctx.check_validation()?;
+    let t2 = Instant::now();
+    let data = FitData {
+        points: &surface.points,
+        near: &near,
+        bounds: field.bounds,
+    };
+    let fit = fit_environment(&data, knobs, &|step, steps, loss| {
+        progress(Stage::Fit, step as usize, steps as usize, Some(loss))
+    });
+    let t3 = Instant::now();
+    Ok(EnvEstimate {
+        surface,
+        near,
+        fit,
+        seconds: [
+            (t1 - t0).as_secs_f64(),
+            (t2 - t1).as_secs_f64(),
+            (t3 - t2).as_secs_f64(),
+        ],
+    })
+}

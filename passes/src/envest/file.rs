@@ -1,0 +1,159 @@
+//! The environment file `inlay estimate-env` writes and scene files name
+//! (`[lighting] environment = "file"`): TOML holding SG lobes in the same
+//! form as a scene's `[environment] lobes`.
+//!
+//! ```toml
+//! format = "inlay-environment"   # required, exactly this
+//! version = 1                    # required, this reader's ENV_FILE_VERSION
+//! source = "books"               # optional: the scene it was estimated from
+//! [estimate]                     # optional: how (knobs, timings, loss); not read
+//! views = 100
+//! [[lobes]]                      # any number; none is a black environment
+//! direction = [0.5, 0.8, 0.35]   # finite, non-zero (normalised on load)
+//! sharpness = 120.0              # in (0, 1e4]
+//! amplitude = [9.0, 8.4, 7.4]    # RGB radiance on the axis, finite, ≥ 0
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::sg::Sg64;
+
+/// The version this reader understands.
+pub const ENV_FILE_VERSION: u32 = 1;
+
+/// The `format` value of an environment file.
+pub const ENV_FILE_FORMAT: &str = "inlay-environment";
+
+/// Why an environment file cannot be used: the file, the field and what.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}: `{field}`: {message}", path.display())]
+pub struct EnvFileError {
+    /// The file.
+    pub path: PathBuf,
+    /// The key (or `file`, or a TOML line).
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvFileSpec {
+    format: String,
+    version: u32,
+    #[serde(default)]
+    #[allow(dead_code)]
+    source: Option<String>,
+    #[serde(default)]
+    #[allow(dead_code)]
+    estimate: Option<toml::Table>,
+    #[serde(default)]
+    lobes: Vec<Sg64>,
+}
+
+/// Why one lobe cannot be used, if it cannot (shared with scene files).
+pub fn lobe_problem(l: &Sg64) -> Option<String> {
+    if !(l.direction.is_finite() && l.direction.length() > 1e-9) {
+        return Some("direction must be a finite non-zero vector".into());
+    }
+    if !(l.sharpness.is_finite() && l.sharpness > 0.0 && l.sharpness <= 1e4) {
+        return Some(format!("sharpness {} must be in (0, 1e4]", l.sharpness));
+    }
+    if !(l.amplitude.is_finite() && l.amplitude.min_element() >= 0.0) {
+        return Some("amplitude must be finite and ≥ 0".into());
+    }
+    None
+}
+
+/// Reads an environment file's lobes (directions normalised).
+pub fn load_environment_file(path: &Path) -> Result<Vec<Sg64>, EnvFileError> {
+    let text = std::fs::read_to_string(path).map_err(|x| EnvFileError {
+        path: path.to_owned(),
+        field: "file".into(),
+        message: x.to_string(),
+    })?;
+    parse_environment_file(path, &text)
+}
+
+/// Parses the text of an environment file read from `path`.
+pub fn parse_environment_file(path: &Path, text: &str) -> Result<Vec<Sg64>, EnvFileError> {
+    let e = |field: &str, message: String| EnvFileError {
+        path: path.to_owned(),
+        field: field.to_owned(),
+        message,
+    };
+    let spec: EnvFileSpec = toml::from_str(text).map_err(|x| {
+        let at = x
+            .span()
+            .map(|s| format!("line {}", text[..s.start].lines().count().max(1)))
+            .unwrap_or_else(|| "toml".into());
+        e(&at, x.message().to_owned())
+    })?;
+    if spec.format != ENV_FILE_FORMAT {
+        return Err(e(
+            "format",
+            format!("\"{}\" is not \"{ENV_FILE_FORMAT}\"", spec.format),
+        ));
+    }
+    if spec.version != ENV_FILE_VERSION {
+        return Err(e(
+            "version",
+            format!(
+                "{} is not supported (this reader reads {ENV_FILE_VERSION})",
+                spec.version
+            ),
+        ));
+    }
+    let mut lobes = spec.lobes;
+    for (i, l) in lobes.iter_mut().enumerate() {
+        if let Some(m) = lobe_problem(l) {
+            return Err(e(&format!("lobes[{i}]"), m));
+        }
+        l.direction = l.direction.normalize();
+    }
+    Ok(lobes)
+}
+
+/// The text of an environment file for `lobes`, estimated from scene
+/// `source`, with `estimate` lines (`key = value` TOML) recording how.
+pub fn environment_file_text(
+    lobes: &[Sg64],
+    source: &str,
+    estimate: &[(String, String)],
+) -> String {
+    let mut s = String::from("# An environment light estimated by `inlay estimate-env` (format: passes/src/envest/file.rs).\n");
+    s += &format!(
+        "format = \"{ENV_FILE_FORMAT}\"\nversion = {ENV_FILE_VERSION}\nsource = {source:?}\n"
+    );
+    if !estimate.is_empty() {
+        s += "\n[estimate]\n";
+        for (k, v) in estimate {
+            s += &format!("{k} = {v}\n");
+        }
+    }
+    for l in lobes {
+        let d = l.direction;
+        let a = l.amplitude;
+        s += &format!(
+            "\n[[lobes]]\ndirection = [{:e}, {:e}, {:e}]\nsharpness = {:e}\namplitude = [{:e}, {:e}, {:e}]\n",
+            d.x, d.y, d.z, l.sharpness, a.x, a.y, a.z
+        );
+    }
+    s
+}
+
+/// Writes [`environment_file_text`] to `path`.
+pub fn save_environment_file(
+    path: &Path,
+    lobes: &[Sg64],
+    source: &str,
+    estimate: &[(String, String)],
+) -> Result<(), EnvFileError> {
+    std::fs::write(path, environment_file_text(lobes, source, estimate)).map_err(|x| EnvFileError {
+        path: path.to_owned(),
+        field: "file".into(),
+        message: x.to_string(),
+    })
+}

@@ -1,0 +1,245 @@
+//! The joint fit of the albedo MLP and the environment's SG lobes
+//! (METHOD.md eq. 3): minimise the mean squared difference, over surface
+//! points and RGB, between each point's radiance and the Lambertian
+//! L_o(x) = a(x)/π · (E_nerf(x) + E_env(x)), by Adam on random batches of
+//! points, E_env importance sampled afresh every step
+//! ([`super::env_model`]). The step sizes decay exponentially to a tenth
+//! over the run. Every random choice comes from the seed and the step (and
+//! the batch is split into fixed chunks whose gradients are summed in
+//! order), so a seed gives the same lobes on any number of threads.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::adam::Adam;
+use super::env_model::{env_term, initial_params, lobes, project, EnvSampler};
+use super::knobs::EnvEstimateKnobs;
+use super::mlp::AlbedoMlp;
+use super::near_field::NearField;
+use super::surface::SurfacePoint;
+use crate::geometry::Aabb;
+use crate::rng::Pcg32;
+use crate::sg::Sg64;
+
+/// Octaves of the albedo MLP's position encoding.
+pub const ALBEDO_FREQUENCIES: u32 = 4;
+
+/// Fraction of the steps over which the albedo's encoding opens from the
+/// coarsest to the finest octave.
+pub const ANNEAL_FRACTION: f64 = 0.5;
+
+/// Points per chunk of a batch (the unit of parallel work).
+const CHUNK: usize = 32;
+
+/// What the fit needs per point.
+pub struct FitData<'a> {
+    /// The surface points.
+    pub points: &'a [SurfacePoint],
+    /// Their near-field light.
+    pub near: &'a NearField,
+    /// The field's box (normalises the MLP's input).
+    pub bounds: Aabb,
+}
+
+/// The fitted environment and how the fit went.
+#[derive(Debug, Clone)]
+pub struct FitResult {
+    /// The environment's lobes.
+    pub lobes: Vec<Sg64>,
+    /// The albedo network.
+    pub albedo: AlbedoMlp,
+    /// (step, mean squared error of that step's batch), every few steps.
+    pub history: Vec<(u32, f64)>,
+    /// Mean squared error over every point at the end (E_env sampled).
+    pub final_loss: f64,
+}
+
+/// The loss of point `i` and, when `grads` is given, its gradients added.
+///
+/// E_env is estimated twice from independent halves of the samples, Ê_A
+/// and Ê_B, giving residuals r_A and r_B. The squared residual of one
+/// noisy estimate would be biased by the estimate's variance, and its
+/// gradient would pull the environment towards what samples with little
+/// variance (broad, dim lobes instead of a sun); the gradient of r_A·r_B,
+/// whose expectation is the squared residual of the exact E_env, is not.
+/// The loss returned is ½(r_A² + r_B²) averaged over RGB.
+#[allow(clippy::too_many_arguments)]
+fn point_loss(
+    data: &FitData,
+    i: usize,
+    mlp: &AlbedoMlp,
+    env: &[f64],
+    env_lobes: &[Sg64],
+    sampler: &EnvSampler,
+    samples: u32,
+    rng: &mut Pcg32,
+    grads: Option<(&mut [f64], &mut [f64], f64)>,
+) -> f64 {
+    let p = &data.points[i];
+    let trace = mlp.forward(p.position);
+    let visibility = |d: DVec3| 1.0 - data.near.opacity_at(i, d);
+    let half = samples.div_ceil(2);
+    let term_a = env_term(env_lobes, sampler, p.normal, half, &visibility, rng);
+    let term_b = env_term(env_lobes, sampler, p.normal, half, &visibility, rng);
+    let e_a = data.near.irradiance[i] + term_a.irradiance;
+    let e_b = data.near.irradiance[i] + term_b.irradiance;
+    let a = trace.albedo;
+    let inv_pi = 1.0 / std::f64::consts::PI;
+    let r_a = a * e_a * inv_pi - p.radiance;
+    let r_b = a * e_b * inv_pi - p.radiance;
+    let loss = 0.5 * (r_a.length_squared() + r_b.length_squared()) / 3.0;
+    if let Some((g_mlp, g_env, scale)) = grads {
+        let k = scale / 3.0;
+        mlp.backward(&trace, k * (e_a * r_b + r_a * e_b) * inv_pi, g_mlp);
+        term_a.backward(env, k * r_b * a * inv_pi, g_env);
+        term_b.backward(env, k * r_a * a * inv_pi, g_env);
+    }
+    loss
+}
+
+/// The mean radiance luminance of `points` (sets the starting environment).
+fn mean_luminance(points: &[SurfacePoint]) -> f64 {
+    let sum: f64 = points
+        .iter()
+        .map(|p| 0.2126 * p.radiance.x + 0.7152 * p.radiance.y + 0.0722 * p.radiance.z)
+        .sum();
+    sum / points.len().max(1) as f64
+}
+
+/// Runs the fit from the starting environment
+/// ([`super::env_model::initial_params`]); `progress(step, steps, batch
+/// loss)` every few steps.
+pub fn fit_environment(
+    data: &FitData,
+    knobs: &EnvEstimateKnobs,
+    progress: &dyn Fn(u32, u32, f64),
+) -> FitResult {
+    let env = initial_params(knobs.lobes as usize, mean_luminance(data.points));
+    fit_from(data, knobs, env, true, progress)
+}
+
+/// The environment parameters of `lobes` (for [`fit_from`]).
+pub fn params_of(lobes: &[Sg64]) -> Vec<f64> {
+    lobes
+        .iter()
+        .flat_map(|l| {
+            let d = l.direction.normalize();
+            let e = (l.amplitude / super::env_model::amplitude_per_energy(l.sharpness))
+                .max(DVec3::splat(1e-17));
+            [
+                d.x,
+                d.y,
+                d.z,
+                l.sharpness.ln(),
+                e.x.ln(),
+                e.y.ln(),
+                e.z.ln(),
+            ]
+        })
+        .collect()
+}
+
+/// Runs the fit from environment parameters `env`; with `fit_env` false
+/// the environment stays as given and only the albedo is fitted (to ask
+/// how well a known environment explains the points).
+pub fn fit_from(
+    data: &FitData,
+    knobs: &EnvEstimateKnobs,
+    mut env: Vec<f64>,
+    fit_env: bool,
+    progress: &dyn Fn(u32, u32, f64),
+) -> FitResult {
+    let mut mlp = AlbedoMlp::new(
+        data.bounds,
+        knobs.albedo_width as usize,
+        ALBEDO_FREQUENCIES,
+        knobs.seed,
+    );
+    let mut adam_env = Adam::new(env.len());
+    let mut adam_mlp = Adam::new(mlp.params.len());
+    let mut history = Vec::new();
+    let n = data.points.len();
+    let steps = knobs.iterations;
+    let batch = knobs.batch as usize;
+    let report_every = (steps / 100).max(1);
+    for step in 0..steps {
+        mlp.set_band(
+            mlp.frequencies() as f64 * (step as f64 / (ANNEAL_FRACTION * steps as f64)).min(1.0),
+        );
+        let env_lobes = lobes(&env);
+        let sampler = EnvSampler::new(&env_lobes);
+        let mut rng = Pcg32::new(knobs.seed, 0xBA7C_0000_0000 | step as u64);
+        let picks: Vec<usize> = (0..batch).map(|_| rng.next_u32() as usize % n).collect();
+        let scale = 1.0 / batch as f64;
+        let parts: Vec<(f64, Vec<f64>, Vec<f64>)> = picks
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut g_mlp = vec![0.0; mlp.params.len()];
+                let mut g_env = vec![0.0; env.len()];
+                let mut rng = Pcg32::new(knobs.seed ^ 0x5A3D, ((step as u64) << 24) | c as u64);
+                let mut loss = 0.0;
+                for &i in chunk {
+                    loss += point_loss(
+                        data,
+                        i,
+                        &mlp,
+                        &env,
+                        &env_lobes,
+                        &sampler,
+                        knobs.env_samples,
+                        &mut rng,
+                        Some((&mut g_mlp, &mut g_env, scale)),
+                    );
+                }
+                (loss, g_mlp, g_env)
+            })
+            .collect();
+        let mut loss = 0.0;
+        let mut g_mlp = vec![0.0; mlp.params.len()];
+        let mut g_env = vec![0.0; env.len()];
+        for (l, gm, ge) in parts {
+            loss += l;
+            g_mlp.iter_mut().zip(gm).for_each(|(a, b)| *a += b);
+            g_env.iter_mut().zip(ge).for_each(|(a, b)| *a += b);
+        }
+        let decay = 0.1f64.powf(step as f64 / steps.max(1) as f64);
+        if fit_env {
+            adam_env.step(&mut env, &g_env, knobs.env_rate * decay);
+            project(&mut env, knobs.max_sharpness);
+        }
+        adam_mlp.step(&mut mlp.params, &g_mlp, knobs.albedo_rate * decay);
+        let loss = loss * scale;
+        if step % report_every == 0 || step + 1 == steps {
+            history.push((step, loss));
+            progress(step + 1, steps, loss);
+        }
+    }
+    mlp.set_band(mlp.frequencies() as f64);
+    let env_lobes = lobes(&env);
+    let sampler = EnvSampler::new(&env_lobes);
+    let final_loss = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = Pcg32::new(knobs.seed ^ 0xF1A1, i as u64);
+            point_loss(
+                data,
+                i,
+                &mlp,
+                &env,
+                &env_lobes,
+                &sampler,
+                knobs.env_samples,
+                &mut rng,
+                None,
+            )
+        })
+        .sum::<f64>()
+        / n.max(1) as f64;
+    FitResult {
+        lobes: env_lobes,
+        albedo: mlp,
+        history,
+        final_loss,
+    }
+}

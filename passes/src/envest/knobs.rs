@@ -1,0 +1,107 @@
+//! The knobs of environment-light estimation (METHOD.md "Environment light
+//! estimation"): how many views and surface points, how many rays per point,
+//! and how long and how the optimiser runs.
+
+/// Every knob of `inlay estimate-env`, with the paper's values as defaults
+/// where the paper gives one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnvEstimateKnobs {
+    /// Views kept after quality rejection (paper: 100).
+    pub views: u32,
+    /// Side of each view's square render, in pixels.
+    pub view_size: u32,
+    /// Surface points drawn per kept view (paper: 64).
+    pub pixels_per_view: u32,
+    /// Monte-Carlo rays per point for the near-field irradiance E_nerf
+    /// (paper: 32768).
+    pub rays_per_point: u32,
+    /// Side of each point's cached octahedral opacity map Ô(ω; x).
+    pub opacity_map: u32,
+    /// Quality score above which a view is rejected (0 best, 100 worst;
+    /// the paper rejects BRISQUE scores above 50).
+    pub quality_threshold: f64,
+    /// Views tried per view kept before giving up.
+    pub max_tries_per_view: u32,
+    /// SG lobes of the environment (paper: M = 32).
+    pub lobes: u32,
+    /// Width of the albedo MLP's hidden layers (6 layers, as the paper).
+    pub albedo_width: u32,
+    /// Optimiser steps (Adam).
+    pub iterations: u32,
+    /// Surface points per optimiser step.
+    pub batch: u32,
+    /// Directions sampled from the SG mixture per point and step for E_env.
+    pub env_samples: u32,
+    /// Adam step size of the SG parameters.
+    pub env_rate: f64,
+    /// Adam step size of the albedo MLP.
+    pub albedo_rate: f64,
+    /// Largest lobe sharpness the fit may reach.
+    pub max_sharpness: f64,
+    /// A point whose luminance exceeds this multiple of the median point's is
+    /// taken for a light source in the field and left out (a Lambertian
+    /// reflector cannot explain it).
+    pub emitter_ratio: f64,
+    /// Seed of every random choice (views, pixels, rays, batches, samples).
+    pub seed: u64,
+}
+
+impl Default for EnvEstimateKnobs {
+    fn default() -> Self {
+        Self {
+            views: 100,
+            view_size: 96,
+            pixels_per_view: 64,
+            rays_per_point: 32768,
+            opacity_map: 16,
+            quality_threshold: 50.0,
+            max_tries_per_view: 20,
+            lobes: 32,
+            albedo_width: 64,
+            iterations: 3000,
+            batch: 512,
+            env_samples: 48,
+            env_rate: 0.02,
+            albedo_rate: 2e-3,
+            max_sharpness: 2000.0,
+            emitter_ratio: 50.0,
+            seed: 1,
+        }
+    }
+}
+
+impl EnvEstimateKnobs {
+    /// The first knob out of range, with why.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        let range = |name: &'static str, v: u32, lo: u32, hi: u32| {
+            (!(lo..=hi).contains(&v)).then(|| (name, format!("{v} must be in {lo}..={hi}")))
+        };
+        range("views", self.views, 1, 10_000)
+            .or_else(|| range("view_size", self.view_size, 16, 1024))
+            .or_else(|| range("pixels_per_view", self.pixels_per_view, 1, 4096))
+            .or_else(|| range("rays_per_point", self.rays_per_point, 16, 1 << 20))
+            .or_else(|| range("opacity_map", self.opacity_map, 4, 64))
+            .or_else(|| range("max_tries_per_view", self.max_tries_per_view, 1, 1000))
+            .or_else(|| range("lobes", self.lobes, 1, 128))
+            .or_else(|| range("albedo_width", self.albedo_width, 4, 512))
+            .or_else(|| range("iterations", self.iterations, 0, 1_000_000))
+            .or_else(|| range("batch", self.batch, 1, 1 << 20))
+            .or_else(|| range("env_samples", self.env_samples, 1, 4096))
+            .or_else(|| {
+                let pos = |name: &'static str, v: f64, hi: f64| {
+                    (!(v.is_finite() && v > 0.0 && v <= hi))
+                        .then(|| (name, format!("{v} must be in (0, {hi}]")))
+                };
+                pos("quality_threshold", self.quality_threshold, 100.0)
+                    .or_else(|| pos("env_rate", self.env_rate, 1.0))
+                    .or_else(|| pos("albedo_rate", self.albedo_rate, 1.0))
+                    .or_else(|| pos("max_sharpness", self.max_sharpness, 1e4))
+                    .or_else(|| pos("emitter_ratio", self.emitter_ratio, 1e9))
+            })
+    }
+
+    /// Surface points asked for: views × pixels per view.
+    pub fn points(&self) -> usize {
+        self.views as usize * self.pixels_per_view as usize
+    }
+}

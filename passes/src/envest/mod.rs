@@ -1,0 +1,42 @@
+//! Environment light estimation by inverse rendering (METHOD.md
+//! "Environment light estimation", eq. 3-4), offline: surface points from
+//! random views of the field ([`views`], [`quality`], [`surface`]), their
+//! near-field irradiance and cached opacity on the GPU ([`near_field`],
+//! its CPU mirror [`near_field_reference`], the ray set [`hemisphere`]),
+//! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
+//! ([`env_model`], [`fit`]); [`estimate`] runs them in order, [`file`]
+//! stores the lobes, and [`truth`] checks them against a recipe's lights.
+
+pub mod adam;
+pub mod env_model;
+pub mod estimate;
+pub mod file;
+pub mod fit;
+pub mod hemisphere;
+pub mod knobs;
+pub mod mlp;
+pub mod near_field;
+pub mod near_field_reference;
+pub mod quality;
+pub mod surface;
+pub mod truth;
+pub mod views;
+
+#[cfg(test)]
+mod tests;
+
+pub use estimate::{
+    estimate_environment, sample_surface, EnvEstimate, Progress, Stage, SurfaceSample,
+};
+pub use file::{
+    environment_file_text, load_environment_file, parse_environment_file, save_environment_file,
+    EnvFileError, ENV_FILE_VERSION,
+};
+pub use fit::{fit_environment, fit_from, params_of, FitData, FitResult};
+pub use knobs::EnvEstimateKnobs;
+pub use near_field::{NearField, NearFieldTracer};
+pub use quality::{view_quality, QualityScore, ViewImage};
+pub use surface::{surface_points, SurfacePoint};
+pub use truth::{
+    hidden_light_lobes, light_irradiance, lobes_irradiance, test_points, Lights, Validation,
+};

@@ -1,0 +1,193 @@
+//! The near-field light at surface points on the GPU
+//! (`shaders/envest/near_field.wgsl`), computed once before the fit:
+//! E_nerf(x) = ∫_{Ω+} Ĉ(ω; x)(ω·n) dω by Monte Carlo with cosine-distributed
+//! rays ([`super::hemisphere`]), and the field's opacity Ô(ω; x) cached on an
+//! octahedral map per point for the environment term. Points go in batches
+//! (one submission each) so progress can be shown.
+//! [`super::near_field_reference`] is the f64 CPU mirror.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use inlay_engine::graph::{Binding, BufferAccess, FrameGraph, PassKind};
+use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::{
+    vk, Buffer, BufferReadback, ComputePipeline, Context, Push, Renderer, SubmitSync,
+};
+
+use super::surface::SurfacePoint;
+use crate::field::{GpuGridField, GridField};
+use crate::march::MarchKnobs;
+use crate::probe::octahedral_bilinear;
+
+/// Rays start this many node spacings off the surface point along its
+/// normal: the expected depth lies at the front of the density's smooth
+/// edge (about 1.5 spacings wide in the bundled recipes), so rays starting
+/// on it would see the point's own surface.
+pub const SURFACE_OFFSET_SPACINGS: f64 = 2.0;
+
+/// Points per submission.
+const POINTS_PER_BATCH: usize = 64;
+
+/// The near-field light at every surface point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NearField {
+    /// E_nerf per point.
+    pub irradiance: Vec<DVec3>,
+    /// Mean Ô over each point's rays (the fraction of the hemisphere the
+    /// field covers, cosine-weighted).
+    pub covered: Vec<f64>,
+    /// Side of the octahedral opacity maps.
+    pub map_side: u32,
+    /// side² opacities per point, texel y·side + x.
+    pub opacity: Vec<f32>,
+}
+
+impl NearField {
+    /// Ô(d; x) of point `point`, bilinear over its map.
+    pub fn opacity_at(&self, point: usize, d: DVec3) -> f64 {
+        let texels = (self.map_side * self.map_side) as usize;
+        let map = &self.opacity[point * texels..(point + 1) * texels];
+        octahedral_bilinear(self.map_side, d, |t| map[t] as f64).clamp(0.0, 1.0)
+    }
+}
+
+/// Where a point's rays start: lifted off the surface along its normal.
+pub fn ray_origin(field: &GridField, p: &SurfacePoint) -> DVec3 {
+    p.position + SURFACE_OFFSET_SPACINGS * field.spacing().min_element() * p.normal
+}
+
+/// The seed the ray sets use (the low and high halves of `seed` folded).
+pub fn ray_seed(seed: u64) -> u32 {
+    (seed as u32) ^ ((seed >> 32) as u32)
+}
+
+/// The compiled near-field kernels.
+pub struct NearFieldTracer {
+    irradiance: ComputePipeline,
+    opacity: ComputePipeline,
+    march: MarchKnobs,
+}
+
+impl NearFieldTracer {
+    /// Compiles both kernels for `march`'s quadrature.
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, march: MarchKnobs) -> anyhow::Result<Self> {
+        let defines = [
+            Define::Bool("SKIP_EMPTY", march.skip_empty),
+            Define::Bool("OCTAHEDRAL", true),
+        ];
+        let pipeline = |entry: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(
+                lib,
+                "envest/near_field.wgsl",
+                entry,
+                ShaderStage::Compute,
+                &defines,
+            )?;
+            Ok(ComputePipeline::new(ctx, &shader)?)
+        };
+        Ok(Self {
+            irradiance: pipeline("irradiance")?,
+            opacity: pipeline("opacity_map")?,
+            march,
+        })
+    }
+
+    /// E_nerf and the opacity maps of `points` in `field` (already
+    /// uploaded as `gpu`), `rays` rays per point, maps `map_side` wide;
+    /// `progress(done, total)` after each batch.
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace(
+        &self,
+        ctx: &Arc<Context>,
+        field: &GridField,
+        gpu: &GpuGridField,
+        points: &[SurfacePoint],
+        rays: u32,
+        map_side: u32,
+        seed: u64,
+        progress: &dyn Fn(usize, usize),
+    ) -> anyhow::Result<NearField> {
+        let mut packed = Vec::with_capacity(points.len() * 8);
+        for p in points {
+            let o = ray_origin(field, p);
+            packed.extend([o.x as f32, o.y as f32, o.z as f32, 0.0]);
+            packed.extend([p.normal.x as f32, p.normal.y as f32, p.normal.z as f32, 0.0]);
+        }
+        let mut bytes: Vec<u8> = packed.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bytes.resize(bytes.len().max(32), 0);
+        let points_buf = Arc::new(Buffer::with_data(
+            ctx,
+            "near-field points",
+            &bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?);
+        let texels = (map_side * map_side) as usize;
+        let step = self.march.step(gpu.diagonal) as f32;
+        let seed = ray_seed(seed);
+        let mut out = NearField {
+            irradiance: Vec::with_capacity(points.len()),
+            covered: Vec::with_capacity(points.len()),
+            map_side,
+            opacity: Vec::with_capacity(points.len() * texels),
+        };
+        let mut renderer = Renderer::new(ctx, 1)?;
+        for start in (0..points.len()).step_by(POINTS_PER_BATCH) {
+            let count = POINTS_PER_BATCH.min(points.len() - start);
+            let e_size = (count * 16) as u64;
+            let o_size = (count * texels * 4) as u64;
+            let e_readback = BufferReadback::new(ctx, "near-field irradiance readback", e_size)?;
+            let o_readback = BufferReadback::new(ctx, "near-field opacity readback", o_size)?;
+            renderer.begin_frame()?;
+            let mut graph = FrameGraph::new();
+            let grid = gpu.import(&mut graph);
+            let pts = graph.import_buffer(&points_buf, None);
+            let e_buf = graph.create_buffer("near-field irradiance", e_size);
+            let o_buf = graph.create_buffer("near-field opacity", o_size);
+            let mut pass = graph.add_pass("near-field", PassKind::Compute);
+            grid.declare_reads(&mut pass);
+            pass.buffer(pts, BufferAccess::StorageRead);
+            let e_buf = pass.buffer(e_buf, BufferAccess::StorageWrite);
+            let o_buf = pass.buffer(o_buf, BufferAccess::StorageWrite);
+            let push = Push::new()
+                .f32(step)
+                .f32(self.march.termination as f32)
+                .u32(rays)
+                .u32(start as u32)
+                .u32(count as u32)
+                .u32(map_side)
+                .u32(seed)
+                .u32(0);
+            let (irradiance, opacity) = (&self.irradiance, &self.opacity);
+            pass.exec(move |c| {
+                let table = [
+                    Binding::UniformBuffer(grid.info),
+                    Binding::StorageBuffer(grid.nodes),
+                    Binding::StorageBuffer(grid.occupancy),
+                    Binding::StorageBuffer(pts),
+                    Binding::StorageBuffer(e_buf),
+                    Binding::StorageBuffer(o_buf),
+                ];
+                c.dispatch_table(irradiance, &table, push.bytes(), [count as u32, 1, 1])?;
+                c.dispatch_table(
+                    opacity,
+                    &table,
+                    push.bytes(),
+                    [(texels as u32).div_ceil(64), count as u32, 1],
+                )
+            });
+            e_readback.add_to_graph(&mut graph, "near-field irradiance readback", e_buf);
+            o_readback.add_to_graph(&mut graph, "near-field opacity readback", o_buf);
+            renderer.submit(graph, &SubmitSync::none())?;
+            renderer.finish()?;
+            for e in e_readback.read_f32()?.chunks_exact(4) {
+                out.irradiance
+                    .push(DVec3::new(e[0] as f64, e[1] as f64, e[2] as f64));
+                out.covered.push(e[3] as f64);
+            }
+            out.opacity.extend(o_readback.read_f32()?);
+            progress(start + count, points.len());
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,297 @@
+//! Unit tests of the estimate's CPU parts: gradients against finite
+//! differences, the ray set, the quality score and the environment file.
+
+use glam::DVec3;
+
+use super::env_model::{env_term, initial_params, lobes, EnvSampler, PARAMS_PER_LOBE};
+use super::mlp::AlbedoMlp;
+use crate::geometry::Aabb;
+use crate::rng::Pcg32;
+
+fn unit_box() -> Aabb {
+    Aabb::new(DVec3::splat(-1.0), DVec3::ONE)
+}
+
+/// Central difference of `f` along parameter `i` of `params`.
+fn numeric(params: &[f64], i: usize, h: f64, f: &dyn Fn(&[f64]) -> f64) -> f64 {
+    let mut p = params.to_vec();
+    p[i] += h;
+    let up = f(&p);
+    p[i] -= 2.0 * h;
+    let down = f(&p);
+    (up - down) / (2.0 * h)
+}
+
+#[test]
+fn albedo_mlp_gradient_matches_finite_differences() {
+    let mut mlp = AlbedoMlp::new(unit_box(), 8, 2, 3);
+    // Non-zero last layer so every layer's gradient is exercised.
+    let mut rng = Pcg32::new(5, 5);
+    mlp.params
+        .iter_mut()
+        .for_each(|p| *p += 0.3 * (rng.next_f64() - 0.5));
+    let x = DVec3::new(0.3, -0.2, 0.5);
+    let w = DVec3::new(0.7, -1.3, 0.4);
+    let loss = |m: &AlbedoMlp| m.forward(x).albedo.dot(w);
+    let mut grad = vec![0.0; mlp.params.len()];
+    mlp.backward(&mlp.forward(x), w, &mut grad);
+    let mut worst: f64 = 0.0;
+    for i in (0..mlp.params.len()).step_by(7) {
+        let f = |p: &[f64]| {
+            let mut m = mlp.clone();
+            m.params.copy_from_slice(p);
+            loss(&m)
+        };
+        let n = numeric(&mlp.params, i, 1e-6, &f);
+        worst = worst.max((n - grad[i]).abs() / (1e-6 + n.abs().max(grad[i].abs())));
+    }
+    assert!(worst < 1e-4, "worst relative gradient error {worst}");
+}
+
+#[test]
+fn environment_gradient_matches_finite_differences() {
+    let params = initial_params(4, 0.8);
+    let n = DVec3::new(0.2, 0.9, 0.1).normalize();
+    let w = DVec3::new(0.5, -0.8, 1.1);
+    let visibility = |d: DVec3| if d.x > 0.3 { 0.25 } else { 1.0 };
+    // The sampled directions are fixed by the sampler (built once, from the
+    // starting lobes) and the seed; the estimate is then smooth in the
+    // parameters.
+    let sampler = EnvSampler::new(&lobes(&params));
+    let e = |p: &[f64]| {
+        let mut rng = Pcg32::new(9, 1);
+        env_term(&lobes(p), &sampler, n, 64, &visibility, &mut rng)
+            .irradiance
+            .dot(w)
+    };
+    let mut rng = Pcg32::new(9, 1);
+    let term = env_term(&lobes(&params), &sampler, n, 64, &visibility, &mut rng);
+    let mut grad = vec![0.0; params.len()];
+    term.backward(&params, w, &mut grad);
+    for (i, g) in grad.iter().enumerate() {
+        let n_i = numeric(&params, i, 1e-6, &e);
+        assert!(
+            (n_i - g).abs() <= 1e-5 * (1.0 + n_i.abs()),
+            "parameter {i} (lobe {}, slot {}): numeric {n_i}, analytic {}",
+            i / PARAMS_PER_LOBE,
+            i % PARAMS_PER_LOBE,
+            g
+        );
+    }
+}
+
+#[test]
+fn ray_set_is_cosine_distributed_about_the_normal() {
+    use super::hemisphere::ray_direction;
+    let n = DVec3::new(0.3, -0.5, 0.8).normalize();
+    let rays = 4096;
+    let mut mean_cos = 0.0;
+    for i in 0..rays {
+        let d = ray_direction(n, 17, 5, i, rays);
+        assert!((d.length() - 1.0).abs() < 1e-12);
+        let c = d.dot(n);
+        assert!(c >= -1e-12, "ray {i} below the surface");
+        mean_cos += c / rays as f64;
+    }
+    // E[cos θ] under the density cos θ/π is 2/3.
+    assert!(
+        (mean_cos - 2.0 / 3.0).abs() < 1e-3,
+        "mean cosine {mean_cos}"
+    );
+    // Tangent frames are orthonormal for normals near ±Z too.
+    for n in [DVec3::Z, -DVec3::Z, DVec3::new(1e-9, 0.0, -1.0).normalize()] {
+        let (t, b) = super::hemisphere::tangent_frame(n);
+        assert!(
+            t.dot(b).abs() < 1e-12 && t.dot(n).abs() < 1e-12 && (t.cross(b) - n).length() < 1e-12
+        );
+    }
+}
+
+fn view(
+    width: u32,
+    height: u32,
+    pixel: impl Fn(u32, u32) -> ([f32; 4], f32),
+) -> super::quality::ViewImage {
+    let mut colour_opacity = Vec::new();
+    let mut depth = Vec::new();
+    for y in 0..height {
+        for x in 0..width {
+            let (c, d) = pixel(x, y);
+            colour_opacity.push(c);
+            depth.push(d);
+        }
+    }
+    super::quality::ViewImage {
+        width,
+        height,
+        colour_opacity,
+        depth,
+    }
+}
+
+#[test]
+fn quality_score_rejects_empty_flat_and_cluttered_views() {
+    use super::quality::view_quality;
+    // A checkered, fully covered view at a sane depth: good.
+    let good = view(48, 48, |x, y| {
+        let v = if (x / 6 + y / 6) % 2 == 0 { 0.8 } else { 0.1 };
+        ([v, v, v, 1.0], 1.0)
+    });
+    assert!(
+        view_quality(&good, 1.0).score < 10.0,
+        "{:?}",
+        view_quality(&good, 1.0)
+    );
+    // Nothing in view.
+    let empty = view(48, 48, |_, _| ([0.0; 4], 0.0));
+    assert!(view_quality(&empty, 1.0).empty > 50.0);
+    // Uniform colour (the inside of a solid, a wall filling the view).
+    let flat = view(48, 48, |_, _| ([0.5, 0.5, 0.5, 1.0], 1.0));
+    assert!(view_quality(&flat, 1.0).flat > 50.0);
+    // The same checker blurred into a smooth ramp.
+    let blurred = view(48, 48, |x, _| {
+        let v = 0.3 + 0.2 * (x as f32 / 48.0);
+        ([v, v, v, 1.0], 1.0)
+    });
+    assert!(view_quality(&blurred, 1.0).score > 50.0);
+    // Matter right at the camera (D̂ is opacity-weighted depth).
+    let near = view(48, 48, |x, y| {
+        let v = if (x / 6 + y / 6) % 2 == 0 { 0.8 } else { 0.1 };
+        ([v, v, v, 1.0], 0.02)
+    });
+    assert!(view_quality(&near, 1.0).near > 50.0);
+}
+
+#[test]
+fn environment_file_round_trips_and_names_bad_fields() {
+    use super::file::{environment_file_text, parse_environment_file};
+    use crate::sg::Sg64;
+    let lobes = vec![
+        Sg64 {
+            direction: DVec3::new(0.5, 0.8, 0.35).normalize(),
+            sharpness: 812.5,
+            amplitude: DVec3::new(900.0, 840.0, 1e-30),
+        },
+        Sg64 {
+            direction: DVec3::Y,
+            sharpness: 0.05,
+            amplitude: DVec3::ZERO,
+        },
+    ];
+    let path = std::path::Path::new("books-env.toml");
+    let text = environment_file_text(&lobes, "books", &[("views".into(), "100".into())]);
+    let back = parse_environment_file(path, &text).unwrap();
+    assert_eq!(back.len(), 2);
+    for (a, b) in lobes.iter().zip(&back) {
+        assert!((a.direction - b.direction).length() < 1e-15);
+        assert_eq!(a.sharpness, b.sharpness);
+        assert_eq!(a.amplitude, b.amplitude);
+    }
+    let bad = |t: &str, field: &str| {
+        let e = parse_environment_file(path, t).unwrap_err();
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.to_string().contains("books-env.toml"), "{e}");
+    };
+    bad("format = \"x\"\nversion = 1\n", "format");
+    bad("format = \"inlay-environment\"\nversion = 7\n", "version");
+    bad(
+        "format = \"inlay-environment\"\nversion = 1\n[[lobes]]\ndirection = [0, 0, 0]\nsharpness = 1.0\namplitude = [1, 1, 1]\n",
+        "lobes[0]",
+    );
+    bad(
+        "format = \"inlay-environment\"\nversion = 1\n[[lobes]]\ndirection = [0, 1, 0]\nsharpness = nan\namplitude = [1, 1, 1]\n",
+        "lobes[0]",
+    );
+    bad(
+        "format = \"inlay-environment\"\nversion = 1\n[[lobes]]\ndirection = [0, 1, 0]\nsharpness = 1.0\namplitude = [1, -1, 1]\n",
+        "lobes[0]",
+    );
+    assert!(
+        parse_environment_file(path, "format = \"inlay-environment\"\nversion = 1\n")
+            .unwrap()
+            .is_empty()
+    );
+}
+
+/// Synthetic surface points lit by a known sun over an open floor and a
+/// box's sides, with a uniform near field: the fit's input without a GPU.
+fn synthetic_data(
+    sun: &crate::sg::Sg64,
+) -> (
+    Vec<super::surface::SurfacePoint>,
+    super::near_field::NearField,
+) {
+    use super::near_field::NearField;
+    use super::surface::SurfacePoint;
+    let side = 8u32;
+    let texels = (side * side) as usize;
+    let mut rng = Pcg32::new(2, 2);
+    let mut points = Vec::new();
+    let mut near = NearField {
+        irradiance: Vec::new(),
+        covered: Vec::new(),
+        map_side: side,
+        opacity: Vec::new(),
+    };
+    for i in 0..256 {
+        let normal = [DVec3::Y, DVec3::X, DVec3::Z, -DVec3::X][i % 4];
+        let position = DVec3::new(
+            rng.next_f64() - 0.5,
+            0.3 * rng.next_f64(),
+            rng.next_f64() - 0.5,
+        );
+        let albedo = 0.6;
+        let e_nerf = DVec3::splat(0.3);
+        let e_sun = sun.amplitude
+            * (2.0 * std::f64::consts::PI / sun.sharpness)
+            * sun.direction.dot(normal).max(0.0);
+        points.push(SurfacePoint {
+            position,
+            normal,
+            radiance: albedo / std::f64::consts::PI * (e_nerf + e_sun),
+            view: 0,
+        });
+        near.irradiance.push(e_nerf);
+        near.covered.push(0.0);
+        near.opacity.extend(std::iter::repeat_n(0.0, texels));
+    }
+    (points, near)
+}
+
+#[test]
+fn a_seed_gives_the_same_lobes_twice_and_the_fit_lowers_the_loss() {
+    use super::fit::{fit_environment, FitData};
+    use super::knobs::EnvEstimateKnobs;
+    let sun = crate::sg::Sg64 {
+        direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
+        sharpness: 60.0,
+        amplitude: DVec3::splat(40.0),
+    };
+    let (points, near) = synthetic_data(&sun);
+    let data = FitData {
+        points: &points,
+        near: &near,
+        bounds: Aabb::new(DVec3::new(-0.5, 0.0, -0.5), DVec3::new(0.5, 0.3, 0.5)),
+    };
+    let knobs = EnvEstimateKnobs {
+        lobes: 8,
+        albedo_width: 8,
+        iterations: 150,
+        batch: 64,
+        env_samples: 16,
+        env_rate: 0.05,
+        ..EnvEstimateKnobs::default()
+    };
+    let a = fit_environment(&data, &knobs, &|_, _, _| {});
+    let b = fit_environment(&data, &knobs, &|_, _, _| {});
+    assert_eq!(a.lobes, b.lobes, "the same seed gave different lobes");
+    let c = fit_environment(&data, &EnvEstimateKnobs { seed: 2, ..knobs }, &|_, _, _| {});
+    assert_ne!(a.lobes, c.lobes, "the seed changes nothing");
+    // Loss falls from the starting environment.
+    let first = a.history.first().unwrap().1;
+    assert!(
+        a.final_loss < 0.5 * first,
+        "loss {first} → {}",
+        a.final_loss
+    );
+}

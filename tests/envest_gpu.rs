@@ -1,0 +1,82 @@
+//! Environment estimation on lavapipe: the near-field kernels against their
+//! f64 CPU mirror, views and surface points from a baked recipe, and
+//! `inlay estimate-env` end to end.
+
+mod common;
+
+use inlay_passes::envest::near_field_reference::{irradiance_reference, opacity_map_reference};
+use inlay_passes::envest::{sample_surface, EnvEstimateKnobs, NearFieldTracer};
+use inlay_passes::field::GpuGridField;
+
+#[test]
+fn near_field_kernels_match_the_cpu_mirror() {
+    let ctx = common::gpu();
+    let scene = common::bundled_scene("plants.toml");
+    let field = common::bake_small(&scene, 32, 2, 0);
+    let lib = inlay::shaders::embedded_library();
+    let gpu = GpuGridField::upload(&ctx, &field).unwrap();
+    let knobs = EnvEstimateKnobs {
+        views: 3,
+        view_size: 32,
+        pixels_per_view: 4,
+        ..EnvEstimateKnobs::default()
+    };
+    let surface = sample_surface(
+        &ctx,
+        &lib,
+        &field,
+        &gpu,
+        scene.march,
+        &knobs,
+        &|_, _, _, _| {},
+    )
+    .unwrap();
+    assert_eq!(surface.views_kept, 3);
+    assert!(surface.points.len() >= 6, "{} points", surface.points.len());
+    for p in &surface.points {
+        assert!(field.bounds.contains(p.position) && (p.normal.length() - 1.0).abs() < 1e-9);
+    }
+    let (rays, side) = (256, 8);
+    let near = NearFieldTracer::new(&ctx, &lib, scene.march)
+        .unwrap()
+        .trace(
+            &ctx,
+            &field,
+            &gpu,
+            &surface.points,
+            rays,
+            side,
+            7,
+            &|_, _| {},
+        )
+        .unwrap();
+    common::assert_no_validation_errors(&ctx);
+    // The same rays in f32 and f64: they part only where a ray grazes the
+    // density's edge and an f32 rounding moves a sample across a cell, so
+    // sums over 256 rays agree to a few per mille of the brightest one.
+    let mut worst_e: f64 = 0.0;
+    let mut opacity_off = 0;
+    for (i, p) in surface.points.iter().enumerate() {
+        let (e, covered) = irradiance_reference(&field, &scene.march, p, i as u32, rays, 7);
+        let scale = e.max_element().max(1e-3);
+        worst_e = worst_e.max((near.irradiance[i] - e).abs().max_element() / scale);
+        assert!(
+            (near.covered[i] - covered).abs() < 0.02,
+            "point {i}: Ô {} vs {covered}",
+            near.covered[i]
+        );
+        let map = opacity_map_reference(&field, &scene.march, p, side);
+        let texels = (side * side) as usize;
+        for (t, o) in map.iter().enumerate() {
+            if (near.opacity[i * texels + t] as f64 - o).abs() > 0.02 {
+                opacity_off += 1;
+            }
+        }
+    }
+    assert!(worst_e < 0.02, "worst relative E_nerf difference {worst_e}");
+    let total = surface.points.len() * (side * side) as usize;
+    assert!(
+        opacity_off * 50 <= total,
+        "{opacity_off} of {total} opacity texels differ by > 0.02"
+    );
+}

@@ -1,0 +1,352 @@
+//! `inlay estimate-env SCENE --out ENV`: estimates the distant environment
+//! light the field does not show (METHOD.md eq. 3-4) and writes it as an
+//! environment file scenes can name (`[lighting] environment`), with an
+//! equirectangular picture of it. On a recipe scene it also checks the
+//! estimate against the recipe's hidden lights; `--compare` renders the
+//! scene's objects lit by the true hidden light and by the estimate, side by
+//! side, and reports their difference.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use clap::Args;
+use glam::DVec3;
+use inlay_engine::{Context, HdrImage};
+use inlay_passes::envest::{
+    estimate_environment, hidden_light_lobes, save_environment_file, EnvEstimateKnobs, Stage,
+    Validation,
+};
+use inlay_passes::field::GpuGridField;
+use inlay_passes::march::MarchPass;
+use inlay_passes::scene::{load_scene, ObjectEnvironment, Scene};
+use inlay_passes::sg::Sg64;
+
+use crate::field_source::{progress_bar, scene_field};
+use crate::headless::run_headless;
+use crate::insertion_view::InsertionView;
+
+/// Options of `estimate-env`.
+#[derive(Args, Debug)]
+pub struct EstimateEnvArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The environment file to write (default: <scene name>-env.toml).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Equirectangular picture of the estimate (.png tonemapped, .exr linear; default: <out>.png).
+    #[arg(long)]
+    pub picture: Option<PathBuf>,
+    /// Use this field file instead of the scene's field or recipe.
+    #[arg(long)]
+    pub field: Option<PathBuf>,
+    /// Bake the recipe again even if a cached field exists.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Views kept after the quality check (paper: 100).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().views)]
+    pub views: u32,
+    /// Side of each view's render in pixels.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().view_size)]
+    pub view_size: u32,
+    /// Surface points per view (paper: 64).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().pixels_per_view)]
+    pub pixels: u32,
+    /// Near-field rays per point (paper: 32768).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().rays_per_point)]
+    pub rays: u32,
+    /// Side of each point's cached opacity map.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().opacity_map)]
+    pub opacity_map: u32,
+    /// Quality score (0 best .. 100 worst) above which a view is rejected.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().quality_threshold)]
+    pub quality_threshold: f64,
+    /// SG lobes (paper: 32).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().lobes)]
+    pub lobes: u32,
+    /// Width of the albedo MLP's hidden layers.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().albedo_width)]
+    pub albedo_width: u32,
+    /// Adam steps.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().iterations)]
+    pub iterations: u32,
+    /// Surface points per step.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().batch)]
+    pub batch: u32,
+    /// Directions sampled from the SG mixture per point and step.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().env_samples)]
+    pub env_samples: u32,
+    /// Seed of every random choice.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().seed)]
+    pub seed: u64,
+    /// Render the objects lit by the true hidden light and by the estimate, side by side, to this image.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+    /// Width of each half of the comparison.
+    #[arg(long, default_value_t = 320)]
+    pub compare_width: u32,
+    /// Height of the comparison.
+    #[arg(long, default_value_t = 180)]
+    pub compare_height: u32,
+    /// Camera of the comparison (index or name).
+    #[arg(long, default_value = "0")]
+    pub camera: String,
+}
+
+impl EstimateEnvArgs {
+    fn knobs(&self) -> EnvEstimateKnobs {
+        EnvEstimateKnobs {
+            views: self.views,
+            view_size: self.view_size,
+            pixels_per_view: self.pixels,
+            rays_per_point: self.rays,
+            opacity_map: self.opacity_map,
+            quality_threshold: self.quality_threshold,
+            lobes: self.lobes,
+            albedo_width: self.albedo_width,
+            iterations: self.iterations,
+            batch: self.batch,
+            env_samples: self.env_samples,
+            seed: self.seed,
+            ..EnvEstimateKnobs::default()
+        }
+    }
+}
+
+/// Runs `estimate-env`.
+pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
+    let knobs = args.knobs();
+    if let Some((k, m)) = knobs.problem() {
+        anyhow::bail!("--{}: {m}", k.replace('_', "-"));
+    }
+    let scene = load_scene(&args.scene)?;
+    let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    let lib = crate::shaders::embedded_library();
+    let bars = [
+        progress_bar("views", knobs.views as u64),
+        progress_bar("near field", knobs.points() as u64),
+        progress_bar("fit", knobs.iterations as u64),
+    ];
+    let progress = |stage: Stage, done: usize, total: usize, loss: Option<f64>| {
+        let bar = &bars[stage as usize];
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+        if let Some(l) = loss {
+            bar.set_message(format!("fit {l:.3e}"));
+        }
+    };
+    let estimate = estimate_environment(ctx, &lib, &field, scene.march, &knobs, &progress)?;
+    bars.iter().for_each(|b| b.finish_and_clear());
+    let s = &estimate.surface;
+    println!(
+        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources)",
+        s.views_kept,
+        s.views_tried,
+        s.scores.iter().filter(|(_, k)| !k).count(),
+        s.points.len(),
+        s.emitters
+    );
+    println!(
+        "time: views {:.1} s, near field {:.1} s ({} rays per point), fit {:.1} s ({} steps); final loss {:.4e}",
+        estimate.seconds[0],
+        estimate.seconds[1],
+        knobs.rays_per_point,
+        estimate.seconds[2],
+        knobs.iterations,
+        estimate.fit.final_loss
+    );
+    let lobes = &estimate.fit.lobes;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}-env.toml", scene.name)));
+    let record = vec![
+        ("views".to_string(), s.views_kept.to_string()),
+        ("points".to_string(), s.points.len().to_string()),
+        (
+            "rays_per_point".to_string(),
+            knobs.rays_per_point.to_string(),
+        ),
+        ("iterations".to_string(), knobs.iterations.to_string()),
+        ("seed".to_string(), knobs.seed.to_string()),
+        (
+            "final_loss".to_string(),
+            format!("{:e}", estimate.fit.final_loss),
+        ),
+        (
+            "seconds".to_string(),
+            format!("{:.1}", estimate.seconds.iter().sum::<f64>()),
+        ),
+    ];
+    save_environment_file(&out, lobes, &scene.name, &record)?;
+    println!("wrote {}", out.display());
+    let picture = args
+        .picture
+        .clone()
+        .unwrap_or_else(|| out.with_extension("png"));
+    let (image, exposure) = equirect_picture(lobes, 256, 128);
+    image.save(&picture, exposure)?;
+    println!("wrote {}", picture.display());
+    if let Some(recipe) = scene.recipe() {
+        let v = Validation::new(&scene, recipe, lobes, 4096, knobs.seed);
+        println!(
+            "against the recipe's lights at {} test points: hidden-light irradiance error {:.1} %, \
+             estimate = {:.2} % of all the lights' irradiance",
+            v.points.len(),
+            100.0 * v.hidden_error(),
+            100.0 * v.fraction_of_lights()
+        );
+        println!(
+            "  point                 normal        hidden (rgb)                   estimated (rgb)"
+        );
+        for (i, (x, n)) in v.points.iter().enumerate() {
+            let f = |c: DVec3| format!("{:8.4} {:8.4} {:8.4}", c.x, c.y, c.z);
+            println!(
+                "  {:6.2} {:6.2} {:6.2}  {:4.1} {:4.1} {:4.1}  {}   {}",
+                x.x,
+                x.y,
+                x.z,
+                n.x,
+                n.y,
+                n.z,
+                f(v.hidden[i]),
+                f(v.estimated[i])
+            );
+        }
+    }
+    if let Some(path) = &args.compare {
+        compare(ctx, args, &scene, &field, lobes, path)?;
+    }
+    Ok(())
+}
+
+/// An equirectangular picture of `lobes` (+Y up, as scene maps) and the
+/// exposure that brings its mean to 0.18.
+pub fn equirect_picture(lobes: &[Sg64], width: u32, height: u32) -> (HdrImage, f32) {
+    let mut pixels = Vec::with_capacity((width * height) as usize);
+    let mut sum = 0.0;
+    for y in 0..height {
+        let theta = std::f64::consts::PI * (y as f64 + 0.5) / height as f64;
+        for x in 0..width {
+            let phi = 2.0 * std::f64::consts::PI * (x as f64 + 0.5) / width as f64;
+            let d = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            let l: DVec3 = lobes.iter().map(|g| g.eval(d)).sum();
+            sum += 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z;
+            pixels.push([l.x as f32, l.y as f32, l.z as f32, 1.0]);
+        }
+    }
+    let mean = sum / (width * height) as f64;
+    let exposure = if mean > 1e-12 {
+        (0.18 / mean) as f32
+    } else {
+        1.0
+    };
+    (
+        HdrImage {
+            width,
+            height,
+            pixels,
+        },
+        exposure,
+    )
+}
+
+/// The scene rendered with its objects lit by `lobes` (the field's light
+/// through the probe plus these as the distant light).
+fn render_with(
+    ctx: &Arc<Context>,
+    args: &EstimateEnvArgs,
+    scene: &Scene,
+    field: &inlay_passes::field::GridField,
+    lobes: Vec<Sg64>,
+    what: &str,
+) -> anyhow::Result<HdrImage> {
+    let mut scene = scene.clone();
+    scene.object_environment = Some(ObjectEnvironment {
+        file: PathBuf::from(what),
+        lobes,
+    });
+    let library = crate::shaders::library()?;
+    let camera = scene.camera(&args.camera)?.clone();
+    let view = InsertionView::new(
+        ctx,
+        &library,
+        &scene,
+        MarchPass::new(ctx, &library, scene.march)?,
+        GpuGridField::upload(ctx, field)?,
+        camera,
+        !args.no_cache,
+    )?;
+    Ok(run_headless(ctx, &view, args.compare_width, args.compare_height, 1, 0.0)?.image)
+}
+
+/// Writes true | estimated | |difference| and prints how far apart they are.
+fn compare(
+    ctx: &Arc<Context>,
+    args: &EstimateEnvArgs,
+    scene: &Scene,
+    field: &inlay_passes::field::GridField,
+    lobes: &[Sg64],
+    path: &Path,
+) -> anyhow::Result<()> {
+    let recipe = scene.recipe().ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: --compare needs a recipe scene (its hidden lights are the truth)",
+            scene.path.display()
+        )
+    })?;
+    anyhow::ensure!(
+        !scene.objects.is_empty(),
+        "{}: --compare needs objects to light",
+        scene.path.display()
+    );
+    let at = scene.objects.iter().map(|o| o.sphere().0).sum::<DVec3>() / scene.objects.len() as f64;
+    let truth = hidden_light_lobes(recipe, &scene.environment, at, 1e4);
+    let a = render_with(ctx, args, scene, field, truth, "the recipe's hidden light")?;
+    let b = render_with(ctx, args, scene, field, lobes.to_vec(), "the estimate")?;
+    let (w, h) = (a.width, a.height);
+    let mut pixels = Vec::with_capacity((3 * w * h) as usize);
+    let (mut diff, mut total, mut sq) = (0.0f64, 0.0f64, 0.0f64);
+    for y in 0..h {
+        let row = |img: &HdrImage| (0..w).map(move |x| img.at(x, y)).collect::<Vec<_>>();
+        let (ra, rb) = (row(&a), row(&b));
+        let rd: Vec<[f32; 4]> = ra
+            .iter()
+            .zip(&rb)
+            .map(|(p, q)| {
+                let d = [
+                    (p[0] - q[0]).abs(),
+                    (p[1] - q[1]).abs(),
+                    (p[2] - q[2]).abs(),
+                    1.0,
+                ];
+                for c in 0..3 {
+                    diff += d[c] as f64;
+                    sq += (d[c] as f64).powi(2);
+                    total += p[c] as f64;
+                }
+                d
+            })
+            .collect();
+        pixels.extend(ra);
+        pixels.extend(rb);
+        pixels.extend(rd);
+    }
+    let n = (3 * w * h) as f64;
+    HdrImage {
+        width: 3 * w,
+        height: h,
+        pixels,
+    }
+    .save(path, 1.0)?;
+    println!(
+        "wrote {} (true hidden light | estimate | |difference|): mean relative difference {:.2} %, rms {:.4e}",
+        path.display(),
+        100.0 * diff / total.max(1e-30),
+        (sq / n).sqrt()
+    );
+    Ok(())
+}
