@@ -54,6 +54,30 @@ fn bake_small_plants(dir: &Path) -> (PathBuf, String) {
     (field, t)
 }
 
+/// `inlay bake-scene` of bundled scene `name` at 24 nodes, 2 samples, no
+/// bounce into `dir`: the scene file's path and the field file.
+fn bake_scene_at_test_size(dir: &Path, name: &str) -> (String, PathBuf) {
+    let scene = scene_path(&format!("{name}.toml"));
+    let field = dir.join(format!("{name}.inlayfield"));
+    let o = inlay(
+        &[
+            "bake-scene",
+            &scene,
+            "--out",
+            s(&field),
+            "--resolution",
+            "24",
+            "--samples",
+            "2",
+            "--bounces",
+            "0",
+        ],
+        dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    (scene, field)
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -365,24 +389,7 @@ fn render_and_reference_insert_objects() {
 fn every_bundled_scene_renders_with_shadows() {
     let dir = scratch("shadows");
     for name in ["books", "cups", "dog", "plants"] {
-        let scene = scene_path(&format!("{name}.toml"));
-        let field = dir.join(format!("{name}.inlayfield"));
-        let o = inlay(
-            &[
-                "bake-scene",
-                &scene,
-                "--out",
-                s(&field),
-                "--resolution",
-                "24",
-                "--samples",
-                "2",
-                "--bounces",
-                "0",
-            ],
-            &dir,
-        );
-        assert!(o.status.success(), "{}", common::output_text(&o));
+        let (scene, field) = bake_scene_at_test_size(&dir, name);
         let render = |extra: &[&str], out: &Path| {
             let mut args = vec![
                 "--validate",
@@ -573,24 +580,7 @@ fn bake_ssdf_writes_a_field_scenes_can_use() {
 #[test]
 fn estimate_env_writes_a_file_render_can_light_objects_with() {
     let dir = scratch("estimate-env");
-    let scene = scene_path("books.toml");
-    let field = dir.join("books.inlayfield");
-    let o = inlay(
-        &[
-            "bake-scene",
-            &scene,
-            "--out",
-            s(&field),
-            "--resolution",
-            "24",
-            "--samples",
-            "2",
-            "--bounces",
-            "0",
-        ],
-        &dir,
-    );
-    assert!(o.status.success(), "{}", common::output_text(&o));
+    let (scene, field) = bake_scene_at_test_size(&dir, "books");
     let env = dir.join("books-env.toml");
     let picture = dir.join("books-env.exr");
     let compare = dir.join("compare.png");

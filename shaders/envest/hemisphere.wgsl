@@ -3,6 +3,7 @@
 // point ((i + ½)/N, radical inverse of i) shifted by the point's random
 // offset (a hash of its index and the seed), mapped to a cosine-distributed
 // direction about the normal in Duff et al.'s orthonormal frame.
+// Needs: common/tangent_basis.wgsl.
 
 const HS_PI: f32 = 3.14159265358979;
 const HS_TWO_POW_32: f32 = 4294967296.0;
@@ -26,14 +27,10 @@ fn hs_hammersley(i: u32, n: u32, rotation: vec2<f32>) -> vec2<f32> {
 }
 
 fn hs_cosine_direction(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    let t = vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    let bt = vec3<f32>(b, sign + n.y * n.y * a, -n.y);
+    let frame = tangent_basis(n);
     let r = sqrt(u.x);
     let phi = 2.0 * HS_PI * u.y;
-    return (r * cos(phi)) * t + (r * sin(phi)) * bt + sqrt(max(1.0 - u.x, 0.0)) * n;
+    return (r * cos(phi)) * frame.t1 + (r * sin(phi)) * frame.t2 + sqrt(max(1.0 - u.x, 0.0)) * n;
 }
 
 fn hs_ray_direction(normal: vec3<f32>, point: u32, seed: u32, i: u32, n: u32) -> vec3<f32> {

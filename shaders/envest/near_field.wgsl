@@ -11,6 +11,7 @@
 #include "common/direction_map.wgsl"
 #include "field/grid.wgsl"
 #include "nerf/volume_march.wgsl"
+#include "common/tangent_basis.wgsl"
 #include "envest/hemisphere.wgsl"
 
 struct NearFieldPush {

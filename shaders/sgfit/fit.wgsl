@@ -11,6 +11,7 @@
 // every iteration.
 #include "common/sg.wgsl"
 #include "common/direction_map.wgsl"
+#include "common/tangent_basis.wgsl"
 #include "sgfit/model.wgsl"
 
 struct FitPush {
@@ -308,7 +309,7 @@ fn jacobian(@builtin(global_invocation_id) id: vec3<u32>) {
         let g = lobe(0u, k);
         let e = sg_weight(g, v);
         model += g.amplitude * e;
-        let b = fit_tangent_basis(g.direction);
+        let b = tangent_basis(g.direction);
         let dv = v - g.direction;
         let ds = -0.5 * g.sharpness * dot(dv, dv);
         let du = g.sharpness * dot(v, b.t1);

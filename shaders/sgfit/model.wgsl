@@ -1,6 +1,5 @@
-// The SG fit's model, mirroring passes/src/sgfit/model.rs: tangent basis,
-// Fibonacci axes, cold-start sharpness, texel validity, the step.
-// Needs: common/sg.wgsl.
+// The SG fit's model, mirroring passes/src/sgfit/model.rs: Fibonacci axes, cold-start sharpness, texel validity, the step.
+// Needs: common/sg.wgsl and common/tangent_basis.wgsl.
 
 const FIT_PI: f32 = 3.14159265358979;
 const FIT_LN_2: f32 = 0.693147180559945;
@@ -8,22 +7,6 @@ const FIT_MIN_SHARPNESS: f32 = 1e-4;
 // FIT_MAX_SHARPNESS (f32) is defined by the pass: passes/src/sgfit/model.rs `max_sharpness`.
 const FIT_MAX_AXIS_STEP: f32 = 1.0;
 const FIT_SEED_CONTRAST: f32 = 4.0;
-
-struct Basis {
-    t1: vec3<f32>,
-    t2: vec3<f32>,
-}
-
-// Orthonormal tangent basis of unit p (Duff et al. 2017).
-fn fit_tangent_basis(p: vec3<f32>) -> Basis {
-    let s = select(-1.0, 1.0, p.z >= 0.0);
-    let a = -1.0 / (s + p.z);
-    let b = p.x * p.y * a;
-    return Basis(
-        vec3<f32>(1.0 + s * p.x * p.x * a, s * b, -s * p.x),
-        vec3<f32>(b, s + p.y * p.y * a, -p.y),
-    );
-}
 
 // Axis k of m Fibonacci-lattice points (+Y up).
 fn fit_fibonacci_axis(k: u32, m: u32) -> vec3<f32> {
@@ -62,6 +45,6 @@ fn fit_apply_step(g: Sg, d0: vec4<f32>, d1: vec2<f32>) -> Sg {
     if len > FIT_MAX_AXIS_STEP {
         uv *= FIT_MAX_AXIS_STEP / len;
     }
-    let b = fit_tangent_basis(g.direction);
+    let b = tangent_basis(g.direction);
     return Sg(normalize(g.direction + uv.x * b.t1 + uv.y * b.t2), exp(s), a * a);
 }

@@ -21,6 +21,7 @@ use glam::DVec3;
 use super::hemisphere::cosine_direction;
 use crate::rng::Pcg32;
 use crate::sg::Sg64;
+use crate::sgfit::model::{fibonacci_axis, luminance};
 
 /// Parameters per lobe: axis (3), log sharpness (1), log energy (3).
 pub const PARAMS_PER_LOBE: usize = 7;
@@ -31,31 +32,14 @@ pub const DEFENSIVE_FRACTION: f64 = 0.25;
 /// Smallest sharpness the fit uses.
 pub const MIN_SHARPNESS: f64 = 0.05;
 
-fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
-/// Fibonacci-sphere directions: `m` nearly evenly spread unit vectors.
-pub fn fibonacci_directions(m: usize) -> Vec<DVec3> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..m)
-        .map(|i| {
-            let y = 1.0 - 2.0 * (i as f64 + 0.5) / m as f64;
-            let r = (1.0 - y * y).max(0.0).sqrt();
-            let phi = golden * i as f64;
-            DVec3::new(r * phi.cos(), y, r * phi.sin())
-        })
-        .collect()
-}
-
 /// The starting environment: `m` lobes on a Fibonacci sphere, sharpness
 /// m/4 (neighbours overlap), amplitudes giving a uniform radiance of about
 /// `radiance`; packed.
 pub fn initial_params(m: usize, radiance: f64) -> Vec<f64> {
     let sharpness = (m as f64 / 4.0).max(1.0);
     let energy = (4.0 * std::f64::consts::PI * radiance.max(1e-9) / m as f64).ln();
-    fibonacci_directions(m)
-        .into_iter()
+    (0..m as u32)
+        .map(|k| fibonacci_axis(k, m as u32))
         .flat_map(|d| [d.x, d.y, d.z, sharpness.ln(), energy, energy, energy])
         .collect()
 }

@@ -101,7 +101,7 @@ fn point_loss(
 fn mean_luminance(points: &[SurfacePoint]) -> f64 {
     let sum: f64 = points
         .iter()
-        .map(|p| 0.2126 * p.radiance.x + 0.7152 * p.radiance.y + 0.0722 * p.radiance.z)
+        .map(|p| crate::sgfit::model::luminance(p.radiance))
         .sum();
     sum / points.len().max(1) as f64
 }

@@ -7,6 +7,8 @@
 
 use glam::DVec3;
 
+use crate::sgfit::model::tangent_basis;
+
 /// PCG's 32-bit output hash (the shader's `hs_hash`).
 pub fn hash_u32(v: u32) -> u32 {
     let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
@@ -28,24 +30,12 @@ pub fn hammersley(i: u32, n: u32, rotation: [f64; 2]) -> [f64; 2] {
     [u.fract(), v.fract()]
 }
 
-/// Unit tangent and bitangent completing unit `n` to a right-handed frame
-/// (Duff et al. 2017, branchless; the sign of n.z chooses the branch).
-pub fn tangent_frame(n: DVec3) -> (DVec3, DVec3) {
-    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        DVec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
-}
-
 /// The cosine-distributed direction about unit `n` for `u` ∈ [0, 1)²
 /// (density cos θ/π).
 pub fn cosine_direction(n: DVec3, u: [f64; 2]) -> DVec3 {
     let r = u[0].sqrt();
     let phi = 2.0 * std::f64::consts::PI * u[1];
-    let (t, b) = tangent_frame(n);
+    let (t, b) = tangent_basis(n);
     (r * phi.cos()) * t + (r * phi.sin()) * b + (1.0 - u[0]).max(0.0).sqrt() * n
 }
 

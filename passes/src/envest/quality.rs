@@ -60,7 +60,7 @@ const NEAR_FRACTION: f64 = 0.1;
 const NEAR_FULL: f64 = 0.5;
 
 fn luminance(c: [f64; 3]) -> f64 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    crate::sgfit::model::luminance(glam::DVec3::from_array(c))
 }
 
 /// The score of `view`, taken `distance` from the point it looks at.

@@ -17,6 +17,7 @@ use super::quality::ViewImage;
 use crate::camera::CameraFrame;
 use crate::field::GridField;
 use crate::rng::Pcg32;
+use crate::sgfit::model::luminance;
 
 /// Smallest |∇σ|·h² of a surface point (an opaque surface of the bundled
 /// recipes reaches about 5 at its expected depth; a medium's edge about
@@ -47,10 +48,6 @@ pub struct ViewPoints {
     pub emitters: usize,
     /// Covered pixels left out as not on a surface.
     pub not_surface: usize,
-}
-
-fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 /// Draws up to `count` surface points from `view` (rendered from `frame`),

@@ -100,7 +100,7 @@ fn ray_set_is_cosine_distributed_about_the_normal() {
     );
     // Tangent frames are orthonormal for normals near ±Z too.
     for n in [DVec3::Z, -DVec3::Z, DVec3::new(1e-9, 0.0, -1.0).normalize()] {
-        let (t, b) = super::hemisphere::tangent_frame(n);
+        let (t, b) = crate::sgfit::model::tangent_basis(n);
         assert!(
             t.dot(b).abs() < 1e-12 && t.dot(n).abs() < 1e-12 && (t.cross(b) - n).length() < 1e-12
         );

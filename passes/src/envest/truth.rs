@@ -13,6 +13,7 @@ use crate::lighting::environment_lobes;
 use crate::rng::Pcg32;
 use crate::scene::{Environment, Primitive, Recipe, Scene, Shape};
 use crate::sg::Sg64;
+use crate::sgfit::model::luminance;
 
 /// Which of a recipe's lights to count.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -196,10 +197,6 @@ pub fn hidden_light_lobes(
         });
     }
     lobes
-}
-
-fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 /// An estimated environment checked against a recipe's lights at
