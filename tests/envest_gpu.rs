@@ -80,3 +80,34 @@ fn near_field_kernels_match_the_cpu_mirror() {
         "{opacity_off} of {total} opacity texels differ by > 0.02"
     );
 }
+
+/// llvmpipe ends all loops of an invocation after 65535 iterations in all,
+/// so a kernel that let one invocation march a share of 131072 rays (2048
+/// of them, some 40 steps each on this field) returned E_nerf ≈ 0. The
+/// kernel now splits a point's rays over workgroups; the sum must still
+/// match the mirror's.
+#[test]
+fn near_field_sums_many_rays_per_point() {
+    let ctx = common::gpu();
+    let scene = common::bundled_scene("plants.toml");
+    let field = common::bake_small(&scene, 32, 2, 0);
+    let lib = inlay::shaders::embedded_library();
+    let gpu = GpuGridField::upload(&ctx, &field).unwrap();
+    let point = inlay_passes::envest::SurfacePoint {
+        position: glam::DVec3::new(0.3, 0.03, 0.4),
+        normal: glam::DVec3::Y,
+        radiance: glam::DVec3::splat(0.2),
+        view: 0,
+    };
+    let rays = 1 << 17;
+    let near = NearFieldTracer::new(&ctx, &lib, scene.march)
+        .unwrap()
+        .trace(&ctx, &field, &gpu, &[point], rays, 4, 3, &|_, _| {})
+        .unwrap();
+    common::assert_no_validation_errors(&ctx);
+    let (e, covered) = irradiance_reference(&field, &scene.march, &point, 0, rays, 3);
+    assert!(e.max_element() > 0.1, "the floor sees the lamp: {e}");
+    let off = (near.irradiance[0] - e).abs().max_element() / e.max_element();
+    assert!(off < 0.02, "E_nerf {} vs mirror {e}", near.irradiance[0]);
+    assert!((near.covered[0] - covered).abs() < 0.01);
+}

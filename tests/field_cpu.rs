@@ -74,6 +74,27 @@ fn bundled_recipes_have_the_lights_and_volumes_they_promise() {
     assert!(ratio >= 1e4, "bulb / mean radiance = {ratio:.3e}");
 }
 
+/// The method represents light from outside the field as a distant
+/// environment, so the recipes must place their hidden lights where that
+/// model holds, or the estimate's 15 % check could not pass even for a
+/// perfect estimate: each recipe's hidden lights, turned into distant lobes
+/// seen from the field's centre, must deliver their own irradiance at the
+/// validation points within 5 % (BOOKS' sun and sky do by construction;
+/// DOG's bulb and CUPS' lamp at 2–2.5 units missed by 33 % and 19 %).
+#[test]
+fn recipes_hidden_lights_are_distant() {
+    use inlay_passes::envest::{hidden_light_lobes, Validation};
+    for name in ["books.toml", "dog.toml", "cups.toml"] {
+        let s = scene(name);
+        let recipe = s.recipe().unwrap();
+        let centre = 0.5 * (recipe.bounds.min + recipe.bounds.max);
+        let lobes = hidden_light_lobes(recipe, &s.environment, centre, 1e4);
+        let v = Validation::new(&s, recipe, &lobes, 512, 3);
+        let error = v.hidden_error();
+        assert!(error < 0.05, "{name}: distant form off by {error:.3}");
+    }
+}
+
 #[test]
 fn skipping_empty_space_changes_nothing_and_saves_samples() {
     let s = scene("cups.toml");

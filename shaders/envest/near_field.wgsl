@@ -1,12 +1,18 @@
 // The near-field light at surface points (METHOD.md "Environment light
 // estimation"), computed once before the fit. Each point holds its ray
 // origin (the surface point lifted along the normal) and its unit normal.
-// `irradiance`: one workgroup per point marches `rays` cosine-distributed
-// rays (hemisphere.wgsl) through the field and writes
-// E_nerf = π/N · Σ Ĉ in rgb and the rays' mean Ô in alpha.
+// `irradiance`: workgroup (c, p) marches rays [c·NF_RAYS_PER_GROUP,
+// (c + 1)·NF_RAYS_PER_GROUP) of point p's `rays` cosine-distributed rays
+// (hemisphere.wgsl) through the field and writes their sums Σ Ĉ in rgb and
+// Σ Ô in alpha; the caller adds the chunks of a point and scales by π/N
+// (E_nerf) and 1/N (mean Ô). An invocation marches at most
+// NF_RAYS_PER_INVOCATION rays: llvmpipe ends every loop of an invocation
+// once 65535 iterations of all its loops together have run, so one
+// invocation marching thousands of rays returns garbage on lavapipe.
 // `opacity_map`: one invocation per point and texel of an octahedral
 // map, writing Ô along the texel's centre direction (the cache the
 // environment term reads). Mirrors passes/src/envest/near_field_reference.rs.
+// NF_RAYS_PER_INVOCATION (u32) is defined by the pass: passes/src/envest/near_field.rs.
 #include "common/ray_box.wgsl"
 #include "common/direction_map.wgsl"
 #include "field/grid.wgsl"
@@ -29,24 +35,28 @@ var<immediate> pc: NearFieldPush;
 
 // Two vec4 per point: (origin, 0), (normal, 0).
 @group(0) @binding(3) var<storage, read> points: array<vec4<f32>>;
-// One vec4 per point of the batch: (E_nerf, mean Ô).
+// One vec4 per point of the batch and chunk of rays, chunk-minor:
+// (Σ Ĉ, Σ Ô) over the chunk's rays.
 @group(0) @binding(4) var<storage, read_write> irradiance_out: array<vec4<f32>>;
 // map_side² opacities per point of the batch.
 @group(0) @binding(5) var<storage, read_write> opacity_out: array<f32>;
 
 const NF_GROUP: u32 = 64u;
+const NF_RAYS_PER_GROUP: u32 = NF_GROUP * NF_RAYS_PER_INVOCATION;
 const NF_NO_OBJECT: f32 = 3.0e38;
 
 var<workgroup> nf_sums: array<vec4<f32>, NF_GROUP>;
 
 @compute @workgroup_size(64, 1, 1)
 fn irradiance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let local_point = group.x;
+    let chunk = group.x;
+    let local_point = group.y;
     let point = pc.first_point + local_point;
     let origin = points[2u * point].xyz;
     let normal = points[2u * point + 1u].xyz;
+    let end = min(pc.rays, (chunk + 1u) * NF_RAYS_PER_GROUP);
     var sum = vec4<f32>(0.0);
-    for (var i = lid; i < pc.rays; i += NF_GROUP) {
+    for (var i = chunk * NF_RAYS_PER_GROUP + lid; i < end; i += NF_GROUP) {
         let d = hs_ray_direction(normal, point, pc.seed, i, pc.rays);
         let m = march_ray(origin, d, NF_NO_OBJECT, pc.step, pc.termination);
         sum += vec4<f32>(m.colour, m.opacity);
@@ -60,8 +70,8 @@ fn irradiance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation
         workgroupBarrier();
     }
     if lid == 0u {
-        let mean = nf_sums[0] / f32(pc.rays);
-        irradiance_out[local_point] = vec4<f32>(HS_PI * mean.rgb, mean.a);
+        let chunks = (pc.rays + NF_RAYS_PER_GROUP - 1u) / NF_RAYS_PER_GROUP;
+        irradiance_out[local_point * chunks + chunk] = nf_sums[0];
     }
 }
 

@@ -47,6 +47,8 @@ pub struct SurfaceSample {
     pub scores: Vec<(QualityScore, bool)>,
     /// Covered pixels left out as light sources, over all kept views.
     pub emitters: usize,
+    /// Covered pixels left out as mixed, over all kept views.
+    pub mixed: usize,
 }
 
 /// A finished estimate.
@@ -113,6 +115,7 @@ pub fn sample_surface(
         views_kept: 0,
         scores: Vec::new(),
         emitters: 0,
+        mixed: 0,
     };
     while out.views_kept < knobs.views && out.views_tried < max_tries {
         let spec = random_view(&field.bounds, knobs.seed, out.views_tried as u64);
@@ -135,6 +138,7 @@ pub fn sample_surface(
             // A view with no surface to draw from is as poor as an empty one.
             keep = !drawn.points.is_empty();
             out.emitters += drawn.emitters;
+            out.mixed += drawn.mixed;
             out.points.extend(drawn.points);
         }
         out.scores.push((score, keep));

@@ -12,7 +12,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::adam::Adam;
-use super::env_model::{env_term, initial_params, lobes, project, EnvSampler};
+use super::env_model::{env_term, initial_params, lobes, project, EnvSampler, PARAMS_PER_LOBE};
 use super::knobs::EnvEstimateKnobs;
 use super::mlp::AlbedoMlp;
 use super::near_field::NearField;
@@ -97,6 +97,39 @@ fn point_loss(
     loss
 }
 
+/// The energy prior's value (see [`add_energy_prior`]); the tests check
+/// the gradient against it.
+#[cfg(test)]
+pub(super) fn energy_prior(env: &[f64], weight: f64, mean: f64) -> f64 {
+    env.chunks_exact(PARAMS_PER_LOBE)
+        .map(|p| {
+            let m = (p[4].exp() + p[5].exp() + p[6].exp()) / (3.0 * 4.0 * std::f64::consts::PI);
+            weight * (mean * m).sqrt()
+        })
+        .sum()
+}
+
+/// Adds the gradient of the energy prior to `g_env`: `weight`·Σ_k
+/// √(L̄·m_k), with m_k lobe k's mean radiance (its energy over 4π averaged
+/// over RGB) and L̄ = `mean` the points' mean radiance. The square root
+/// presses hardest on faint lobes: light spread thinly over the sphere
+/// that no point needs fades away, while one bright lobe (a sun the points
+/// do need) is held back less than by a penalty on the total.
+pub(super) fn add_energy_prior(env: &[f64], weight: f64, mean: f64, g_env: &mut [f64]) {
+    let four_pi = 4.0 * std::f64::consts::PI;
+    for (p, g) in env
+        .chunks_exact(PARAMS_PER_LOBE)
+        .zip(g_env.chunks_exact_mut(PARAMS_PER_LOBE))
+    {
+        let energies = [p[4].exp(), p[5].exp(), p[6].exp()];
+        let m = (energies.iter().sum::<f64>() / (3.0 * four_pi)).max(1e-300);
+        let d_m = 0.5 * weight * (mean / m).sqrt();
+        for c in 0..3 {
+            g[4 + c] += d_m * energies[c] / (3.0 * four_pi);
+        }
+    }
+}
+
 /// The mean radiance luminance of `points` (sets the starting environment).
 fn mean_luminance(points: &[SurfacePoint]) -> f64 {
     let sum: f64 = points
@@ -162,6 +195,8 @@ pub fn fit_from(
     let steps = knobs.iterations;
     let batch = knobs.batch as usize;
     let report_every = (steps / 100).max(1);
+    let mean = mean_luminance(data.points);
+    let prior = knobs.energy_prior * mean;
     for step in 0..steps {
         mlp.set_band(
             mlp.frequencies() as f64 * (step as f64 / (ANNEAL_FRACTION * steps as f64)).min(1.0),
@@ -203,6 +238,7 @@ pub fn fit_from(
             g_mlp.iter_mut().zip(gm).for_each(|(a, b)| *a += b);
             g_env.iter_mut().zip(ge).for_each(|(a, b)| *a += b);
         }
+        add_energy_prior(&env, prior, mean, &mut g_env);
         let decay = 0.1f64.powf(step as f64 / steps.max(1) as f64);
         if fit_env {
             adam_env.step(&mut env, &g_env, knobs.env_rate * decay);

@@ -29,6 +29,16 @@ pub const SURFACE_OFFSET_SPACINGS: f64 = 2.0;
 /// Points per submission.
 const POINTS_PER_BATCH: usize = 64;
 
+/// Rays one invocation of the irradiance kernel marches. llvmpipe stops
+/// every loop of an invocation after 65535 iterations of all its loops
+/// together (measured: one invocation marching 470 rays of 32768 returned
+/// E_nerf ≈ 0 on PLANTS), so an invocation's share must stay small: eight
+/// rays of even a few thousand steps each stay well under it.
+pub const RAYS_PER_INVOCATION: u32 = 8;
+
+/// Rays one workgroup (64 invocations) of the irradiance kernel marches.
+const RAYS_PER_GROUP: u32 = 64 * RAYS_PER_INVOCATION;
+
 /// The near-field light at every surface point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NearField {
@@ -75,6 +85,7 @@ impl NearFieldTracer {
         let defines = [
             Define::Bool("SKIP_EMPTY", march.skip_empty),
             Define::Bool("OCTAHEDRAL", true),
+            Define::U32("NF_RAYS_PER_INVOCATION", RAYS_PER_INVOCATION),
         ];
         let pipeline = |entry: &str| -> anyhow::Result<ComputePipeline> {
             let shader = compile(
@@ -134,7 +145,8 @@ impl NearFieldTracer {
         let mut renderer = Renderer::new(ctx, 1)?;
         for start in (0..points.len()).step_by(POINTS_PER_BATCH) {
             let count = POINTS_PER_BATCH.min(points.len() - start);
-            let e_size = (count * 16) as u64;
+            let chunks = rays.div_ceil(RAYS_PER_GROUP) as usize;
+            let e_size = (count * chunks * 16) as u64;
             let o_size = (count * texels * 4) as u64;
             let e_readback = BufferReadback::new(ctx, "near-field irradiance readback", e_size)?;
             let o_readback = BufferReadback::new(ctx, "near-field opacity readback", o_size)?;
@@ -168,7 +180,12 @@ impl NearFieldTracer {
                     Binding::StorageBuffer(e_buf),
                     Binding::StorageBuffer(o_buf),
                 ];
-                c.dispatch_table(irradiance, &table, push.bytes(), [count as u32, 1, 1])?;
+                c.dispatch_table(
+                    irradiance,
+                    &table,
+                    push.bytes(),
+                    [chunks as u32, count as u32, 1],
+                )?;
                 c.dispatch_table(
                     opacity,
                     &table,
@@ -180,10 +197,15 @@ impl NearFieldTracer {
             o_readback.add_to_graph(&mut graph, "near-field opacity readback", o_buf);
             renderer.submit(graph, &SubmitSync::none())?;
             renderer.finish()?;
-            for e in e_readback.read_f32()?.chunks_exact(4) {
+            for point in e_readback.read_f32()?.chunks_exact(4 * chunks) {
+                let mut sum = [0.0f64; 4];
+                for chunk in point.chunks_exact(4) {
+                    sum.iter_mut().zip(chunk).for_each(|(s, &c)| *s += c as f64);
+                }
+                let scale = std::f64::consts::PI / rays as f64;
                 out.irradiance
-                    .push(DVec3::new(e[0] as f64, e[1] as f64, e[2] as f64));
-                out.covered.push(e[3] as f64);
+                    .push(DVec3::new(sum[0], sum[1], sum[2]) * scale);
+                out.covered.push(sum[3] / rays as f64);
             }
             out.opacity.extend(o_readback.read_f32()?);
             progress(start + count, points.len());

@@ -81,6 +81,29 @@ fn environment_gradient_matches_finite_differences() {
 }
 
 #[test]
+fn energy_prior_gradient_matches_finite_differences() {
+    let env = initial_params(5, 0.3);
+    let (weight, mean) = (0.02, 0.3);
+    let mut g = vec![0.0; env.len()];
+    super::fit::add_energy_prior(&env, weight, mean, &mut g);
+    let f = |p: &[f64]| super::fit::energy_prior(p, weight, mean);
+    for (i, gi) in g.iter().enumerate() {
+        let n = numeric(&env, i, 1e-5, &f);
+        assert!(
+            (gi - n).abs() <= 1e-7 + 1e-5 * n.abs(),
+            "param {i}: {gi} vs {n}"
+        );
+    }
+    // Faint lobes feel it hardest: the pull on log energy per unit of
+    // energy grows as the lobe fades.
+    let mut faint = env.clone();
+    faint[4..7].iter_mut().for_each(|e| *e -= 6.0);
+    let mut gf = vec![0.0; env.len()];
+    super::fit::add_energy_prior(&faint, weight, mean, &mut gf);
+    assert!(gf[4] / faint[4].exp() > 10.0 * g[4] / env[4].exp());
+}
+
+#[test]
 fn ray_set_is_cosine_distributed_about_the_normal() {
     use super::hemisphere::ray_direction;
     let n = DVec3::new(0.3, -0.5, 0.8).normalize();

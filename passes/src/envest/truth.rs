@@ -136,7 +136,8 @@ pub fn light_irradiance(
 
 /// Irradiance at `x` with normal `n` from distant `lobes`; occluded by
 /// `recipe` when `occluded` (the same occlusion as [`light_irradiance`], so
-/// the two differ only by the light).
+/// the two differ only by the light; the hidden emitters' spheres, which
+/// the lobes stand for, do not occlude).
 #[allow(clippy::too_many_arguments)]
 pub fn lobes_irradiance(
     recipe: &Recipe,
@@ -151,7 +152,13 @@ pub fn lobes_irradiance(
         return DVec3::ZERO;
     }
     let env = Environment::Black;
-    let tracer = PathTracer::new(recipe, &env, 0);
+    // The lobes stand for the hidden lights, so those lights' own spheres
+    // must not block them.
+    let mut geometry = recipe.clone();
+    geometry
+        .primitives
+        .retain(|p| !p.is_emitter() || p.in_field == Some(true));
+    let tracer = PathTracer::new(&geometry, &env, 0);
     let visibility = |dir: DVec3| {
         if occluded {
             tracer.visibility(&Ray { origin: x, dir }, f64::INFINITY)

@@ -75,6 +75,10 @@ pub struct EstimateEnvArgs {
     /// Directions sampled from the SG mixture per point and step.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().env_samples)]
     pub env_samples: u32,
+    /// Weight of the prior that fades environment light no point needs
+    /// (0 turns it off).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().energy_prior)]
+    pub energy_prior: f64,
     /// Seed of every random choice.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().seed)]
     pub seed: u64,
@@ -106,6 +110,7 @@ impl EstimateEnvArgs {
             iterations: self.iterations,
             batch: self.batch,
             env_samples: self.env_samples,
+            energy_prior: self.energy_prior,
             seed: self.seed,
             ..EnvEstimateKnobs::default()
         }
@@ -138,12 +143,13 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     bars.iter().for_each(|b| b.finish_and_clear());
     let s = &estimate.surface;
     println!(
-        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources)",
+        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources, {} as mixed)",
         s.views_kept,
         s.views_tried,
         s.scores.iter().filter(|(_, k)| !k).count(),
         s.points.len(),
-        s.emitters
+        s.emitters,
+        s.mixed
     );
     println!(
         "time: views {:.1} s, near field {:.1} s ({} rays per point), fit {:.1} s ({} steps); final loss {:.4e}",
