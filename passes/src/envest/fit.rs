@@ -102,11 +102,16 @@ fn point_loss(
 #[cfg(test)]
 pub(super) fn energy_prior(env: &[f64], weight: f64, mean: f64) -> f64 {
     env.chunks_exact(PARAMS_PER_LOBE)
-        .map(|p| {
-            let m = (p[4].exp() + p[5].exp() + p[6].exp()) / (3.0 * 4.0 * std::f64::consts::PI);
-            weight * (mean * m).sqrt()
-        })
+        .map(|p| weight * (mean * lobe_mean_radiance(p).0).sqrt())
         .sum()
+}
+
+/// A packed lobe's mean radiance m (its energy over 4π averaged over RGB)
+/// and its energies per channel.
+fn lobe_mean_radiance(p: &[f64]) -> (f64, [f64; 3]) {
+    let energies = [p[4].exp(), p[5].exp(), p[6].exp()];
+    let m = energies.iter().sum::<f64>() / (3.0 * 4.0 * std::f64::consts::PI);
+    (m, energies)
 }
 
 /// Adds the gradient of the energy prior to `g_env`: `weight`·Σ_k
@@ -116,16 +121,15 @@ pub(super) fn energy_prior(env: &[f64], weight: f64, mean: f64) -> f64 {
 /// that no point needs fades away, while one bright lobe (a sun the points
 /// do need) is held back less than by a penalty on the total.
 pub(super) fn add_energy_prior(env: &[f64], weight: f64, mean: f64, g_env: &mut [f64]) {
-    let four_pi = 4.0 * std::f64::consts::PI;
+    let dm_de = 1.0 / (3.0 * 4.0 * std::f64::consts::PI);
     for (p, g) in env
         .chunks_exact(PARAMS_PER_LOBE)
         .zip(g_env.chunks_exact_mut(PARAMS_PER_LOBE))
     {
-        let energies = [p[4].exp(), p[5].exp(), p[6].exp()];
-        let m = (energies.iter().sum::<f64>() / (3.0 * four_pi)).max(1e-300);
-        let d_m = 0.5 * weight * (mean / m).sqrt();
+        let (m, energies) = lobe_mean_radiance(p);
+        let d_m = 0.5 * weight * (mean / m.max(1e-300)).sqrt();
         for c in 0..3 {
-            g[4 + c] += d_m * energies[c] / (3.0 * four_pi);
+            g[4 + c] += d_m * energies[c] * dm_de;
         }
     }
 }

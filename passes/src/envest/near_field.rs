@@ -143,9 +143,10 @@ impl NearFieldTracer {
             opacity: Vec::with_capacity(points.len() * texels),
         };
         let mut renderer = Renderer::new(ctx, 1)?;
+        let chunks = rays.div_ceil(RAYS_PER_GROUP) as usize;
+        let (e_scale, o_scale) = (std::f64::consts::PI / rays as f64, 1.0 / rays as f64);
         for start in (0..points.len()).step_by(POINTS_PER_BATCH) {
             let count = POINTS_PER_BATCH.min(points.len() - start);
-            let chunks = rays.div_ceil(RAYS_PER_GROUP) as usize;
             let e_size = (count * chunks * 16) as u64;
             let o_size = (count * texels * 4) as u64;
             let e_readback = BufferReadback::new(ctx, "near-field irradiance readback", e_size)?;
@@ -202,10 +203,9 @@ impl NearFieldTracer {
                 for chunk in point.chunks_exact(4) {
                     sum.iter_mut().zip(chunk).for_each(|(s, &c)| *s += c as f64);
                 }
-                let scale = std::f64::consts::PI / rays as f64;
                 out.irradiance
-                    .push(DVec3::new(sum[0], sum[1], sum[2]) * scale);
-                out.covered.push(sum[3] / rays as f64);
+                    .push(DVec3::new(sum[0], sum[1], sum[2]) * e_scale);
+                out.covered.push(sum[3] * o_scale);
             }
             out.opacity.extend(o_readback.read_f32()?);
             progress(start + count, points.len());
