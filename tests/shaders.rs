@@ -39,6 +39,10 @@ fn every_shipped_shader_compiles() {
                 Define::F32("FIT_MAX_SHARPNESS", 1024.0),
                 Define::U32("ARC_PIECES", 4),
                 Define::F32("OUTSIDE_OFFSET", 2e-3),
+                Define::U32(
+                    "NF_RAYS_PER_INVOCATION",
+                    inlay_passes::envest::near_field::RAYS_PER_INVOCATION,
+                ),
             ];
             defines.extend(inlay_passes::shadow::shadow_defines());
             compile(&lib, path, name, stage, &defines).unwrap_or_else(|e| panic!("{e}"));
