@@ -6,18 +6,16 @@
 //! medium's in-scattered light, mixed by density.
 //!
 //! **Emitters keep their power**: the smooth edge makes a sphere's field
-//! look larger than the sphere (its density reaches out by the falloff
-//! width), so a small lamp would light the field's surroundings more than
-//! the recipe's lamp lights them. Each emitting sphere's colour is scaled
-//! by [`emitter_power_scale`], the ratio of the sphere's cross-section to
-//! the field's effective one (∫ (1 − e^{−τ(b)}) 2πb db over impact
-//! parameters b), so the field emits the recipe's power.
+//! look larger than the sphere, so after the bake each emitting sphere's
+//! nodes are scaled until the field emits the recipe's power
+//! ([`super::emitter_power`]).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::{DVec3, UVec3};
 use rayon::prelude::*;
 
+use super::emitter_power::calibrate_emitters;
 use super::knobs::BakeKnobs;
 use super::path_tracer::PathTracer;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
@@ -33,29 +31,7 @@ pub fn edge_profile(s: f64) -> f64 {
 
 /// Changes whenever baking would give different nodes for the same recipe
 /// and knobs (cached bakes carry it in their key).
-pub const BAKE_REVISION: u32 = 2;
-
-/// The factor that gives an emitting sphere of `radius` the recipe's power
-/// in a field whose edge profile has half-width `width` and peak density
-/// `sigma_max`: πr² over the field's effective cross-section.
-pub fn emitter_power_scale(radius: f64, width: f64, sigma_max: f64) -> f64 {
-    let outer = radius + width;
-    let (nb, nt) = (256, 512);
-    let mut area = 0.0;
-    for ib in 0..nb {
-        let b = outer * (ib as f64 + 0.5) / nb as f64;
-        let half = (outer * outer - b * b).max(0.0).sqrt();
-        let dt = 2.0 * half / nt as f64;
-        let tau: f64 = (0..nt)
-            .map(|it| {
-                let t = -half + (it as f64 + 0.5) * dt;
-                sigma_max * edge_profile(((b * b + t * t).sqrt() - radius) / width) * dt
-            })
-            .sum();
-        area += (1.0 - (-tau).exp()) * 2.0 * std::f64::consts::PI * b * outer / nb as f64;
-    }
-    std::f64::consts::PI * radius * radius / area.max(1e-300)
-}
+pub const BAKE_REVISION: u32 = 3;
 
 /// Nodes per axis for a bake at `resolution` along the longest axis.
 pub fn grid_resolution(recipe: &Recipe, resolution: u32) -> UVec3 {
@@ -82,16 +58,6 @@ pub fn bake_grid(
     // Nodes whose trilinear cells can reach non-zero density need a colour.
     let band = width + 2.0 * voxel;
     let tracer = PathTracer::new(recipe, env, knobs.bounces);
-    let emitter_scale: Vec<f64> = recipe
-        .primitives
-        .iter()
-        .map(|p| match p.shape {
-            crate::scene::Shape::Sphere { radius, .. } if p.is_emitter() => {
-                emitter_power_scale(radius, width, sigma_max)
-            }
-            _ => 1.0,
-        })
-        .collect();
     let done = AtomicU64::new(0);
     let slices: Vec<Vec<[f32; 4]>> = (0..res.z)
         .into_par_iter()
@@ -110,7 +76,6 @@ pub fn bake_grid(
                         sigma_max,
                         band,
                         knobs.samples,
-                        &emitter_scale,
                         &mut rng,
                     ));
                 }
@@ -121,7 +86,25 @@ pub fn bake_grid(
         })
         .collect();
     let nodes = slices.into_iter().flatten().collect();
-    GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK)
+    let mut field = GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK);
+    let owner = |x: DVec3| {
+        nearest_opaque(recipe, x)
+            .filter(|(d, _)| d.abs() <= band)
+            .map(|(_, i)| i)
+    };
+    calibrate_emitters(recipe, &mut field, band, &owner);
+    field
+}
+
+/// The opaque primitive of `recipe` nearest to `x` (signed distance, index).
+fn nearest_opaque(recipe: &Recipe, x: DVec3) -> Option<(f64, usize)> {
+    recipe
+        .primitives
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.medium_density.is_none())
+        .map(|(i, p)| (p.shape.sdf(x), i))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -133,26 +116,18 @@ fn bake_node(
     sigma_max: f64,
     band: f64,
     samples: u32,
-    emitter_scale: &[f64],
     rng: &mut Pcg32,
 ) -> [f32; 4] {
     // Nearest opaque primitive, and the media around x.
-    let mut nearest: Option<(f64, usize)> = None;
+    let nearest = nearest_opaque(recipe, x);
     let mut sigma_media = 0.0;
     let mut medium_near: Option<(f64, usize)> = None;
     for (i, p) in recipe.primitives.iter().enumerate() {
-        let d = p.shape.sdf(x);
-        match p.medium_density {
-            None => {
-                if nearest.is_none_or(|(b, _)| d < b) {
-                    nearest = Some((d, i));
-                }
-            }
-            Some(sigma) => {
-                sigma_media += sigma * edge_profile(d / width);
-                if medium_near.is_none_or(|(b, _)| d < b) {
-                    medium_near = Some((d, i));
-                }
+        if let Some(sigma) = p.medium_density {
+            let d = p.shape.sdf(x);
+            sigma_media += sigma * edge_profile(d / width);
+            if medium_near.is_none_or(|(b, _)| d < b) {
+                medium_near = Some((d, i));
             }
         }
     }
@@ -166,7 +141,7 @@ fn bake_node(
         for _ in 0..samples {
             sum += tracer.surface_radiance(i, p, normal, rng);
         }
-        sum / n * emitter_scale[i]
+        sum / n
     });
     let medium_colour = medium_near.filter(|(d, _)| *d <= band).map(|(_, i)| {
         let mut sum = DVec3::ZERO;

@@ -2,13 +2,15 @@
 //! analytic primitives and placed objects (triangles in a BVH), the grid
 //! bake, and reference camera images.
 
+mod emitter_power;
 mod grid_bake;
 mod knobs;
 mod mesh_bvh;
 mod path_tracer;
 mod reference_image;
 
-pub use grid_bake::{bake_grid, edge_profile, emitter_power_scale, grid_resolution, BAKE_REVISION};
+pub use emitter_power::{calibrate_emitters, field_power};
+pub use grid_bake::{bake_grid, edge_profile, grid_resolution, BAKE_REVISION};
 pub use knobs::BakeKnobs;
 pub use mesh_bvh::{MeshHit, MeshScene, MeshSurface};
 pub use path_tracer::{Event, PathTracer, Scatter};
