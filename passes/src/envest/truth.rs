@@ -54,6 +54,35 @@ pub fn test_points(scene: &Scene, recipe: &Recipe) -> Vec<(DVec3, DVec3)> {
         .collect()
 }
 
+/// The cone an emitting sphere subtends from a point outside it.
+struct SphereCone {
+    /// Unit direction to the sphere's centre.
+    axis: DVec3,
+    /// Cosine of the cone's half-angle.
+    cos_max: f64,
+    /// Its solid angle.
+    solid: f64,
+}
+
+/// The cone sphere primitive `p` subtends from `x` (none for other shapes
+/// or when `x` is inside the sphere).
+fn sphere_cone(p: &Primitive, x: DVec3) -> Option<SphereCone> {
+    let Shape::Sphere { centre, radius } = p.shape else {
+        return None;
+    };
+    let to = centre - x;
+    let d = to.length();
+    if d <= radius {
+        return None;
+    }
+    let cos_max = (1.0 - (radius / d).powi(2)).max(0.0).sqrt();
+    Some(SphereCone {
+        axis: to / d,
+        cos_max,
+        solid: 2.0 * std::f64::consts::PI * (1.0 - cos_max),
+    })
+}
+
 fn emitters(recipe: &Recipe, lights: Lights) -> Vec<&Primitive> {
     let (inside, outside) = recipe.lights();
     match lights {
@@ -87,17 +116,14 @@ pub fn light_irradiance(
     let mut rng = Pcg32::new(seed, 0x7207);
     let mut e = DVec3::ZERO;
     for p in emitters(recipe, lights) {
-        let Shape::Sphere { centre, radius } = p.shape else {
+        let Some(SphereCone {
+            axis,
+            cos_max,
+            solid,
+        }) = sphere_cone(p, x)
+        else {
             continue;
         };
-        let to = centre - x;
-        let d = to.length();
-        if d <= radius {
-            continue;
-        }
-        let axis = to / d;
-        let cos_max = (1.0 - (radius / d).powi(2)).max(0.0).sqrt();
-        let solid = 2.0 * std::f64::consts::PI * (1.0 - cos_max);
         let (t, b) = axis.any_orthonormal_pair();
         for _ in 0..samples {
             let [u, v] = rng.next_2d();
@@ -184,21 +210,14 @@ pub fn hidden_light_lobes(
 ) -> Vec<Sg64> {
     let mut lobes = environment_lobes(env);
     for p in emitters(recipe, Lights::Hidden) {
-        let Shape::Sphere { centre, radius } = p.shape else {
+        let Some(SphereCone { axis, solid, .. }) = sphere_cone(p, at) else {
             continue;
         };
-        let to = centre - at;
-        let d = to.length();
-        if d <= radius {
-            continue;
-        }
-        let cos_max = (1.0 - (radius / d).powi(2)).max(0.0).sqrt();
-        let solid = 2.0 * std::f64::consts::PI * (1.0 - cos_max);
         let sharpness = 2.0 * std::f64::consts::PI / solid;
         let capped = sharpness.min(max_sharpness);
         let keep = |l: f64| 2.0 * std::f64::consts::PI / l * Sg64::one_minus_exp_neg(2.0 * l);
         lobes.push(Sg64 {
-            direction: to / d,
+            direction: axis,
             sharpness: capped,
             amplitude: p.emission * keep(sharpness) / keep(capped),
         });
