@@ -1,6 +1,7 @@
 // The near-field light at surface points (METHOD.md "Environment light
-// estimation"), computed once before the fit. Each point holds its ray
-// origin (the surface point lifted along the normal) and its unit normal.
+// estimation"), computed once before the fit. Each point holds its
+// position, how far above the surface its rays start marching, and its
+// unit normal; nf_ray_start mirrors ray_start in near_field.rs.
 // `irradiance`: workgroup (c, p) marches rays [c·NF_RAYS_PER_GROUP,
 // (c + 1)·NF_RAYS_PER_GROUP) of point p's `rays` cosine-distributed rays
 // (hemisphere.wgsl) through the field and writes their sums Σ Ĉ in rgb and
@@ -33,7 +34,7 @@ struct NearFieldPush {
 
 var<immediate> pc: NearFieldPush;
 
-// Two vec4 per point: (origin, 0), (normal, 0).
+// Two vec4 per point: (position, rise), (normal, 0).
 @group(0) @binding(3) var<storage, read> points: array<vec4<f32>>;
 // One vec4 per point of the batch and chunk of rays, chunk-minor:
 // (Σ Ĉ, Σ Ô) over the chunk's rays.
@@ -44,6 +45,14 @@ var<immediate> pc: NearFieldPush;
 const NF_GROUP: u32 = 64u;
 const NF_RAYS_PER_GROUP: u32 = NF_GROUP * NF_RAYS_PER_INVOCATION;
 const NF_NO_OBJECT: f32 = 3.0e38;
+// near_field.rs MIN_RISE_COSINE.
+const NF_MIN_RISE_COSINE: f32 = 0.25;
+
+// Where the ray from the point along d starts marching: `rise` above the
+// surface along the ray itself.
+fn nf_ray_start(position: vec3<f32>, normal: vec3<f32>, rise: f32, d: vec3<f32>) -> vec3<f32> {
+    return position + d * (rise / max(dot(d, normal), NF_MIN_RISE_COSINE));
+}
 
 var<workgroup> nf_sums: array<vec4<f32>, NF_GROUP>;
 
@@ -52,12 +61,13 @@ fn irradiance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation
     let chunk = group.x;
     let local_point = group.y;
     let point = pc.first_point + local_point;
-    let origin = points[2u * point].xyz;
+    let position = points[2u * point];
     let normal = points[2u * point + 1u].xyz;
     let end = min(pc.rays, (chunk + 1u) * NF_RAYS_PER_GROUP);
     var sum = vec4<f32>(0.0);
     for (var i = chunk * NF_RAYS_PER_GROUP + lid; i < end; i += NF_GROUP) {
         let d = hs_ray_direction(normal, point, pc.seed, i, pc.rays);
+        let origin = nf_ray_start(position.xyz, normal, position.w, d);
         let m = march_ray(origin, d, NF_NO_OBJECT, pc.step, pc.termination);
         sum += vec4<f32>(m.colour, m.opacity);
     }
@@ -82,9 +92,11 @@ fn opacity_map(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let point = pc.first_point + id.y;
-    let origin = points[2u * point].xyz;
+    let position = points[2u * point];
+    let normal = points[2u * point + 1u].xyz;
     let t = vec2<u32>(id.x % pc.map_side, id.x / pc.map_side);
     let d = dm_direction(t, vec2<u32>(pc.map_side, pc.map_side));
+    let origin = nf_ray_start(position.xyz, normal, position.w, d);
     let m = march_ray(origin, d, NF_NO_OBJECT, pc.step, pc.termination);
     opacity_out[id.y * texels + id.x] = m.opacity;
 }

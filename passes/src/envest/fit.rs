@@ -21,9 +21,6 @@ use crate::geometry::Aabb;
 use crate::rng::Pcg32;
 use crate::sg::Sg64;
 
-/// Octaves of the albedo MLP's position encoding.
-pub const ALBEDO_FREQUENCIES: u32 = 4;
-
 /// Fraction of the steps over which the albedo's encoding opens from the
 /// coarsest to the finest octave.
 pub const ANNEAL_FRACTION: f64 = 0.5;
@@ -50,8 +47,14 @@ pub struct FitResult {
     pub albedo: AlbedoMlp,
     /// (step, mean squared error of that step's batch), every few steps.
     pub history: Vec<(u32, f64)>,
-    /// Mean squared error over every point at the end (E_env sampled).
+    /// Mean squared error over every point at the end (E_env sampled, so
+    /// it includes the sampling noise of E_env).
     pub final_loss: f64,
+    /// The same error without the noise: the mean of r_A·r_B (see
+    /// [`point_loss`]), whose expectation is the squared residual of the
+    /// exact E_env; noise can take it slightly below zero when the fit is
+    /// near exact.
+    pub exact_loss: f64,
 }
 
 /// The loss of point `i` and, when `grads` is given, its gradients added.
@@ -62,7 +65,7 @@ pub struct FitResult {
 /// gradient would pull the environment towards what samples with little
 /// variance (broad, dim lobes instead of a sun); the gradient of r_A·r_B,
 /// whose expectation is the squared residual of the exact E_env, is not.
-/// The loss returned is ½(r_A² + r_B²) averaged over RGB.
+/// Returns ½(r_A² + r_B²) and r_A·r_B, each averaged over RGB.
 #[allow(clippy::too_many_arguments)]
 fn point_loss(
     data: &FitData,
@@ -74,7 +77,7 @@ fn point_loss(
     samples: u32,
     rng: &mut Pcg32,
     grads: Option<(&mut [f64], &mut [f64], f64)>,
-) -> f64 {
+) -> (f64, f64) {
     let p = &data.points[i];
     let trace = mlp.forward(p.position);
     let visibility = |d: DVec3| 1.0 - data.near.opacity_at(i, d);
@@ -94,7 +97,7 @@ fn point_loss(
         term_a.backward(env, k * r_b * a * inv_pi, g_env);
         term_b.backward(env, k * r_a * a * inv_pi, g_env);
     }
-    loss
+    (loss, r_a.dot(r_b) / 3.0)
 }
 
 /// The energy prior's value (see [`add_energy_prior`]); the tests check
@@ -189,7 +192,7 @@ pub fn fit_from(
     let mut mlp = AlbedoMlp::new(
         data.bounds,
         knobs.albedo_width as usize,
-        ALBEDO_FREQUENCIES,
+        knobs.albedo_octaves,
         knobs.seed,
     );
     let mut adam_env = Adam::new(env.len());
@@ -229,7 +232,8 @@ pub fn fit_from(
                         knobs.env_samples,
                         &mut rng,
                         Some((&mut g_mlp, &mut g_env, scale)),
-                    );
+                    )
+                    .0;
                 }
                 (loss, g_mlp, g_env)
             })
@@ -258,7 +262,7 @@ pub fn fit_from(
     mlp.set_band(mlp.frequencies() as f64);
     let env_lobes = lobes(&env);
     let sampler = EnvSampler::new(&env_lobes);
-    let final_loss = (0..n)
+    let (final_loss, exact_loss) = (0..n)
         .into_par_iter()
         .map(|i| {
             let mut rng = Pcg32::new(knobs.seed ^ 0xF1A1, i as u64);
@@ -274,12 +278,13 @@ pub fn fit_from(
                 None,
             )
         })
-        .sum::<f64>()
-        / n.max(1) as f64;
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let per_point = 1.0 / n.max(1) as f64;
     FitResult {
         lobes: env_lobes,
         albedo: mlp,
         history,
-        final_loss,
+        final_loss: final_loss * per_point,
+        exact_loss: exact_loss * per_point,
     }
 }

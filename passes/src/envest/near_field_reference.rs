@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use super::hemisphere::ray_direction;
-use super::near_field::{ray_origin, ray_seed};
+use super::near_field::{ray_rise, ray_seed, ray_start};
 use super::surface::SurfacePoint;
 use crate::field::GridField;
 use crate::geometry::Ray;
@@ -21,12 +21,13 @@ pub fn irradiance_reference(
     rays: u32,
     seed: u64,
 ) -> (DVec3, f64) {
-    let origin = ray_origin(field, p);
+    let rise = ray_rise(field);
     let seed = ray_seed(seed);
     let mut colour = DVec3::ZERO;
     let mut opacity = 0.0;
     for i in 0..rays {
         let dir = ray_direction(p.normal, index, seed, i, rays);
+        let origin = ray_start(p, rise, dir);
         let m = march_ray(field, &Ray { origin, dir }, f64::INFINITY, march);
         colour += m.colour;
         opacity += m.opacity;
@@ -44,11 +45,12 @@ pub fn opacity_map_reference(
     p: &SurfacePoint,
     side: u32,
 ) -> Vec<f64> {
-    let origin = ray_origin(field, p);
+    let rise = ray_rise(field);
     let map = DirectionMap::new(MapKind::Octahedral, side);
     (0..side * side)
         .map(|t| {
             let dir = map.direction(t % side, t / side);
+            let origin = ray_start(p, rise, dir);
             march_ray(field, &Ray { origin, dir }, f64::INFINITY, march).opacity
         })
         .collect()

@@ -318,3 +318,30 @@ fn a_seed_gives_the_same_lobes_twice_and_the_fit_lowers_the_loss() {
         a.final_loss
     );
 }
+
+#[test]
+fn rays_start_on_their_line_through_the_point_risen_off_the_surface() {
+    use super::near_field::{ray_start, MIN_RISE_COSINE};
+    use super::surface::SurfacePoint;
+    let p = SurfacePoint {
+        position: DVec3::new(0.2, 0.1, -0.3),
+        normal: DVec3::Y,
+        radiance: DVec3::ONE,
+        view: 0,
+    };
+    let rise = 0.03;
+    for (x, y) in [(0.0, 1.0), (0.6, 0.8), (0.9, 0.3), (1.0, 0.1)] {
+        let dir = DVec3::new(x, y, 0.0).normalize();
+        let offset = ray_start(&p, rise, dir) - p.position;
+        // On the ray through the point, ahead of it.
+        assert!(offset.cross(dir).length() < 1e-12 && offset.dot(dir) > 0.0);
+        // Risen by `rise` unless the ray is nearer the horizon than the cap.
+        let height = offset.dot(p.normal);
+        if dir.y >= MIN_RISE_COSINE {
+            assert!((height - rise).abs() < 1e-12, "{dir}: {height}");
+        } else {
+            assert!(height < rise && height > 0.0, "{dir}: {height}");
+            assert!((offset.length() - rise / MIN_RISE_COSINE).abs() < 1e-12);
+        }
+    }
+}

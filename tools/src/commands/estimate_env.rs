@@ -66,7 +66,11 @@ pub struct EstimateEnvArgs {
     /// Width of the albedo MLP's hidden layers.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().albedo_width)]
     pub albedo_width: u32,
-    /// Adam steps.
+    /// Octaves of Fourier encoding on the albedo MLP's input (0: position
+    /// alone).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().albedo_octaves)]
+    pub albedo_octaves: u32,
+    /// Adam steps .
     #[arg(long, default_value_t = EnvEstimateKnobs::default().iterations)]
     pub iterations: u32,
     /// Surface points per step.
@@ -107,6 +111,7 @@ impl EstimateEnvArgs {
             quality_threshold: self.quality_threshold,
             lobes: self.lobes,
             albedo_width: self.albedo_width,
+            albedo_octaves: self.albedo_octaves,
             iterations: self.iterations,
             batch: self.batch,
             env_samples: self.env_samples,
@@ -152,13 +157,14 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         s.mixed
     );
     println!(
-        "time: views {:.1} s, near field {:.1} s ({} rays per point), fit {:.1} s ({} steps); final loss {:.4e}",
+        "time: views {:.1} s, near field {:.1} s ({} rays per point), fit {:.1} s ({} steps); final loss {:.4e} ({:.4e} without E_env's sampling noise)",
         estimate.seconds[0],
         estimate.seconds[1],
         knobs.rays_per_point,
         estimate.seconds[2],
         knobs.iterations,
-        estimate.fit.final_loss
+        estimate.fit.final_loss,
+        estimate.fit.exact_loss
     );
     let lobes = &estimate.fit.lobes;
     let out = args
