@@ -26,8 +26,9 @@ use crate::probe::octahedral_bilinear;
 /// spacings wide in the bundled recipes), so rays marched from the point
 /// would see its own surface. Rising along each ray rather than lifting
 /// the origin along the normal keeps every ray on its line through the
-/// point: a lifted origin is closer to a lamp above it (2 spacings put
-/// PLANTS' floor 6 % too bright under its lamp, 4 % farther away).
+/// point: a lifted origin is closer to a lamp above it (on 150 of
+/// PLANTS' floor points, E_nerf read 8.6 % above the path tracer's
+/// irradiance with the origin lifted, 4.3 % rising along the rays).
 pub const SURFACE_OFFSET_SPACINGS: f64 = 2.0;
 
 /// The smallest cosine to the normal the rise is divided by: a ray
