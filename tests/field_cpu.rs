@@ -129,9 +129,12 @@ fn baking_is_reproducible_and_density_is_zero_away_from_surfaces() {
     let a = bake(&s, 16, 2, 1);
     let b = bake(&s, 16, 2, 1);
     assert_eq!(a.nodes, b.nodes, "same seed, same field");
-    // Bytes round-trip through the file format.
+    // Bytes round-trip through the file format: a fresh bake and the same
+    // bake loaded from its file (or the cache) are the same field, bounds
+    // included (DOG's −0.1 and 0.9 are not f32 values).
     let back = parse_field(Path::new("x"), &field_bytes(&a)).unwrap();
     assert_eq!(back.nodes, a.nodes);
+    assert_eq!(back.bounds, a.bounds);
     // High above the dog there is nothing; under the floor it is solid.
     assert_eq!(a.density(DVec3::new(-0.7, 0.8, -0.7)), 0.0);
     assert!(a.density(DVec3::new(0.0, -0.08, 0.0)) > 100.0);

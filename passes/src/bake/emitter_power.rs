@@ -52,6 +52,10 @@ pub fn field_power(field: &GridField, centre: DVec3, radius: f64) -> DVec3 {
                     let ray = Ray { origin, dir: axis };
                     march_ray(field, &ray, 2.0 * radius, &knobs).colour * db * db
                 })
+                // Summed in order: a parallel sum's order, and so its last
+                // bits, would change from run to run.
+                .collect::<Vec<DVec3>>()
+                .into_iter()
                 .sum::<DVec3>()
         })
         .sum();

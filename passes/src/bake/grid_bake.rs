@@ -31,7 +31,7 @@ pub fn edge_profile(s: f64) -> f64 {
 
 /// Changes whenever baking would give different nodes for the same recipe
 /// and knobs (cached bakes carry it in their key).
-pub const BAKE_REVISION: u32 = 3;
+pub const BAKE_REVISION: u32 = 4;
 
 /// Nodes per axis for a bake at `resolution` along the longest axis.
 pub fn grid_resolution(recipe: &Recipe, resolution: u32) -> UVec3 {
@@ -50,7 +50,12 @@ pub fn bake_grid(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> GridField {
     let res = grid_resolution(recipe, knobs.resolution);
-    let bounds = recipe.bounds;
+    // The bounds as a field file stores them (f32), so that the field baked
+    // here and the same field loaded from its file are the same field.
+    let bounds = crate::geometry::Aabb::new(
+        recipe.bounds.min.as_vec3().as_dvec3(),
+        recipe.bounds.max.as_vec3().as_dvec3(),
+    );
     let spacing = bounds.size() / (res.as_dvec3() - DVec3::ONE);
     let voxel = spacing.max_element();
     let width = knobs.falloff_voxels * voxel;

@@ -193,6 +193,11 @@ pub fn env_term(
 }
 
 impl EnvTerm {
+    /// The part of the estimate that `lobe` (one of the mixture's) gives.
+    pub fn lobe_irradiance(&self, lobe: &Sg64) -> DVec3 {
+        self.samples.iter().map(|(d, f)| *f * lobe.eval(*d)).sum()
+    }
+
     /// Adds ∂loss/∂params to `grad` given ∂loss/∂E_env (RGB).
     pub fn backward(&self, params: &[f64], d_irradiance: DVec3, grad: &mut [f64]) {
         for (p, grad) in params

@@ -20,6 +20,7 @@ use super::surface::SurfacePoint;
 use crate::geometry::Aabb;
 use crate::rng::Pcg32;
 use crate::sg::Sg64;
+use crate::sgfit::model::{luminance, LUMINANCE_WEIGHTS};
 
 /// Fraction of the steps over which the albedo's encoding opens from the
 /// coarsest to the finest octave.
@@ -76,6 +77,7 @@ fn point_loss(
     sampler: &EnvSampler,
     samples: u32,
     rng: &mut Pcg32,
+    prior: &SharePrior,
     grads: Option<(&mut [f64], &mut [f64], f64)>,
 ) -> (f64, f64) {
     let p = &data.points[i];
@@ -96,53 +98,150 @@ fn point_loss(
         mlp.backward(&trace, k * (e_a * r_b + r_a * e_b) * inv_pi, g_mlp);
         term_a.backward(env, k * r_b * a * inv_pi, g_env);
         term_b.backward(env, k * r_a * a * inv_pi, g_env);
+        if prior.weight > 0.0 {
+            // Each half's gradient scaled by the slope the other half sees,
+            // so the noise of the two does not multiply.
+            let near = luminance(data.near.irradiance[i]);
+            let slope_a = prior.slope(near, luminance(term_a.irradiance));
+            let slope_b = prior.slope(near, luminance(term_b.irradiance));
+            let w = LUMINANCE_WEIGHTS * (0.5 * scale);
+            term_a.backward(env, w * slope_b, g_env);
+            term_b.backward(env, w * slope_a, g_env);
+        }
     }
     (loss, r_a.dot(r_b) / 3.0)
 }
 
-/// The energy prior's value (see [`add_energy_prior`]); the tests check
-/// the gradient against it.
-#[cfg(test)]
-pub(super) fn energy_prior(env: &[f64], weight: f64, mean: f64) -> f64 {
-    env.chunks_exact(PARAMS_PER_LOBE)
-        .map(|p| weight * (mean * lobe_mean_radiance(p).0).sqrt())
-        .sum()
+/// The prior that keeps out of the environment light which only the
+/// model's misfit asks for: the loss gains `weight`·s̄, the mean over
+/// points of the environment's share of each point's irradiance,
+/// s = Y(E_env)/(Y(E_nerf) + Y(E_env) + ε) in luminance Y.
+///
+/// The share, unlike the light's energy, is blind to where the light comes
+/// from and how much of it there is once it dominates: a point that the
+/// environment lights almost alone (s near 1) barely feels it, so the
+/// scenes whose light is hidden keep their light's strength and
+/// direction, while light added to points that the field itself lights
+/// costs in proportion to the share it takes. ε (a hundredth of the mean
+/// Y(E_nerf)) bounds the slope at points the field leaves dark.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SharePrior {
+    /// The weight: κ·L̄², κ the knob and L̄ the points' mean radiance
+    /// luminance (so κ is a fraction of the loss's scale).
+    pub weight: f64,
+    /// ε, in irradiance.
+    pub floor: f64,
 }
 
-/// A packed lobe's mean radiance m (its energy over 4π averaged over RGB)
-/// and its energies per channel.
-fn lobe_mean_radiance(p: &[f64]) -> (f64, [f64; 3]) {
-    let energies = [p[4].exp(), p[5].exp(), p[6].exp()];
-    let m = energies.iter().sum::<f64>() / (3.0 * 4.0 * std::f64::consts::PI);
-    (m, energies)
-}
+impl SharePrior {
+    /// The prior for knob `kappa` on `data`.
+    pub fn new(kappa: f64, data: &FitData) -> Self {
+        let n = data.points.len().max(1) as f64;
+        let mean_near = data
+            .near
+            .irradiance
+            .iter()
+            .map(|e| luminance(*e))
+            .sum::<f64>()
+            / n;
+        let mean = mean_luminance(data.points);
+        Self {
+            weight: kappa * mean * mean,
+            floor: 0.01 * mean_near,
+        }
+    }
 
-/// Adds the gradient of the energy prior to `g_env`: `weight`·Σ_k
-/// √(L̄·m_k), with m_k lobe k's mean radiance (its energy over 4π averaged
-/// over RGB) and L̄ = `mean` the points' mean radiance. The square root
-/// presses hardest on faint lobes: light spread thinly over the sphere
-/// that no point needs fades away, while one bright lobe (a sun the points
-/// do need) is held back less than by a penalty on the total.
-pub(super) fn add_energy_prior(env: &[f64], weight: f64, mean: f64, g_env: &mut [f64]) {
-    let dm_de = 1.0 / (3.0 * 4.0 * std::f64::consts::PI);
-    for (p, g) in env
-        .chunks_exact(PARAMS_PER_LOBE)
-        .zip(g_env.chunks_exact_mut(PARAMS_PER_LOBE))
-    {
-        let (m, energies) = lobe_mean_radiance(p);
-        let d_m = 0.5 * weight * (mean / m.max(1e-300)).sqrt();
-        for c in 0..3 {
-            g[4 + c] += d_m * energies[c] * dm_de;
+    /// The prior's value at one point, with near-field luminance `near` and
+    /// environment luminance `env`.
+    pub fn value(&self, near: f64, env: f64) -> f64 {
+        let env = env.max(0.0);
+        let total = near + env + self.floor;
+        if total > 0.0 {
+            self.weight * env / total
+        } else {
+            0.0
+        }
+    }
+
+    /// d[`Self::value`]/d`env`.
+    pub fn slope(&self, near: f64, env: f64) -> f64 {
+        let total = near + env.max(0.0) + self.floor;
+        if total > 0.0 {
+            self.weight * (near + self.floor) / (total * total)
+        } else {
+            0.0
         }
     }
 }
 
+/// A lobe of which less than this fraction of the energy reaches the
+/// points, on average (cosine-weighted, through their cached opacity), is
+/// unsupported by them; see [`prune_unseen`].
+pub const MIN_LOBE_REACH: f64 = 0.01;
+
+/// An unsupported lobe is dropped only if it also gives less than this
+/// fraction of the light that reaches the points from the whole
+/// environment (a light that few points see, such as one through a window,
+/// is kept by the share it gives them).
+pub const MAX_DROPPED_SHARE: f64 = 0.05;
+
+/// Each lobe's mean luminance irradiance over the points (through their
+/// cached opacity), `samples` directions per point from the mixture.
+pub fn lobe_reach(data: &FitData, env_lobes: &[Sg64], samples: u32, seed: u64) -> Vec<f64> {
+    let sampler = EnvSampler::new(env_lobes);
+    let n = data.points.len();
+    let sums = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = Pcg32::new(seed ^ 0x4EAC, i as u64);
+            let visibility = |d: DVec3| 1.0 - data.near.opacity_at(i, d);
+            let term = env_term(
+                env_lobes,
+                &sampler,
+                data.points[i].normal,
+                samples,
+                &visibility,
+                &mut rng,
+            );
+            env_lobes
+                .iter()
+                .map(|l| luminance(term.lobe_irradiance(l)))
+                .collect::<Vec<f64>>()
+        })
+        .collect::<Vec<Vec<f64>>>();
+    // Summed in point order, so that the same points give the same reach.
+    let mut reach = vec![0.0; env_lobes.len()];
+    for per_point in sums {
+        reach.iter_mut().zip(per_point).for_each(|(r, v)| *r += v);
+    }
+    reach.into_iter().map(|s| s / n.max(1) as f64).collect()
+}
+
+/// The packed parameters `env` without the lobes the points do not
+/// support: less than [`MIN_LOBE_REACH`] of the lobe's energy reaches
+/// them and it gives less than [`MAX_DROPPED_SHARE`] of the light that
+/// reaches them. Facing below every surface or behind every occluder, such
+/// a lobe feels almost no gradient and keeps what it started with; kept,
+/// it would stand in the estimate as light the field gives no evidence of.
+/// When no lobe reaches the points at all, none is kept.
+fn prune_unseen(data: &FitData, env: &[f64], samples: u32, seed: u64) -> Vec<f64> {
+    let env_lobes = lobes(env);
+    let reach = lobe_reach(data, &env_lobes, samples.max(64), seed);
+    let total: f64 = reach.iter().sum();
+    env.chunks_exact(PARAMS_PER_LOBE)
+        .zip(env_lobes.iter().zip(&reach))
+        .filter(|(_, (l, r))| {
+            let energy = luminance(l.integral());
+            let supported = **r >= MIN_LOBE_REACH * energy;
+            total > 0.0 && (supported || **r >= MAX_DROPPED_SHARE * total)
+        })
+        .flat_map(|(p, _)| p.iter().copied())
+        .collect()
+}
+
 /// The mean radiance luminance of `points` (sets the starting environment).
 fn mean_luminance(points: &[SurfacePoint]) -> f64 {
-    let sum: f64 = points
-        .iter()
-        .map(|p| crate::sgfit::model::luminance(p.radiance))
-        .sum();
+    let sum: f64 = points.iter().map(|p| luminance(p.radiance)).sum();
     sum / points.len().max(1) as f64
 }
 
@@ -202,8 +301,7 @@ pub fn fit_from(
     let steps = knobs.iterations;
     let batch = knobs.batch as usize;
     let report_every = (steps / 100).max(1);
-    let mean = mean_luminance(data.points);
-    let prior = knobs.energy_prior * mean;
+    let prior = SharePrior::new(knobs.share_prior, data);
     for step in 0..steps {
         mlp.set_band(
             mlp.frequencies() as f64 * (step as f64 / (ANNEAL_FRACTION * steps as f64)).min(1.0),
@@ -231,6 +329,7 @@ pub fn fit_from(
                         &sampler,
                         knobs.env_samples,
                         &mut rng,
+                        &prior,
                         Some((&mut g_mlp, &mut g_env, scale)),
                     )
                     .0;
@@ -246,7 +345,6 @@ pub fn fit_from(
             g_mlp.iter_mut().zip(gm).for_each(|(a, b)| *a += b);
             g_env.iter_mut().zip(ge).for_each(|(a, b)| *a += b);
         }
-        add_energy_prior(&env, prior, mean, &mut g_env);
         let decay = 0.1f64.powf(step as f64 / steps.max(1) as f64);
         if fit_env {
             adam_env.step(&mut env, &g_env, knobs.env_rate * decay);
@@ -260,6 +358,9 @@ pub fn fit_from(
         }
     }
     mlp.set_band(mlp.frequencies() as f64);
+    if fit_env {
+        env = prune_unseen(data, &env, knobs.env_samples, knobs.seed);
+    }
     let env_lobes = lobes(&env);
     let sampler = EnvSampler::new(&env_lobes);
     let (final_loss, exact_loss) = (0..n)
@@ -275,10 +376,13 @@ pub fn fit_from(
                 &sampler,
                 knobs.env_samples,
                 &mut rng,
+                &prior,
                 None,
             )
         })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        .collect::<Vec<(f64, f64)>>()
+        .into_iter()
+        .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
     let per_point = 1.0 / n.max(1) as f64;
     FitResult {
         lobes: env_lobes,

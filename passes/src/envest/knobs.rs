@@ -42,17 +42,16 @@ pub struct EnvEstimateKnobs {
     pub env_rate: f64,
     /// Adam step size of the albedo MLP.
     pub albedo_rate: f64,
-    /// Weight κ of the prior that keeps light the data does not ask for out
-    /// of the environment: the loss gains κ·L̄·Σ_k √(L̄·m_k), with L̄ the
-    /// points' mean radiance luminance and m_k lobe k's mean radiance (its
-    /// energy over 4π, averaged over RGB); 0 turns it off. It keeps out
-    /// light that only the model's misfit asks for (on PLANTS, whose lights
-    /// are all in the field, κ = 0 leaves 23 % of the lamp's irradiance in
-    /// the environment, 0.001 leaves 13 %, 0.003 leaves 5 %), but it buys
-    /// the points' irradiance with as little energy as it can, turning side
-    /// light into overhead light (DOG misses its hidden light by 15 % at
-    /// 0.001 and by 24 % at 0.003; docs/benchmarks.md).
-    pub energy_prior: f64,
+    /// Weight κ of the prior that keeps out of the environment light
+    /// which only the model's misfit asks for: the loss gains κ·L̄² times
+    /// the points' mean share of environment light in their irradiance
+    /// (L̄ the points' mean radiance luminance; [`super::fit::SharePrior`]);
+    /// 0 turns it off. The field's blur and E_nerf's noise leave some
+    /// points darker than their colour asks for, and without the prior the
+    /// environment fills them in: on PLANTS, whose lights are all inside
+    /// the field, κ = 0 leaves 23 % of the lamp's irradiance in the
+    /// environment and κ = 0.01 about 1 % (docs/benchmarks.md).
+    pub share_prior: f64,
     /// Largest lobe sharpness the fit may reach.
     pub max_sharpness: f64,
     /// A point whose luminance exceeds this multiple of the median point's is
@@ -81,7 +80,7 @@ impl Default for EnvEstimateKnobs {
             env_samples: 48,
             env_rate: 0.02,
             albedo_rate: 2e-3,
-            energy_prior: 0.001,
+            share_prior: 0.01,
             max_sharpness: 2000.0,
             emitter_ratio: 50.0,
             seed: 1,
@@ -116,14 +115,13 @@ impl EnvEstimateKnobs {
                     .or_else(|| pos("env_rate", self.env_rate, 1.0))
                     .or_else(|| pos("albedo_rate", self.albedo_rate, 1.0))
                     .or_else(|| {
-                        (!(self.energy_prior.is_finite()
-                            && (0.0..=1.0).contains(&self.energy_prior)))
-                        .then(|| {
-                            (
-                                "energy_prior",
-                                format!("{} must be in [0, 1]", self.energy_prior),
-                            )
-                        })
+                        (!(self.share_prior.is_finite() && (0.0..=1.0).contains(&self.share_prior)))
+                            .then(|| {
+                                (
+                                    "share_prior",
+                                    format!("{} must be in [0, 1]", self.share_prior),
+                                )
+                            })
                     })
                     .or_else(|| pos("max_sharpness", self.max_sharpness, 1e4))
                     .or_else(|| pos("emitter_ratio", self.emitter_ratio, 1e9))

@@ -81,26 +81,39 @@ fn environment_gradient_matches_finite_differences() {
 }
 
 #[test]
-fn energy_prior_gradient_matches_finite_differences() {
-    let env = initial_params(5, 0.3);
-    let (weight, mean) = (0.02, 0.3);
-    let mut g = vec![0.0; env.len()];
-    super::fit::add_energy_prior(&env, weight, mean, &mut g);
-    let f = |p: &[f64]| super::fit::energy_prior(p, weight, mean);
-    for (i, gi) in g.iter().enumerate() {
-        let n = numeric(&env, i, 1e-5, &f);
-        assert!(
-            (gi - n).abs() <= 1e-7 + 1e-5 * n.abs(),
-            "param {i}: {gi} vs {n}"
-        );
+fn share_prior_slope_matches_finite_differences_and_stays_finite() {
+    use super::fit::SharePrior;
+    let prior = SharePrior {
+        weight: 0.02,
+        floor: 1e-3,
+    };
+    for near in [0.0, 1e-6, 0.05, 1.0, 300.0] {
+        for env in [0.0, 1e-6, 0.05, 1.0, 300.0] {
+            let h = 1e-6 * (near + env + prior.floor);
+            let numeric = (prior.value(near, env + h) - prior.value(near, (env - h).max(0.0)))
+                / (env + h - (env - h).max(0.0));
+            let slope = prior.slope(near, env);
+            assert!(slope.is_finite() && slope >= 0.0, "near {near} env {env}");
+            assert!(
+                (slope - numeric).abs() <= 1e-4 * slope.abs() + 1e-9,
+                "near {near} env {env}: {slope} vs {numeric}"
+            );
+            // Bounded by the floor, wherever the field leaves a point dark.
+            assert!(slope <= prior.weight / prior.floor * (1.0 + 1e-12));
+        }
     }
-    // Faint lobes feel it hardest: the pull on log energy per unit of
-    // energy grows as the lobe fades.
-    let mut faint = env.clone();
-    faint[4..7].iter_mut().for_each(|e| *e -= 6.0);
-    let mut gf = vec![0.0; env.len()];
-    super::fit::add_energy_prior(&faint, weight, mean, &mut gf);
-    assert!(gf[4] / faint[4].exp() > 10.0 * g[4] / env[4].exp());
+    // No floor and no light at all: zero, not NaN.
+    let bare = SharePrior {
+        weight: 0.02,
+        floor: 0.0,
+    };
+    assert_eq!(bare.value(0.0, 0.0), 0.0);
+    assert_eq!(bare.slope(0.0, 0.0), 0.0);
+    // A point the environment lights almost alone barely feels the prior;
+    // one the field lights feels it in full.
+    assert!(prior.slope(0.01, 1.0) < 0.02 * prior.slope(1.0, 0.01));
+    // The value is a share of the weight.
+    assert!((prior.value(1.0, 1.0) - 0.02 * 1.0 / 2.001).abs() < 1e-12);
 }
 
 #[test]
@@ -281,9 +294,35 @@ fn synthetic_data(
     (points, near)
 }
 
+/// The fit's view of synthetic points (the box they lie in).
+fn synthetic_fit_data<'a>(
+    points: &'a [super::surface::SurfacePoint],
+    near: &'a super::near_field::NearField,
+) -> super::fit::FitData<'a> {
+    super::fit::FitData {
+        points,
+        near,
+        bounds: Aabb::new(DVec3::new(-0.5, 0.0, -0.5), DVec3::new(0.5, 0.3, 0.5)),
+    }
+}
+
+/// Knobs for a fast fit on synthetic points: `lobes` lobes, `iterations`
+/// steps, a small network and batch.
+fn small_fit_knobs(lobes: u32, iterations: u32) -> super::knobs::EnvEstimateKnobs {
+    super::knobs::EnvEstimateKnobs {
+        lobes,
+        albedo_width: 8,
+        iterations,
+        batch: 64,
+        env_samples: 16,
+        env_rate: 0.05,
+        ..Default::default()
+    }
+}
+
 #[test]
 fn a_seed_gives_the_same_lobes_twice_and_the_fit_lowers_the_loss() {
-    use super::fit::{fit_environment, FitData};
+    use super::fit::fit_environment;
     use super::knobs::EnvEstimateKnobs;
     let sun = crate::sg::Sg64 {
         direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
@@ -291,20 +330,8 @@ fn a_seed_gives_the_same_lobes_twice_and_the_fit_lowers_the_loss() {
         amplitude: DVec3::splat(40.0),
     };
     let (points, near) = synthetic_data(&sun);
-    let data = FitData {
-        points: &points,
-        near: &near,
-        bounds: Aabb::new(DVec3::new(-0.5, 0.0, -0.5), DVec3::new(0.5, 0.3, 0.5)),
-    };
-    let knobs = EnvEstimateKnobs {
-        lobes: 8,
-        albedo_width: 8,
-        iterations: 150,
-        batch: 64,
-        env_samples: 16,
-        env_rate: 0.05,
-        ..EnvEstimateKnobs::default()
-    };
+    let data = synthetic_fit_data(&points, &near);
+    let knobs = small_fit_knobs(8, 150);
     let a = fit_environment(&data, &knobs, &|_, _, _| {});
     let b = fit_environment(&data, &knobs, &|_, _, _| {});
     assert_eq!(a.lobes, b.lobes, "the same seed gave different lobes");
@@ -317,6 +344,124 @@ fn a_seed_gives_the_same_lobes_twice_and_the_fit_lowers_the_loss() {
         "loss {first} → {}",
         a.final_loss
     );
+}
+
+/// The mean share of the environment in the irradiance of `points`
+/// (unoccluded), for lobes `lobes` and near-field light `near`.
+fn environment_share(
+    points: &[super::surface::SurfacePoint],
+    near: &super::near_field::NearField,
+    lobes: &[crate::sg::Sg64],
+) -> f64 {
+    use super::env_model::{env_term, EnvSampler};
+    use crate::sgfit::model::luminance;
+    let sampler = EnvSampler::new(lobes);
+    let mut rng = Pcg32::new(7, 7);
+    let shares: f64 = points
+        .iter()
+        .zip(&near.irradiance)
+        .map(|(p, e)| {
+            let env = env_term(lobes, &sampler, p.normal, 256, &|_| 1.0, &mut rng).irradiance;
+            luminance(env) / (luminance(env) + luminance(*e))
+        })
+        .sum();
+    shares / points.len() as f64
+}
+
+#[test]
+fn the_share_prior_keeps_light_that_only_noise_asks_for_out_of_the_environment() {
+    use super::fit::fit_environment;
+    use super::knobs::EnvEstimateKnobs;
+    // Points lit by the field alone (no environment), more under a lamp
+    // at one side, whose recorded E_nerf carries ±10 % noise, as a
+    // Monte-Carlo estimate does: the points whose E_nerf came out low look
+    // as if some other light reached them.
+    let dark = crate::sg::Sg64 {
+        direction: DVec3::Y,
+        sharpness: 1.0,
+        amplitude: DVec3::ZERO,
+    };
+    let (mut points, mut near) = synthetic_data(&dark);
+    let mut rng = Pcg32::new(3, 3);
+    for (p, e) in points.iter_mut().zip(&mut near.irradiance) {
+        let lit = 0.05 + 1.5 * (p.position.x + 0.5).powi(2);
+        p.radiance *= lit / e.x;
+        *e = DVec3::splat(lit * (1.0 + 0.2 * (rng.next_f64() - 0.5)));
+    }
+    let data = synthetic_fit_data(&points, &near);
+    let knobs = small_fit_knobs(8, 1000);
+    let free = fit_environment(
+        &data,
+        &EnvEstimateKnobs {
+            share_prior: 0.0,
+            ..knobs
+        },
+        &|_, _, _| {},
+    );
+    let held = fit_environment(&data, &knobs, &|_, _, _| {});
+    let (free, held) = (
+        environment_share(&points, &near, &free.lobes),
+        environment_share(&points, &near, &held.lobes),
+    );
+    eprintln!("environment share: no prior {free:.4}, default prior {held:.4}");
+    assert!(
+        free > 0.1,
+        "without the prior the noise should pull light in ({free})"
+    );
+    assert!(
+        held < 0.5 * free,
+        "the prior kept {held} of the light in (without: {free})"
+    );
+}
+
+#[test]
+fn lobes_that_reach_no_point_are_dropped_from_the_estimate() {
+    use super::fit::{fit_environment, lobe_reach};
+    let sun = crate::sg::Sg64 {
+        direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
+        sharpness: 60.0,
+        amplitude: DVec3::splat(40.0),
+    };
+    // A floor: every point faces up, and its cached opacity is full below
+    // 6° above the horizon, so no light from below reaches it.
+    let (mut points, mut near) = synthetic_data(&sun);
+    let map = crate::probe::DirectionMap::new(crate::probe::MapKind::Octahedral, near.map_side);
+    let side = near.map_side;
+    for (t, o) in near.opacity.iter_mut().enumerate() {
+        let t = t as u32 % (side * side);
+        if map.direction(t % side, t / side).y < 0.1 {
+            *o = 1.0;
+        }
+    }
+    let e_sun = sun.amplitude * (2.0 * std::f64::consts::PI / sun.sharpness) * sun.direction.y;
+    for (p, e) in points.iter_mut().zip(&near.irradiance) {
+        p.normal = DVec3::Y;
+        p.radiance = 0.6 / std::f64::consts::PI * (*e + e_sun);
+    }
+    let data = synthetic_fit_data(&points, &near);
+    let down = crate::sg::Sg64 {
+        direction: -DVec3::Y,
+        sharpness: 20.0,
+        amplitude: DVec3::ONE,
+    };
+    let reach = lobe_reach(&data, &[sun, down], 64, 1);
+    assert!(
+        reach[0] > 0.1 && reach[1] < 1e-6 * reach[0],
+        "reach {reach:?}"
+    );
+    let knobs = small_fit_knobs(32, 150);
+    let fit = fit_environment(&data, &knobs, &|_, _, _| {});
+    // The starting lobes cover the sphere; those far below the horizon
+    // (axis more than 53° under it) send well under 1 % of their energy to
+    // the floor and must be gone.
+    assert!(
+        !fit.lobes.is_empty() && fit.lobes.len() < 32,
+        "{} lobes",
+        fit.lobes.len()
+    );
+    for l in &fit.lobes {
+        assert!(l.direction.y > -0.8, "a lobe from below was kept: {l:?}");
+    }
 }
 
 #[test]

@@ -8,6 +8,7 @@ use std::path::Path;
 use glam::DVec3;
 
 use crate::sg::SgLobe;
+use crate::sgfit::model::luminance;
 
 /// Distant light arriving from every direction.
 #[derive(Debug, Clone)]
@@ -24,10 +25,6 @@ pub enum Environment {
     /// An equirectangular map (+Y up; u = φ/2π with φ = atan2(z, x), v = θ/π
     /// from +Y), piecewise constant per pixel.
     Map(EquirectMap),
-}
-
-fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 impl Environment {

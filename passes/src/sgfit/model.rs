@@ -92,9 +92,12 @@ pub fn texel_valid(t: &[f64; 4]) -> bool {
     t[..3].iter().all(|c| c.is_finite() && *c >= 0.0)
 }
 
+/// Rec. 709 luminance weights of R, G and B.
+pub const LUMINANCE_WEIGHTS: DVec3 = DVec3::new(0.2126, 0.7152, 0.0722);
+
 /// Rec. 709 luminance.
 pub fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+    LUMINANCE_WEIGHTS.dot(c)
 }
 
 /// An orthonormal tangent basis (t1, t2) of unit `p` (Duff et al. 2017),

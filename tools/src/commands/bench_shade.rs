@@ -69,7 +69,7 @@ pub fn run(args: &BenchShadeArgs) -> anyhow::Result<()> {
             (n, (n * a.cos() + t * a.sin()).normalize())
         })
         .collect();
-    let lum = |c: DVec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let lum = inlay_passes::sgfit::model::luminance;
     let brute: Vec<Vec<f64>> = classes
         .iter()
         .map(|&(_, albedo, roughness, metallic)| {

