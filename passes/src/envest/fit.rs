@@ -4,18 +4,24 @@
 //! L_o(x) = a(x)/π · (E_nerf(x) + E_env(x)), by Adam on random batches of
 //! points, E_env importance sampled afresh every step
 //! ([`super::env_model`]). The step sizes decay exponentially to a tenth
-//! over the run. Every random choice comes from the seed and the step (and
-//! the batch is split into fixed chunks whose gradients are summed in
-//! order), so a seed gives the same lobes on any number of threads.
+//! over the run. Beyond the paper, the loss gains a prior on the
+//! environment's share of the points' irradiance ([`super::share_prior`]),
+//! and lobes the points do not support are dropped at the end
+//! ([`super::prune`]). Every random choice comes from the seed and the
+//! step (and the batch is split into fixed chunks whose gradients are
+//! summed in order), so a seed gives the same lobes on any number of
+//! threads.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::adam::Adam;
-use super::env_model::{env_term, initial_params, lobes, project, EnvSampler, PARAMS_PER_LOBE};
+use super::env_model::{env_term, initial_params, lobes, project, EnvSampler};
 use super::knobs::EnvEstimateKnobs;
 use super::mlp::AlbedoMlp;
 use super::near_field::NearField;
+use super::prune::prune_unseen;
+use super::share_prior::SharePrior;
 use super::surface::SurfacePoint;
 use crate::geometry::Aabb;
 use crate::rng::Pcg32;
@@ -112,135 +118,9 @@ fn point_loss(
     (loss, r_a.dot(r_b) / 3.0)
 }
 
-/// The prior that keeps out of the environment light which only the
-/// model's misfit asks for: the loss gains `weight`·s̄, the mean over
-/// points of the environment's share of each point's irradiance,
-/// s = Y(E_env)/(Y(E_nerf) + Y(E_env) + ε) in luminance Y.
-///
-/// The share, unlike the light's energy, is blind to where the light comes
-/// from and how much of it there is once it dominates: a point that the
-/// environment lights almost alone (s near 1) barely feels it, so the
-/// scenes whose light is hidden keep their light's strength and
-/// direction, while light added to points that the field itself lights
-/// costs in proportion to the share it takes. ε (a hundredth of the mean
-/// Y(E_nerf)) bounds the slope at points the field leaves dark.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SharePrior {
-    /// The weight: κ·L̄², κ the knob and L̄ the points' mean radiance
-    /// luminance (so κ is a fraction of the loss's scale).
-    pub weight: f64,
-    /// ε, in irradiance.
-    pub floor: f64,
-}
-
-impl SharePrior {
-    /// The prior for knob `kappa` on `data`.
-    pub fn new(kappa: f64, data: &FitData) -> Self {
-        let n = data.points.len().max(1) as f64;
-        let mean_near = data
-            .near
-            .irradiance
-            .iter()
-            .map(|e| luminance(*e))
-            .sum::<f64>()
-            / n;
-        let mean = mean_luminance(data.points);
-        Self {
-            weight: kappa * mean * mean,
-            floor: 0.01 * mean_near,
-        }
-    }
-
-    /// The prior's value at one point, with near-field luminance `near` and
-    /// environment luminance `env`.
-    pub fn value(&self, near: f64, env: f64) -> f64 {
-        let env = env.max(0.0);
-        let total = near + env + self.floor;
-        if total > 0.0 {
-            self.weight * env / total
-        } else {
-            0.0
-        }
-    }
-
-    /// d[`Self::value`]/d`env`.
-    pub fn slope(&self, near: f64, env: f64) -> f64 {
-        let total = near + env.max(0.0) + self.floor;
-        if total > 0.0 {
-            self.weight * (near + self.floor) / (total * total)
-        } else {
-            0.0
-        }
-    }
-}
-
-/// A lobe of which less than this fraction of the energy reaches the
-/// points, on average (cosine-weighted, through their cached opacity), is
-/// unsupported by them; see [`prune_unseen`].
-pub const MIN_LOBE_REACH: f64 = 0.01;
-
-/// An unsupported lobe is dropped only if it also gives less than this
-/// fraction of the light that reaches the points from the whole
-/// environment (a light that few points see, such as one through a window,
-/// is kept by the share it gives them).
-pub const MAX_DROPPED_SHARE: f64 = 0.05;
-
-/// Each lobe's mean luminance irradiance over the points (through their
-/// cached opacity), `samples` directions per point from the mixture.
-pub fn lobe_reach(data: &FitData, env_lobes: &[Sg64], samples: u32, seed: u64) -> Vec<f64> {
-    let sampler = EnvSampler::new(env_lobes);
-    let n = data.points.len();
-    let sums = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let mut rng = Pcg32::new(seed ^ 0x4EAC, i as u64);
-            let visibility = |d: DVec3| 1.0 - data.near.opacity_at(i, d);
-            let term = env_term(
-                env_lobes,
-                &sampler,
-                data.points[i].normal,
-                samples,
-                &visibility,
-                &mut rng,
-            );
-            env_lobes
-                .iter()
-                .map(|l| luminance(term.lobe_irradiance(l)))
-                .collect::<Vec<f64>>()
-        })
-        .collect::<Vec<Vec<f64>>>();
-    // Summed in point order, so that the same points give the same reach.
-    let mut reach = vec![0.0; env_lobes.len()];
-    for per_point in sums {
-        reach.iter_mut().zip(per_point).for_each(|(r, v)| *r += v);
-    }
-    reach.into_iter().map(|s| s / n.max(1) as f64).collect()
-}
-
-/// The packed parameters `env` without the lobes the points do not
-/// support: less than [`MIN_LOBE_REACH`] of the lobe's energy reaches
-/// them and it gives less than [`MAX_DROPPED_SHARE`] of the light that
-/// reaches them. Facing below every surface or behind every occluder, such
-/// a lobe feels almost no gradient and keeps what it started with; kept,
-/// it would stand in the estimate as light the field gives no evidence of.
-/// When no lobe reaches the points at all, none is kept.
-fn prune_unseen(data: &FitData, env: &[f64], samples: u32, seed: u64) -> Vec<f64> {
-    let env_lobes = lobes(env);
-    let reach = lobe_reach(data, &env_lobes, samples.max(64), seed);
-    let total: f64 = reach.iter().sum();
-    env.chunks_exact(PARAMS_PER_LOBE)
-        .zip(env_lobes.iter().zip(&reach))
-        .filter(|(_, (l, r))| {
-            let energy = luminance(l.integral());
-            let supported = **r >= MIN_LOBE_REACH * energy;
-            total > 0.0 && (supported || **r >= MAX_DROPPED_SHARE * total)
-        })
-        .flat_map(|(p, _)| p.iter().copied())
-        .collect()
-}
-
-/// The mean radiance luminance of `points` (sets the starting environment).
-fn mean_luminance(points: &[SurfacePoint]) -> f64 {
+/// The mean radiance luminance of `points` (sets the starting environment
+/// and the share prior's weight).
+pub(super) fn mean_luminance(points: &[SurfacePoint]) -> f64 {
     let sum: f64 = points.iter().map(|p| luminance(p.radiance)).sum();
     sum / points.len().max(1) as f64
 }

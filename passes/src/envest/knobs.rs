@@ -45,7 +45,7 @@ pub struct EnvEstimateKnobs {
     /// Weight κ of the prior that keeps out of the environment light
     /// which only the model's misfit asks for: the loss gains κ·L̄² times
     /// the points' mean share of environment light in their irradiance
-    /// (L̄ the points' mean radiance luminance; [`super::fit::SharePrior`]);
+    /// (L̄ the points' mean radiance luminance; [`super::share_prior::SharePrior`]);
     /// 0 turns it off. The field's blur and E_nerf's noise leave some
     /// points darker than their colour asks for, and without the prior the
     /// environment fills them in: on PLANTS, whose lights are all inside

@@ -4,8 +4,9 @@
 //! near-field irradiance and cached opacity on the GPU ([`near_field`],
 //! its CPU mirror [`near_field_reference`], the ray set [`hemisphere`]),
 //! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
-//! ([`env_model`], [`fit`]); [`estimate`] runs them in order, [`file`]
-//! stores the lobes, and [`truth`] checks them against a recipe's lights.
+//! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]);
+//! [`estimate`] runs them in order, [`file`] stores the lobes, and
+//! [`truth`] checks them against a recipe's lights.
 
 pub mod adam;
 pub mod env_model;
@@ -17,7 +18,9 @@ pub mod knobs;
 pub mod mlp;
 pub mod near_field;
 pub mod near_field_reference;
+pub mod prune;
 pub mod quality;
+pub mod share_prior;
 pub mod surface;
 pub mod truth;
 pub mod views;

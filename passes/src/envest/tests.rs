@@ -82,7 +82,7 @@ fn environment_gradient_matches_finite_differences() {
 
 #[test]
 fn share_prior_slope_matches_finite_differences_and_stays_finite() {
-    use super::fit::SharePrior;
+    use super::share_prior::SharePrior;
     let prior = SharePrior {
         weight: 0.02,
         floor: 1e-3,
@@ -416,7 +416,8 @@ fn the_share_prior_keeps_light_that_only_noise_asks_for_out_of_the_environment()
 
 #[test]
 fn lobes_that_reach_no_point_are_dropped_from_the_estimate() {
-    use super::fit::{fit_environment, lobe_reach};
+    use super::fit::fit_environment;
+    use super::prune::lobe_reach;
     let sun = crate::sg::Sg64 {
         direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
         sharpness: 60.0,

@@ -172,7 +172,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         "kept {} of {} lobes (the others send the points under {:.0} % of their light)",
         lobes.len(),
         knobs.lobes,
-        100.0 * inlay_passes::envest::fit::MIN_LOBE_REACH
+        100.0 * inlay_passes::envest::prune::MIN_LOBE_REACH
     );
     let out = args
         .out
