@@ -320,15 +320,20 @@ fn small_fit_knobs(lobes: u32, iterations: u32) -> super::knobs::EnvEstimateKnob
     }
 }
 
+/// The sun the synthetic fits look for.
+fn synthetic_sun() -> crate::sg::Sg64 {
+    crate::sg::Sg64 {
+        direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
+        sharpness: 60.0,
+        amplitude: DVec3::splat(40.0),
+    }
+}
+
 #[test]
 fn a_seed_gives_the_same_lobes_twice_and_the_fit_lowers_the_loss() {
     use super::fit::fit_environment;
     use super::knobs::EnvEstimateKnobs;
-    let sun = crate::sg::Sg64 {
-        direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
-        sharpness: 60.0,
-        amplitude: DVec3::splat(40.0),
-    };
+    let sun = synthetic_sun();
     let (points, near) = synthetic_data(&sun);
     let data = synthetic_fit_data(&points, &near);
     let knobs = small_fit_knobs(8, 150);
@@ -418,11 +423,7 @@ fn the_share_prior_keeps_light_that_only_noise_asks_for_out_of_the_environment()
 fn lobes_that_reach_no_point_are_dropped_from_the_estimate() {
     use super::fit::fit_environment;
     use super::prune::lobe_reach;
-    let sun = crate::sg::Sg64 {
-        direction: DVec3::new(0.4, 0.8, 0.3).normalize(),
-        sharpness: 60.0,
-        amplitude: DVec3::splat(40.0),
-    };
+    let sun = synthetic_sun();
     // A floor: every point faces up, and its cached opacity is full below
     // 6° above the horizon, so no light from below reaches it.
     let (mut points, mut near) = synthetic_data(&sun);
