@@ -680,3 +680,67 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
         "{text}"
     );
 }
+
+/// `inlay profile` on PLANTS (small field, tiny image, shadows off, the
+/// object still): the Table 1 layout with the probe and fit run once and
+/// skipped after, the cast shadow reported as skipped with its reason, and
+/// JSON and Chrome-trace files that parse and agree with the table.
+#[test]
+fn profile_prints_table_1_and_writes_json_and_a_trace() {
+    let dir = scratch("profile");
+    let (field, _) = bake_small_plants(&dir);
+    let (json, trace) = (dir.join("p.json"), dir.join("p.trace.json"));
+    let o = inlay(
+        &[
+            "--validate",
+            "profile",
+            &scene_path("plants.toml"),
+            "--field",
+            s(&field),
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--frames",
+            "4",
+            "--motion",
+            "still",
+            "--no-shadows",
+            "--json",
+            s(&json),
+            "--trace",
+            s(&trace),
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    for module in [
+        "NeRF rendering",
+        "Lighting",
+        "SG updating",
+        "Rendering",
+        "Compositing",
+        "Shadow",
+    ] {
+        assert!(t.contains(module), "{module} missing: {t}");
+    }
+    assert!(
+        t.contains("1 of 4 frames; otherwise skipped (object and lighting unchanged)"),
+        "{t}"
+    );
+    assert!(t.contains("skipped (cast shadows off)"), "{t}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["frames"].as_array().unwrap().len(), 4);
+    let sg = &report["table"]["modules"][2];
+    assert_eq!(sg["module"], "SG updating");
+    assert_eq!(sg["ran_in"], 1);
+    assert!(sg["first_frame_ms"].as_f64().unwrap() > 0.0);
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();
+    let events = trace["traceEvents"].as_array().unwrap();
+    let marches = events.iter().filter(|e| e["name"] == "nerf-march").count();
+    assert_eq!(marches, 4, "one march event per frame");
+    assert!(events.iter().any(|e| e["name"] == "sg-fit skipped"));
+}

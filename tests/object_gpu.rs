@@ -454,7 +454,9 @@ fn sg_shading_matches_brute_force_against_the_probe() {
     }
 }
 
-use inlay_passes::composite::{composite_over, CompositePass, COMPOSITE_FORMAT};
+use inlay_passes::composite::{
+    composite_over, composite_shade_field, CompositePass, Layering, COMPOSITE_FORMAT,
+};
 use inlay_passes::march::{MarchPass, MARCH_COLOUR_FORMAT};
 
 /// Compositing on PLANTS, whose toy stands behind semi-transparent
@@ -462,7 +464,10 @@ use inlay_passes::march::{MarchPass, MARCH_COLOUR_FORMAT};
 /// composite, read back. Every pixel is exactly I_c + (1 − I_α)·I_v (f32
 /// rounding); some object pixels are partly hidden (0.05 < I_α < 0.95),
 /// some fully visible, and where the object is, the field behind it is cut
-/// (clipped opacity no larger than the unclipped one).
+/// (clipped opacity no larger than the unclipped one). The same frame
+/// checks the two other layerings exactly: the object over the unclipped
+/// field (occlusion off) and the shadowed field alone (any image serves as
+/// ρ for the arithmetic).
 #[test]
 fn composite_hides_the_object_partly_behind_foliage() {
     let ctx = common::gpu();
@@ -495,6 +500,8 @@ fn composite_hides_the_object_partly_behind_foliage() {
         MARCH_COLOUR_FORMAT,
         OBJECT_COLOUR_FORMAT,
         COMPOSITE_FORMAT,
+        COMPOSITE_FORMAT,
+        COMPOSITE_FORMAT,
     ]
     .map(|f| readback(&ctx, w, h, f));
     common::run_frame(&ctx, |graph| {
@@ -507,12 +514,37 @@ fn composite_hides_the_object_partly_behind_foliage() {
         let clipped = march.add(graph, &gpu_field, &cam, Some(g.distance_id));
         let object = shade.add(graph, &cam, &g, &[lobes], &[]);
         let out = composite.add(graph, clipped.colour_opacity, object, None);
+        let front = composite.add_layered(
+            graph,
+            bare.colour_opacity,
+            object,
+            None,
+            Layering::ObjectOverField,
+        );
+        let shadowed = composite.add_field_shadowed(graph, bare.colour_opacity, object);
         rb[0].add_to_graph(graph, bare.colour_opacity);
         rb[1].add_to_graph(graph, clipped.colour_opacity);
         rb[2].add_to_graph(graph, object);
         rb[3].add_to_graph(graph, out);
+        rb[4].add_to_graph(graph, front);
+        rb[5].add_to_graph(graph, shadowed);
     });
-    let [bare, clipped, object, out] = rb.map(|r| r.read().unwrap());
+    let [bare, clipped, object, out, front, shadowed] = rb.map(|r| r.read().unwrap());
+    for i in 0..(w * h) as usize {
+        let o = object.pixels[i];
+        let expect = [
+            (front.pixels[i], composite_over(o, bare.pixels[i])),
+            (
+                shadowed.pixels[i],
+                composite_shade_field(bare.pixels[i], [o[0], o[1], o[2]]),
+            ),
+        ];
+        for (got, want) in expect {
+            for (g, w) in got.iter().zip(want) {
+                assert!((g - w).abs() <= 1e-5 * w.abs().max(1.0), "pixel {i}");
+            }
+        }
+    }
     let (mut partly, mut fully) = (0, 0);
     for i in 0..(w * h) as usize {
         let expect = composite_over(clipped.pixels[i], object.pixels[i]);

@@ -111,3 +111,202 @@ fn without_a_display_the_demo_falls_back_to_headless() {
         "{t}"
     );
 }
+
+/// The viewer driven like a user: open `inlay view` on DOG under Xvfb with
+/// validation, wait for its first frame, screenshot, drag the object with
+/// injected (XTEST) mouse input to another spot on the floor, wait for a
+/// frame showing the move, screenshot again, quit with Escape. The object
+/// must have moved (it says where, and the image changed around its old
+/// and new pixels), the image must not be blank, and the run must be
+/// validation-clean.
+///
+/// Ignored for now: after the injected drag ends, the viewer's next frames
+/// never finish (two lavapipe threads stay in shader code, the present
+/// waits; seen in debug and release builds, with the fast and balanced
+/// presets). `inlay profile --motion drag` and headless renders at the
+/// dropped position finish, so the cause is still open; run with
+/// `cargo test --test window -- --ignored` once it is found.
+#[test]
+#[ignore = "the viewer stalls after an injected drag; cause not yet found (see the doc comment)"]
+fn the_viewer_moves_the_object_where_it_is_dragged() {
+    use std::io::BufRead;
+    use std::sync::mpsc;
+    use x11rb::connection::Connection;
+    use x11rb::protocol::xproto::ConnectionExt as _;
+    use x11rb::protocol::xtest::ConnectionExt as _;
+
+    let Some((_server, display)) = start_xvfb() else {
+        return;
+    };
+    let (w, h) = (320u16, 180u16);
+    let mut app = Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .env("DISPLAY", &display)
+        .args(["--validate", "view"])
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/dog.toml"))
+        .args([
+            "--width",
+            &w.to_string(),
+            "--height",
+            &h.to_string(),
+            "--preset",
+            "fast",
+            "--overlay",
+            "compact",
+            // As in the demo test: lavapipe's FIFO presentation under Xvfb
+            // was seen to stall in a debug build with validation.
+            "--present-mode",
+            "mailbox",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Drain stderr as it comes: a full pipe would block the viewer.
+    let stderr = app.stderr.take().unwrap();
+    let stderr_text = std::thread::spawn(move || {
+        let mut err = String::new();
+        let _ = std::io::Read::read_to_string(&mut std::io::BufReader::new(stderr), &mut err);
+        err
+    });
+    let (tx, rx) = mpsc::channel::<String>();
+    let stdout = app.stdout.take().unwrap();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+        {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut log = String::new();
+    let mut wait_for = |needle: &str, secs: u64| -> String {
+        let deadline = std::time::Instant::now() + Duration::from_secs(secs);
+        while let Some(left) = deadline.checked_duration_since(std::time::Instant::now()) {
+            match rx.recv_timeout(left) {
+                Ok(line) => {
+                    eprintln!("viewer: {line}");
+                    log.push_str(&line);
+                    log.push('\n');
+                    if line.contains(needle) {
+                        return line;
+                    }
+                }
+                Err(_) => break,
+            }
+        }
+        panic!("no `{needle}` within {secs} s; output so far:\n{log}");
+    };
+    let pixel = |line: &str| -> (f64, f64) {
+        let s = &line[line.rfind('(').unwrap() + 1..line.rfind(')').unwrap()];
+        let v: Vec<f64> = s.split(", ").map(|x| x.parse().unwrap()).collect();
+        (v[0], v[1])
+    };
+    let first = wait_for("first frame presented; object `silver-ball` at pixel", 600);
+    let old = pixel(&first);
+    let (conn, screen) = x11rb::connect(Some(&display)).unwrap();
+    let root = conn.setup().roots[screen].root;
+    let shot = |conn: &x11rb::rust_connection::RustConnection| -> Vec<[u8; 3]> {
+        let img = conn
+            .get_image(
+                x11rb::protocol::xproto::ImageFormat::Z_PIXMAP,
+                root,
+                0,
+                0,
+                w,
+                h,
+                !0,
+            )
+            .unwrap()
+            .reply()
+            .unwrap();
+        assert_eq!(img.data.len(), w as usize * h as usize * 4, "24-bit screen");
+        img.data.chunks(4).map(|p| [p[2], p[1], p[0]]).collect()
+    };
+    std::thread::sleep(Duration::from_secs(2));
+    let before = shot(&conn);
+    // Drag from the object to a spot on the floor, down and to the left.
+    let target = (old.0 - 0.22 * w as f64, old.1 + 0.12 * h as f64);
+    let motion = |x: f64, y: f64| {
+        conn.xtest_fake_input(6, 0, 0, root, x as i16, y as i16, 0)
+            .unwrap();
+        conn.flush().unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    motion(old.0, old.1);
+    conn.xtest_fake_input(4, 1, 0, root, 0, 0, 0).unwrap();
+    for k in 1..=10 {
+        let t = k as f64 / 10.0;
+        motion(
+            old.0 + t * (target.0 - old.0),
+            old.1 + t * (target.1 - old.1),
+        );
+    }
+    conn.xtest_fake_input(5, 1, 0, root, 0, 0, 0).unwrap();
+    conn.flush().unwrap();
+    let moved = wait_for("view: moved `silver-ball`", 120);
+    let new = pixel(&moved);
+    wait_for("shows", 300);
+    std::thread::sleep(Duration::from_secs(2));
+    let after = shot(&conn);
+    // Escape (keycode 9 in the server's default map) closes the viewer.
+    conn.xtest_fake_input(2, 9, 0, root, 0, 0, 0).unwrap();
+    conn.xtest_fake_input(3, 9, 0, root, 0, 0, 0).unwrap();
+    conn.flush().unwrap();
+    let status = app.wait().unwrap();
+    let err = stderr_text.join().unwrap();
+    assert!(status.success(), "viewer failed: {err}\n{log}");
+    assert!(
+        !err.contains("VUID") && !err.to_lowercase().contains("validation error"),
+        "{err}"
+    );
+
+    let dist = ((new.0 - old.0).powi(2) + (new.1 - old.1).powi(2)).sqrt();
+    assert!(
+        dist > 20.0,
+        "object moved only {dist:.1} px: {old:?} -> {new:?}\n{log}"
+    );
+    let change_near = |c: (f64, f64)| -> f64 {
+        let mut sum = 0.0f64;
+        let mut n = 0.0f64;
+        for y in (c.1 as i64 - 4)..=(c.1 as i64 + 4) {
+            for x in (c.0 as i64 - 4)..=(c.0 as i64 + 4) {
+                if x >= 0 && y >= 0 && x < w as i64 && y < h as i64 {
+                    let i = (y * w as i64 + x) as usize;
+                    sum += (0..3)
+                        .map(|k| (before[i][k] as f64 - after[i][k] as f64).abs())
+                        .sum::<f64>()
+                        / 3.0;
+                    n += 1.0;
+                }
+            }
+        }
+        sum / n.max(1.0)
+    };
+    let (at_old, at_new) = (change_near(old), change_near(new));
+    eprintln!("object {old:?} -> {new:?}; mean change {at_old:.1} at the old pixel, {at_new:.1} at the new");
+    assert!(
+        at_old > 8.0 && at_new > 8.0,
+        "old {at_old:.1}, new {at_new:.1}"
+    );
+    let luma: Vec<f64> = after
+        .iter()
+        .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
+        .collect();
+    let mean = luma.iter().sum::<f64>() / luma.len() as f64;
+    let sd = (luma.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / luma.len() as f64).sqrt();
+    assert!(
+        sd > 10.0 && mean > 10.0,
+        "blank screenshot: mean {mean:.1}, sd {sd:.1}"
+    );
+    write_screenshot_ppm(&after, w as usize, h as usize);
+}
+
+/// Keeps the last viewer screenshot for inspection (target/window-test.ppm).
+fn write_screenshot_ppm(pixels: &[[u8; 3]], w: usize, h: usize) {
+    let mut bytes = format!("P6\n{w} {h}\n255\n").into_bytes();
+    bytes.extend(pixels.iter().flatten());
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/window-test.ppm");
+    let _ = std::fs::write(path, bytes);
+}

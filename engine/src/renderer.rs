@@ -46,6 +46,7 @@ struct InFlight {
     frame: u64,
     passes: Vec<(String, f64)>,
     culled: Vec<String>,
+    skipped: Vec<crate::graph::SkippedPass>,
     // Keeps imported and transient resources alive until the GPU is done.
     _keep_images: Vec<Arc<Image>>,
     _keep_buffers: Vec<Arc<Buffer>>,
@@ -70,6 +71,8 @@ pub struct FrameReport {
     pub executed: Vec<String>,
     /// Culled passes.
     pub culled: Vec<String>,
+    /// Passes the builder skipped, with why.
+    pub skipped: Vec<crate::graph::SkippedPass>,
 }
 
 /// Executes frame graphs with several frames in flight.
@@ -165,6 +168,7 @@ impl Renderer {
                 .zip(&stamps)
                 .map(|((name, cpu), (t0, t1))| PassTiming {
                     name: name.clone(),
+                    start_ms: *t0,
                     gpu_ms: (t1 - t0).max(0.0),
                     cpu_ms: *cpu,
                 })
@@ -180,6 +184,7 @@ impl Renderer {
                 frame: done.frame,
                 passes,
                 culled: done.culled,
+                skipped: done.skipped,
                 gpu_total_ms,
             });
         }
@@ -289,10 +294,12 @@ impl Renderer {
         }
         let executed = recorded.passes.iter().map(|(n, _)| n.clone()).collect();
         let culled = recorded.culled.clone();
+        let skipped = recorded.skipped.clone();
         slot.in_flight = Some(InFlight {
             frame: token.frame,
             passes: recorded.passes,
             culled: recorded.culled,
+            skipped: recorded.skipped.clone(),
             _keep_images: keep_images,
             _keep_buffers: keep_buffers,
         });
@@ -300,6 +307,7 @@ impl Renderer {
             frame: token.frame,
             executed,
             culled,
+            skipped,
         })
     }
 

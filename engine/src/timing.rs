@@ -17,6 +17,9 @@ pub const MAX_TIMED_PASSES: u32 = 128;
 pub struct PassTiming {
     /// The pass name.
     pub name: String,
+    /// When the pass started on the GPU, in milliseconds after the frame's
+    /// first pass started (for traces).
+    pub start_ms: f64,
     /// GPU time between the timestamps around the pass, in milliseconds.
     pub gpu_ms: f64,
     /// CPU time spent recording the pass (barriers and commands), in milliseconds.
@@ -32,6 +35,8 @@ pub struct FrameTimings {
     pub passes: Vec<PassTiming>,
     /// Passes declared but culled (nothing consumed their output).
     pub culled: Vec<String>,
+    /// Passes the builder did not add because the frame did not need them.
+    pub skipped: Vec<crate::graph::SkippedPass>,
     /// GPU time from the first pass's start to the last pass's end, ms.
     pub gpu_total_ms: f64,
 }

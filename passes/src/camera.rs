@@ -109,6 +109,45 @@ impl CameraFrame {
         self.ray(px as f64 + 0.5, py as f64 + 0.5)
     }
 
+    /// Where `p` lands in the image, in pixels (the inverse of
+    /// [`Self::ray`]), or None when it is not in front of the camera.
+    pub fn project(&self, p: DVec3) -> Option<(f64, f64)> {
+        let d = p - self.origin;
+        let z = d.dot(self.forward);
+        if z <= 1e-9 {
+            return None;
+        }
+        let nx = d.dot(self.right) / (z * self.right.length_squared());
+        let ny = d.dot(self.up) / (z * self.up.length_squared());
+        Some((
+            (nx + 1.0) * 0.5 * self.width as f64,
+            (1.0 - ny) * 0.5 * self.height as f64,
+        ))
+    }
+
+    /// Whether any of the sphere (`centre`, `radius`) can be in the image:
+    /// false only when it lies wholly behind the eye or outside one of the
+    /// four side planes of the view frustum (conservative near corners).
+    pub fn sphere_visible(&self, centre: DVec3, radius: f64) -> bool {
+        let d = centre - self.origin;
+        if d.dot(self.forward) < -radius {
+            return false;
+        }
+        // The side planes through the eye, each spanned by a frustum edge
+        // direction and an image axis; normals turned to face inwards.
+        let planes = [
+            (self.forward + self.right).cross(self.up),
+            (self.forward - self.right).cross(self.up),
+            (self.forward + self.up).cross(self.right),
+            (self.forward - self.up).cross(self.right),
+        ];
+        planes.iter().all(|n| {
+            let n = n.normalize();
+            let inward = if n.dot(self.forward) < 0.0 { -n } else { n };
+            d.dot(inward) >= -radius
+        })
+    }
+
     /// The push-constant prefix the camera shaders share (`MarchPush`,
     /// `ShadePush`): origin, width, right, height, up, `after_up`, forward;
     /// the caller appends the block's last word.
@@ -160,6 +199,35 @@ mod tests {
         assert!(top.dir.y > 0.0);
         let right = f.ray(200.0, 50.0);
         assert!(right.dir.x > 0.0);
+    }
+
+    #[test]
+    fn projection_inverts_the_ray_and_the_frustum_test_is_exact_on_its_planes() {
+        let spec = CameraSpec {
+            name: None,
+            position: DVec3::new(0.3, 1.0, 4.0),
+            look_at: DVec3::new(0.0, 0.2, 0.0),
+            up: DVec3::Y,
+            fov_y: 60.0,
+        };
+        let f = CameraFrame::new(&spec, 320, 180);
+        for (x, y) in [(0.5, 0.5), (160.0, 90.0), (300.25, 12.75)] {
+            let p = f.ray(x, y).at(3.0);
+            let (px, py) = f.project(p).unwrap();
+            assert!((px - x).abs() < 1e-9 && (py - y).abs() < 1e-9);
+            assert!(f.sphere_visible(p, 0.0));
+        }
+        assert!(f.project(f.origin - f.forward).is_none());
+        assert!(!f.sphere_visible(f.origin - 2.0 * f.forward, 1.0));
+        assert!(f.sphere_visible(f.origin - 2.0 * f.forward, 2.5));
+        // Just past the right edge at depth 3: out for a small sphere, in
+        // once its radius reaches across the plane.
+        let edge = f.ray(320.0, 90.0).at(3.0);
+        let outward = f.right.normalize();
+        assert!(!f.sphere_visible(edge + 0.2 * outward, 0.1));
+        assert!(f.sphere_visible(edge + 0.2 * outward, 0.2));
+        let top = f.ray(160.0, 0.0).at(3.0);
+        assert!(!f.sphere_visible(top + 0.3 * f.up.normalize(), 0.1));
     }
 
     #[test]

@@ -85,8 +85,9 @@ impl IncidentLight {
         *self.last.lock().unwrap_or_else(|p| p.into_inner()) = None;
     }
 
-    /// Adds the probe trace and the fit when `work` asks for them; returns
-    /// the lobe buffer (as written this frame, or as the last fit left it).
+    /// Adds the probe trace (with L_env) and the fit when `work` asks for
+    /// them; returns the lobe buffer (as written this frame, or as the last
+    /// fit left it).
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
@@ -94,10 +95,29 @@ impl IncidentLight {
         centre: DVec3,
         work: LightingWork,
     ) -> anyhow::Result<BufferHandle> {
+        self.add_with(graph, field, centre, work, true)
+    }
+
+    /// As [`Self::add`], with the L_env term left out of the probe when
+    /// `environment` is false (fold that switch into the `version` given
+    /// to [`Self::plan`]). A frame that reuses the fit notes both passes as
+    /// skipped.
+    pub fn add_with<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: &GpuGridField,
+        centre: DVec3,
+        work: LightingWork,
+        environment: bool,
+    ) -> anyhow::Result<BufferHandle> {
         match work {
-            LightingWork::Reuse => Ok(graph.import_buffer(self.fit.lobes(), None)),
+            LightingWork::Reuse => {
+                graph.note_skipped("probe-trace", "object and lighting unchanged");
+                graph.note_skipped("sg-fit", "object and lighting unchanged");
+                Ok(graph.import_buffer(self.fit.lobes(), None))
+            }
             LightingWork::Update { start, iterations } => {
-                let probe = self.probe.add(graph, field, centre);
+                let probe = self.probe.add_with(graph, field, centre, environment);
                 self.fit.add(graph, probe, start, iterations)
             }
         }

@@ -3,14 +3,19 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod chrome_trace;
 pub mod commands;
 pub mod demo;
 pub mod field_source;
 pub mod field_view;
 pub mod headless;
 pub mod insertion_view;
+pub mod overlay;
 pub mod present;
+pub mod scene_view;
 pub mod shaders;
 pub mod ssdf_source;
+pub mod table1;
 pub mod timings_table;
+pub mod view;
 pub mod window_app;

@@ -46,6 +46,8 @@ impl GpuArgs {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Open a scene in a window: drag its objects across the field, edit them, switch effects and presets (headless PNG without a display).
+    View(inlay::view::ViewArgs),
     /// Run the engine demo (two compute passes feeding a raster pass with depth) in a window, or headless.
     Demo(DemoArgs),
     /// Bake a scene's recipe of analytic primitives into a grid-field file (path traced).
@@ -56,6 +58,8 @@ enum Command {
     EstimateEnv(inlay::commands::estimate_env::EstimateEnvArgs),
     /// Render a scene's radiance field headless from one of its cameras.
     Render(inlay::commands::render::RenderArgs),
+    /// Run N frames with the objects inserted and print the paper's Table 1 (median/p95 per module); writes JSON and a Chrome trace.
+    Profile(inlay::commands::profile::ProfileArgs),
     /// Measure the march: rays/s and samples/s per image size, and its error as the step size changes.
     BenchMarch(inlay::commands::bench_march::BenchMarchArgs),
     /// Path trace the ground-truth image of a recipe scene's camera (no field).
@@ -112,6 +116,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Demo(args) => demo(&cli.gpu, args),
+        Command::View(args) => inlay::view::run(&cli.gpu.options(), args),
         Command::BakeScene(args) => inlay::commands::bake_scene::run(args),
         Command::BakeSsdf(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
@@ -122,6 +127,9 @@ fn main() -> ExitCode {
         Command::Render(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::render::run(&ctx, args)),
+        Command::Profile(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::profile::run(&ctx, args)),
         Command::Reference(args) => inlay::commands::reference::run(args),
         Command::BenchMarch(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
@@ -168,11 +176,11 @@ fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
         let factory = Box::new(
             move |ctx: &std::sync::Arc<Context>,
                   lib: &inlay_engine::shader::ShaderLibrary|
-                  -> anyhow::Result<Box<dyn inlay::headless::Scene>> {
-                Ok(Box::new(DemoScene {
+                  -> anyhow::Result<Box<dyn inlay::window_app::WindowScene>> {
+                Ok(Box::new(inlay::window_app::Passive(Box::new(DemoScene {
                     pipelines: DemoPipelines::new(ctx, lib)?,
                     keep_heatmap,
-                }))
+                }))))
             },
         );
         match run_window(options, library.clone(), factory) {

@@ -1,6 +1,7 @@
 //! The windowed target: a winit window whose swapchain shows a scene's HDR
-//! image through the present pass, with resize and minimise handled and the
-//! per-pass timings printed once a second.
+//! image through the present pass, with resize and minimise handled, the
+//! per-pass timings printed once a second, input handed to the scene and
+//! the scene's text overlay drawn on top.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -18,6 +19,7 @@ use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
 use crate::headless::Scene;
+use crate::overlay::OverlayPass;
 use crate::present::PresentPipeline;
 use crate::timings_table::format_table;
 
@@ -49,14 +51,73 @@ pub enum WindowError {
     Other(#[from] anyhow::Error),
 }
 
+/// What the window should do after the scene saw an input event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Response {
+    /// Nothing beyond drawing the next frame.
+    Continue,
+    /// Close the window.
+    Quit,
+    /// Wait for the frames in flight, then call [`WindowScene::rebuild`]
+    /// (the scene's pipelines or resources change).
+    Rebuild,
+}
+
+/// What the overlay can show about the frames so far.
+pub struct HudStats<'a> {
+    /// Frames per second over the last second.
+    pub fps: f64,
+    /// The last completed frames' timings, oldest first.
+    pub recent: &'a [FrameTimings],
+    /// The drawable size in pixels.
+    pub extent: (u32, u32),
+    /// The device's name.
+    pub device: &'a str,
+}
+
+/// A scene shown in the window, optionally interactive: it takes input,
+/// rebuilds itself on request and writes the overlay's lines.
+pub trait WindowScene {
+    /// The scene to render.
+    fn scene(&self) -> &dyn Scene;
+
+    /// Sees a window event (`extent`: the drawable size).
+    fn input(&mut self, _event: &WindowEvent, _extent: (u32, u32)) -> Response {
+        Response::Continue
+    }
+
+    /// Rebuilds what [`Response::Rebuild`] asked for; no frame is in flight.
+    fn rebuild(&mut self, _ctx: &Arc<Context>, _lib: &ShaderLibrary) -> anyhow::Result<()> {
+        Ok(())
+    }
+
+    /// The overlay's lines (none: no overlay pass).
+    fn hud(&self, _stats: &HudStats<'_>) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// Called after frame `frame` (0-based) was presented.
+    fn presented(&mut self, _frame: u64) {}
+}
+
+/// A scene that only renders.
+pub struct Passive(pub Box<dyn Scene>);
+
+impl WindowScene for Passive {
+    fn scene(&self) -> &dyn Scene {
+        &*self.0
+    }
+}
+
 /// Builds a scene once the context exists.
 pub type SceneFactory =
-    Box<dyn FnOnce(&Arc<Context>, &ShaderLibrary) -> anyhow::Result<Box<dyn Scene>>>;
+    Box<dyn FnOnce(&Arc<Context>, &ShaderLibrary) -> anyhow::Result<Box<dyn WindowScene>>>;
 
 // Field order is drop order: Vulkan objects go before the window.
 struct Running {
     present: PresentPipeline,
-    scene: Box<dyn Scene>,
+    overlay: OverlayPass,
+    scene: Box<dyn WindowScene>,
     target: WindowTarget,
     renderer: Renderer,
     ctx: Arc<Context>,
@@ -64,6 +125,8 @@ struct Running {
     started: Instant,
     last_report: Instant,
     frames: u64,
+    fps: f64,
+    fps_window: (Instant, u64),
     minimised: bool,
 }
 
@@ -127,22 +190,32 @@ impl App {
             DEFAULT_FRAMES_IN_FLIGHT,
         )?;
         let present = PresentPipeline::new(&ctx, &self.library, target.format(), target.is_srgb())?;
+        let overlay = OverlayPass::new(&ctx, &self.library, target.format())?;
         let factory = self
             .factory
             .take()
             .ok_or_else(|| anyhow::anyhow!("window started twice"))?;
         let scene = factory(&ctx, &self.library)?;
         let renderer = Renderer::new(&ctx, DEFAULT_FRAMES_IN_FLIGHT)?;
+        let position = window
+            .inner_position()
+            .map(|p| (p.x, p.y))
+            .unwrap_or((0, 0));
         println!(
-            "window: {} on {} ({:?}), present mode {:?}",
+            "window: {} on {} ({:?}), present mode {:?}, {}x{} at ({}, {})",
             self.options.title,
             ctx.info().name,
             ctx.info().kind,
-            target.present_mode()
+            target.present_mode(),
+            size.width,
+            size.height,
+            position.0,
+            position.1
         );
         let now = Instant::now();
         self.running = Some(Running {
             present,
+            overlay,
             scene,
             target,
             renderer,
@@ -151,6 +224,8 @@ impl App {
             started: now,
             last_report: now,
             frames: 0,
+            fps: 0.0,
+            fps_window: (now, 0),
             minimised: false,
         });
         Ok(())
@@ -169,17 +244,43 @@ impl App {
         if r.present.format() != r.target.format() {
             r.present =
                 PresentPipeline::new(&r.ctx, &self.library, r.target.format(), r.target.is_srgb())?;
+            r.overlay = OverlayPass::new(&r.ctx, &self.library, r.target.format())?;
         }
         let (w, h) = r.target.extent();
         let time = r.started.elapsed().as_secs_f32();
+        let recent: Vec<FrameTimings> = r
+            .renderer
+            .timings()
+            .iter()
+            .rev()
+            .take(30)
+            .rev()
+            .cloned()
+            .collect();
+        let device = r.ctx.info().name.clone();
+        let lines = r.scene.hud(&HudStats {
+            fps: r.fps,
+            recent: &recent,
+            extent: (w, h),
+            device: &device,
+        });
         let mut graph = FrameGraph::new();
-        let hdr = r.scene.build(&mut graph, w, h, time)?;
+        let hdr = r.scene.scene().build(&mut graph, w, h, time)?;
         let swapchain = r.target.import(&mut graph, acquired);
-        r.present
+        let shown = r
+            .present
             .add_pass(&mut graph, hdr, swapchain, self.options.exposure);
+        r.overlay
+            .add(&mut graph, shown, &lines, 1 + (h >= 600) as u32);
         r.renderer.submit(graph, &r.target.submit_sync(acquired))?;
         r.target.present(acquired)?;
+        r.scene.presented(r.frames);
         r.frames += 1;
+        let since = r.fps_window.0.elapsed().as_secs_f64();
+        if since >= 1.0 {
+            r.fps = (r.frames - r.fps_window.1) as f64 / since;
+            r.fps_window = (Instant::now(), r.frames);
+        }
         if r.last_report.elapsed() >= Duration::from_secs(1) {
             let recent: Vec<FrameTimings> = r
                 .renderer
@@ -200,6 +301,22 @@ impl App {
         }
         r.ctx.check_validation()?;
         Ok(self.options.frames.is_some_and(|n| r.frames >= n))
+    }
+
+    /// Hands `event` to the scene; true when the window should close.
+    fn input(&mut self, event: &WindowEvent) -> anyhow::Result<bool> {
+        let Some(r) = self.running.as_mut() else {
+            return Ok(false);
+        };
+        match r.scene.input(event, r.target.extent()) {
+            Response::Continue => Ok(false),
+            Response::Quit => Ok(true),
+            Response::Rebuild => {
+                r.renderer.finish()?;
+                r.scene.rebuild(&r.ctx, &self.library)?;
+                Ok(false)
+            }
+        }
     }
 
     fn stop(&mut self, event_loop: &ActiveEventLoop) {
@@ -241,7 +358,14 @@ impl ApplicationHandler for App {
                     self.stop(event_loop);
                 }
             },
-            _ => {}
+            other => match self.input(&other) {
+                Ok(true) => self.stop(event_loop),
+                Ok(false) => {}
+                Err(e) => {
+                    self.error = Some(e);
+                    self.stop(event_loop);
+                }
+            },
         }
     }
 

@@ -105,7 +105,19 @@ pub struct FrameGraph<'a> {
     pub(crate) images: Vec<ImageDecl>,
     pub(crate) buffers: Vec<BufferDecl>,
     pub(crate) passes: Vec<PassDecl<'a>>,
+    pub(crate) skipped: Vec<SkippedPass>,
     pub(crate) error: Option<GraphError>,
+}
+
+/// A pass the frame's builder chose not to add because its result is not
+/// needed this frame (as opposed to a culled pass, which was added but
+/// whose output nothing consumed). Recorded so profilers can show it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SkippedPass {
+    /// The pass's name, as it would have been added.
+    pub name: String,
+    /// Why it was not needed (for tables and traces).
+    pub reason: String,
 }
 
 impl<'a> FrameGraph<'a> {
@@ -320,6 +332,23 @@ impl<'a> FrameGraph<'a> {
         if let Some(d) = self.buffers.get_mut(buffer.id as usize) {
             d.output_version = Some(buffer.version);
         }
+    }
+
+    /// Records that the pass `name` was not added this frame and why (a
+    /// skip decided by the builder, reported with the frame's timings).
+    /// Repeated names are kept once.
+    pub fn note_skipped(&mut self, name: &str, reason: &str) {
+        if !self.skipped.iter().any(|s| s.name == name) {
+            self.skipped.push(SkippedPass {
+                name: name.into(),
+                reason: reason.into(),
+            });
+        }
+    }
+
+    /// The passes noted as skipped so far.
+    pub fn skipped(&self) -> &[SkippedPass] {
+        &self.skipped
     }
 
     /// Starts declaring a pass. Declare its accesses on the returned builder,

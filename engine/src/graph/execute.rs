@@ -68,6 +68,7 @@ pub(crate) struct Resolved {
 pub(crate) struct RecordOutput {
     pub passes: Vec<(String, f64)>,
     pub culled: Vec<String>,
+    pub skipped: Vec<super::SkippedPass>,
 }
 
 /// What a pass's callback records through: resolved resources, descriptor
@@ -829,5 +830,9 @@ pub(crate) fn record_graph(
         .iter()
         .map(|&p| graph.passes[p].name.clone())
         .collect();
-    Ok(RecordOutput { passes, culled })
+    Ok(RecordOutput {
+        passes,
+        culled,
+        skipped: graph.skipped.clone(),
+    })
 }

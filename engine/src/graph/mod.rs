@@ -20,7 +20,7 @@ mod tests;
 
 pub use access::{BufferAccess, ImageAccess, LoadOp, PassKind, SyncState};
 pub(crate) use builder::{BufferBacking, ImageBacking};
-pub use builder::{BufferHandle, FrameGraph, ImageHandle, PassBuilder};
+pub use builder::{BufferHandle, FrameGraph, ImageHandle, PassBuilder, SkippedPass};
 pub(crate) use execute::texel_bytes;
 pub(crate) use execute::{record_graph, RecordEnv, Resolved, ResolvedBuffer, ResolvedImage};
 pub use execute::{Binding, PassContext, SamplerKind};

@@ -2,7 +2,9 @@
 //! rendered with object clipping (premultiplied colour I_c, opacity I_α)
 //! over the object's radiance I_v, I = I_c + (1 − I_α)·I_v, so the field
 //! hides the object fully or partly, the field's colour first darkened by
-//! the cast shadow ρ when there is one. [`composite_over`] and
+//! the cast shadow ρ when there is one. With occlusion off the object goes
+//! over the unclipped field; with no object on screen only the shadow is
+//! applied. [`composite_over`] and
 //! [`composite_shade_field`] are the CPU mirrors of
 //! `shaders/composite/over.wgsl`.
 
@@ -31,10 +33,22 @@ pub fn composite_shade_field(field: [f32; 4], rho: [f32; 3]) -> [f32; 4] {
     ]
 }
 
-/// The compositing pipelines (without and with a cast shadow).
+/// The compositing pipelines (without and with a cast shadow, and the
+/// shadowed field alone).
 pub struct CompositePass {
     pipeline: ComputePipeline,
     shadowed: ComputePipeline,
+    field_shadowed: ComputePipeline,
+}
+
+/// Which layer is in front when the object is composited.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layering {
+    /// The field, clipped at the object, over the object (eq. 6): the
+    /// field occludes the object.
+    FieldOverObject,
+    /// The object over the unclipped field (occlusion turned off).
+    ObjectOverField,
 }
 
 impl CompositePass {
@@ -53,6 +67,7 @@ impl CompositePass {
         Ok(Self {
             pipeline: build("main")?,
             shadowed: build("main_shadowed")?,
+            field_shadowed: build("main_field_shadowed")?,
         })
     }
 
@@ -65,6 +80,18 @@ impl CompositePass {
         field: ImageHandle,
         object: ImageHandle,
         shadow: Option<ImageHandle>,
+    ) -> ImageHandle {
+        self.add_layered(graph, field, object, shadow, Layering::FieldOverObject)
+    }
+
+    /// Adds `composite` with the layers in the order `layering` says.
+    pub fn add_layered<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: ImageHandle,
+        object: ImageHandle,
+        shadow: Option<ImageHandle>,
+        layering: Layering,
     ) -> ImageHandle {
         let desc = graph.image_desc(field).unwrap_or(ImageDesc {
             width: 1,
@@ -87,7 +114,10 @@ impl CompositePass {
             pass.image(s, ImageAccess::Sampled);
         }
         let out = pass.image(out, ImageAccess::StorageWrite);
-        let push = Push::new().u32(width).u32(height);
+        let push = Push::new()
+            .u32(width)
+            .u32(height)
+            .u32((layering == Layering::ObjectOverField) as u32);
         let pipeline = if shadow.is_some() {
             &self.shadowed
         } else {
@@ -105,6 +135,53 @@ impl CompositePass {
             ctx.dispatch(
                 pipeline,
                 &bindings,
+                push.bytes(),
+                pipeline.groups_for([width, height, 1]),
+            )
+        });
+        out
+    }
+
+    /// Adds `composite` for a frame without an object on screen: the
+    /// field's colour darkened by `shadow` (an object off screen can still
+    /// shadow what is on it).
+    pub fn add_field_shadowed<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: ImageHandle,
+        shadow: ImageHandle,
+    ) -> ImageHandle {
+        let desc = graph.image_desc(field).unwrap_or(ImageDesc {
+            width: 1,
+            height: 1,
+            format: COMPOSITE_FORMAT,
+        });
+        let (width, height) = (desc.width, desc.height);
+        let out = graph.create_image(
+            "composite",
+            ImageDesc {
+                width,
+                height,
+                format: COMPOSITE_FORMAT,
+            },
+        );
+        let mut pass = graph.add_pass("composite", PassKind::Compute);
+        pass.image(field, ImageAccess::Sampled);
+        pass.image(shadow, ImageAccess::Sampled);
+        let out = pass.image(out, ImageAccess::StorageWrite);
+        let push = Push::new().u32(width).u32(height).u32(0);
+        let pipeline = &self.field_shadowed;
+        pass.exec(move |ctx| {
+            // Bindings by number: the object image (1) is not used.
+            let table = [
+                Binding::SampledImage(field),
+                Binding::SampledImage(field),
+                Binding::StorageImage(out),
+                Binding::SampledImage(shadow),
+            ];
+            ctx.dispatch_table(
+                pipeline,
+                &table,
                 push.bytes(),
                 pipeline.groups_for([width, height, 1]),
             )

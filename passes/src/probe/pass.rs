@@ -17,10 +17,17 @@ use crate::sg::Sg64;
 /// Format of the probe image: L_i in rgb, Ô in alpha.
 pub const PROBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
+/// L_env's lobes and the entry point that adds them.
+struct ProbeEnvironment {
+    pipeline: ComputePipeline,
+    lobes: Arc<Buffer>,
+    count: u32,
+}
+
 /// The probe trace for one set of knobs and one environment light.
 pub struct ProbePass {
-    pipeline: ComputePipeline,
-    environment: Option<(Arc<Buffer>, u32)>,
+    field_only: ComputePipeline,
+    environment: Option<ProbeEnvironment>,
     image: Arc<Image>,
     map: DirectionMap,
     march: MarchKnobs,
@@ -47,19 +54,17 @@ impl ProbePass {
             Define::Bool("SKIP_EMPTY", march.skip_empty),
             Define::Bool("OCTAHEDRAL", knobs.map == MapKind::Octahedral),
         ];
-        let entry = if environment.is_empty() {
-            "main_field_only"
-        } else {
-            "main_with_environment"
+        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(
+                lib,
+                "probe/trace.wgsl",
+                entry,
+                ShaderStage::Compute,
+                &defines,
+            )?;
+            Ok(ComputePipeline::new(ctx, &shader)?)
         };
-        let shader = compile(
-            lib,
-            "probe/trace.wgsl",
-            entry,
-            ShaderStage::Compute,
-            &defines,
-        )?;
-        let pipeline = ComputePipeline::new(ctx, &shader)?;
+        let field_only = build("main_field_only")?;
         let environment = if environment.is_empty() {
             None
         } else {
@@ -74,7 +79,11 @@ impl ProbePass {
                 &bytes,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
             )?;
-            Some((Arc::new(buffer), environment.len() as u32))
+            Some(ProbeEnvironment {
+                pipeline: build("main_with_environment")?,
+                lobes: Arc::new(buffer),
+                count: environment.len() as u32,
+            })
         };
         let map = knobs.direction_map();
         let image = Arc::new(Image::new(
@@ -91,7 +100,7 @@ impl ProbePass {
                 | vk::ImageUsageFlags::TRANSFER_DST,
         )?);
         Ok(Self {
-            pipeline,
+            field_only,
             environment,
             image,
             map,
@@ -114,20 +123,36 @@ impl ProbePass {
         graph.import_image(&self.image, "probe", None)
     }
 
-    /// Adds the `probe-trace` pass tracing `field` from `origin`; returns
-    /// the written probe image.
+    /// Whether the pass was built with an environment light (a black one
+    /// is never evaluated).
+    pub fn has_environment(&self) -> bool {
+        self.environment.is_some()
+    }
+
+    /// Adds the `probe-trace` pass tracing `field` from `origin`, with the
+    /// L_env term; returns the written probe image.
     pub fn add<'a>(
         &'a self,
         graph: &mut FrameGraph<'a>,
         field: &GpuGridField,
         origin: DVec3,
     ) -> ImageHandle {
+        self.add_with(graph, field, origin, true)
+    }
+
+    /// Adds the `probe-trace` pass; `environment = false` leaves the L_env
+    /// term out (the field-only entry point runs, the lobes are not bound).
+    pub fn add_with<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: &GpuGridField,
+        origin: DVec3,
+        environment: bool,
+    ) -> ImageHandle {
         let grid = field.import(graph);
         let probe = self.import(graph);
-        let env = self
-            .environment
-            .as_ref()
-            .map(|(b, n)| (graph.import_buffer(b, None), *n));
+        let chosen = self.environment.as_ref().filter(|_| environment);
+        let env = chosen.map(|e| (graph.import_buffer(&e.lobes, None), e.count));
         let (w, h) = (self.map.width, self.map.height);
         let o = origin.as_vec3();
         let push = Push::new()
@@ -145,7 +170,7 @@ impl ProbePass {
         if let Some((b, _)) = env {
             pass.buffer(b, inlay_engine::graph::BufferAccess::StorageRead);
         }
-        let pipeline = &self.pipeline;
+        let pipeline = chosen.map_or(&self.field_only, |e| &e.pipeline);
         pass.exec(move |ctx| {
             let mut bindings = vec![
                 Binding::UniformBuffer(grid.info),

@@ -1,5 +1,5 @@
 //! The field commands of `inlay`: `bake-scene`, `bake-ssdf`, `estimate-env`, `render`,
-//! `reference`, `probe` and the benchmarks.
+//! `reference`, `probe`, `profile` and the benchmarks.
 
 pub mod bake_scene;
 pub mod bake_ssdf;
@@ -8,5 +8,6 @@ pub mod bench_sg;
 pub mod bench_shade;
 pub mod estimate_env;
 pub mod probe;
+pub mod profile;
 pub mod reference;
 pub mod render;

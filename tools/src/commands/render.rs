@@ -8,14 +8,11 @@ use std::sync::Arc;
 use clap::Args;
 use inlay_engine::Context;
 use inlay_passes::envest::load_environment_file;
-use inlay_passes::field::GpuGridField;
-use inlay_passes::march::MarchPass;
 use inlay_passes::scene::{load_scene, ObjectEnvironment};
 use inlay_passes::shadow::OutsideMode;
 
-use crate::field_source::scene_field;
 use crate::headless::run_headless;
-use crate::insertion_view::InsertionView;
+use crate::scene_view::open_view;
 
 /// Options of `render`.
 #[derive(Args, Debug)]
@@ -126,23 +123,18 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
     if let Some((k, m)) = bake.problem() {
         anyhow::bail!("--ssdf-{k}: {m}");
     }
-    let camera = scene.camera(&args.camera)?.clone();
     let mut knobs = scene.march;
     knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
     knobs.termination = args.termination.unwrap_or(knobs.termination);
     knobs.skip_empty &= !args.no_skip;
-    knobs
-        .check()
-        .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
-    let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
     let library = crate::shaders::library()?;
-    let view = InsertionView::new(
+    let view = open_view(
         ctx,
         &library,
         &scene,
-        MarchPass::new(ctx, &library, knobs)?,
-        GpuGridField::upload(ctx, &field)?,
-        camera,
+        knobs,
+        args.field.as_deref(),
+        &args.camera,
         !args.no_cache,
     )?;
     let run = run_headless(ctx, &view, args.width, args.height, args.frames.max(1), 0.0)?;

@@ -1,0 +1,229 @@
+//! `inlay profile SCENE`: runs N frames of a scene with its objects
+//! inserted and prints the paper's Table 1 (per-module median and p95 GPU
+//! time from timestamps, the first frame's SG update apart, frame total and
+//! frame rate), writing the same as JSON and as a Chrome/Perfetto trace.
+//! By default the first object is dragged along a small circle so the
+//! probe and the fit run every frame, as they do while a user moves it;
+//! `--motion still` shows what adaptive skipping saves.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use clap::{Args, ValueEnum};
+use glam::DVec3;
+use inlay_engine::graph::FrameGraph;
+use inlay_engine::timing::FrameTimings;
+use inlay_engine::{Context, Renderer, SubmitSync, DEFAULT_FRAMES_IN_FLIGHT};
+use inlay_passes::envest::load_environment_file;
+use inlay_passes::scene::{load_scene, ObjectEnvironment};
+use serde_json::json;
+
+use crate::chrome_trace::chrome_trace;
+use crate::headless::Scene as _;
+use crate::insertion_view::InsertionView;
+use crate::scene_view::open_view;
+use crate::table1::summarise;
+
+/// How the first object moves during the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Motion {
+    /// Dragged along a circle of a quarter of its radius, a full turn per
+    /// 60 frames: the incident light is updated every frame.
+    Drag,
+    /// Left where the scene puts it: after the first frame the probe and
+    /// the fit are skipped.
+    Still,
+}
+
+/// Options of `profile`.
+#[derive(Args, Debug)]
+pub struct ProfileArgs {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Camera index or name.
+    #[arg(long, default_value = "0")]
+    pub camera: String,
+    /// Width in pixels.
+    #[arg(long, default_value_t = 1280)]
+    pub width: u32,
+    /// Height in pixels.
+    #[arg(long, default_value_t = 720)]
+    pub height: u32,
+    /// Frames to run (the first is reported apart for the SG update).
+    #[arg(long, default_value_t = 60)]
+    pub frames: u32,
+    /// How the first object moves.
+    #[arg(long, value_enum, default_value_t = Motion::Drag)]
+    pub motion: Motion,
+    /// Where to write the table and every frame's timings as JSON.
+    #[arg(long, default_value = "inlay-profile.json")]
+    pub json: PathBuf,
+    /// Where to write the Chrome/Perfetto trace.
+    #[arg(long, default_value = "inlay-profile.trace.json")]
+    pub trace: PathBuf,
+    /// Use this field file instead of the scene's field or recipe.
+    #[arg(long)]
+    pub field: Option<PathBuf>,
+    /// Light the objects with this environment file (`inlay estimate-env`).
+    #[arg(long)]
+    pub environment: Option<PathBuf>,
+    /// Segments across the field's diagonal (overrides [march] samples_per_ray).
+    #[arg(long)]
+    pub samples_per_ray: Option<u32>,
+    /// Bake again even where a cached field or SSDF exists.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Draw no shadows (no SSDF is loaded or baked; Shadow shows as skipped).
+    #[arg(long)]
+    pub no_shadows: bool,
+}
+
+/// What a profile run measured.
+pub struct ProfileRun {
+    /// Every frame's timings, oldest first.
+    pub frames: Vec<FrameTimings>,
+    /// When each frame was submitted, ms after the run began.
+    pub submitted_ms: Vec<f64>,
+}
+
+/// Runs `frames` frames of `view` at `width`×`height` with `motion`,
+/// keeping every frame's timings.
+pub fn profile_view(
+    ctx: &Arc<Context>,
+    view: &InsertionView,
+    width: u32,
+    height: u32,
+    frames: u32,
+    motion: Motion,
+) -> anyhow::Result<ProfileRun> {
+    anyhow::ensure!(
+        (1..=16384).contains(&width) && (1..=16384).contains(&height),
+        "image size {width}x{height} is out of range (1..=16384 per side)"
+    );
+    let start_pose = view.placed(0);
+    let mut renderer = Renderer::new(ctx, DEFAULT_FRAMES_IN_FLIGHT)?;
+    let began = Instant::now();
+    let mut run = ProfileRun {
+        frames: Vec::new(),
+        submitted_ms: Vec::new(),
+    };
+    let collect = |renderer: &Renderer, run: &mut ProfileRun| {
+        let seen = run.frames.last().map(|f| f.frame as i64).unwrap_or(-1);
+        run.frames.extend(
+            renderer
+                .timings()
+                .iter()
+                .filter(|f| f.frame as i64 > seen)
+                .cloned(),
+        );
+    };
+    for i in 0..frames.max(1) {
+        if let (Motion::Drag, Some(p0)) = (motion, &start_pose) {
+            let (_, radius) = p0.sphere();
+            let a = std::f64::consts::TAU * i as f64 / 60.0;
+            let mut p = p0.clone();
+            p.pose.position += 0.25 * radius * DVec3::new(a.cos() - 1.0, 0.0, a.sin());
+            view.set_placed(0, p);
+        }
+        renderer.begin_frame()?;
+        collect(&renderer, &mut run);
+        let mut graph = FrameGraph::new();
+        let hdr = view.build(&mut graph, width, height, 0.0)?;
+        graph.mark_output_image(hdr);
+        run.submitted_ms.push(began.elapsed().as_secs_f64() * 1e3);
+        renderer.submit(graph, &SubmitSync::none())?;
+    }
+    renderer.finish()?;
+    collect(&renderer, &mut run);
+    if let Some(p0) = start_pose {
+        view.set_placed(0, p0);
+    }
+    ctx.check_validation()?;
+    Ok(run)
+}
+
+/// Runs `profile`.
+pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
+    let mut scene = load_scene(&args.scene)?;
+    if let Some(file) = &args.environment {
+        scene.object_environment = Some(ObjectEnvironment {
+            lobes: load_environment_file(file)?,
+            file: file.clone(),
+        });
+    }
+    if args.no_shadows {
+        scene.shadows.self_shadow = false;
+        scene.shadows.cast = false;
+    }
+    let mut knobs = scene.march;
+    knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
+    let library = crate::shaders::library()?;
+    let view = open_view(
+        ctx,
+        &library,
+        &scene,
+        knobs,
+        args.field.as_deref(),
+        &args.camera,
+        !args.no_cache,
+    )?;
+    let run = profile_view(
+        ctx,
+        &view,
+        args.width,
+        args.height,
+        args.frames,
+        args.motion,
+    )?;
+    let wall: Vec<f64> = run.submitted_ms.windows(2).map(|w| w[1] - w[0]).collect();
+    let table = summarise(&run.frames, &wall);
+    let device = format!("{} ({:?})", ctx.info().name, ctx.info().kind);
+    print!(
+        "{}",
+        table.format(&format!(
+            "Table 1: {} at {}x{}, {} frames ({:?} object), on {device}",
+            args.scene.display(),
+            args.width,
+            args.height,
+            run.frames.len(),
+            args.motion
+        ))
+    );
+    let per_frame: Vec<_> = run
+        .frames
+        .iter()
+        .map(|f| {
+            json!({
+                "frame": f.frame,
+                "gpu_total_ms": f.gpu_total_ms,
+                "passes": f.passes.iter().map(|p| json!({
+                    "name": p.name, "start_ms": p.start_ms, "gpu_ms": p.gpu_ms, "cpu_ms": p.cpu_ms,
+                })).collect::<Vec<_>>(),
+                "skipped": f.skipped.iter().map(|s| json!({"name": s.name, "reason": s.reason})).collect::<Vec<_>>(),
+                "culled": f.culled,
+            })
+        })
+        .collect();
+    let report = json!({
+        "scene": args.scene.display().to_string(),
+        "device": device,
+        "width": args.width,
+        "height": args.height,
+        "motion": format!("{:?}", args.motion).to_lowercase(),
+        "table": table,
+        "frames": per_frame,
+    });
+    write_json(&args.json, &report)?;
+    let trace = chrome_trace(&run.frames, &run.submitted_ms, &device);
+    write_json(&args.trace, &trace)?;
+    Ok(())
+}
+
+fn write_json(path: &std::path::Path, value: &serde_json::Value) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(path, text)
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}

@@ -1,0 +1,58 @@
+//! Opening a scene file as an [`InsertionView`]: its field (file, cached
+//! bake or fresh bake), the march with the given knobs, its objects and
+//! the chosen camera. Shared by `render`, `profile`, `sweep` and `view`.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::Context;
+use inlay_passes::camera::CameraSpec;
+use inlay_passes::field::{GpuGridField, GridField};
+use inlay_passes::march::{MarchKnobs, MarchPass};
+use inlay_passes::scene::Scene;
+
+use crate::field_source::scene_field;
+use crate::insertion_view::InsertionView;
+
+/// `scene` seen from its camera `camera` (index or name), the field from
+/// `field_file` when given, the march with `knobs` (checked), bakes cached
+/// when `use_cache`.
+pub fn open_view(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    scene: &Scene,
+    knobs: MarchKnobs,
+    field_file: Option<&Path>,
+    camera: &str,
+    use_cache: bool,
+) -> anyhow::Result<InsertionView> {
+    let camera = scene.camera(camera)?.clone();
+    let field = scene_field(scene, field_file, use_cache)?;
+    view_over_field(ctx, lib, scene, knobs, &field, camera, use_cache)
+}
+
+/// `scene`'s objects inserted into `field` (already loaded), seen from
+/// `camera`, the march with `knobs` (checked).
+pub fn view_over_field(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    scene: &Scene,
+    knobs: MarchKnobs,
+    field: &GridField,
+    camera: CameraSpec,
+    use_cache: bool,
+) -> anyhow::Result<InsertionView> {
+    knobs
+        .check()
+        .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
+    InsertionView::new(
+        ctx,
+        lib,
+        scene,
+        MarchPass::new(ctx, lib, knobs)?,
+        GpuGridField::upload(ctx, field)?,
+        camera,
+        use_cache,
+    )
+}
