@@ -33,6 +33,19 @@ pub fn composite_shade_field(field: [f32; 4], rho: [f32; 3]) -> [f32; 4] {
     ]
 }
 
+/// The composited image, the size of `field`, with its width and height.
+fn output_image(graph: &mut FrameGraph<'_>, field: ImageHandle) -> (ImageHandle, u32, u32) {
+    let (width, height) = graph
+        .image_desc(field)
+        .map_or((1, 1), |d| (d.width, d.height));
+    let desc = ImageDesc {
+        width,
+        height,
+        format: COMPOSITE_FORMAT,
+    };
+    (graph.create_image("composite", desc), width, height)
+}
+
 /// The compositing pipelines (without and with a cast shadow, and the
 /// shadowed field alone).
 pub struct CompositePass {
@@ -93,20 +106,7 @@ impl CompositePass {
         shadow: Option<ImageHandle>,
         layering: Layering,
     ) -> ImageHandle {
-        let desc = graph.image_desc(field).unwrap_or(ImageDesc {
-            width: 1,
-            height: 1,
-            format: COMPOSITE_FORMAT,
-        });
-        let (width, height) = (desc.width, desc.height);
-        let out = graph.create_image(
-            "composite",
-            ImageDesc {
-                width,
-                height,
-                format: COMPOSITE_FORMAT,
-            },
-        );
+        let (out, width, height) = output_image(graph, field);
         let mut pass = graph.add_pass("composite", PassKind::Compute);
         pass.image(field, ImageAccess::Sampled);
         pass.image(object, ImageAccess::Sampled);
@@ -151,20 +151,7 @@ impl CompositePass {
         field: ImageHandle,
         shadow: ImageHandle,
     ) -> ImageHandle {
-        let desc = graph.image_desc(field).unwrap_or(ImageDesc {
-            width: 1,
-            height: 1,
-            format: COMPOSITE_FORMAT,
-        });
-        let (width, height) = (desc.width, desc.height);
-        let out = graph.create_image(
-            "composite",
-            ImageDesc {
-                width,
-                height,
-                format: COMPOSITE_FORMAT,
-            },
-        );
+        let (out, width, height) = output_image(graph, field);
         let mut pass = graph.add_pass("composite", PassKind::Compute);
         pass.image(field, ImageAccess::Sampled);
         pass.image(shadow, ImageAccess::Sampled);
