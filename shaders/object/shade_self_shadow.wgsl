@@ -6,7 +6,7 @@
 #include "object/shade_body.wgsl"
 
 @group(0) @binding(6) var<storage, read> fh_table: array<f32>;
-@group(0) @binding(7) var<uniform> ssdf: SsdfObject;
+@group(0) @binding(7) var<storage, read> ssdf: SsdfObject;
 @group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
 @group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
 

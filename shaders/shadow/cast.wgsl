@@ -26,7 +26,7 @@ var<immediate> pc: CastPush;
 @group(0) @binding(4) var field_depth: texture_2d<f32>;
 @group(0) @binding(5) var<storage, read> light_lobes: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> fh_table: array<f32>;
-@group(0) @binding(7) var<uniform> ssdf: SsdfObject;
+@group(0) @binding(7) var<storage, read> ssdf: SsdfObject;
 @group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
 @group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
 @group(0) @binding(10) var previous: texture_2d<f32>;

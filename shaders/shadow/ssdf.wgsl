@@ -4,9 +4,13 @@
 // nearest node's (outside); then ssdf_value(d) reads the direction map
 // bilinearly and, outside, applies the mode: 0 clamp, 1 infinity (π),
 // 2 correct (turn towards the centre and shrink by the angular radii).
-// Needs: uniform `ssdf: SsdfObject`; storage buffers `ssdf_rows` (per
+// Needs: read-only storage buffers `ssdf: SsdfObject`, `ssdf_rows` (per
 // texel: mean, k basis values) and `ssdf_coefs` (per node: k values), both
-// array<f32>; define SSDF_MAX_COMPONENTS (u32).
+// array<f32>; define SSDF_MAX_COMPONENTS (u32). The block is storage, not
+// uniform, on purpose: Mesa 22.3's lavapipe recompiles (and leaks) a shader
+// at every bind when branches and loop bounds depend on uniform values
+// alone and inlining them halves the shader — this one did, ~1.2 MB and a
+// JIT compile per frame.
 #include "shadow/angles.wgsl"
 
 struct SsdfObject {

@@ -114,7 +114,7 @@ impl ShadePass {
         for s in self_shadow.iter().flatten() {
             for (b, access) in [
                 (s.fh_table, BufferAccess::StorageRead),
-                (s.ssdf.object, BufferAccess::Uniform),
+                (s.ssdf.object, BufferAccess::StorageRead),
                 (s.ssdf.rows, BufferAccess::StorageRead),
                 (s.ssdf.coefs, BufferAccess::StorageRead),
             ] {
@@ -144,7 +144,7 @@ impl ShadePass {
                     Some(s) => {
                         bindings.extend([
                             Binding::StorageBuffer(s.fh_table),
-                            Binding::UniformBuffer(s.ssdf.object),
+                            Binding::StorageBuffer(s.ssdf.object),
                             Binding::StorageBuffer(s.ssdf.rows),
                             Binding::StorageBuffer(s.ssdf.coefs),
                         ]);

@@ -79,7 +79,7 @@ impl CastShadowPass {
         pass.image(march.depth, ImageAccess::Sampled);
         pass.buffer(lobes, BufferAccess::StorageRead);
         pass.buffer(fh_table, BufferAccess::StorageRead);
-        pass.buffer(ssdf.object, BufferAccess::Uniform);
+        pass.buffer(ssdf.object, BufferAccess::StorageRead);
         pass.buffer(ssdf.rows, BufferAccess::StorageRead);
         pass.buffer(ssdf.coefs, BufferAccess::StorageRead);
         if let Some(p) = previous {
@@ -100,7 +100,7 @@ impl CastShadowPass {
                 Binding::SampledImage(m.depth),
                 Binding::StorageBuffer(lobes),
                 Binding::StorageBuffer(fh_table),
-                Binding::UniformBuffer(ssdf.object),
+                Binding::StorageBuffer(ssdf.object),
                 Binding::StorageBuffer(ssdf.rows),
                 Binding::StorageBuffer(ssdf.coefs),
             ];

@@ -68,7 +68,8 @@ pub struct GpuSsdf {
 /// A [`GpuSsdf`]'s buffers in one frame's graph.
 #[derive(Debug, Clone, Copy)]
 pub struct SsdfBindings {
-    /// The per-frame `SsdfObject` block (uniform).
+    /// The per-frame `SsdfObject` block (read-only storage; see
+    /// shaders/shadow/ssdf.wgsl for why not uniform).
     pub object: BufferHandle,
     /// Per texel: mean and basis.
     pub rows: BufferHandle,

@@ -13,7 +13,7 @@ use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::keyboard::{KeyCode, PhysicalKey};
 
 use super::orbit::OrbitCamera;
-use super::picking::{field_surface, pick_object, rest_on};
+use super::picking::{field_surface, pick_visible, rest_on};
 use crate::insertion_view::InsertionView;
 use crate::window_app::Response;
 
@@ -123,7 +123,7 @@ impl Controls {
                 self.mouse_moved(dx, dy, extent, view, field);
             }
             WindowEvent::MouseInput { state, button, .. } => {
-                self.mouse_button(*state, *button, extent, view)
+                self.mouse_button(*state, *button, extent, view, field)
             }
             WindowEvent::MouseWheel { delta, .. } => {
                 let steps = match delta {
@@ -157,6 +157,7 @@ impl Controls {
         button: MouseButton,
         extent: (u32, u32),
         view: &InsertionView,
+        field: &inlay_passes::field::GridField,
     ) {
         if state == ElementState::Released {
             if let Drag::Object(i) = self.drag {
@@ -172,7 +173,7 @@ impl Controls {
                 let placed: Vec<PlacedObject> = (0..view.objects.len())
                     .filter_map(|i| view.placed(i))
                     .collect();
-                match pick_object(&placed, &ray) {
+                match pick_visible(&placed, &ray, field, &self.march, view.effects().occlusion) {
                     Some((i, _)) => {
                         self.selected = Some(i);
                         Drag::Object(i)
