@@ -744,3 +744,118 @@ fn profile_prints_table_1_and_writes_json_and_a_trace() {
     assert_eq!(marches, 4, "one march event per frame");
     assert!(events.iter().any(|e| e["name"] == "sg-fit skipped"));
 }
+
+/// `inlay sweep` over a small full grid (two march step counts × two PCA
+/// component counts on DOG at 32×18, a test-size field): every
+/// configuration gets a time per Table 1 module and a finite error against
+/// the path-traced truth; the JSON, Markdown and SVG agree on the count
+/// and on the Pareto front; a sweep without the frames it needs is refused.
+#[test]
+fn sweep_measures_each_configuration_and_finds_the_pareto_front() {
+    let dir = scratch("sweep");
+    let (scene, field) = bake_scene_at_test_size(&dir, "dog");
+    let out = dir.join("sweep");
+    let args = |frames: &str| -> Vec<String> {
+        [
+            "--validate",
+            "sweep",
+            &scene,
+            "--field",
+            s(&field),
+            "--sizes",
+            "32x18",
+            "--samples-per-ray",
+            "32,128",
+            "--probe",
+            "8",
+            "--lobes",
+            "4",
+            "--iterations",
+            "4",
+            "--ssdf-grid",
+            "4",
+            "--components",
+            "2,4",
+            "--grid",
+            "full",
+            "--frames",
+            frames,
+            "--reference-samples",
+            "4",
+            "--out-dir",
+            s(&out),
+        ]
+        .iter()
+        .map(|a| a.to_string())
+        .collect()
+    };
+    let refused = inlay(
+        &args("1").iter().map(String::as_str).collect::<Vec<_>>(),
+        &dir,
+    );
+    let t = common::output_text(&refused);
+    assert!(
+        !refused.status.success() && t.contains("--frames must be at least 2"),
+        "{t}"
+    );
+    let o = inlay(
+        &args("3").iter().map(String::as_str).collect::<Vec<_>>(),
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("4 configurations (Full grid)") && t.contains("Pareto front"),
+        "{t}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let configs = report["configurations"].as_array().unwrap();
+    assert_eq!(configs.len(), 4);
+    let mut seen = Vec::new();
+    for c in configs {
+        let k = &c["knobs"];
+        assert_eq!(
+            (k["width"].as_u64(), k["probe"].as_u64()),
+            (Some(32), Some(8))
+        );
+        seen.push((
+            k["samples_per_ray"].as_u64().unwrap(),
+            k["components"].as_u64().unwrap(),
+        ));
+        let error = c["error"].as_f64().expect("a finite error");
+        assert!(error > 0.0 && error < 1.0, "{c}");
+        assert!(c["frame_ms"].as_f64().unwrap() >= 0.0);
+        for module in [
+            "NeRF rendering",
+            "Lighting",
+            "SG updating",
+            "Rendering",
+            "Shadow",
+        ] {
+            assert!(
+                c["modules_ms"][module].is_number(),
+                "{module} ran while dragged: {c}"
+            );
+        }
+    }
+    seen.sort();
+    assert_eq!(seen, vec![(32, 2), (32, 4), (128, 2), (128, 4)]);
+    let front: Vec<u64> = report["pareto_front"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i.as_u64().unwrap())
+        .collect();
+    assert!(!front.is_empty());
+    for (i, c) in configs.iter().enumerate() {
+        assert_eq!(c["pareto"].as_bool(), Some(front.contains(&(i as u64))));
+    }
+    let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
+    assert_eq!(md.matches("| yes |").count(), front.len(), "{md}");
+    let svg = std::fs::read_to_string(out.join("sweep.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.matches("<circle").count() == 4,
+        "{svg}"
+    );
+}

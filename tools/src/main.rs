@@ -60,6 +60,8 @@ enum Command {
     Render(inlay::commands::render::RenderArgs),
     /// Run N frames with the objects inserted and print the paper's Table 1 (median/p95 per module); writes JSON and a Chrome trace.
     Profile(inlay::commands::profile::ProfileArgs),
+    /// Measure the speed/accuracy trade: time and error against the ground truth over a grid of the quality knobs; writes a table, the Pareto front and a plot.
+    Sweep(inlay::commands::sweep::SweepArgs),
     /// Measure the march: rays/s and samples/s per image size, and its error as the step size changes.
     BenchMarch(inlay::commands::bench_march::BenchMarchArgs),
     /// Path trace the ground-truth image of a recipe scene's camera (no field).
@@ -131,6 +133,9 @@ fn main() -> ExitCode {
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::profile::run(&ctx, args)),
         Command::Reference(args) => inlay::commands::reference::run(args),
+        Command::Sweep(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::sweep::run(&ctx, args)),
         Command::BenchMarch(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::bench_march::run(&ctx, args)),

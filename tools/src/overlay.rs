@@ -36,6 +36,75 @@ pub fn text_grid(lines: &[String], cols: usize, rows: usize) -> Vec<u32> {
     grid
 }
 
+/// Pixels from the image's top-left corner to the text's.
+pub const ORIGIN: u32 = 4;
+
+/// Where the text goes on a `width`×`height` image: a `cols`×`rows` grid
+/// of cells `8·scale` pixels square from [`ORIGIN`], as many columns as
+/// the longest line needs and fit, as many rows as lines fit.
+pub struct OverlayLayout {
+    /// Columns of cells.
+    pub cols: u32,
+    /// Rows of cells.
+    pub rows: u32,
+    /// Glyph magnification (at least 1).
+    pub scale: u32,
+    /// The character codes, row-major ([`text_grid`]).
+    pub grid: Vec<u32>,
+}
+
+impl OverlayLayout {
+    /// The layout of `lines` at `scale`; None when nothing fits or there
+    /// is nothing to draw.
+    pub fn new(width: u32, height: u32, lines: &[String], scale: u32) -> Option<Self> {
+        let scale = scale.max(1);
+        let cell = 8 * scale;
+        let cols = (width.saturating_sub(2 * ORIGIN) / cell) as usize;
+        let rows = lines
+            .len()
+            .min((height.saturating_sub(2 * ORIGIN) / cell) as usize);
+        if lines.is_empty() || cols == 0 || rows == 0 {
+            return None;
+        }
+        let cols = cols
+            .min(lines.iter().map(|l| l.chars().count()).max().unwrap_or(0))
+            .max(1);
+        Some(Self {
+            cols: cols as u32,
+            rows: rows as u32,
+            scale,
+            grid: text_grid(lines, cols, rows),
+        })
+    }
+
+    /// The CPU mirror of `shaders/overlay.wgsl` with its blend (premultiplied
+    /// "over": src + (1 − src.a)·dst): pixel (x, y) of an image holding
+    /// `background` everywhere after the overlay is drawn.
+    pub fn shade(&self, x: u32, y: u32, background: [f32; 4]) -> [f32; 4] {
+        let cell = (8 * self.scale) as i64;
+        let (px, py) = (x as i64 - ORIGIN as i64, y as i64 - ORIGIN as i64);
+        if px < 0 || py < 0 || px >= cell * self.cols as i64 || py >= cell * self.rows as i64 {
+            return background;
+        }
+        let (cx, cy) = ((px / cell) as usize, (py / cell) as usize);
+        let ch = self.grid[cy * self.cols as usize + cx].min(127) as usize;
+        if ch == 0 {
+            return background;
+        }
+        let (tx, ty) = (
+            ((px % cell) / self.scale as i64) as usize,
+            ((py % cell) / self.scale as i64) as usize,
+        );
+        let glyph = font8x8::legacy::BASIC_LEGACY[ch];
+        let src = if (glyph[ty] >> tx) & 1 != 0 {
+            [1.0, 1.0, 1.0, 1.0]
+        } else {
+            [0.0, 0.0, 0.0, 0.6]
+        };
+        std::array::from_fn(|c| src[c] + (1.0 - src[3]) * background[c])
+    }
+}
+
 /// The overlay pipeline for one swapchain format, with the font uploaded.
 pub struct OverlayPass {
     pipeline: GraphicsPipeline,
@@ -91,19 +160,11 @@ impl OverlayPass {
         let Some(desc) = graph.image_desc(target) else {
             return target;
         };
-        let scale = scale.max(1);
-        let cell = 8 * scale;
-        let cols = (desc.width.saturating_sub(8) / cell) as usize;
-        let rows = lines
-            .len()
-            .min((desc.height.saturating_sub(8) / cell) as usize);
-        if lines.is_empty() || cols == 0 || rows == 0 {
+        let Some(layout) = OverlayLayout::new(desc.width, desc.height, lines, scale) else {
             return target;
-        }
-        let cols = cols
-            .min(lines.iter().map(|l| l.chars().count()).max().unwrap_or(0))
-            .max(1);
-        let grid = text_grid(lines, cols, rows);
+        };
+        let (cols, rows, scale) = (layout.cols, layout.rows, layout.scale);
+        let grid = layout.grid;
         let text = graph.upload_buffer(
             "overlay-text",
             grid.iter().flat_map(|c| c.to_le_bytes()).collect(),
@@ -114,11 +175,11 @@ impl OverlayPass {
         pass.buffer(text, BufferAccess::StorageRead);
         let out = pass.image(target, ImageAccess::ColorAttachment(LoadOp::Load));
         let push = Push::new()
-            .u32(cols as u32)
-            .u32(rows as u32)
+            .u32(cols)
+            .u32(rows)
             .u32(scale)
-            .u32(4)
-            .u32(4);
+            .u32(ORIGIN)
+            .u32(ORIGIN);
         let pipeline = &self.pipeline;
         pass.exec(move |ctx| {
             ctx.draw(

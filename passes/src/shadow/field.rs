@@ -99,6 +99,33 @@ impl SsdfField {
         }
     }
 
+    /// The field with only its first `components` principal components
+    /// (at least 1; no more than it has). The components are ordered by
+    /// decreasing variance, so this is the rank-`components` PCA of the
+    /// same samples without baking them again (how a sweep over the PCA
+    /// knob reuses one bake).
+    pub fn truncated(&self, components: u32) -> Self {
+        let k = self.components as usize;
+        let kept = (components as usize).clamp(1, k);
+        let texel_rows = self
+            .texel_rows
+            .chunks_exact(k + 1)
+            .flat_map(|row| row[..=kept].iter().copied())
+            .collect();
+        let coefficients = self
+            .coefficients
+            .chunks_exact(k)
+            .flat_map(|c| c[..kept].iter().copied())
+            .collect();
+        Self {
+            grid: self.grid,
+            directions: self.directions,
+            components: kept as u32,
+            texel_rows,
+            coefficients,
+        }
+    }
+
     /// Number of direction texels.
     pub fn texels(&self) -> usize {
         (self.directions * self.directions) as usize

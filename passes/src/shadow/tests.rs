@@ -81,3 +81,63 @@ fn silhouette_angles_match_ray_casting() {
         );
     }
 }
+
+/// Keeping the first k of a field's components is the rank-k PCA: it
+/// reconstructs the samples as well as compressing them to k directly
+/// (within 2 % of that error), and has the k-component layout.
+#[test]
+fn truncating_components_matches_compressing_to_fewer() {
+    use super::{SsdfField, SsdfGrid, SsdfSamples};
+    let grid = SsdfGrid {
+        centre: DVec3::ZERO,
+        radius: 1.0,
+        nodes: 4,
+    };
+    let directions = 6u32;
+    let texels = (directions * directions) as usize;
+    let mut rng = Pcg32::new(5, 0);
+    // Five patterns over the texels with decreasing weights, plus noise.
+    let patterns: Vec<Vec<f64>> = (0..5)
+        .map(|_| (0..texels).map(|_| rng.next_f64() - 0.5).collect())
+        .collect();
+    let values: Vec<f32> = (0..grid.count())
+        .flat_map(|_| {
+            let w: Vec<f64> = (0..5)
+                .map(|p| (rng.next_f64() - 0.5) * 2f64.powi(-p))
+                .collect();
+            let noise: Vec<f64> = (0..texels).map(|_| 1e-3 * rng.next_f64()).collect();
+            (0..texels)
+                .map(|t| {
+                    (0.5 + noise[t] + (0..5).map(|p| w[p] * patterns[p][t]).sum::<f64>()) as f32
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let samples = SsdfSamples {
+        grid,
+        directions,
+        values,
+        seconds: 0.0,
+    };
+    let rms = |f: &SsdfField| -> f64 {
+        let mut sum = 0.0;
+        for n in 0..grid.count() {
+            for t in 0..texels {
+                sum += (f.node_value(n, t) - samples.values[n * texels + t] as f64).powi(2);
+            }
+        }
+        (sum / (grid.count() * texels) as f64).sqrt()
+    };
+    let full = SsdfField::compress(&samples, 5);
+    for k in 1..=4u32 {
+        let cut = full.truncated(k);
+        let direct = SsdfField::compress(&samples, k);
+        assert_eq!(cut.components, k);
+        assert_eq!(cut.texel_rows.len(), direct.texel_rows.len());
+        assert_eq!(cut.coefficients.len(), direct.coefficients.len());
+        let (a, b) = (rms(&cut), rms(&direct));
+        assert!(a <= b * 1.02 + 1e-6, "k = {k}: truncated {a}, direct {b}");
+    }
+    assert_eq!(full.truncated(0).components, 1);
+    assert_eq!(full.truncated(99).components, 5);
+}

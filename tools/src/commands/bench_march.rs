@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use clap::Args;
-use inlay_engine::{Context, HdrImage};
+use inlay_engine::Context;
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::field::GpuGridField;
@@ -18,6 +18,7 @@ use inlay_passes::scene::load_scene;
 use crate::field_source::scene_field;
 use crate::field_view::FieldView;
 use crate::headless::run_headless;
+use crate::measure::{parse_size, relative_error};
 use crate::timings_table::quantile;
 
 /// Options of `bench-march`.
@@ -46,30 +47,6 @@ pub struct BenchMarchArgs {
     /// Path-traced samples per pixel of the reference (recipe scenes only).
     #[arg(long, default_value_t = 64)]
     pub reference_samples: u32,
-}
-
-fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
-    let (w, h) = s
-        .split_once('x')
-        .ok_or_else(|| anyhow::anyhow!("size `{s}` is not WxH"))?;
-    let (w, h): (u32, u32) = (w.parse()?, h.parse()?);
-    anyhow::ensure!(
-        (1..=16384).contains(&w) && (1..=16384).contains(&h),
-        "size `{s}` is out of range"
-    );
-    Ok((w, h))
-}
-
-/// Mean |a − b| over rgb, divided by the mean of b.
-fn relative_error(a: &HdrImage, b: &[[f32; 4]]) -> f64 {
-    let (mut err, mut mean) = (0.0, 0.0);
-    for (p, q) in a.pixels.iter().zip(b) {
-        for c in 0..3 {
-            err += (p[c] - q[c]).abs() as f64;
-            mean += q[c] as f64;
-        }
-    }
-    err / mean.max(1e-30)
 }
 
 /// Runs `bench-march`.

@@ -11,3 +11,4 @@ pub mod probe;
 pub mod profile;
 pub mod reference;
 pub mod render;
+pub mod sweep;
