@@ -124,7 +124,9 @@ fn without_a_display_the_demo_falls_back_to_headless() {
 /// The viewer driven like a user: open `inlay view` on DOG under Xvfb with
 /// validation, wait for its first frame, screenshot, drag the object with
 /// injected (XTEST) mouse input to another spot on the floor, wait for a
-/// frame showing the move, screenshot again, quit with Escape. The object
+/// frame showing the move, screenshot again, switch the quality preset
+/// with F5 (the passes rebuilt over the same field upload) and draw on,
+/// quit with Escape. The object
 /// must have moved (it says where, and the image changed around its old
 /// and new pixels), the image must not be blank, and the run must be
 /// validation-clean.
@@ -251,7 +253,6 @@ fn the_viewer_moves_the_object_where_it_is_dragged() {
     wait_for("shows", 300);
     std::thread::sleep(Duration::from_secs(2));
     let after = shot(&conn);
-    // Escape (keycode 9 in the server's default map) closes the viewer.
     // Without a window manager nothing gives the window keyboard focus:
     // give it, as a window manager would on a click.
     let windows = conn.query_tree(root).unwrap().reply().unwrap().children;
@@ -271,6 +272,14 @@ fn the_viewer_moves_the_object_where_it_is_dragged() {
         x11rb::CURRENT_TIME,
     )
     .unwrap();
+    // F5 (keycode 71) rebuilds the passes at the next preset, keeping the
+    // moved object; Escape (keycode 9 in the server's default map) closes
+    // the viewer.
+    conn.xtest_fake_input(2, 71, 0, root, 0, 0, 0).unwrap();
+    conn.xtest_fake_input(3, 71, 0, root, 0, 0, 0).unwrap();
+    conn.flush().unwrap();
+    wait_for("view: quality preset balanced", 300);
+    wait_for("fps average", 300);
     conn.xtest_fake_input(2, 9, 0, root, 0, 0, 0).unwrap();
     conn.xtest_fake_input(3, 9, 0, root, 0, 0, 0).unwrap();
     conn.flush().unwrap();

@@ -43,6 +43,22 @@ pub fn view_over_field(
     camera: CameraSpec,
     use_cache: bool,
 ) -> anyhow::Result<InsertionView> {
+    let gpu = GpuGridField::upload(ctx, field)?;
+    view_over_gpu_field(ctx, lib, scene, knobs, gpu, camera, use_cache)
+}
+
+/// As [`view_over_field`] over a field already on the GPU (a clone of one
+/// upload shared by several views: a sweep's configurations, the
+/// viewer's presets).
+pub fn view_over_gpu_field(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    scene: &Scene,
+    knobs: MarchKnobs,
+    field: GpuGridField,
+    camera: CameraSpec,
+    use_cache: bool,
+) -> anyhow::Result<InsertionView> {
     knobs
         .check()
         .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
@@ -51,7 +67,7 @@ pub fn view_over_field(
         lib,
         scene,
         MarchPass::new(ctx, lib, knobs)?,
-        GpuGridField::upload(ctx, field)?,
+        field,
         camera,
         use_cache,
     )

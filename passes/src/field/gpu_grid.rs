@@ -10,6 +10,8 @@ use inlay_engine::{vk, Buffer, Context, Push};
 use super::grid::GridField;
 
 /// Device copies of a grid field's data (bindings 0, 1, 2 of set 0).
+/// Clones share the device buffers (several views of one upload).
+#[derive(Clone)]
 pub struct GpuGridField {
     info: Arc<Buffer>,
     nodes: Arc<Buffer>,

@@ -14,6 +14,7 @@ use clap::Args;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
+use inlay_passes::field::GpuGridField;
 use inlay_passes::scene::{load_scene, Scene};
 use inlay_passes::shadow::GpuSsdf;
 use serde_json::json;
@@ -22,7 +23,7 @@ use super::profile::{profile_view, Motion};
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
 use crate::measure::{parse_size, relative_error};
-use crate::scene_view::view_over_field;
+use crate::scene_view::view_over_gpu_field;
 use crate::sweep::grid::{configurations, GridMode, KnobValues, Knobs};
 use crate::sweep::pareto::pareto_front;
 use crate::sweep::plot::{svg, PlotPoint};
@@ -175,6 +176,8 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
         .unwrap_or(base.components);
     let spec = scene.camera(&args.camera)?.clone();
     let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    // One upload serves every configuration.
+    let gpu_field = GpuGridField::upload(ctx, &field)?;
     let library = crate::shaders::library()?;
     eprintln!(
         "sweep: {} configurations ({:?} grid) of {} on {}",
@@ -207,12 +210,12 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
             )
         });
         let configured = scene_with(&scene, knobs, most_components);
-        let mut view = view_over_field(
+        let mut view = view_over_gpu_field(
             ctx,
             &library,
             &configured,
             configured.march,
-            &field,
+            gpu_field.clone(),
             spec.clone(),
             !args.no_cache,
         )

@@ -18,12 +18,12 @@ use clap::Args;
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::window::PresentMode;
 use inlay_engine::{Context, ContextOptions};
-use inlay_passes::field::GridField;
+use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::scene::{load_scene, Scene};
 
 use crate::field_source::scene_field;
 use crate::insertion_view::{Effects, InsertionView};
-use crate::scene_view::view_over_field;
+use crate::scene_view::view_over_gpu_field;
 use crate::window_app::{run_window, WindowError, WindowOptions};
 use controls::Controls;
 use orbit::OrbitCamera;
@@ -83,6 +83,8 @@ pub enum PresentArg {
 pub struct Viewer {
     authored: Scene,
     field: GridField,
+    /// The field on the GPU, shared by the views of every preset.
+    gpu_field: GpuGridField,
     view: InsertionView,
     preset: Preset,
     use_cache: bool,
@@ -105,13 +107,14 @@ impl Viewer {
         authored.shadows.cast = true;
         let camera = authored.camera(&args.camera)?.clone();
         let field = scene_field(&authored, None, !args.no_cache)?;
+        let gpu_field = GpuGridField::upload(ctx, &field)?;
         let scene = preset.apply(&authored);
-        let view = view_over_field(
+        let view = view_over_gpu_field(
             ctx,
             lib,
             &scene,
             scene.march,
-            &field,
+            gpu_field.clone(),
             camera.clone(),
             !args.no_cache,
         )?;
@@ -120,6 +123,7 @@ impl Viewer {
             controls: Controls::new(OrbitCamera::from_spec(&camera), &authored, args.overlay),
             authored,
             field,
+            gpu_field,
             view,
             preset,
             use_cache: !args.no_cache,
@@ -136,12 +140,12 @@ impl Viewer {
     fn rebuild_view(&mut self, ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<()> {
         let scene = self.preset.apply(&self.authored);
         let camera = self.controls.camera.spec();
-        let view = view_over_field(
+        let view = view_over_gpu_field(
             ctx,
             lib,
             &scene,
             scene.march,
-            &self.field,
+            self.gpu_field.clone(),
             camera,
             self.use_cache,
         )?;
