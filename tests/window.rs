@@ -126,10 +126,9 @@ fn without_a_display_the_demo_falls_back_to_headless() {
 /// injected (XTEST) mouse input to another spot on the floor, wait for a
 /// frame showing the move, screenshot again, switch the quality preset
 /// with F5 (the passes rebuilt over the same field upload) and draw on,
-/// quit with Escape. The object
-/// must have moved (it says where, and the image changed around its old
-/// and new pixels), the image must not be blank, and the run must be
-/// validation-clean.
+/// quit with Escape. The object must have moved (it says where, and the
+/// image changed around its old and new pixels), the image must not be
+/// blank, and the run must be validation-clean.
 #[test]
 fn the_viewer_moves_the_object_where_it_is_dragged() {
     use std::io::BufRead;
