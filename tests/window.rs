@@ -126,7 +126,8 @@ fn without_a_display_the_demo_falls_back_to_headless() {
 /// injected (XTEST) mouse input to another spot on the floor, wait for a
 /// frame showing the move, screenshot again, switch the quality preset
 /// with F5 (the passes rebuilt over the same field upload) and draw on,
-/// quit with Escape. The object must have moved (it says where, and the
+/// resize the window and draw on at the new size, hide and show it, quit
+/// with Escape. The object must have moved (it says where, and the
 /// image changed around its old and new pixels), the image must not be
 /// blank, and the run must be validation-clean.
 #[test]
@@ -279,6 +280,31 @@ fn the_viewer_moves_the_object_where_it_is_dragged() {
     conn.flush().unwrap();
     wait_for("view: quality preset balanced", 300);
     wait_for("fps average", 300);
+    // Resizing the window (as a window manager would) recreates the
+    // swapchain: frames go on at the new size.
+    conn.configure_window(
+        viewer_window,
+        &x11rb::protocol::xproto::ConfigureWindowAux::new()
+            .width(400)
+            .height(200),
+    )
+    .unwrap();
+    conn.flush().unwrap();
+    wait_for("fps average, 400x200", 300);
+    // Hidden and shown again (what minimising and restoring do to an X11
+    // window without a window manager): the viewer draws on.
+    conn.unmap_window(viewer_window).unwrap();
+    conn.flush().unwrap();
+    std::thread::sleep(Duration::from_secs(1));
+    conn.map_window(viewer_window).unwrap();
+    conn.flush().unwrap();
+    wait_for("fps average, 400x200", 300);
+    conn.set_input_focus(
+        x11rb::protocol::xproto::InputFocus::PARENT,
+        viewer_window,
+        x11rb::CURRENT_TIME,
+    )
+    .unwrap();
     conn.xtest_fake_input(2, 9, 0, root, 0, 0, 0).unwrap();
     conn.xtest_fake_input(3, 9, 0, root, 0, 0, 0).unwrap();
     conn.flush().unwrap();
