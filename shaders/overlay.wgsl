@@ -3,7 +3,7 @@
 // glyph white over a translucent dark cell (premultiplied "over" blend).
 // `font` holds 128 ASCII glyphs as two u32 words each (rows 0-3, 4-7; bit
 // c of a row's byte is column c); `text` one character code per cell.
-#include "common/fullscreen.wgsl"
+#include "common/fullscreen_vertex.wgsl"
 
 struct OverlayPush {
     cols: u32,
@@ -16,17 +16,8 @@ var<immediate> pc: OverlayPush;
 @group(0) @binding(0) var<storage, read> font: array<u32>;
 @group(0) @binding(1) var<storage, read> text: array<u32>;
 
-struct Out {
-    @builtin(position) position: vec4<f32>,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> Out {
-    return Out(fullscreen_position(i));
-}
-
 @fragment
-fn fs_main(in: Out) -> @location(0) vec4<f32> {
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let p = vec2<i32>(in.position.xy) - vec2<i32>(i32(pc.origin_x), i32(pc.origin_y));
     let cell_size = i32(8u * pc.scale);
     if p.x < 0 || p.y < 0 || p.x >= cell_size * i32(pc.cols) || p.y >= cell_size * i32(pc.rows) {

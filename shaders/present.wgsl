@@ -1,6 +1,6 @@
 // Presents an HDR image on the swapchain: exposure, ACES, and sRGB encoding
 // unless the swapchain format encodes itself.
-#include "common/fullscreen.wgsl"
+#include "common/fullscreen_vertex.wgsl"
 #include "common/tonemap.wgsl"
 
 struct Params {
@@ -10,17 +10,8 @@ struct Params {
 var<immediate> params: Params;
 @group(0) @binding(0) var hdr: texture_2d<f32>;
 
-struct Out {
-    @builtin(position) position: vec4<f32>,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> Out {
-    return Out(fullscreen_position(i));
-}
-
 @fragment
-fn fs_main(in: Out) -> @location(0) vec4<f32> {
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let size = vec2<i32>(textureDimensions(hdr));
     let p = clamp(vec2<i32>(in.position.xy), vec2<i32>(0), size - 1);
     var c = aces_filmic3(textureLoad(hdr, p, 0).rgb * params.exposure);

@@ -298,12 +298,15 @@ fn the_viewer_moves_the_object_where_it_is_dragged() {
                 .is_ok_and(|a| a.map_state == x11rb::protocol::xproto::MapState::VIEWABLE)
         })
         .expect("the viewer's window is mapped");
-    conn.set_input_focus(
-        x11rb::protocol::xproto::InputFocus::PARENT,
-        viewer_window,
-        x11rb::CURRENT_TIME,
-    )
-    .unwrap();
+    let focus = || {
+        conn.set_input_focus(
+            x11rb::protocol::xproto::InputFocus::PARENT,
+            viewer_window,
+            x11rb::CURRENT_TIME,
+        )
+        .unwrap();
+    };
+    focus();
     // F5 (keycode 71) rebuilds the passes at the next preset, keeping the
     // moved object; Escape (keycode 9 in the server's default map) closes
     // the viewer.
@@ -331,12 +334,7 @@ fn the_viewer_moves_the_object_where_it_is_dragged() {
     conn.map_window(viewer_window).unwrap();
     conn.flush().unwrap();
     wait_for("fps average, 400x200", 300);
-    conn.set_input_focus(
-        x11rb::protocol::xproto::InputFocus::PARENT,
-        viewer_window,
-        x11rb::CURRENT_TIME,
-    )
-    .unwrap();
+    focus();
     conn.xtest_fake_input(2, 9, 0, root, 0, 0, 0).unwrap();
     conn.xtest_fake_input(3, 9, 0, root, 0, 0, 0).unwrap();
     conn.flush().unwrap();
