@@ -80,10 +80,11 @@ fn probe_matches_the_cpu_reference_with_and_without_environment() {
         let knobs = ProbeKnobs {
             map: kind,
             resolution: 12,
+            supersampling: 2,
         };
         let pass = ProbePass::new(&ctx, &lib, knobs, march(), &env).unwrap();
         let gpu = gpu_probe(&ctx, &pass, &field, origin);
-        let cpu = trace_probe(&field, origin, &pass.map(), &march(), &env);
+        let cpu = trace_probe(&field, origin, &knobs, &march(), &env);
         assert_matches(&gpu, &cpu, scene);
         // Some of the sphere sees past the field.
         assert!(
@@ -134,6 +135,7 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
     let probe_knobs = ProbeKnobs {
         map: MapKind::Octahedral,
         resolution: 16,
+        supersampling: 2,
     };
     let fit_knobs = FitKnobs {
         lobes: 8,
@@ -162,7 +164,7 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
     assert!(executed.iter().any(|p| p == "probe-trace") && executed.iter().any(|p| p == "sg-fit"));
     let gpu = light.fit.read_report().unwrap();
     // The same probe on the CPU.
-    let cpu_probe = trace_probe(&field, centre, &light.probe.map(), &march(), &env);
+    let cpu_probe = trace_probe(&field, centre, &probe_knobs, &march(), &env);
     let cpu = fit_reference(
         &ProbeSamples::new(&light.probe.map(), &cpu_probe),
         &fit_knobs,

@@ -155,8 +155,11 @@ fn gpu_fit_reaches_the_cpu_residual() {
             gpu.accepted, cpu.accepted
         );
         // f32 normal equations take slightly different steps; both must
-        // reach a good fit, the GPU within 1.5× (+1 %) of the CPU.
-        assert!(c < 0.05, "{kind:?}: CPU residual {c}");
+        // reach a good fit, the GPU within 1.5× (+1 %) of the CPU. (The fit
+        // sees the probe filtered, sgfit/probe_filter.rs: on this small
+        // equirect map the filter moves a constant by up to 2.5 % near the
+        // poles, which no sum of lobes follows; the CPU reaches 0.058.)
+        assert!(c < 0.07, "{kind:?}: CPU residual {c}");
         assert!(g <= 1.5 * c + 0.01, "{kind:?}: GPU residual {g} vs CPU {c}");
     }
 }
@@ -289,8 +292,10 @@ fn warm_starts_from_extreme_lobes_and_after_a_jump() {
     let warm = gpu_fit(&ctx, &fit, &map, &moved, FitStart::Warm, 4);
     assert_sane("small move", &warm);
     assert!(!warm.started_cold);
+    // As good as the converged cold fit it started from (the filtered
+    // probe leaves a residual of about 0.015 at 8 lobes).
     assert!(
-        warm.relative_residual() < 0.01,
+        warm.relative_residual() < 1.1 * r.relative_residual() + 0.002,
         "{} after {}",
         warm.relative_residual(),
         r.relative_residual()

@@ -1,6 +1,9 @@
 // The incident-light probe (METHOD.md eq. 1): from the object's centre,
-// one ray per texel of the direction map through the field, writing
-// L_i = (1 − Ô)·L_env + Ĉ in rgb and Ô in alpha (`main_with_environment`).
+// `side` × `side` stratified rays per texel of the direction map through
+// the field, writing the solid-angle mean of L_i = (1 − Ô)·L_env + Ĉ in rgb
+// and of Ô in alpha (`main_with_environment`). The lobes come blurred to
+// the sub-sample spacing (passes/src/probe/texel_filter.rs), so the rays
+// integrate even a needle lobe.
 // When the scene has no environment light, `main_field_only` writes Ĉ: the
 // L_env term is not evaluated at all and `env_lobes` is not bound.
 // Mirrors passes/src/probe/reference.rs.
@@ -17,6 +20,11 @@ struct ProbePush {
     height: u32,
     termination: f32,
     env_lobe_count: u32,
+    side: u32,
+    // The struct is 16-byte aligned (its vec3): pad to 48 bytes.
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 var<immediate> pc: ProbePush;
@@ -36,24 +44,37 @@ fn environment(d: vec3<f32>) -> vec3<f32> {
     return sum;
 }
 
-struct ProbeRay {
+// Sub-sample `k` (row-major in the texel's `side` × `side` cells) of
+// texel `t`: its direction, its weight dω/(du dv) and the march along it.
+struct ProbeSample {
     dir: vec3<f32>,
+    weight: f32,
     march: MarchResult,
 }
 
-fn probe_ray(t: vec2<u32>) -> ProbeRay {
-    let d = dm_direction(t, vec2<u32>(pc.width, pc.height));
-    return ProbeRay(d, march_ray(pc.origin, d, PROBE_NO_OBJECT, pc.step, pc.termination));
+fn probe_sample(t: vec2<u32>, k: u32) -> ProbeSample {
+    let ij = vec2<u32>(k % pc.side, k / pc.side);
+    let size = vec2<u32>(pc.width, pc.height);
+    let dd = dm_direction_density(dm_subsample_uv(t, ij, pc.side, size));
+    let m = march_ray(pc.origin, dd.xyz, PROBE_NO_OBJECT, pc.step, pc.termination);
+    return ProbeSample(dd.xyz, dd.w, m);
 }
 
+// Each entry point writes the solid-angle mean over the texel's sub-samples.
 @compute @workgroup_size(8, 8, 1)
 fn main_with_environment(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= pc.width || id.y >= pc.height {
         return;
     }
-    let p = probe_ray(id.xy);
-    let radiance = p.march.colour + (1.0 - p.march.opacity) * environment(p.dir);
-    textureStore(probe, id.xy, vec4<f32>(radiance, p.march.opacity));
+    var sum = vec4<f32>(0.0);
+    var weight = 0.0;
+    for (var k = 0u; k < pc.side * pc.side; k++) {
+        let s = probe_sample(id.xy, k);
+        let l = s.march.colour + (1.0 - s.march.opacity) * environment(s.dir);
+        sum += s.weight * vec4<f32>(l, s.march.opacity);
+        weight += s.weight;
+    }
+    textureStore(probe, id.xy, sum / weight);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -61,6 +82,12 @@ fn main_field_only(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= pc.width || id.y >= pc.height {
         return;
     }
-    let p = probe_ray(id.xy);
-    textureStore(probe, id.xy, vec4<f32>(p.march.colour, p.march.opacity));
+    var sum = vec4<f32>(0.0);
+    var weight = 0.0;
+    for (var k = 0u; k < pc.side * pc.side; k++) {
+        let s = probe_sample(id.xy, k);
+        sum += s.weight * vec4<f32>(s.march.colour, s.march.opacity);
+        weight += s.weight;
+    }
+    textureStore(probe, id.xy, sum / weight);
 }

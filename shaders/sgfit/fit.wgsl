@@ -2,6 +2,8 @@
 // passes/src/sgfit/{model,solve,reference}.rs. Entry points, dispatched in
 // this order by passes/src/sgfit/pass.rs (one graph pass; the graph orders
 // successive dispatches):
+//   filter_probe (texels / 64) the probe filtered by passes/src/sgfit/probe_filter.rs's
+//                              matrix, with each texel's solid angle, into `fitted`
 //   init_cold (M groups)       cold-start lobes into slot 1
 //   cost (slot 1 [, slot 0])   partial sums of the cost of a slot's lobes
 //   select (1 thread)          warm lobes (slot 0) or the cold start, state reset
@@ -41,6 +43,11 @@ var<immediate> pc: FitPush;
 @group(0) @binding(4) var<storage, read_write> jac: array<f32>;
 @group(0) @binding(5) var<storage, read_write> normal: array<f32>;
 @group(0) @binding(6) var<storage, read_write> work: array<f32>;
+// Per texel: the filtered radiance (rgb) and the solid angle (w).
+@group(0) @binding(7) var<storage, read_write> fitted: array<vec4<f32>>;
+// The probe filter as a sparse matrix (filter_probe).
+@group(0) @binding(8) var<storage, read> filter_offsets: array<u32>;
+@group(0) @binding(9) var<storage, read> filter_entries: array<vec2<u32>>;
 
 // `state` layout (mirrored by passes/src/sgfit/pass.rs).
 const S_COST: u32 = 0u;
@@ -68,6 +75,45 @@ fn texel_count() -> u32 {
 
 fn texel_xy(t: u32) -> vec2<u32> {
     return vec2<u32>(t % pc.width, t / pc.width);
+}
+
+// ---- the probe as the fit sees it --------------------------------------------
+
+// Row t of the filter (passes/src/sgfit/probe_filter.rs, built on the CPU):
+// filter_entries[filter_offsets[t] .. filter_offsets[t + 1]], each (source
+// texel, weight as f32 bits).
+@compute @workgroup_size(64, 1, 1)
+fn filter_probe(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = id.x;
+    if t >= texel_count() {
+        return;
+    }
+    let xy = texel_xy(t);
+    let own = textureLoad(probe, xy, 0).rgb;
+    let omega = dm_solid_angle(xy, vec2<u32>(pc.width, pc.height));
+    if !fit_texel_valid(own) {
+        fitted[t] = vec4<f32>(own, omega);
+        return;
+    }
+    var sum = vec3<f32>(0.0);
+    for (var e = filter_offsets[t]; e < filter_offsets[t + 1u]; e++) {
+        let entry = filter_entries[e];
+        let l = textureLoad(probe, texel_xy(entry.x), 0).rgb;
+        if fit_texel_valid(l) {
+            sum += bitcast<f32>(entry.y) * l;
+        }
+    }
+    fitted[t] = vec4<f32>(sum, omega);
+}
+
+// The filtered radiance of texel t.
+fn fit_radiance(t: u32) -> vec3<f32> {
+    return fitted[t].rgb;
+}
+
+// The solid angle of texel t.
+fn fit_weight(t: u32) -> f32 {
+    return fitted[t].w;
 }
 
 fn lobe(slot: u32, k: u32) -> Sg {
@@ -114,11 +160,11 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
     var sum_wl = 0.0;
     var sum_w = 0.0;
     for (var t = lid; t < n; t += 64u) {
-        let l = textureLoad(probe, texel_xy(t), 0).rgb;
+        let l = fit_radiance(t);
         if !fit_texel_valid(l) {
             continue;
         }
-        let w = dm_solid_angle(texel_xy(t), size);
+        let w = fit_weight(t);
         let lum = fit_luminance(l);
         if lum > best_lum {
             best_lum = lum;
@@ -160,7 +206,7 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
                 seeded = j;
             }
         }
-        let sharp = 2.0 * FIT_LN_2 * FIT_PI / dm_solid_angle(bt, size);
+        let sharp = 2.0 * FIT_LN_2 * FIT_PI / fit_weight(red_i[0]);
         seed_sharpness = clamp(sharp, min(l0, FIT_MAX_SHARPNESS), FIT_MAX_SHARPNESS);
     }
     workgroupBarrier();
@@ -169,7 +215,7 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
     var num = vec3<f32>(0.0);
     var den = 0.0;
     for (var t = lid; t < n; t += 64u) {
-        let l = textureLoad(probe, texel_xy(t), 0).rgb;
+        let l = fit_radiance(t);
         if !fit_texel_valid(l) {
             continue;
         }
@@ -178,7 +224,7 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
         for (var j = 0u; j < m; j++) {
             cover += sg_weight(cold_lobe(j, seeded, seed_dir, seed_sharpness), v);
         }
-        let gw = dm_solid_angle(texel_xy(t), size) * sg_weight(g, v);
+        let gw = fit_weight(t) * sg_weight(g, v);
         num += gw * l;
         den += gw * cover;
     }
@@ -213,11 +259,11 @@ fn cost(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
     var invalid = 0.0;
     if t < texel_count() {
         let xy = texel_xy(t);
-        let l = textureLoad(probe, xy, 0).rgb;
+        let l = fit_radiance(t);
         if fit_texel_valid(l) {
             let size = vec2<u32>(pc.width, pc.height);
             let v = dm_direction(xy, size);
-            let w = dm_solid_angle(xy, size);
+            let w = fit_weight(t);
             var model = vec3<f32>(0.0);
             for (var k = 0u; k < pc.lobe_count; k++) {
                 model += sg_eval(lobe(pc.slot, k), v);
@@ -298,11 +344,11 @@ fn jacobian(@builtin(global_invocation_id) id: vec3<u32>) {
     let m = pc.lobe_count;
     let p = 6u * m;
     let xy = texel_xy(t);
-    let l = textureLoad(probe, xy, 0).rgb;
+    let l = fit_radiance(t);
     let valid = fit_texel_valid(l);
     let size = vec2<u32>(pc.width, pc.height);
     let v = dm_direction(xy, size);
-    let sw = sqrt(dm_solid_angle(xy, size));
+    let sw = sqrt(fit_weight(t));
     let row0 = 3u * t * pc.cols;
     var model = vec3<f32>(0.0);
     for (var k = 0u; k < m; k++) {

@@ -12,6 +12,7 @@
 // alone and inlining them halves the shader — this one did, ~1.2 MB and a
 // JIT compile per frame.
 #include "shadow/angles.wgsl"
+#include "common/octahedral_wrap.wgsl"
 
 struct SsdfObject {
     // Rows of the affine world → object map (directions use .xyz).
@@ -93,23 +94,8 @@ fn ssdf_prepare(x: vec3<f32>) {
 
 // The octahedral map's edges fold onto themselves (SsdfField's wrap_octahedral).
 fn ssdf_wrap(t: vec2<i32>, n: i32) -> u32 {
-    var x = t.x;
-    var y = t.y;
-    if x < 0 {
-        x = 0;
-        y = n - 1 - y;
-    } else if x >= n {
-        x = n - 1;
-        y = n - 1 - y;
-    }
-    if y < 0 {
-        y = 0;
-        x = n - 1 - x;
-    } else if y >= n {
-        y = n - 1;
-        x = n - 1 - x;
-    }
-    return u32(clamp(y, 0, n - 1) * n + clamp(x, 0, n - 1));
+    let w = oct_wrap(t, n);
+    return u32(w.y * n + w.x);
 }
 
 fn ssdf_texel_value(texel: u32) -> f32 {

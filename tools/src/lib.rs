@@ -6,6 +6,7 @@
 pub mod chrome_trace;
 pub mod commands;
 pub mod demo;
+pub mod fidelity;
 pub mod field_source;
 pub mod field_view;
 pub mod headless;

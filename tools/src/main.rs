@@ -66,6 +66,8 @@ enum Command {
     BenchMarch(inlay::commands::bench_march::BenchMarchArgs),
     /// Path trace the ground-truth image of a recipe scene's camera (no field).
     Reference(inlay::commands::reference::ReferenceArgs),
+    /// Measure inlay against Blender Cycles renders of the scene (tools/cycles/render_cycles.py): reference, field, insertion, shadow, probe irradiance.
+    Fidelity(inlay::commands::fidelity::FidelityArgs),
     /// Trace the incident-light probe at a point and fit SG lighting to it; writes probe | fit | error.
     Probe(inlay::commands::probe::ProbeArgs),
     /// Measure the SG fit: residual against iterations and lobes, time per iteration and per probe trace.
@@ -139,6 +141,9 @@ fn main() -> ExitCode {
         Command::BenchMarch(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::bench_march::run(&ctx, args)),
+        Command::Fidelity(args) => Context::new(&cli.gpu.options(), None)
+            .map_err(anyhow::Error::from)
+            .and_then(|ctx| inlay::commands::fidelity::run(&ctx, args)),
         Command::Probe(args) => Context::new(&cli.gpu.options(), None)
             .map_err(anyhow::Error::from)
             .and_then(|ctx| inlay::commands::probe::run(&ctx, args)),

@@ -6,6 +6,11 @@ use std::f64::consts::PI;
 use glam::DVec3;
 use serde::Deserialize;
 
+/// Cells per texel side of the midpoint rule for an octahedral texel's
+/// solid angle ([`DirectionMap::solid_angle`]); `DM_SOLID_ANGLE_CELLS` in
+/// the shader.
+pub const SOLID_ANGLE_CELLS: u32 = 4;
+
 /// The layout of a probe image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -68,6 +73,26 @@ impl DirectionMap {
         self.direction_and_density(u, v).0
     }
 
+    /// The map coordinates (u, v) of sub-sample (i, j) of texel (x, y)
+    /// when each texel is split into `side` × `side` equal cells: the
+    /// cell's centre. With `side` = 1 it is the texel's centre. Mirrored
+    /// by `dm_subsample_uv`.
+    pub fn subsample_uv(&self, x: u32, y: u32, i: u32, j: u32, side: u32) -> (f64, f64) {
+        let s = side as f64;
+        (
+            (x as f64 + (i as f64 + 0.5) / s) / self.width as f64,
+            (y as f64 + (j as f64 + 0.5) / s) / self.height as f64,
+        )
+    }
+
+    /// The largest texel's solid angle (sr).
+    pub fn max_solid_angle(&self) -> f64 {
+        (0..self.height)
+            .flat_map(|y| (0..self.width).map(move |x| (x, y)))
+            .map(|(x, y)| self.solid_angle(x, y))
+            .fold(0.0, f64::max)
+    }
+
     /// The unit direction at map coordinates (u, v) ∈ [0, 1]² and the
     /// solid angle per unit of map area there, dω/(du dv) (4π on average):
     /// sin θ · 2π² for equirect, 4/|p|³ for the octahedral map.
@@ -92,8 +117,10 @@ impl DirectionMap {
 
     /// The solid angle of texel (x, y): exact for equirect; for the
     /// octahedral map the midpoint rule on dω = du dv / |p|³ (p the
-    /// octahedron point), whose sum over the map is 4π within 0.3 % at
-    /// n = 16 (tested).
+    /// octahedron point) over a [`SOLID_ANGLE_CELLS`]² grid of cells in
+    /// the texel, within 0.4 % of the exact value for every texel at n = 32
+    /// (one midpoint per texel is off by up to 6 % on the texels the fold
+    /// |u| + |v| = 1 crosses, where dω/(du dv) has a kink).
     pub fn solid_angle(&self, x: u32, y: u32) -> f64 {
         match self.kind {
             MapKind::Equirect => {
@@ -102,11 +129,15 @@ impl DirectionMap {
                 2.0 * PI / self.width as f64 * (t0.cos() - t1.cos())
             }
             MapKind::Octahedral => {
-                let n = self.width as f64;
-                let u = 2.0 * (x as f64 + 0.5) / n - 1.0;
-                let v = 2.0 * (y as f64 + 0.5) / self.height as f64 - 1.0;
-                let p = octahedron_point(u, v);
-                4.0 / (n * self.height as f64) / p.length().powi(3)
+                let c = SOLID_ANGLE_CELLS;
+                let mut sum = 0.0;
+                for j in 0..c {
+                    for i in 0..c {
+                        let (u, v) = self.subsample_uv(x, y, i, j, c);
+                        sum += self.direction_and_density(u, v).1;
+                    }
+                }
+                sum / (c * c) as f64 / self.texels() as f64
             }
         }
     }
@@ -209,8 +240,8 @@ mod tests {
         for (kind, n, tol) in [
             (MapKind::Equirect, 8, 1e-12),
             (MapKind::Equirect, 64, 1e-12),
-            (MapKind::Octahedral, 16, 3e-3),
-            (MapKind::Octahedral, 64, 3e-4),
+            (MapKind::Octahedral, 16, 3e-4),
+            (MapKind::Octahedral, 64, 2e-5),
         ] {
             let map = DirectionMap::new(kind, n);
             let mut total = 0.0;

@@ -10,6 +10,7 @@ use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, Push}
 
 use super::direction_map::{DirectionMap, MapKind};
 use super::knobs::ProbeKnobs;
+use super::texel_filter::texel_environment;
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::Sg64;
@@ -30,12 +31,14 @@ pub struct ProbePass {
     environment: Option<ProbeEnvironment>,
     image: Arc<Image>,
     map: DirectionMap,
+    supersampling: u32,
     march: MarchKnobs,
 }
 
 impl ProbePass {
     /// Compiles the pass and creates its probe image. `environment` is the
-    /// distant light L_env; when empty, the pass runs the entry point
+    /// distant light L_env (blurred here to the probe's sub-sample spacing,
+    /// [`texel_environment`]); when empty, the pass runs the entry point
     /// without the L_env term.
     pub fn new(
         ctx: &Arc<Context>,
@@ -65,6 +68,8 @@ impl ProbePass {
             Ok(ComputePipeline::new(ctx, &shader)?)
         };
         let field_only = build("main_field_only")?;
+        let map = knobs.direction_map();
+        let environment = texel_environment(environment, &map, knobs.supersampling);
         let environment = if environment.is_empty() {
             None
         } else {
@@ -85,7 +90,6 @@ impl ProbePass {
                 count: environment.len() as u32,
             })
         };
-        let map = knobs.direction_map();
         let image = Arc::new(Image::new(
             ctx,
             "probe",
@@ -104,6 +108,7 @@ impl ProbePass {
             environment,
             image,
             map,
+            supersampling: knobs.supersampling,
             march,
         })
     }
@@ -163,7 +168,11 @@ impl ProbePass {
             .u32(w)
             .u32(h)
             .f32(self.march.termination as f32)
-            .u32(env.map_or(0, |(_, n)| n));
+            .u32(env.map_or(0, |(_, n)| n))
+            .u32(self.supersampling)
+            .u32(0)
+            .u32(0)
+            .u32(0);
         let mut pass = graph.add_pass("probe-trace", PassKind::Compute);
         grid.declare_reads(&mut pass);
         let probe = pass.image(probe, ImageAccess::StorageWrite);

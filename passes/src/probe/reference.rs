@@ -1,36 +1,66 @@
 //! The CPU reference of the probe trace (f64): eq. 1 over the same direction
-//! map and march quadrature as `shaders/probe/trace.wgsl`.
+//! map, sub-samples and march quadrature as `shaders/probe/trace.wgsl`.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::direction_map::DirectionMap;
+use super::knobs::ProbeKnobs;
+use super::texel_filter::texel_environment;
 use crate::field::RadianceField;
 use crate::geometry::Ray;
 use crate::march::{march_ray, MarchKnobs};
 use crate::sg::Sg64;
 
-/// L_i = (1 − Ô)·L_env + Ĉ (rgb) and Ô (alpha) for every texel of `map`,
-/// row by row, seen from `origin`. With no lobes the L_env term is skipped.
+/// For every texel of the knobs' map, row by row, seen from `origin`: the
+/// solid-angle mean over the texel's `supersampling`² stratified rays of
+/// L_i = (1 − Ô)·L_env + Ĉ (rgb) and of Ô (alpha), L_env blurred as the
+/// GPU pass blurs it ([`texel_environment`]). With no lobes the L_env
+/// term is skipped.
 pub fn trace_probe(
     field: &dyn RadianceField,
     origin: DVec3,
-    map: &DirectionMap,
+    knobs: &ProbeKnobs,
     march: &MarchKnobs,
     environment: &[Sg64],
 ) -> Vec<[f64; 4]> {
+    let map = knobs.direction_map();
+    let side = knobs.supersampling;
+    let env = texel_environment(environment, &map, side);
     (0..map.texels())
         .into_par_iter()
         .map(|i| {
             let (x, y) = (i as u32 % map.width, i as u32 / map.width);
-            let dir = map.direction(x, y);
-            let r = march_ray(field, &Ray { origin, dir }, f64::INFINITY, march);
-            let mut l = r.colour;
-            if !environment.is_empty() {
-                let env: DVec3 = environment.iter().map(|g| g.eval(dir)).sum();
-                l += (1.0 - r.opacity) * env;
-            }
-            [l.x, l.y, l.z, r.opacity]
+            trace_texel(field, origin, &map, (x, y), side, march, &env)
         })
         .collect()
+}
+
+fn trace_texel(
+    field: &dyn RadianceField,
+    origin: DVec3,
+    map: &DirectionMap,
+    (x, y): (u32, u32),
+    side: u32,
+    march: &MarchKnobs,
+    env: &[Sg64],
+) -> [f64; 4] {
+    let (mut l, mut opacity, mut weight) = (DVec3::ZERO, 0.0, 0.0);
+    for j in 0..side {
+        for i in 0..side {
+            let (u, v) = map.subsample_uv(x, y, i, j, side);
+            let (dir, density) = map.direction_and_density(u, v);
+            let r = march_ray(field, &Ray { origin, dir }, f64::INFINITY, march);
+            let mut s = r.colour;
+            if !env.is_empty() {
+                let e: DVec3 = env.iter().map(|g| g.eval(dir)).sum();
+                s += (1.0 - r.opacity) * e;
+            }
+            l += density * s;
+            opacity += density * r.opacity;
+            weight += density;
+        }
+    }
+    let l = l / weight;
+    [l.x, l.y, l.z, opacity / weight]
 }

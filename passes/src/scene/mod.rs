@@ -203,6 +203,7 @@ impl LightingKnobs {
             probe: crate::probe::ProbeKnobs {
                 map: s.probe_map.unwrap_or(d.probe.map),
                 resolution: s.probe_resolution.unwrap_or(d.probe.resolution),
+                supersampling: s.probe_supersampling.unwrap_or(d.probe.supersampling),
             },
             fit: crate::sgfit::FitKnobs {
                 lobes: s.lobes.unwrap_or(d.fit.lobes),
@@ -252,12 +253,23 @@ impl Scene {
     }
 
     /// The distant light L_env the objects are lit with, as SG lobes: the
-    /// environment file's if the scene names one, otherwise the declared
-    /// environment's ([`crate::lighting::environment_lobes`]).
+    /// environment file's if the scene names one; otherwise, for a recipe,
+    /// the whole light from outside the field — the declared environment
+    /// and every emitter outside the bounds as a lobe seen from the
+    /// field's centre ([`crate::envest::hidden_light_lobes`]), since an
+    /// object in the recipe's world is lit by those lights as the field is;
+    /// for a field file, the declared environment
+    /// ([`crate::lighting::environment_lobes`]).
     pub fn object_light_lobes(&self) -> Vec<crate::sg::Sg64> {
-        match &self.object_environment {
-            Some(o) => o.lobes.clone(),
-            None => crate::lighting::environment_lobes(&self.environment),
+        match (&self.object_environment, self.recipe()) {
+            (Some(o), _) => o.lobes.clone(),
+            (None, Some(r)) => crate::envest::hidden_light_lobes(
+                r,
+                &self.environment,
+                0.5 * (r.bounds.min + r.bounds.max),
+                crate::sgfit::model::MAX_SHARPNESS,
+            ),
+            (None, None) => crate::lighting::environment_lobes(&self.environment),
         }
     }
 

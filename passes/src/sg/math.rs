@@ -120,6 +120,26 @@ sg_math!(Sg64, f64, DVec3);
 sg_math!(Sg32, f32, Vec3);
 
 impl Sg64 {
+    /// The lobe convolved with a normalised lobe of sharpness `kernel`
+    /// (a blur of angular variance ≈ 1/`kernel`), approximated as one SG:
+    /// the variances add, so λ' = λκ/(λ + κ), and the amplitude is set so
+    /// that the sphere integral — the lobe's energy — is kept exactly. A
+    /// lobe far wider than the kernel is left almost as it is; a needle
+    /// (λ ≫ κ) becomes a lobe of sharpness ≈ κ with the needle's energy.
+    pub fn blurred(&self, kernel: f64) -> Sg64 {
+        let sharpness = if self.sharpness <= 0.0 {
+            0.0
+        } else {
+            self.sharpness * kernel / (self.sharpness + kernel)
+        };
+        Sg64 {
+            direction: self.direction,
+            sharpness,
+            amplitude: self.amplitude * Self::sphere_factor(self.sharpness)
+                / Self::sphere_factor(sharpness),
+        }
+    }
+
     /// The f32 lobe the GPU would hold.
     pub fn to_f32(&self) -> Sg32 {
         Sg32 {

@@ -6,6 +6,7 @@
 mod knobs;
 pub mod model;
 mod pass;
+pub mod probe_filter;
 mod reference;
 pub mod solve;
 #[cfg(test)]

@@ -23,12 +23,16 @@ pub const MIN_SHARPNESS: f64 = 1e-4;
 pub const MAX_SHARPNESS: f64 = 1e4;
 
 /// Largest sharpness a lobe fitted to a probe of `texels` texels may take:
-/// a lobe's solid angle 2π/λ must not shrink below half a texel's
-/// (4π/texels), or a needle lobe on one texel centre fits that texel with
-/// an unconstrained energy (λ ≤ texels, 1024 at 32 × 32), and never past
-/// [`MAX_SHARPNESS`]. `shaders/sgfit/fit.wgsl` gets it as a define.
+/// the variance 1/λ of the narrowest lobe equals that of the narrowest
+/// feature of the filtered probe ([`super::probe_filter`]), 7h²/12 with
+/// h² = 4π/texels the mean texel's solid angle, so λ ≤ 3·texels/(7π)
+/// (about 140 at 32 × 32), within [1, [`MAX_SHARPNESS`]]. Such a lobe is
+/// about 1.5 texel spacings wide (σ = 0.76 h), so evaluated at texel
+/// centres its energy is its integral. (The earlier cap, λ ≤ texels, let
+/// a lobe half a texel wide fit a bright texel with an energy off by tens
+/// of per cent.) `shaders/sgfit/fit.wgsl` gets it as a define.
 pub fn max_sharpness(texels: usize) -> f64 {
-    (texels as f64).clamp(1.0, MAX_SHARPNESS)
+    (3.0 * texels as f64 / (7.0 * PI)).clamp(1.0, MAX_SHARPNESS)
 }
 /// Largest tangent-plane move of an axis in one step (radians, roughly).
 pub const MAX_AXIS_STEP: f64 = 1.0;
@@ -53,9 +57,14 @@ pub struct ProbeSamples {
 
 impl ProbeSamples {
     /// Reads `texels` (row by row, rgb + anything) laid out by `map`,
+    /// filtered as the fit sees them ([`super::probe_filter::filter_probe`]),
     /// sanitising invalid ones.
     pub fn new(map: &DirectionMap, texels: &[[f64; 4]]) -> Self {
         let n = map.texels();
+        let mut texels = texels.to_vec();
+        // Missing texels count as invalid.
+        texels.resize(n, [f64::NAN; 4]);
+        let texels = super::probe_filter::filter_probe(map, &texels);
         let mut s = Self {
             directions: Vec::with_capacity(n),
             weights: Vec::with_capacity(n),

@@ -67,6 +67,7 @@ impl FitReport {
 }
 
 struct Kernels {
+    filter_probe: ComputePipeline,
     init_cold: ComputePipeline,
     cost: ComputePipeline,
     select_start: ComputePipeline,
@@ -92,6 +93,9 @@ pub struct SgFitPass {
     shape: Shape,
     lobes: Arc<Buffer>,
     state: Arc<Buffer>,
+    /// The probe filter's rows (`probe_filter::ProbeFilter`), built for the map.
+    filter_offsets: Arc<Buffer>,
+    filter_entries: Arc<Buffer>,
     lobes_readback: BufferReadback,
     state_readback: BufferReadback,
 }
@@ -161,6 +165,7 @@ impl SgFitPass {
             Ok(ComputePipeline::new(ctx, &shader)?)
         };
         let kernels = Kernels {
+            filter_probe: build("filter_probe")?,
             init_cold: build("init_cold")?,
             cost: build("cost")?,
             select_start: build("select_start")?,
@@ -181,6 +186,21 @@ impl SgFitPass {
             })
             .collect();
         let lobes = Buffer::with_data(ctx, "sg-lobes", &lobe_bytes_of(&dark), usage)?;
+        let filter = super::probe_filter::ProbeFilter::new(&map);
+        let offsets: Vec<u8> = filter
+            .offsets
+            .iter()
+            .flat_map(|o| o.to_le_bytes())
+            .collect();
+        let entries: Vec<u8> = filter
+            .entries
+            .iter()
+            .flat_map(|&(s, w)| [s.to_le_bytes(), (w as f32).to_le_bytes()])
+            .flatten()
+            .collect();
+        let read_only = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let filter_offsets = Buffer::with_data(ctx, "sg-fit-filter-offsets", &offsets, read_only)?;
+        let filter_entries = Buffer::with_data(ctx, "sg-fit-filter-entries", &entries, read_only)?;
         let state_bytes = (STATE_FLOATS * 4) as u64;
         let state =
             Buffer::with_data(ctx, "sg-fit-state", &vec![0u8; state_bytes as usize], usage)?;
@@ -191,6 +211,8 @@ impl SgFitPass {
             shape,
             lobes: Arc::new(lobes),
             state: Arc::new(state),
+            filter_offsets: Arc::new(filter_offsets),
+            filter_entries: Arc::new(filter_entries),
             lobes_readback: BufferReadback::new(ctx, "sg-lobes (readback)", lobe_bytes)?,
             state_readback: BufferReadback::new(ctx, "sg-fit-state (readback)", state_bytes)?,
         })
@@ -259,10 +281,13 @@ impl SgFitPass {
         let n = self.knobs.parameters() as u64;
         let lobes = graph.import_buffer(&self.lobes, None);
         let state = graph.import_buffer(&self.state, None);
+        let graph_offsets = graph.import_buffer(&self.filter_offsets, None);
+        let graph_entries = graph.import_buffer(&self.filter_entries, None);
         let partials = graph.create_buffer("sg-fit-partials", 2 * s.groups as u64 * 16);
         let jacobian = graph.create_buffer("sg-fit-jacobian", s.rows as u64 * s.cols as u64 * 4);
         let normal = graph.create_buffer("sg-fit-normal", s.cols as u64 * s.cols as u64 * 4);
         let work = graph.create_buffer("sg-fit-work", (n * n + 2 * n) * 4);
+        let fitted = graph.create_buffer("sg-fit-probe", self.map.texels() as u64 * 16);
         // The transients are written before they are read within the pass
         // (StorageWrite: no previous content); the lobes and the state
         // carry over from the previous fit.
@@ -274,6 +299,9 @@ impl SgFitPass {
         let jacobian = pass.buffer(jacobian, BufferAccess::StorageWrite);
         let normal = pass.buffer(normal, BufferAccess::StorageWrite);
         let work = pass.buffer(work, BufferAccess::StorageWrite);
+        let fitted = pass.buffer(fitted, BufferAccess::StorageWrite);
+        let filter_offsets = pass.buffer(graph_offsets, BufferAccess::StorageRead);
+        let filter_entries = pass.buffer(graph_entries, BufferAccess::StorageRead);
         let table = [
             Binding::SampledImage(probe),
             Binding::StorageBuffer(lobes),
@@ -282,6 +310,9 @@ impl SgFitPass {
             Binding::StorageBuffer(jacobian),
             Binding::StorageBuffer(normal),
             Binding::StorageBuffer(work),
+            Binding::StorageBuffer(fitted),
+            Binding::StorageBuffer(filter_offsets),
+            Binding::StorageBuffer(filter_entries),
         ];
         let warm = start == FitStart::Warm;
         let candidate = self.push(1, warm);
@@ -292,6 +323,7 @@ impl SgFitPass {
             let mut run = |p: &ComputePipeline, push: &Push, groups: [u32; 3]| {
                 ctx.dispatch_table(p, &table, push.bytes(), groups)
             };
+            run(&k.filter_probe, &candidate, [s.groups, 1, 1])?;
             run(&k.init_cold, &candidate, [self.knobs.lobes, 1, 1])?;
             run(&k.cost, &candidate, [s.groups, 1, 1])?;
             if warm {

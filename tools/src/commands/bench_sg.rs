@@ -109,7 +109,11 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
     println!("| probe | {} |", header.join(" | "));
     println!("| --- |{}", " --- |".repeat(args.iterations.len()));
     for &n in &args.resolutions {
-        let knobs = ProbeKnobs { map, resolution: n };
+        let knobs = ProbeKnobs {
+            map,
+            resolution: n,
+            ..scene.lighting.probe
+        };
         let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env)?;
         let fit = SgFitPass::new(ctx, &library, base, probe.map())?;
         let (report, trace, t_max) = measure(
@@ -148,7 +152,11 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
     println!("| --- |{}", " --- |".repeat(args.lobes.len()));
     let mut lobe_timing = Vec::new();
     for &n in &args.resolutions {
-        let knobs = ProbeKnobs { map, resolution: n };
+        let knobs = ProbeKnobs {
+            map,
+            resolution: n,
+            ..scene.lighting.probe
+        };
         let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env)?;
         let mut cells = Vec::new();
         for &m in &args.lobes {

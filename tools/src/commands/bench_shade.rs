@@ -11,7 +11,6 @@ use std::path::PathBuf;
 use clap::Args;
 use glam::DVec3;
 use inlay_passes::brdf::{shade_sg, NdfLobes, SurfaceMaterial};
-use inlay_passes::lighting::environment_lobes;
 use inlay_passes::probe::{trace_probe, ProbeKnobs};
 use inlay_passes::scene::load_scene;
 use inlay_passes::sgfit::{fit_reference, FitKnobs, ProbeSamples, Start};
@@ -52,8 +51,8 @@ pub fn run(args: &BenchShadeArgs) -> anyhow::Result<()> {
         ..scene.lighting.probe
     };
     let map = probe_knobs.direction_map();
-    let env = environment_lobes(&scene.environment);
-    let texels = trace_probe(&field, at, &map, &scene.march, &env);
+    let env = scene.object_light_lobes();
+    let texels = trace_probe(&field, at, &probe_knobs, &scene.march, &env);
     let samples = ProbeSamples::new(&map, &texels);
     let classes = [
         ("diffuse", DVec3::new(0.8, 0.6, 0.4), 1.0, 0.0),

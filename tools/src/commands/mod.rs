@@ -7,6 +7,7 @@ pub mod bench_march;
 pub mod bench_sg;
 pub mod bench_shade;
 pub mod estimate_env;
+pub mod fidelity;
 pub mod probe;
 pub mod profile;
 pub mod reference;

@@ -10,10 +10,14 @@ use clap::{Args, ValueEnum};
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback, Renderer, SubmitSync};
 use inlay_passes::field::GpuGridField;
-use inlay_passes::lighting::environment_lobes;
-use inlay_passes::probe::{MapKind, ProbeKnobs, ProbePass, PROBE_FORMAT};
+use inlay_passes::march::MarchKnobs;
+use inlay_passes::probe::{
+    lobes_irradiance, probe_irradiance, DirectionMap, MapKind, ProbeKnobs, ProbePass, AXES,
+    PROBE_FORMAT,
+};
 use inlay_passes::scene::load_scene;
 use inlay_passes::sg::Sg32;
+use inlay_passes::sg::Sg64;
 use inlay_passes::sgfit::{
     fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, SgFitPass, Start,
 };
@@ -83,6 +87,9 @@ pub struct ProbeArgs {
     /// Probe resolution n: n × n octahedral, 2n × n equirect (overrides [lighting] probe_resolution).
     #[arg(long)]
     pub resolution: Option<u32>,
+    /// Rays per texel side s, s × s per texel (overrides [lighting] probe_supersampling).
+    #[arg(long)]
+    pub supersampling: Option<u32>,
     /// Number of SG lobes M (overrides [lighting] lobes).
     #[arg(long)]
     pub lobes: Option<u32>,
@@ -131,6 +138,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     let probe_knobs = ProbeKnobs {
         map: args.placement.map_or(knobs.probe.map),
         resolution: args.resolution.unwrap_or(knobs.probe.resolution),
+        supersampling: args.supersampling.unwrap_or(knobs.probe.supersampling),
     };
     let fit_knobs = FitKnobs {
         lobes: args.lobes.unwrap_or(knobs.fit.lobes),
@@ -141,31 +149,11 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     let iterations = fit_knobs.cold_iterations;
     let mut march = scene.march;
     march.samples_per_ray = args.samples_per_ray.unwrap_or(march.samples_per_ray);
-    let env = environment_lobes(&scene.environment);
-    let library = crate::shaders::library()?;
-    let probe = ProbePass::new(ctx, &library, probe_knobs, march, &env)?;
-    let fit = SgFitPass::new(ctx, &library, fit_knobs, probe.map())?;
+    let env = scene.object_light_lobes();
     let gpu_field = GpuGridField::upload(ctx, &field)?;
-    let map = probe.map();
-    let readback = Readback::new(
-        ctx,
-        ImageDesc {
-            width: map.width,
-            height: map.height,
-            format: PROBE_FORMAT,
-        },
-    )?;
-    let mut renderer = Renderer::new(ctx, 1)?;
-    renderer.begin_frame()?;
-    let mut graph = inlay_engine::graph::FrameGraph::new();
-    let image = probe.add(&mut graph, &gpu_field, at);
-    fit.add(&mut graph, image, FitStart::Cold, iterations)?;
-    readback.add_to_graph(&mut graph, image);
-    fit.add_readback(&mut graph);
-    renderer.submit(graph, &SubmitSync::none())?;
-    renderer.finish()?;
-    let probe_image = readback.read()?;
-    let report = fit.read_report()?;
+    let traced = trace_and_fit(ctx, &gpu_field, at, probe_knobs, fit_knobs, march, &env)?;
+    let (probe_image, report, renderer) = (traced.probe, traced.report, traced.renderer);
+    let map = probe_knobs.direction_map();
     print_report(
         ctx,
         &scene.name,
@@ -176,12 +164,13 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
         &report,
         &renderer,
     );
+    let texels: Vec<[f64; 4]> = probe_image
+        .pixels
+        .iter()
+        .map(|p| p.map(|v| v as f64))
+        .collect();
+    print_irradiance(&map, &texels, &report);
     if args.cpu_check {
-        let texels: Vec<[f64; 4]> = probe_image
-            .pixels
-            .iter()
-            .map(|p| p.map(|v| v as f64))
-            .collect();
         let cpu = fit_reference(
             &ProbeSamples::new(&map, &texels),
             &fit_knobs,
@@ -208,6 +197,71 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A probe traced and fitted cold on the GPU.
+pub struct TracedProbe {
+    /// The probe image (rgb radiance, alpha opacity).
+    pub probe: HdrImage,
+    /// The fit's report, lobes included.
+    pub report: FitReport,
+    /// The renderer that ran it (for its timings).
+    pub renderer: Renderer,
+}
+
+/// Traces the probe at `at` through `field` with L_env `env` and fits it
+/// from a cold start for the knobs' cold iterations.
+pub fn trace_and_fit(
+    ctx: &Arc<Context>,
+    field: &GpuGridField,
+    at: DVec3,
+    probe_knobs: ProbeKnobs,
+    fit_knobs: FitKnobs,
+    march: MarchKnobs,
+    env: &[Sg64],
+) -> anyhow::Result<TracedProbe> {
+    let library = crate::shaders::library()?;
+    let probe = ProbePass::new(ctx, &library, probe_knobs, march, env)?;
+    let fit = SgFitPass::new(ctx, &library, fit_knobs, probe.map())?;
+    let map = probe.map();
+    let readback = Readback::new(
+        ctx,
+        ImageDesc {
+            width: map.width,
+            height: map.height,
+            format: PROBE_FORMAT,
+        },
+    )?;
+    let mut renderer = Renderer::new(ctx, 1)?;
+    renderer.begin_frame()?;
+    let mut graph = inlay_engine::graph::FrameGraph::new();
+    let image = probe.add(&mut graph, field, at);
+    fit.add(&mut graph, image, FitStart::Cold, fit_knobs.cold_iterations)?;
+    readback.add_to_graph(&mut graph, image);
+    fit.add_readback(&mut graph);
+    renderer.submit(graph, &SubmitSync::none())?;
+    renderer.finish()?;
+    Ok(TracedProbe {
+        probe: readback.read()?,
+        report: fit.read_report()?,
+        renderer,
+    })
+}
+
+/// The irradiance at the probe's centre from each axis' hemisphere, from
+/// the probe's texels and from the fitted lobes (what shading receives):
+/// the figures an independent renderer's irradiance sensors measure.
+fn print_irradiance(map: &DirectionMap, texels: &[[f64; 4]], report: &FitReport) {
+    let lobes: Vec<Sg64> = report.lobes.iter().map(|g| g.to_f64()).collect();
+    println!("irradiance E(n) at the centre (rgb):");
+    for (name, n) in AXES {
+        let p = probe_irradiance(map, texels, n);
+        let f = lobes_irradiance(&lobes, n);
+        println!(
+            "  {name}: probe [{:.5}, {:.5}, {:.5}]  fit [{:.5}, {:.5}, {:.5}]",
+            p.x, p.y, p.z, f.x, f.y, f.z
+        );
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn print_report(
     ctx: &Context,
@@ -221,11 +275,13 @@ fn print_report(
 ) {
     let map = probe.direction_map();
     println!(
-        "{scene}: probe at {at}, {} {}×{} ({} texels), environment: {}",
+        "{scene}: probe at {at}, {} {}×{} ({} texels, {}×{} rays each), environment: {}",
         probe.map.name(),
         map.width,
         map.height,
         map.texels(),
+        probe.supersampling,
+        probe.supersampling,
         if env.is_empty() {
             "none (L_env not evaluated)".to_string()
         } else {

@@ -1,0 +1,726 @@
+"""Independent ground truth for inlay: a scene file rendered by Blender Cycles.
+
+Run by hand (never in CI) with Debian's Blender 3.4:
+
+    blender -b --factory-startup --python tools/cycles/render_cycles.py -- \
+        scenes/dog.toml --out docs/cycles/dog [--what cameras,probes,training] \
+        [--width 320 --height 180 --samples 512 --seeds 1,2 --threads 0]
+
+The scene file is translated, not re-modelled: every recipe primitive
+becomes a mesh (planes as large quads, spheres and cylinders finely
+tessellated and smooth-shaded, boxes as cubes), Lambertian surfaces a pure
+Diffuse BSDF (Cycles' Diffuse BSDF at roughness 0 is Lambert, so the
+recipe's surfaces are modelled exactly; the Principled BSDF's Burley
+diffuse would not be), emitters an Emission shader whose strength 1 makes
+the colour the emitted radiance (both sides; the recipe's spheres are
+closed, so only the outside is seen), media a Volume Scatter plus Volume
+Absorption pair whose extinction is the recipe's density and whose
+single-scattering albedo is the recipe's albedo, the environment (SG lobes
+or an equirect EXR) an equirect world texture, cameras perspective cameras
+with the scene's vertical field of view, and each glTF object imported by
+Blender's glTF importer (a Principled BSDF: metallic-roughness, F0 = 0.04
+for dielectrics, α = roughness²; its diffuse part is Burley's, not
+Lambert's) and posed as the scene poses it, with the scene's material
+override applied.
+
+Coordinates: inlay is +Y up, Blender +Z up; a point (x, y, z) of inlay is
+(x, −z, y) in Blender, as Blender's glTF importer maps it.
+
+Outputs (linear OpenEXR, float32, RGB; pixel filter a 1-pixel box, i.e. the
+mean over each pixel's area; no clamping, no denoising):
+- cameras: `<camera>-<objects|bare>-<direct|full>-s<seed>.exr` for every
+  camera; `direct` is direct light only (max bounces 0), `full` has the
+  scene's [bake] bounces of indirect light (what inlay's fields hold).
+- probes: `probe-<object>-s<seed>.exr`, the full-bounce incident radiance
+  at each object's centre with the objects removed, as an equirect map in
+  inlay's convention (2n × n, +Y up, u = atan2(z, x)/2π, v = θ/π).
+- training: `training/` with `transforms.json` (nerfstudio/instant-ngp
+  convention, OpenGL camera axes, inlay's world axes) and one EXR per view,
+  full bounces, no objects.
+- `render.json`: Blender's version, the command, samples, seeds and the
+  wall time of each image.
+"""
+
+import json
+import math
+import os
+import sys
+import time
+import tomllib
+
+import bpy
+import numpy as np
+from mathutils import Matrix, Vector
+
+# Blender 3.4's glTF importer still uses `np.bool`, which NumPy 1.24 (Debian
+# bookworm's) removed; the alias is the builtin.
+if "bool" not in np.__dict__:
+    np.bool = bool
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
+    import argparse
+
+    p = argparse.ArgumentParser(prog="render_cycles.py")
+    p.add_argument("scene")
+    p.add_argument("--out", required=True)
+    p.add_argument("--what", default="cameras,probes")
+    p.add_argument("--width", type=int, default=320)
+    p.add_argument("--height", type=int, default=180)
+    p.add_argument("--samples", type=int, default=512)
+    p.add_argument("--probe-samples", type=int, default=1024)
+    p.add_argument("--sensor-samples", type=int, default=4096)
+    p.add_argument("--probe-resolution", type=int, default=64, help="n: the probe is 2n x n")
+    p.add_argument("--seeds", default="1,2")
+    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--cameras", default="", help="only these cameras (comma-separated names)")
+    p.add_argument("--modes", default="bare,objects", help="bare and/or objects")
+    p.add_argument("--light", default="direct,full", help="direct and/or full")
+    p.add_argument("--views", type=int, default=48, help="training views")
+    p.add_argument("--view-size", type=int, default=128)
+    p.add_argument("--view-samples", type=int, default=256)
+    return p.parse_args(argv)
+
+
+# inlay (x, y, z), +Y up  ->  Blender (x, -z, y), +Z up.
+C = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
+
+
+def to_b(v):
+    return Vector((v[0], -v[2], v[1]))
+
+
+def vec3(v, default=None):
+    if v is None:
+        return default
+    return [float(x) for x in v]
+
+
+# ---------------------------------------------------------------- materials
+
+
+def diffuse_material(name, albedo):
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    nt = m.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Color"].default_value = (*albedo, 1.0)
+    d.inputs["Roughness"].default_value = 0.0
+    nt.links.new(d.outputs["BSDF"], out.inputs["Surface"])
+    return m
+
+
+def emitter_material(name, albedo, emission):
+    m = diffuse_material(name, albedo)
+    nt = m.node_tree
+    out = next(n for n in nt.nodes if n.type == "OUTPUT_MATERIAL")
+    d = next(n for n in nt.nodes if n.type == "BSDF_DIFFUSE")
+    e = nt.nodes.new("ShaderNodeEmission")
+    e.inputs["Color"].default_value = (*emission, 1.0)
+    e.inputs["Strength"].default_value = 1.0
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(d.outputs["BSDF"], add.inputs[0])
+    nt.links.new(e.outputs["Emission"], add.inputs[1])
+    nt.links.new(add.outputs["Shader"], out.inputs["Surface"])
+    return m
+
+
+def medium_material(name, albedo, density):
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    nt = m.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    # Cycles: scattering coefficient colour·density, absorption (1 − colour)·density.
+    s = nt.nodes.new("ShaderNodeVolumeScatter")
+    s.inputs["Color"].default_value = (*albedo, 1.0)
+    s.inputs["Density"].default_value = density
+    s.inputs["Anisotropy"].default_value = 0.0
+    a = nt.nodes.new("ShaderNodeVolumeAbsorption")
+    a.inputs["Color"].default_value = (*albedo, 1.0)
+    a.inputs["Density"].default_value = density
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(s.outputs["Volume"], add.inputs[0])
+    nt.links.new(a.outputs["Volume"], add.inputs[1])
+    nt.links.new(add.outputs["Shader"], out.inputs["Volume"])
+    return m
+
+
+# ---------------------------------------------------------------- geometry
+
+
+def link(obj, collection):
+    collection.objects.link(obj)
+    return obj
+
+
+def mesh_object(name, verts, faces, smooth, collection):
+    me = bpy.data.meshes.new(name)
+    me.from_pydata([tuple(v) for v in verts], [], faces)
+    me.update()
+    for p in me.polygons:
+        p.use_smooth = smooth
+    return link(bpy.data.objects.new(name, me), collection)
+
+
+def sphere_mesh(centre, radius, segments=192, rings=96):
+    verts, faces = [], []
+    for r in range(rings + 1):
+        th = math.pi * r / rings
+        for s in range(segments):
+            ph = 2 * math.pi * s / segments
+            d = (math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph))
+            verts.append(to_b([centre[i] + radius * d[i] for i in range(3)]))
+    for r in range(rings):
+        for s in range(segments):
+            a, b = r * segments + s, r * segments + (s + 1) % segments
+            faces.append((a, a + segments, b + segments, b))
+    return verts, faces
+
+
+def basis(axis):
+    a = np.array(axis, float)
+    a /= np.linalg.norm(a)
+    t = np.array([1.0, 0, 0]) if abs(a[0]) < 0.9 else np.array([0, 0, 1.0])
+    u = np.cross(a, t)
+    u /= np.linalg.norm(u)
+    return a, u, np.cross(a, u)
+
+
+def cylinder_mesh(centre, axis, radius, height, segments=192):
+    """The side (smooth-shaded) and the two caps (flat, with vertices of
+    their own, so smoothing does not bend the side's normals into them)."""
+    a, u, w = basis(axis)
+    c = np.array(centre, float)
+    ring = [radius * (u * math.cos(2 * math.pi * s / segments) + w * math.sin(2 * math.pi * s / segments)) for s in range(segments)]
+    side_v, side_f = [], []
+    for end in (-0.5, 0.5):
+        side_v += [to_b(c + a * end * height + r) for r in ring]
+    for s in range(segments):
+        s1 = (s + 1) % segments
+        side_f.append((s, s1, segments + s1, segments + s))
+    caps_v, caps_f = [], []
+    for end, flip in ((-0.5, True), (0.5, False)):
+        base = len(caps_v)
+        caps_v += [to_b(c + a * end * height)] + [to_b(c + a * end * height + r) for r in ring]
+        for s in range(segments):
+            s1 = (s + 1) % segments
+            tri = (base, base + 1 + s, base + 1 + s1)
+            caps_f.append(tri[::-1] if flip else tri)
+    return (side_v, side_f), (caps_v, caps_f)
+
+
+def box_mesh(centre, size, rotation=None):
+    c = np.array(centre, float)
+    h = 0.5 * np.array(size, float)
+    R = np.eye(3) if rotation is None else rotation
+    corners = []
+    for z in (-1, 1):
+        for y in (-1, 1):
+            for x in (-1, 1):
+                corners.append(to_b(c + R @ (h * np.array([x, y, z]))))
+    faces = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    return corners, faces
+
+
+def plane_mesh(point, normal, extent=1e3):
+    n, u, w = basis(normal)
+    p = np.array(point, float)
+    verts = [to_b(p + extent * (su * u + sw * w)) for su, sw in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    return verts, [(0, 1, 2, 3)]
+
+
+def build_recipe(recipe, collection):
+    for i, p in enumerate(recipe.get("primitives", [])):
+        name = p.get("name", f"primitive-{i}")
+        t = p["type"]
+        albedo = vec3(p.get("albedo"), [0.5, 0.5, 0.5])
+        emission = vec3(p.get("emission"), [0.0, 0.0, 0.0])
+        density = p.get("density")
+        smooth = t in ("sphere", "cylinder")
+        extra = None
+        if t == "sphere":
+            v, f = sphere_mesh(p["center"], p["radius"])
+        elif t == "cylinder":
+            (v, f), extra = cylinder_mesh(p["center"], p["axis"], p["radius"], p["height"])
+        elif t == "box":
+            v, f = box_mesh(p["center"], p["size"])
+        elif t == "plane":
+            v, f = plane_mesh(p["point"], p["normal"])
+        else:
+            raise SystemExit(f"{name}: primitive type `{t}` is not translated")
+        obj = mesh_object(name, v, f, smooth, collection)
+        if extra is not None:
+            # Flat caps as a second mesh joined into the first.
+            caps = mesh_object(name + "-caps", extra[0], extra[1], False, collection)
+            offset = len(obj.data.vertices)
+            me = obj.data
+            verts = [tuple(vv.co) for vv in me.vertices] + [tuple(vv.co) for vv in caps.data.vertices]
+            faces = [tuple(pp.vertices) for pp in me.polygons] + [tuple(i + offset for i in pp.vertices) for pp in caps.data.polygons]
+            smooth_flags = [True] * len(me.polygons) + [False] * len(caps.data.polygons)
+            bpy.data.objects.remove(caps)
+            me2 = bpy.data.meshes.new(name)
+            me2.from_pydata(verts, [], faces)
+            me2.update()
+            for pp, sm in zip(me2.polygons, smooth_flags):
+                pp.use_smooth = sm
+            obj.data = me2
+        if density is not None:
+            mat = medium_material(name, albedo, float(density))
+        elif max(emission) > 0:
+            mat = emitter_material(name, albedo, emission)
+        else:
+            mat = diffuse_material(name, albedo)
+        obj.data.materials.append(mat)
+
+
+# ---------------------------------------------------------------- environment
+
+
+def eval_lobes(lobes, scale, d):
+    """Σ μ exp(λ(d·p − 1)) over lobes, d: (..., 3) unit directions (inlay axes)."""
+    out = np.zeros(d.shape[:-1] + (3,))
+    for lobe in lobes:
+        p = np.array(lobe["direction"], float)
+        p /= np.linalg.norm(p)
+        lam = float(lobe["sharpness"])
+        mu = np.array(lobe["amplitude"], float)
+        out += np.exp(lam * (d @ p - 1.0))[..., None] * mu
+    return out * scale
+
+
+def load_equirect_exr(path):
+    """An equirect EXR (inlay's convention) as an (h, w, 3) array, via Blender."""
+    img = bpy.data.images.load(path)
+    w, h = img.size
+    px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[::-1, :, :3]
+    return px
+
+
+def world_from_environment(scene_dir, env, width=2048):
+    """The world shader: inlay's environment as a Blender equirect texture.
+    Blender's equirect column u looks along azimuth atan2(Y, X) = 2π(0.5 − u)
+    (Blender axes), row top = +Z; inlay's column u looks along atan2(z, x) =
+    2πu. A direction of azimuth φ in inlay has Blender azimuth −φ, so
+    Blender's u = 0.5 + inlay's u: the same image rolled by half its width."""
+    h = width // 2
+    scale = float(env.get("scale", 1.0)) if env else 1.0
+    if env is None or (not env.get("lobes") and not env.get("equirect")):
+        pixels = np.zeros((h, width, 3))
+    elif env.get("lobes"):
+        v = (np.arange(h) + 0.5) / h
+        u = (np.arange(width) + 0.5) / width
+        th = math.pi * v[:, None]
+        ph = 2 * math.pi * (u[None, :] - 0.5)  # inlay azimuth of Blender column u
+        d = np.stack(
+            [np.sin(th) * np.cos(ph), np.cos(th) * np.ones_like(ph), np.sin(th) * np.sin(ph)], axis=-1
+        )
+        pixels = eval_lobes(env["lobes"], scale, d)
+    else:
+        src = load_equirect_exr(os.path.join(scene_dir, env["equirect"])) * scale
+        pixels = np.roll(src, src.shape[1] // 2, axis=1)
+        h, width = pixels.shape[:2]
+    img = bpy.data.images.new("environment", width, h, float_buffer=True, alpha=False)
+    rgba = np.concatenate([pixels, np.ones((h, width, 1))], axis=-1)[::-1]
+    img.pixels.foreach_set(rgba.astype(np.float32).ravel())
+    world = bpy.data.worlds.new("environment")
+    world.use_nodes = True
+    nt = world.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputWorld")
+    bg = nt.nodes.new("ShaderNodeBackground")
+    tex = nt.nodes.new("ShaderNodeTexEnvironment")
+    tex.image = img
+    tex.interpolation = "Linear"
+    nt.links.new(tex.outputs["Color"], bg.inputs["Color"])
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    world.cycles.sampling_method = "MANUAL"
+    world.cycles.sample_map_resolution = 1024
+    return world
+
+
+# ---------------------------------------------------------------- objects
+
+
+def pose_matrix(o):
+    """The scene's object-to-world transform in inlay axes (translation ·
+    extrinsic X, Y, Z rotation · scale), as inlay's ObjectPose::matrix."""
+    pos = vec3(o.get("position"), [0.0, 0.0, 0.0])
+    rot = [math.radians(a) for a in vec3(o.get("rotation"), [0.0, 0.0, 0.0])]
+    s = o.get("scale", 1.0)
+    s = [float(s)] * 3 if not isinstance(s, list) else [float(x) for x in s]
+    R = (
+        Matrix.Rotation(rot[2], 4, "Z")
+        @ Matrix.Rotation(rot[1], 4, "Y")
+        @ Matrix.Rotation(rot[0], 4, "X")
+    )
+    S = Matrix.Diagonal((*s, 1.0))
+    return Matrix.Translation(pos) @ R @ S
+
+
+def import_object(scene_dir, o, collection):
+    before = set(bpy.data.objects)
+    bpy.ops.import_scene.gltf(filepath=os.path.join(scene_dir, o["file"]))
+    new = [ob for ob in bpy.data.objects if ob not in before]
+    root = bpy.data.objects.new(o.get("name", os.path.splitext(os.path.basename(o["file"]))[0]), None)
+    collection.objects.link(root)
+    for ob in new:
+        for c in ob.users_collection:
+            c.objects.unlink(ob)
+        collection.objects.link(ob)
+        if ob.parent is None:
+            ob.parent = root
+    # The importer already maps glTF's axes to Blender's (C); the pose acts in inlay's.
+    root.matrix_world = C @ pose_matrix(o) @ C.inverted()
+    override = o.get("material", {})
+    for ob in new:
+        if ob.type != "MESH":
+            continue
+        for slot in ob.material_slots:
+            m = slot.material
+            if m is None or not m.use_nodes:
+                continue
+            for n in m.node_tree.nodes:
+                if n.type != "BSDF_PRINCIPLED":
+                    continue
+                for key, socket in (("base_color", "Base Color"), ("roughness", "Roughness"), ("metallic", "Metallic")):
+                    if key not in override:
+                        continue
+                    inp = n.inputs[socket]
+                    for lk in list(inp.links):
+                        m.node_tree.links.remove(lk)
+                    v = override[key]
+                    inp.default_value = (*[float(x) for x in v], 1.0) if key == "base_color" else float(v)
+                # inlay clamps roughness to at least 0.1.
+                r = n.inputs["Roughness"]
+                if not r.links:
+                    r.default_value = max(r.default_value, 0.1)
+    return root, new
+
+
+def object_centre(objs):
+    """The centre of the world-space bounding box of `objs`' vertices, in
+    inlay axes (where inlay traces the object's probe)."""
+    bpy.context.view_layer.update()
+    lo = np.full(3, np.inf)
+    hi = -lo
+    for ob in objs:
+        if ob.type != "MESH":
+            continue
+        mw = ob.matrix_world
+        for v in ob.data.vertices:
+            p = mw @ v.co
+            q = np.array([p.x, p.z, -p.y])
+            lo = np.minimum(lo, q)
+            hi = np.maximum(hi, q)
+    return 0.5 * (lo + hi)
+
+
+# ---------------------------------------------------------------- cameras and rendering
+
+
+def look_at_matrix(position, look_at, up):
+    pos, tgt, upv = to_b(position), to_b(look_at), to_b(up)
+    f = (tgt - pos).normalized()
+    x = f.cross(upv).normalized()
+    y = x.cross(f)
+    m = Matrix(((x[0], y[0], -f[0], pos[0]), (x[1], y[1], -f[1], pos[1]), (x[2], y[2], -f[2], pos[2]), (0, 0, 0, 1)))
+    return m
+
+
+def add_camera(name, position, look_at, up, fov_y_deg):
+    cam = bpy.data.cameras.new(name)
+    cam.sensor_fit = "VERTICAL"
+    cam.angle_y = math.radians(fov_y_deg)
+    cam.clip_start = 1e-3
+    cam.clip_end = 1e4
+    ob = bpy.data.objects.new(name, cam)
+    bpy.context.scene.collection.objects.link(ob)
+    ob.matrix_world = look_at_matrix(position, look_at, up)
+    return ob
+
+
+def setup_render(args):
+    sc = bpy.context.scene
+    sc.render.engine = "CYCLES"
+    cy = sc.cycles
+    cy.device = "CPU"
+    cy.use_denoising = False
+    cy.use_adaptive_sampling = False
+    cy.sample_clamp_direct = 0.0
+    cy.sample_clamp_indirect = 0.0
+    cy.blur_glossy = 0.0
+    cy.caustics_reflective = True
+    cy.caustics_refractive = True
+    cy.pixel_filter_type = "BOX"
+    cy.filter_width = 1.0
+    cy.film_exposure = 1.0
+    sc.render.film_transparent = False
+    sc.view_settings.view_transform = "Standard"
+    sc.view_settings.look = "None"
+    sc.view_settings.exposure = 0.0
+    sc.view_settings.gamma = 1.0
+    sc.render.image_settings.file_format = "OPEN_EXR"
+    sc.render.image_settings.color_mode = "RGB"
+    sc.render.image_settings.color_depth = "32"
+    sc.render.image_settings.exr_codec = "ZIP"
+    sc.render.resolution_percentage = 100
+    if args.threads > 0:
+        sc.render.threads_mode = "FIXED"
+        sc.render.threads = args.threads
+
+
+def set_bounces(bounces):
+    cy = bpy.context.scene.cycles
+    cy.max_bounces = bounces
+    cy.diffuse_bounces = bounces
+    cy.glossy_bounces = bounces
+    cy.transmission_bounces = bounces
+    cy.volume_bounces = bounces
+    cy.transparent_max_bounces = 64
+
+
+def render_to(path, log):
+    sc = bpy.context.scene
+    tmp = path + ".partial.exr"
+    sc.render.filepath = tmp
+    t0 = time.time()
+    bpy.ops.render.render(write_still=True)
+    os.replace(tmp, path)
+    dt = time.time() - t0
+    log.append({"file": os.path.basename(path), "seconds": round(dt, 1), "samples": sc.cycles.samples, "seed": sc.cycles.seed})
+    print(f"wrote {path} in {dt:.1f} s", flush=True)
+
+
+def write_probe(path, centre, n, samples, seed, log):
+    """An equirect panorama at `centre` in inlay's convention. Cycles'
+    equirect camera with rotation (90°, 0, −90°) renders the world's
+    equirect mapping (column u looks along Blender azimuth 2π(0.5 − u));
+    turned a further 180° about +Z, column u looks along Blender azimuth
+    −2πu, which is inlay azimuth 2πu: inlay's map, with no resampling."""
+    sc = bpy.context.scene
+    cam = bpy.data.cameras.new("probe")
+    cam.type = "PANO"
+    try:
+        cam.panorama_type = "EQUIRECTANGULAR"
+    except AttributeError:
+        cam.cycles.panorama_type = "EQUIRECTANGULAR"
+    ob = bpy.data.objects.new("probe", cam)
+    sc.collection.objects.link(ob)
+    ob.location = to_b(centre)
+    ob.rotation_euler = (math.radians(90), 0.0, math.radians(90))
+    sc.camera = ob
+    sc.render.resolution_x, sc.render.resolution_y = 2 * n, n
+    sc.cycles.samples = samples
+    sc.cycles.seed = seed
+    render_to(path, log)
+    bpy.data.objects.remove(ob)
+
+
+AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+
+
+def measure_irradiance(centre, samples, seed, log):
+    """Irradiance at `centre` from each axis' hemisphere, with next-event
+    estimation (a camera ray into a panorama only finds a 0.3° bulb by
+    chance): a 1 mm white Lambertian square at `centre` facing the axis,
+    seen head-on by an orthographic camera and by nothing else (invisible
+    to every other ray), shows radiance E/π. Returns {axis: [r, g, b]}.
+    (Images are read back from EXRs that the render wrote: Blender's
+    Image.save applies the view transform, sRGB, even to float images.)"""
+    sc = bpy.context.scene
+    size = 1e-3
+    white = diffuse_material("sensor", [1.0, 1.0, 1.0])
+    out = {}
+    for name, n in AXES.items():
+        nb = to_b(n)
+        # One face of a tiny square, built facing +Z in Blender axes, then turned.
+        h = 0.5 * size
+        me = bpy.data.meshes.new("sensor")
+        me.from_pydata([(-h, -h, 0), (h, -h, 0), (h, h, 0), (-h, h, 0)], [], [(0, 1, 2, 3)])
+        me.update()
+        patch = bpy.data.objects.new("sensor", me)
+        sc.collection.objects.link(patch)
+        patch.data.materials.append(white)
+        rot = Vector((0, 0, 1)).rotation_difference(nb).to_matrix().to_4x4()
+        patch.matrix_world = Matrix.Translation(to_b(centre)) @ rot
+        for attr in ("visible_diffuse", "visible_glossy", "visible_transmission", "visible_volume_scatter", "visible_shadow"):
+            setattr(patch, attr, False)
+        cam = bpy.data.cameras.new("sensor-camera")
+        cam.type = "ORTHO"
+        cam.ortho_scale = 0.5 * size
+        cam.clip_start = 1e-5
+        cam.clip_end = 1.0
+        cob = bpy.data.objects.new("sensor-camera", cam)
+        sc.collection.objects.link(cob)
+        cob.matrix_world = Matrix.Translation(to_b(centre) + nb * 0.01) @ rot
+        sc.camera = cob
+        sc.render.resolution_x = sc.render.resolution_y = 4
+        sc.cycles.samples = samples
+        sc.cycles.seed = seed
+        tmp = os.path.join(bpy.app.tempdir or "/tmp", f"sensor-{os.getpid()}.exr")
+        sc.render.filepath = tmp
+        bpy.ops.render.render(write_still=True)
+        img = bpy.data.images.load(tmp)
+        px = np.array(img.pixels[:], dtype=np.float64).reshape(-1, 4)[:, :3]
+        bpy.data.images.remove(img)
+        os.remove(tmp)
+        out[name] = [float(x) for x in math.pi * px.mean(axis=0)]
+        bpy.data.objects.remove(cob)
+        bpy.data.objects.remove(patch)
+    return out
+
+
+def training_views(scene_spec, count):
+    """Cameras on the upper hemisphere around the field, looking at its
+    centre: a Fibonacci spiral from 10° to 70° of elevation."""
+    b = scene_spec["recipe"]["bounds"]
+    lo, hi = np.array(b["min"], float), np.array(b["max"], float)
+    centre = 0.5 * (lo + hi)
+    radius = 1.6 * np.linalg.norm(hi - lo)
+    views = []
+    for k in range(count):
+        el = math.radians(10 + 60 * (k + 0.5) / count)
+        az = k * math.pi * (3 - math.sqrt(5))
+        d = np.array([math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)])
+        views.append((centre + radius * d, centre))
+    return views
+
+
+def main():
+    args = parse_args()
+    scene_path = os.path.abspath(args.scene)
+    scene_dir = os.path.dirname(scene_path)
+    with open(scene_path, "rb") as f:
+        spec = tomllib.load(f)
+    if "recipe" not in spec:
+        raise SystemExit(f"{args.scene}: only recipe scenes can be rendered by Cycles")
+    os.makedirs(args.out, exist_ok=True)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    setup_render(args)
+    sc = bpy.context.scene
+    field = bpy.data.collections.new("field")
+    sc.collection.children.link(field)
+    build_recipe(spec["recipe"], field)
+    sc.world = world_from_environment(scene_dir, spec.get("environment"))
+    objects = bpy.data.collections.new("objects")
+    sc.collection.children.link(objects)
+    placed = []
+    for o in spec.get("objects", []):
+        root, parts = import_object(scene_dir, o, objects)
+        placed.append((root.name, parts))
+    bounces = int(spec.get("bake", {}).get("bounces", 1))
+    seeds = [int(s) for s in args.seeds.split(",") if s]
+    what = set(args.what.split(","))
+    log = []
+
+    def show_objects(on):
+        objects.hide_render = not on
+
+    if "cameras" in what:
+        # Camera images in half floats (11-bit mantissa, well under their
+        # Monte-Carlo noise); probes and sensors stay float32.
+        sc.render.image_settings.color_depth = "16"
+        sc.render.resolution_x, sc.render.resolution_y = args.width, args.height
+        sc.cycles.samples = args.samples
+        for i, c in enumerate(spec.get("cameras", [])):
+            name = c.get("name", str(i))
+            if args.cameras and name not in args.cameras.split(","):
+                continue
+            cam = add_camera(name, c["position"], c["look_at"], c.get("up", [0, 1, 0]), c.get("fov_y", 50.0))
+            sc.camera = cam
+            for mode in args.modes.split(","):
+                if mode == "objects" and not placed:
+                    continue
+                show_objects(mode == "objects")
+                for light in args.light.split(","):
+                    set_bounces(0 if light == "direct" else bounces)
+                    for s in seeds:
+                        sc.cycles.seed = s
+                        render_to(os.path.join(args.out, f"{name}-{mode}-{light}-s{s}.exr"), log)
+
+    if "probes" in what:
+        sc.render.image_settings.color_depth = "32"
+        show_objects(False)
+        set_bounces(bounces)
+        for name, parts in placed:
+            centre = object_centre(parts)
+            for s in seeds:
+                write_probe(
+                    os.path.join(args.out, f"probe-{name}-s{s}.exr"),
+                    centre,
+                    args.probe_resolution,
+                    args.probe_samples,
+                    s,
+                    log,
+                )
+            log[-1]["centre"] = [float(x) for x in centre]
+            sensors = {}
+            for s in seeds:
+                sensors[f"s{s}"] = measure_irradiance(centre, args.sensor_samples, s, log)
+            path = os.path.join(args.out, f"irradiance-{name}.json")
+            with open(path + ".partial", "w") as fh:
+                json.dump({"centre": [float(x) for x in centre], "irradiance": sensors}, fh, indent=1)
+            os.replace(path + ".partial", path)
+            print(f"wrote {path}", flush=True)
+
+    if "training" in what:
+        sc.render.image_settings.color_depth = "32"
+        show_objects(False)
+        set_bounces(bounces)
+        tdir = os.path.join(args.out, "training")
+        os.makedirs(tdir, exist_ok=True)
+        n = args.view_size
+        sc.render.resolution_x = sc.render.resolution_y = n
+        sc.cycles.samples = args.view_samples
+        sc.cycles.seed = seeds[0]
+        fov = math.radians(40.0)
+        frames = []
+        for k, (pos, tgt) in enumerate(training_views(spec, args.views)):
+            cam = add_camera(f"view-{k:03d}", pos, tgt, [0, 1, 0], math.degrees(fov))
+            sc.camera = cam
+            fname = f"view-{k:03d}.exr"
+            render_to(os.path.join(tdir, fname), log)
+            # camera-to-world in inlay axes, OpenGL camera (looks along −z, +y up).
+            m = C.inverted() @ cam.matrix_world
+            frames.append({"file_path": fname, "transform_matrix": [list(r) for r in m]})
+        f = 0.5 * n / math.tan(0.5 * fov)
+        transforms = {
+            "camera_model": "PINHOLE",
+            "fl_x": f,
+            "fl_y": f,
+            "cx": n / 2,
+            "cy": n / 2,
+            "w": n,
+            "h": n,
+            "aabb": [spec["recipe"]["bounds"]["min"], spec["recipe"]["bounds"]["max"]],
+            "frames": frames,
+        }
+        with open(os.path.join(tdir, "transforms.json.partial"), "w") as fh:
+            json.dump(transforms, fh, indent=1)
+        os.replace(os.path.join(tdir, "transforms.json.partial"), os.path.join(tdir, "transforms.json"))
+
+    meta = {
+        "blender": bpy.app.version_string,
+        "scene": os.path.relpath(scene_path),
+        "command": "blender -b --factory-startup --python tools/cycles/render_cycles.py -- " + " ".join(sys.argv[sys.argv.index("--") + 1 :]),
+        "bounces": bounces,
+        "images": log,
+    }
+    meta_path = os.path.join(args.out, "render.json")
+    old = {}
+    if os.path.exists(meta_path):
+        with open(meta_path) as fh:
+            old = json.load(fh)
+    merged = {e["file"]: e for e in old.get("images", [])}
+    merged.update({e["file"]: e for e in log})
+    meta["images"] = sorted(merged.values(), key=lambda e: e["file"])
+    with open(meta_path + ".partial", "w") as fh:
+        json.dump(meta, fh, indent=1)
+    os.replace(meta_path + ".partial", meta_path)
+
+
+main()

@@ -1,0 +1,345 @@
+//! `inlay fidelity SCENE --cycles DIR`: inlay measured against an
+//! independent renderer. DIR holds what `tools/cycles/render_cycles.py`
+//! rendered with Blender Cycles for the scene (two seeds of each image, so
+//! its noise is known). For each camera it compares, against Cycles:
+//! `inlay reference` (the recipe path tracer) without and with the
+//! objects, the field's render, and the insertion (the object's brightness
+//! and error inside its mask, the cast shadow as the ratio of the images
+//! with and without the object); and for each object, the irradiance at
+//! its centre from the probe and from the fitted lobes against Cycles'
+//! irradiance sensors. Writes a markdown report and side-by-side images.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use clap::Args;
+use glam::DVec3;
+use inlay_engine::{Context, HdrImage};
+use inlay_passes::bake::{render_reference, ReferenceOptions};
+use inlay_passes::camera::CameraFrame;
+use inlay_passes::field::GpuGridField;
+use inlay_passes::probe::{lobes_irradiance, probe_irradiance, AXES};
+use inlay_passes::scene::load_scene;
+use inlay_passes::sg::Sg64;
+
+use crate::fidelity::{
+    block_means, coverage, luminance, mean_ratio, median_relative_error, psnr, relative_l1,
+    shadow_figures, shadow_ratio, side_by_side, Rgb,
+};
+use crate::field_source::scene_field;
+use crate::headless::run_headless;
+use crate::scene_view::view_over_field;
+
+/// Options of `fidelity`.
+#[derive(Args, Debug)]
+pub struct FidelityArgs {
+    /// The scene file (a recipe: Cycles renders the recipe).
+    pub scene: PathBuf,
+    /// The directory `tools/cycles/render_cycles.py` wrote for this scene.
+    #[arg(long)]
+    pub cycles: PathBuf,
+    /// Samples per pixel of `inlay reference`, per seed (two seeds).
+    #[arg(long, default_value_t = 64)]
+    pub samples: u32,
+    /// Exposure for PSNR and the PNG pictures.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f64,
+    /// The markdown report.
+    #[arg(long, default_value = "inlay-fidelity.md")]
+    pub out: PathBuf,
+    /// Directory for side-by-side pictures (Cycles | inlay | difference).
+    #[arg(long)]
+    pub images: Option<PathBuf>,
+    /// Leave out the path-traced reference (the slowest part).
+    #[arg(long)]
+    pub no_reference: bool,
+}
+
+fn load(path: &Path) -> anyhow::Result<Rgb> {
+    let image = HdrImage::load_exr(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(Rgb::of(&image))
+}
+
+/// The two seeds of a Cycles image and their mean.
+struct CyclesPair {
+    mean: Rgb,
+    seeds: (Rgb, Rgb),
+}
+
+/// A surface point further than this many bounding radii from every object
+/// counts as far from them.
+const FAR_RADII: f64 = 4.0;
+
+/// Averaging `BLOCK` × `BLOCK` pixels cuts the noise by `BLOCK`.
+const BLOCK: u32 = 8;
+
+/// Both seeds of a Cycles image, if present.
+fn cycles_pair(dir: &Path, stem: &str) -> anyhow::Result<Option<CyclesPair>> {
+    let (a, b) = (
+        dir.join(format!("{stem}-s1.exr")),
+        dir.join(format!("{stem}-s2.exr")),
+    );
+    if !a.exists() || !b.exists() {
+        return Ok(None);
+    }
+    let (a, b) = (load(&a)?, load(&b)?);
+    Ok(Some(CyclesPair {
+        mean: Rgb::mean(&a, &b),
+        seeds: (a, b),
+    }))
+}
+
+/// Runs `fidelity`.
+pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let recipe = scene
+        .recipe()
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: Cycles renders recipes; this scene's field is a file",
+                scene.path.display()
+            )
+        })?
+        .clone();
+    anyhow::ensure!(
+        args.cycles.is_dir(),
+        "--cycles {}: no such directory (render it with tools/cycles/render_cycles.py)",
+        args.cycles.display()
+    );
+    if let Some(dir) = &args.images {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut md = String::new();
+    writeln!(md, "## {}\n", scene.name)?;
+    let field = scene_field(&scene, None, true)?;
+    let library = crate::shaders::library()?;
+    // Probe irradiance per object.
+    let gpu_field = GpuGridField::upload(ctx, &field)?;
+    let env = scene.object_light_lobes();
+    writeln!(md, "Irradiance at each object's centre (luminance; Cycles: a 1 mm white sensor per axis, two seeds):\n")?;
+    writeln!(
+        md,
+        "| object | axis | Cycles | ± | probe | probe / Cycles | lobes | lobes / Cycles |"
+    )?;
+    writeln!(md, "| --- | --- | --- | --- | --- | --- | --- | --- |")?;
+    for object in &scene.objects {
+        let path = args.cycles.join(format!("irradiance-{}.json", object.name));
+        if !path.exists() {
+            continue;
+        }
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let (centre, _) = object.sphere();
+        let traced = crate::commands::probe::trace_and_fit(
+            ctx,
+            &gpu_field,
+            centre,
+            scene.lighting.probe,
+            scene.lighting.fit,
+            scene.march,
+            &env,
+        )?;
+        let map = scene.lighting.probe.direction_map();
+        let texels: Vec<[f64; 4]> = traced
+            .probe
+            .pixels
+            .iter()
+            .map(|p| p.map(f64::from))
+            .collect();
+        let lobes: Vec<Sg64> = traced.report.lobes.iter().map(|g| g.to_f64()).collect();
+        for (axis, n) in AXES {
+            let seeds: Vec<f64> = ["s1", "s2"]
+                .iter()
+                .filter_map(|s| json["irradiance"][s][axis].as_array())
+                .map(|v| {
+                    let c: Vec<f64> = v.iter().filter_map(|x| x.as_f64()).collect();
+                    luminance(DVec3::new(c[0], c[1], c[2]))
+                })
+                .collect();
+            if seeds.len() != 2 {
+                anyhow::bail!("{}: `irradiance.s1/s2.{axis}` missing", path.display());
+            }
+            let cycles = 0.5 * (seeds[0] + seeds[1]);
+            let noise = 0.5 * (seeds[0] - seeds[1]).abs();
+            let p = luminance(probe_irradiance(&map, &texels, n));
+            let l = luminance(lobes_irradiance(&lobes, n));
+            writeln!(
+                md,
+                "| {} | {axis} | {cycles:.4} | {noise:.4} | {p:.4} | {:.3} | {l:.4} | {:.3} |",
+                object.name,
+                p / cycles,
+                l / cycles
+            )?;
+        }
+    }
+    writeln!(md)?;
+    // Images per camera, compared where the field covers the whole pixel
+    // (inlay draws nothing outside the field's bounds; Cycles draws the
+    // sky there) and, for the insertion's figures, the objects' pixels.
+    writeln!(md, "Images against Cycles over the pixels the field covers (relative L1 in luminance per pixel and over {BLOCK}×{BLOCK} blocks, which averages Monte-Carlo noise away and leaves bias; mean luminance ratio; PSNR on sRGB values clamped at exposure {}). Cycles' own seed-to-seed figures give the noise's scale:\n", args.exposure)?;
+    writeln!(md, "| camera | image | rel. L1 | rel. L1 {BLOCK}×{BLOCK} | mean ratio | PSNR dB | Cycles seeds rel. L1 | Cycles seeds {BLOCK}×{BLOCK} |")?;
+    writeln!(md, "| --- | --- | --- | --- | --- | --- | --- | --- |")?;
+    let mut insertion = String::new();
+    for (ci, camera) in scene.cameras.iter().enumerate() {
+        let name = camera.name.clone().unwrap_or_else(|| ci.to_string());
+        let Some(bare) = cycles_pair(&args.cycles, &format!("{name}-bare-full"))? else {
+            continue;
+        };
+        let with = cycles_pair(&args.cycles, &format!("{name}-objects-full"))?;
+        let (w, h) = (bare.mean.width, bare.mean.height);
+        let frame = CameraFrame::new(camera, w, h);
+        let bare_cover = coverage(&recipe, &[], &frame, 4);
+        let object_cover = coverage(&recipe, &scene.objects, &frame, 4).object;
+        let field_px = |i: usize| bare_cover.field[i] >= 1.0;
+        let object_px = |i: usize| object_cover[i] >= 1.0;
+        // Far from every object: the surface seen lies more than
+        // FAR_RADII bounding radii from each object's centre.
+        let spheres: Vec<(DVec3, f64)> = scene.objects.iter().map(|o| o.sphere()).collect();
+        let far_px = |i: usize| {
+            bare_cover.point[i].is_some_and(|p| {
+                spheres
+                    .iter()
+                    .all(|(c, r)| (p - *c).length() > FAR_RADII * r)
+            })
+        };
+        let reference = |objects: bool| -> Rgb {
+            let run = |seed| {
+                render_reference(
+                    &recipe,
+                    &scene.environment,
+                    if objects { &scene.objects[..] } else { &[][..] },
+                    &frame,
+                    &ReferenceOptions {
+                        samples: args.samples,
+                        bounces: scene.bake.bounces,
+                        seed,
+                        antialias: true,
+                    },
+                    &|_, _| {},
+                )
+            };
+            let to = |p: Vec<[f32; 4]>| {
+                Rgb::of(&HdrImage {
+                    width: w,
+                    height: h,
+                    pixels: p,
+                })
+            };
+            Rgb::mean(&to(run(1)), &to(run(2)))
+        };
+        let row = |md: &mut String,
+                   what: &str,
+                   img: &Rgb,
+                   truth: &CyclesPair,
+                   mask: &dyn Fn(usize) -> bool|
+         -> anyhow::Result<()> {
+            let blocks = |x: &Rgb| block_means(x, BLOCK, mask);
+            writeln!(
+                md,
+                "| {name} | {what} | {:.4} | {:.4} | {:.3} | {:.2} | {:.4} | {:.4} |",
+                relative_l1(img, &truth.mean, mask),
+                relative_l1(&blocks(img), &blocks(&truth.mean), |_| true),
+                mean_ratio(img, &truth.mean, mask),
+                psnr(img, &truth.mean, args.exposure, mask),
+                relative_l1(&truth.seeds.0, &truth.seeds.1, mask),
+                relative_l1(&blocks(&truth.seeds.0), &blocks(&truth.seeds.1), |_| true),
+            )?;
+            if let Some(dir) = &args.images {
+                let file = dir.join(format!(
+                    "{}-{name}-{}.png",
+                    scene.name,
+                    what.replace([' ', ','], "-")
+                ));
+                side_by_side(&truth.mean, img)
+                    .to_hdr()
+                    .save(&file, args.exposure as f32)?;
+            }
+            Ok(())
+        };
+        let field_only = |i: usize| field_px(i) && object_cover[i] == 0.0;
+        if !args.no_reference {
+            row(
+                &mut md,
+                "reference, bare",
+                &reference(false),
+                &bare,
+                &field_px,
+            )?;
+            if let Some(with) = &with {
+                row(
+                    &mut md,
+                    "reference, objects",
+                    &reference(true),
+                    with,
+                    &|i| field_px(i) || object_px(i),
+                )?;
+            }
+        }
+        let mut view_scene = scene.clone();
+        view_scene.objects.clear();
+        let bare_view = view_over_field(
+            ctx,
+            &library,
+            &view_scene,
+            scene.march,
+            &field,
+            camera.clone(),
+            true,
+        )?;
+        let field_image = Rgb::of(&run_headless(ctx, &bare_view, w, h, 1, 0.0)?.image);
+        row(&mut md, "field, bare", &field_image, &bare, &field_px)?;
+        let Some(with) = with else {
+            continue;
+        };
+        let view = view_over_field(
+            ctx,
+            &library,
+            &scene,
+            scene.march,
+            &field,
+            camera.clone(),
+            true,
+        )?;
+        let inserted = Rgb::of(&run_headless(ctx, &view, w, h, 1, 0.0)?.image);
+        row(&mut md, "insertion", &inserted, &with, &|i| {
+            field_px(i) || object_px(i)
+        })?;
+        let shadow = shadow_figures(
+            &shadow_ratio(&inserted, &field_image),
+            &shadow_ratio(&with.mean, &bare.mean),
+            field_only,
+            far_px,
+        );
+        writeln!(
+            insertion,
+            "| {name} | {:.3} | {:.3} | {} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) |",
+            mean_ratio(&inserted, &with.mean, object_px),
+            median_relative_error(&inserted, &with.mean, object_px),
+            (0..object_cover.len()).filter(|&i| object_px(i)).count(),
+            shadow.correlation,
+            shadow.area_ratio,
+            shadow.truth_area,
+            100.0 * shadow.far_darkening,
+            100.0 * shadow.truth_far_darkening,
+            shadow.far_pixels,
+        )?;
+    }
+    writeln!(md)?;
+    if !insertion.is_empty() {
+        writeln!(md, "The insertion against Cycles with the objects (object mask: pixels whose 16 rays all hit an object first; shadow: the luminance ratio of the images with and without the objects, inlay's against Cycles', over the pixels the field alone covers; far: surface points more than {FAR_RADII} bounding radii from every object):\n")?;
+        writeln!(md, "| camera | object brightness inlay / Cycles | median relative error | mask px | shadow correlation | shadow area (< 0.9) inlay / Cycles | far darkening, inlay | far darkening, Cycles |")?;
+        writeln!(md, "| --- | --- | --- | --- | --- | --- | --- | --- |")?;
+        md.push_str(&insertion);
+        writeln!(md)?;
+    }
+    // Written whole to a temporary file, then renamed: an interrupted run
+    // leaves an earlier report intact.
+    let partial = args.out.with_extension("md.partial");
+    std::fs::write(&partial, &md).map_err(|e| anyhow::anyhow!("{}: {e}", partial.display()))?;
+    std::fs::rename(&partial, &args.out)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.display()))?;
+    print!("{md}");
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

@@ -1,0 +1,412 @@
+//! Image figures for comparing inlay with an independent renderer: relative
+//! differences, PSNR on tonemapped values, the inserted object's brightness
+//! and error inside its mask, and the cast shadow as the ratio of the
+//! images with and without the object.
+
+use glam::DVec3;
+use inlay_engine::HdrImage;
+use inlay_passes::bake::{MeshScene, PathTracer};
+use inlay_passes::camera::CameraFrame;
+use inlay_passes::geometry::ray_box;
+use inlay_passes::object::PlacedObject;
+use inlay_passes::scene::{Environment, Recipe};
+use rayon::prelude::*;
+
+/// Rec. 709 luminance.
+pub fn luminance(c: DVec3) -> f64 {
+    c.dot(DVec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// An image as f64 RGB, row-major from the top.
+#[derive(Debug, Clone)]
+pub struct Rgb {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The pixels.
+    pub pixels: Vec<DVec3>,
+}
+
+impl Rgb {
+    /// The colour of an HDR image (its fourth channel dropped).
+    pub fn of(image: &HdrImage) -> Self {
+        Self {
+            width: image.width,
+            height: image.height,
+            pixels: image
+                .pixels
+                .iter()
+                .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+                .collect(),
+        }
+    }
+
+    /// The per-pixel mean of two images of one size.
+    pub fn mean(a: &Rgb, b: &Rgb) -> Self {
+        Self {
+            width: a.width,
+            height: a.height,
+            pixels: a
+                .pixels
+                .iter()
+                .zip(&b.pixels)
+                .map(|(x, y)| 0.5 * (x + y))
+                .collect(),
+        }
+    }
+
+    /// As an HDR image (alpha 1).
+    pub fn to_hdr(&self) -> HdrImage {
+        HdrImage {
+            width: self.width,
+            height: self.height,
+            pixels: self
+                .pixels
+                .iter()
+                .map(|p| [p.x as f32, p.y as f32, p.z as f32, 1.0])
+                .collect(),
+        }
+    }
+}
+
+/// Σ|a − b| / Σ|b| over the pixels where `mask` holds (luminance).
+pub fn relative_l1(a: &Rgb, b: &Rgb, mask: impl Fn(usize) -> bool) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (i, (x, y)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        if mask(i) {
+            num += (luminance(*x) - luminance(*y)).abs();
+            den += luminance(*y).abs();
+        }
+    }
+    if den > 0.0 {
+        num / den
+    } else {
+        f64::NAN
+    }
+}
+
+/// Mean luminance of `a` over the mask divided by that of `b`.
+pub fn mean_ratio(a: &Rgb, b: &Rgb, mask: impl Fn(usize) -> bool) -> f64 {
+    let (mut sa, mut sb) = (0.0, 0.0);
+    for (i, (x, y)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        if mask(i) {
+            sa += luminance(*x);
+            sb += luminance(*y);
+        }
+    }
+    sa / sb
+}
+
+/// The median over the mask of |a − b| / b in luminance (pixels where b is
+/// black are left out).
+pub fn median_relative_error(a: &Rgb, b: &Rgb, mask: impl Fn(usize) -> bool) -> f64 {
+    let mut e: Vec<f64> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .enumerate()
+        .filter(|(i, (_, y))| mask(*i) && luminance(**y) > 0.0)
+        .map(|(_, (x, y))| (luminance(*x) / luminance(*y) - 1.0).abs())
+        .collect();
+    if e.is_empty() {
+        return f64::NAN;
+    }
+    e.sort_by(f64::total_cmp);
+    e[e.len() / 2]
+}
+
+/// sRGB encoding of a linear value clamped to [0, 1].
+pub fn srgb(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.0031308 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// PSNR (dB) of `a` against `b` on sRGB-encoded values clamped to [0, 1]
+/// at `exposure`, over every channel of the pixels where `mask` holds.
+pub fn psnr(a: &Rgb, b: &Rgb, exposure: f64, mask: impl Fn(usize) -> bool) -> f64 {
+    let (mut se, mut n) = (0.0, 0usize);
+    for (i, (x, y)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+        if !mask(i) {
+            continue;
+        }
+        for c in 0..3 {
+            let d = srgb(x[c] * exposure) - srgb(y[c] * exposure);
+            se += d * d;
+        }
+        n += 3;
+    }
+    let mse = se / n.max(1) as f64;
+    if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        -10.0 * mse.log10()
+    }
+}
+
+/// Pearson correlation of x and y over the mask.
+pub fn correlation(x: &[f64], y: &[f64], mask: &impl Fn(usize) -> bool) -> f64 {
+    let idx: Vec<usize> = (0..x.len()).filter(|&i| mask(i)).collect();
+    let n = idx.len() as f64;
+    let mx = idx.iter().map(|&i| x[i]).sum::<f64>() / n;
+    let my = idx.iter().map(|&i| y[i]).sum::<f64>() / n;
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for &i in &idx {
+        let (a, b) = (x[i] - mx, y[i] - my);
+        sxy += a * b;
+        sxx += a * a;
+        syy += b * b;
+    }
+    sxy / (sxx * syy).sqrt()
+}
+
+/// The shadow an object casts: luminance of the image with the object over
+/// the image without it, 1 where the bare image is black.
+pub fn shadow_ratio(with: &Rgb, bare: &Rgb) -> Vec<f64> {
+    with.pixels
+        .iter()
+        .zip(&bare.pixels)
+        .map(|(w, b)| {
+            let b = luminance(*b);
+            if b > 1e-6 {
+                luminance(*w) / b
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// The cast shadow of inlay against the truth's, over the field's pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowFigures {
+    /// Correlation of the darkening 1 − ratio, inlay against the truth.
+    pub correlation: f64,
+    /// Pixels darkened below 0.9 by inlay over those by the truth.
+    pub area_ratio: f64,
+    /// Pixels the truth darkens below 0.9.
+    pub truth_area: usize,
+    /// inlay's mean darkening over the far pixels.
+    pub far_darkening: f64,
+    /// The truth's own mean darkening there.
+    pub truth_far_darkening: f64,
+    /// How many pixels are far.
+    pub far_pixels: usize,
+}
+
+/// The shadow figures over the pixels where `field` holds (the field alone
+/// seen); the far-field darkening over those where `far` holds too.
+pub fn shadow_figures(
+    inlay: &[f64],
+    truth: &[f64],
+    field: impl Fn(usize) -> bool,
+    far: impl Fn(usize) -> bool,
+) -> ShadowFigures {
+    let di: Vec<f64> = inlay.iter().map(|r| 1.0 - r).collect();
+    let dt: Vec<f64> = truth.iter().map(|r| 1.0 - r).collect();
+    let area = |r: &[f64]| (0..r.len()).filter(|&i| field(i) && r[i] < 0.9).count();
+    let far: Vec<usize> = (0..truth.len()).filter(|&i| field(i) && far(i)).collect();
+    let mean_over = |d: &[f64]| far.iter().map(|&i| d[i]).sum::<f64>() / far.len().max(1) as f64;
+    let truth_area = area(truth);
+    ShadowFigures {
+        correlation: correlation(&di, &dt, &field),
+        area_ratio: area(inlay) as f64 / truth_area.max(1) as f64,
+        truth_area,
+        far_darkening: mean_over(&di),
+        truth_far_darkening: mean_over(&dt),
+        far_pixels: far.len(),
+    }
+}
+
+/// The geometry seen through each pixel, traced from the recipe and the
+/// objects themselves (not from any render).
+#[derive(Debug, Clone)]
+pub struct Coverage {
+    /// The fraction of the pixel's rays that see the field (a surface or
+    /// medium of the recipe inside its bounds) first.
+    pub field: Vec<f64>,
+    /// The fraction whose first hit is an object.
+    pub object: Vec<f64>,
+    /// Where the ray through the pixel's centre first meets the field.
+    pub point: Vec<Option<DVec3>>,
+}
+
+/// [`Coverage`] of `camera`'s pixels with `side`² stratified rays each.
+pub fn coverage(
+    recipe: &Recipe,
+    objects: &[PlacedObject],
+    camera: &CameraFrame,
+    side: u32,
+) -> Coverage {
+    let meshes = MeshScene::new(objects);
+    let env = Environment::Black;
+    let tracer = PathTracer::new(recipe, &env, 0).with_objects(&meshes);
+    let field_hit = |ray: &inlay_passes::geometry::Ray| -> Option<f64> {
+        let (t0, t1) = ray_box(ray, &recipe.bounds)?;
+        let t0 = t0.max(0.0);
+        let surface = tracer.nearest_surface(ray, t0, t1).map(|(t, _)| t);
+        let medium = recipe
+            .primitives
+            .iter()
+            .filter(|p| p.medium_density.is_some())
+            .filter_map(|p| p.shape.interval(ray))
+            .filter(|&(a, b)| b > t0 && a < t1)
+            .map(|(a, _)| a.max(t0))
+            .reduce(f64::min);
+        match (surface, medium) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    };
+    let (w, h) = (camera.width, camera.height);
+    let per_pixel: Vec<(f64, f64, Option<DVec3>)> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let (mut field, mut object) = (0.0, 0.0);
+            for j in 0..side * side {
+                let jx = ((j % side) as f64 + 0.5) / side as f64;
+                let jy = ((j / side) as f64 + 0.5) / side as f64;
+                let ray = camera.ray(x as f64 + jx, y as f64 + jy);
+                let t_object = tracer
+                    .nearest_object(&ray, 0.0, f64::INFINITY)
+                    .map_or(f64::INFINITY, |(t, _)| t);
+                let t_field = field_hit(&ray).unwrap_or(f64::INFINITY);
+                if t_object < t_field {
+                    object += 1.0;
+                } else if t_field.is_finite() {
+                    field += 1.0;
+                }
+            }
+            let centre = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
+            let point = field_hit(&centre).map(|t| centre.at(t));
+            let n = (side * side) as f64;
+            (field / n, object / n, point)
+        })
+        .collect();
+    let mut c = Coverage {
+        field: Vec::with_capacity(per_pixel.len()),
+        object: Vec::with_capacity(per_pixel.len()),
+        point: Vec::with_capacity(per_pixel.len()),
+    };
+    for (f, o, p) in per_pixel {
+        c.field.push(f);
+        c.object.push(o);
+        c.point.push(p);
+    }
+    c
+}
+
+/// The image averaged over `block` × `block` pixel blocks (partial blocks
+/// at the edges dropped) where every pixel of the block holds `mask`:
+/// Monte-Carlo noise falls by the block's side while a bias stays. Blocks
+/// that fail the mask are black in both images alike.
+pub fn block_means(img: &Rgb, block: u32, mask: impl Fn(usize) -> bool) -> Rgb {
+    let (bw, bh) = (img.width / block, img.height / block);
+    let mut pixels = Vec::with_capacity((bw * bh) as usize);
+    for by in 0..bh {
+        for bx in 0..bw {
+            let mut sum = DVec3::ZERO;
+            let mut ok = true;
+            for y in by * block..(by + 1) * block {
+                for x in bx * block..(bx + 1) * block {
+                    let i = (y * img.width + x) as usize;
+                    ok &= mask(i);
+                    sum += img.pixels[i];
+                }
+            }
+            pixels.push(if ok {
+                sum / (block * block) as f64
+            } else {
+                DVec3::ZERO
+            });
+        }
+    }
+    Rgb {
+        width: bw,
+        height: bh,
+        pixels,
+    }
+}
+
+/// Truth | inlay | |inlay − truth| side by side, one image.
+pub fn side_by_side(truth: &Rgb, inlay: &Rgb) -> Rgb {
+    let (w, h) = (truth.width as usize, truth.height as usize);
+    let mut pixels = Vec::with_capacity(3 * w * h);
+    for y in 0..h {
+        for panel in 0..3 {
+            for x in 0..w {
+                let (t, i) = (truth.pixels[y * w + x], inlay.pixels[y * w + x]);
+                pixels.push(match panel {
+                    0 => t,
+                    1 => i,
+                    _ => (i - t).abs(),
+                });
+            }
+        }
+    }
+    Rgb {
+        width: 3 * w as u32,
+        height: h as u32,
+        pixels,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn img(v: &[f64]) -> Rgb {
+        Rgb {
+            width: v.len() as u32,
+            height: 1,
+            pixels: v.iter().map(|&x| DVec3::splat(x)).collect(),
+        }
+    }
+
+    #[test]
+    fn figures_of_known_images() {
+        let a = img(&[1.0, 2.0, 3.0, 4.0]);
+        let b = img(&[1.0, 2.0, 3.0, 2.0]);
+        assert!((relative_l1(&a, &b, |_| true) - 2.0 / 8.0).abs() < 1e-12);
+        assert!((mean_ratio(&a, &b, |i| i < 2) - 1.0).abs() < 1e-12);
+        assert!((median_relative_error(&a, &b, |_| true) - 0.0).abs() < 1e-12);
+        assert!((median_relative_error(&a, &b, |i| i == 3) - 1.0).abs() < 1e-12);
+        assert_eq!(psnr(&a, &a, 1.0, |_| true), f64::INFINITY);
+        assert!((correlation(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0], &|_| true) - 1.0).abs() < 1e-12);
+        assert!((srgb(1.0) - 1.0).abs() < 1e-12 && srgb(-1.0) == 0.0);
+        let b4 = block_means(&img(&[1.0, 3.0, 5.0, 7.0]), 2, |_| true);
+        assert_eq!(b4.pixels, vec![DVec3::ZERO; 0]);
+        let wide = Rgb {
+            width: 2,
+            height: 2,
+            pixels: [1.0, 3.0, 5.0, 7.0]
+                .iter()
+                .map(|&v| DVec3::splat(v))
+                .collect(),
+        };
+        assert_eq!(
+            block_means(&wide, 2, |_| true).pixels,
+            vec![DVec3::splat(4.0)]
+        );
+        assert_eq!(block_means(&wide, 2, |i| i != 3).pixels, vec![DVec3::ZERO]);
+    }
+
+    #[test]
+    fn shadow_figures_of_a_known_shadow() {
+        let truth = [1.0, 0.5, 0.8, 1.0, 1.0, 0.3];
+        let inlay = [1.0, 0.5, 0.8, 0.98, 1.0, 0.3];
+        // Pixel 5 is the object; pixels 3 and 4 are far.
+        let f = shadow_figures(&inlay, &truth, |i| i != 5, |i| i == 3 || i == 4);
+        assert_eq!(f.truth_area, 2);
+        assert!((f.area_ratio - 1.0).abs() < 1e-12);
+        assert!((f.far_darkening - 0.01).abs() < 1e-12);
+        assert!(f.truth_far_darkening.abs() < 1e-12);
+        assert_eq!(f.far_pixels, 2);
+        assert!(f.correlation > 0.95);
+    }
+}
