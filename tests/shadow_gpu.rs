@@ -340,8 +340,10 @@ fn cast_shadow_matches_mirror_and_brute_force() {
 }
 
 /// Γ_k on the object's surface (the toy, self-shadowing under its cap)
-/// against brute force: the visible share of each lobe, ∫ G_k V / ∫ G_k,
-/// over a 96² octahedral map with one ray per direction.
+/// against brute force: the visible share of each lobe's light above the
+/// surface, ∫ G_k max(n·ω, 0) V / ∫ G_k max(n·ω, 0) (shading already
+/// takes the cosine and the horizon), over a 96² octahedral map with one
+/// ray per direction.
 #[test]
 fn self_shadow_factors_match_brute_force() {
     let ctx = common::gpu();
@@ -371,19 +373,23 @@ fn self_shadow_factors_match_brute_force() {
         };
         let surf = scene.surface(&ray, &hit);
         let x = surf.point + surf.face_normal * 1e-4;
-        let model = self_shadow_factors(&field, &placed, &table, &lobes, x, OutsideMode::Correct);
+        let n = surf.normal;
+        let model =
+            self_shadow_factors(&field, &placed, &table, &lobes, x, n, OutsideMode::Correct);
         for (g, m) in lobes.iter().zip(model) {
             let (mut vis, mut all) = (0.0, 0.0);
             for t in 0..map.texels() as u32 {
                 let (tx, ty) = (t % map.width, t / map.width);
                 let w = map.direction(tx, ty);
-                let e = g.weight(w) * map.solid_angle(tx, ty);
+                let e = g.weight(w) * n.dot(w).max(0.0) * map.solid_angle(tx, ty);
                 all += e;
                 if !hits(&scene, x, w) {
                     vis += e;
                 }
             }
-            errors.push((m, vis / all, g.sharpness));
+            if all > 1e-9 * g.integral().max_element() {
+                errors.push((m, vis / all, g.sharpness));
+            }
         }
     }
     let mean = errors.iter().map(|(m, t, _)| (m - t).abs()).sum::<f64>() / errors.len() as f64;
@@ -393,9 +399,11 @@ fn self_shadow_factors_match_brute_force() {
         "Γ vs brute force: mean |ΔΓ| {mean:.4} over {}, sharp lobe {sharp_mean:.4}",
         errors.len()
     );
-    // Measured: 0.12 over all lobes (broad lobes meet the half-space model's
-    // horizon error), 0.047 for the sun-like lobe.
-    assert!(mean < 0.2, "{mean}");
-    assert!(sharp_mean < 0.1, "{sharp_mean}");
+    // Measured: 0.083 over all lobes and 0.095 for the sun-like lobe. Γ
+    // taken as q(S) of the raw lobe, without the tangent plane's own
+    // visibility divided out, was off by 0.159 over all lobes (0.092 for the
+    // sun-like one) against the same truth.
+    assert!(mean < 0.12, "{mean}");
+    assert!(sharp_mean < 0.13, "{sharp_mean}");
     common::assert_no_validation_errors(&ctx);
 }

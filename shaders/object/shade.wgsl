@@ -5,7 +5,7 @@ fn shading_attenuation(k: u32) -> f32 {
     return 1.0;
 }
 
-fn shading_prepare(x: vec3<f32>) {}
+fn shading_prepare(x: vec3<f32>, n: vec3<f32>) {}
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -4,8 +4,8 @@
 // Output: the object's radiance I_v with coverage in alpha. The including
 // shader (object/shade.wgsl, object/shade_self_shadow.wgsl) defines the
 // entry point, calling shade_pixel, and the hooks
-//   shading_attenuation(k) -> f32 (Γ_k) and shading_prepare(x) (called with
-//   the pixel's world-space surface point before shading).
+//   shading_attenuation(k) -> f32 (Γ_k) and shading_prepare(x, n) (called
+//   with the pixel's world-space surface point and normal before shading).
 #include "common/camera.wgsl"
 #include "object/sg_shading.wgsl"
 
@@ -63,7 +63,8 @@ fn shade_pixel(id: vec3<u32>) {
     let am = textureLoad(albedo_metallic, pixel, 0);
     let size = vec2<f32>(f32(pc.width), f32(pc.height));
     let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(id.xy) + vec2<f32>(0.5));
-    shading_prepare(pc.origin + dir * hit.r);
-    let radiance = shade_sg(normalize(nr.xyz), -dir, am.rgb, nr.w, am.a);
+    let n = normalize(nr.xyz);
+    shading_prepare(pc.origin + dir * hit.r, n);
+    let radiance = shade_sg(n, -dir, am.rgb, nr.w, am.a);
     textureStore(out_object, pixel, vec4<f32>(max(radiance, vec3<f32>(0.0)), 1.0));
 }

@@ -1,8 +1,10 @@
 // The cast shadow (eq. 7-8) of one object on the field: per pixel, the
 // point at the field's expected depth D̂/Ô, the normal −∇σ there, and
 // ρ = Σ_k w_k q(S(p'_k), λ'_k) / Σ_k w_k over the lobes L_k ⊗ cosine
-// (w_k = μ'_k f_h(π/2, λ'_k)); lobes whose direction clears the object's
-// bounding sphere by a quarter turn skip the SSDF (q = 1). Mirrors
+// (w_k = μ'_k f_h(π/2, λ'_k)); each lobe's occlusion 1 − q is capped by the
+// share of its energy the bounding sphere can block, and lobes whose
+// direction clears the sphere by a quarter turn, or of which it can block
+// under CAST_SKIP_SHARE, skip the SSDF (q = 1). Mirrors
 // passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
 // multiplies the previous object's ρ image. Output: ρ in rgb.
 // Needs: the shadow defines (passes/src/shadow/gpu.rs).
@@ -51,6 +53,28 @@ fn clears_sphere(x: vec3<f32>, dir: vec3<f32>) -> bool {
     return ssdf_angle_between(dir, to / dist) - asin(r / dist) >= CAST_HALF_PI;
 }
 
+// Below this share of a lobe's energy the object can block, the lobe is
+// left unshadowed (runtime.rs CAST_SKIP_SHARE).
+const CAST_SKIP_SHARE: f32 = 1e-3;
+
+// The largest share of lobe p's hemisphere energy the bounding sphere can
+// block from x: p's largest value over the sphere's cone times the cone's
+// solid angle, over p's hemisphere integral (runtime.rs sphere_share).
+fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
+    let to = ssdf.world_sphere.xyz - x;
+    let dist = length(to);
+    let r = ssdf.world_sphere.w;
+    if dist <= r {
+        return 1.0;
+    }
+    let beta = asin(r / dist);
+    let gamma = ssdf_angle_between(p.direction, to / dist);
+    let peak = exp(p.sharpness * (cos(max(gamma - beta, 0.0)) - 1.0));
+    let s = sin(0.5 * beta);
+    let solid = 4.0 * SG_PI * s * s;
+    return min(peak * solid / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
+}
+
 fn cast_factor(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let cosine = sg_clamped_cosine(n);
     var num = vec3<f32>(0.0);
@@ -63,12 +87,13 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
         let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
         den += w;
         var q = 1.0;
-        if !clears_sphere(x, p.direction) {
+        let share = sphere_share(x, p);
+        if !clears_sphere(x, p.direction) && share >= CAST_SKIP_SHARE {
             if !prepared {
                 ssdf_prepare(ssdf_to_object_point(x));
                 prepared = true;
             }
-            q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
+            q = max(fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness), 1.0 - share);
         }
         num += w * q;
     }

@@ -21,7 +21,8 @@ pub use format::{load_ssdf, parse_ssdf, save_ssdf, ssdf_bytes, SsdfFormatError, 
 pub use gpu::{object_block, shadow_defines, world_to_object, GpuFhTable, GpuSsdf, SsdfBindings};
 pub use grid::SsdfGrid;
 pub use runtime::{
-    cast_shadow_factor, field_normal, self_shadow_factors, sphere_clear_of, world_ssdf,
+    cast_shadow_factor, field_normal, self_shadow_factors, sphere_clear_of, sphere_share,
+    world_ssdf, CAST_SKIP_SHARE, HORIZON_FLOOR,
 };
 pub use silhouette::{angle_between, angle_to_arc, SilhouetteEdge, SilhouetteMesh, SilhouetteView};
 pub mod reference;
