@@ -8,6 +8,7 @@
 //! - the incident light at each object's centre: the GPU probe's
 //!   irradiance from the upper hemisphere against Cycles' irradiance
 //!   sensor, on a field baked at test size.
+//!
 //! The insertion's figures (object brightness, shadow) need the full bakes
 //! and the SSDF; `inlay fidelity` measures them (docs/fidelity.md).
 
@@ -25,7 +26,9 @@ use inlay_passes::field::GpuGridField;
 use inlay_passes::probe::{probe_irradiance, ProbePass, PROBE_FORMAT};
 
 fn cycles_dir(scene: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/cycles").join(scene)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("docs/cycles")
+        .join(scene)
 }
 
 fn load(path: &Path) -> Rgb {
@@ -51,7 +54,11 @@ fn the_reference_path_tracer_matches_cycles() {
                 dir.join(format!("{cam}-bare-full-s1.exr")),
                 dir.join(format!("{cam}-bare-full-s2.exr")),
             );
-            assert!(a.exists() && b.exists(), "{}: Cycles renders missing", a.display());
+            assert!(
+                a.exists() && b.exists(),
+                "{}: Cycles renders missing",
+                a.display()
+            );
             let cycles = Rgb::mean(&load(&a), &load(&b));
             let frame = CameraFrame::new(camera, cycles.width, cycles.height);
             let cover = coverage(recipe, &[], &frame, 2);
@@ -99,7 +106,8 @@ fn the_probe_irradiance_matches_cycles_sensors() {
         let field = common::bake_small(&scene, 64, 8, scene.bake.bounces);
         let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
         let knobs = scene.lighting.probe;
-        let pass = ProbePass::new(&ctx, &lib, knobs, scene.march, &scene.object_light_lobes()).unwrap();
+        let pass =
+            ProbePass::new(&ctx, &lib, knobs, scene.march, &scene.object_light_lobes()).unwrap();
         let map = pass.map();
         let rb = Readback::new(
             &ctx,
@@ -112,7 +120,8 @@ fn the_probe_irradiance_matches_cycles_sensors() {
         .unwrap();
         for object in &scene.objects {
             let path = cycles_dir(name).join(format!("irradiance-{}.json", object.name));
-            let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            let json: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
             let sensor = |seed: &str| {
                 let v: Vec<f64> = json["irradiance"][seed]["+y"]
                     .as_array()
@@ -128,10 +137,24 @@ fn the_probe_irradiance_matches_cycles_sensors() {
                 let probe = pass.add(graph, &gpu_field, centre);
                 rb.add_to_graph(graph, probe);
             });
-            let texels: Vec<[f64; 4]> = rb.read().unwrap().pixels.iter().map(|p| p.map(f64::from)).collect();
+            let texels: Vec<[f64; 4]> = rb
+                .read()
+                .unwrap()
+                .pixels
+                .iter()
+                .map(|p| p.map(f64::from))
+                .collect();
             let ours = luminance(probe_irradiance(&map, &texels, DVec3::Y));
-            eprintln!("{name} {}: upper-hemisphere irradiance {ours:.4}, Cycles {cycles:.4} ({:+.2} %)", object.name, 100.0 * (ours / cycles - 1.0));
-            assert!((ours / cycles - 1.0).abs() < 0.08, "{name} {}: {ours} against {cycles}", object.name);
+            eprintln!(
+                "{name} {}: upper-hemisphere irradiance {ours:.4}, Cycles {cycles:.4} ({:+.2} %)",
+                object.name,
+                100.0 * (ours / cycles - 1.0)
+            );
+            assert!(
+                (ours / cycles - 1.0).abs() < 0.08,
+                "{name} {}: {ours} against {cycles}",
+                object.name
+            );
         }
     }
     common::assert_no_validation_errors(&ctx);
