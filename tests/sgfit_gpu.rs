@@ -160,6 +160,20 @@ fn gpu_fit_reaches_the_cpu_residual() {
         // equirect map the filter moves a constant by up to 2.5 % near the
         // poles, which no sum of lobes follows; the CPU reaches 0.058.)
         assert!(c < 0.07, "{kind:?}: CPU residual {c}");
+        // The last step sets the amplitudes to hold the probe's energy
+        // (sgfit/energy.rs): on the GPU too, to f32 precision.
+        let samples = samples_of(&map, &texels);
+        let energy: DVec3 = samples
+            .weights
+            .iter()
+            .zip(&samples.radiance)
+            .map(|(w, l)| *w * *l)
+            .sum();
+        let held: DVec3 = gpu.lobes.iter().map(|g| g.to_f64().integral()).sum();
+        assert!(
+            (held / energy - DVec3::ONE).abs().max_element() < 1e-3,
+            "{kind:?}: the GPU lobes hold {held}, the probe {energy}"
+        );
         assert!(g <= 1.5 * c + 0.01, "{kind:?}: GPU residual {g} vs CPU {c}");
     }
 }

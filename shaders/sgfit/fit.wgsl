@@ -8,6 +8,8 @@
 //   cost (slot 1 [, slot 0])   partial sums of the cost of a slot's lobes
 //   select (1 thread)          warm lobes (slot 0) or the cold start, state reset
 //   per iteration: jacobian, normal, solve, cost (slot 1), decide.
+//   conserve_energy (M groups), finish_energy (1 thread): the lobes' amplitudes
+//                              set to hold the probe's energy (energy.rs)
 // The lobe buffer holds two slots (0: current, 1: candidate) of M lobes,
 // two vec4 each. `state` holds the scalars listed below and the cost after
 // every iteration.
@@ -245,6 +247,50 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
         }
         store_lobe(1u, k, Sg(g.direction, g.sharpness, amplitude));
     }
+}
+
+// ---- energy -----------------------------------------------------------------
+
+// Lobe k (workgroup k) of slot 0 with its amplitude set to its share of the
+// probe's energy, Σ_t Ω_t L_t G_k(v_t) / Σ_j G_j(v_t), over its integral,
+// into slot 1 (mirrors passes/src/sgfit/energy.rs); `finish_energy` copies
+// slot 1 to slot 0 once every workgroup has read slot 0.
+@compute @workgroup_size(64, 1, 1)
+fn conserve_energy(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let k = wg.x;
+    let n = texel_count();
+    let size = vec2<u32>(pc.width, pc.height);
+    let g = lobe(0u, k);
+    var share = vec3<f32>(0.0);
+    for (var t = lid; t < n; t += 64u) {
+        let l = fit_radiance(t);
+        if !fit_texel_valid(l) {
+            continue;
+        }
+        let v = dm_direction(texel_xy(t), size);
+        var sum = vec3<f32>(0.0);
+        for (var j = 0u; j < pc.lobe_count; j++) {
+            sum += sg_eval(lobe(0u, j), v);
+        }
+        let mine = sg_eval(g, v);
+        share += fit_weight(t) * l * select(vec3<f32>(0.0), mine / sum, sum > vec3<f32>(0.0));
+    }
+    red_v[lid] = share;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s >>= 1u) {
+        if lid < s {
+            red_v[lid] += red_v[lid + s];
+        }
+        workgroupBarrier();
+    }
+    if lid == 0u {
+        store_lobe(1u, k, Sg(g.direction, g.sharpness, red_v[0] / sg_sphere_factor(g.sharpness)));
+    }
+}
+
+@compute @workgroup_size(1, 1, 1)
+fn finish_energy() {
+    copy_candidate_to_current();
 }
 
 // ---- cost -------------------------------------------------------------------

@@ -3,6 +3,7 @@
 //! the model and parameterisation ([`model`]), the damped step
 //! ([`solve`]), the f64 CPU reference and the GPU pass with its warm start.
 
+mod energy;
 mod knobs;
 pub mod model;
 mod pass;
@@ -12,6 +13,7 @@ pub mod solve;
 #[cfg(test)]
 mod tests;
 
+pub use energy::conserve_energy;
 pub use knobs::{FitKnobs, MAX_ITERATIONS, MAX_LOBES};
 pub use model::{fibonacci_axis, texel_valid, ProbeSamples};
 pub use pass::{FitReport, FitStart, SgFitPass};

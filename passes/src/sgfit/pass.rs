@@ -75,6 +75,8 @@ struct Kernels {
     normal_tile: ComputePipeline,
     solve: ComputePipeline,
     decide: ComputePipeline,
+    conserve_energy: ComputePipeline,
+    finish_energy: ComputePipeline,
 }
 
 /// Sizes derived from the knobs and the probe.
@@ -173,6 +175,8 @@ impl SgFitPass {
             normal_tile: build("normal_tile")?,
             solve: build("solve")?,
             decide: build("decide")?,
+            conserve_energy: build("conserve_energy")?,
+            finish_energy: build("finish_energy")?,
         };
         let lobe_bytes = 2 * knobs.lobes as u64 * 32;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -337,6 +341,8 @@ impl SgFitPass {
                 run(&k.cost, &candidate, [s.groups, 1, 1])?;
                 run(&k.decide, &candidate, [1, 1, 1])?;
             }
+            run(&k.conserve_energy, &candidate, [self.knobs.lobes, 1, 1])?;
+            run(&k.finish_energy, &candidate, [1, 1, 1])?;
             Ok(())
         });
         Ok(lobes)

@@ -90,7 +90,9 @@ fn normal_equations(probe: &ProbeSamples, lobes: &[Sg64]) -> (Vec<f64>, Vec<f64>
 }
 
 /// Fits `knobs.lobes` SGs to `probe` by Levenberg–Marquardt for
-/// `iterations` iterations.
+/// `iterations` iterations, then sets their amplitudes to hold the probe's
+/// energy ([`super::conserve_energy`]). The costs are the Levenberg–Marquardt
+/// iterations'.
 pub fn fit_reference(
     probe: &ProbeSamples,
     knobs: &FitKnobs,
@@ -133,7 +135,7 @@ pub fn fit_reference(
         costs.push(current);
     }
     FitOutcome {
-        lobes,
+        lobes: super::energy::conserve_energy(probe, &lobes),
         costs,
         energy: probe.energy(),
         started_cold,
