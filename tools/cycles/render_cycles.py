@@ -35,8 +35,8 @@ mean over each pixel's area; no clamping, no denoising):
   at each object's centre with the objects removed, as an equirect map in
   inlay's convention (2n × n, +Y up, u = atan2(z, x)/2π, v = θ/π).
 - training: `training/` with `transforms.json` (nerfstudio/instant-ngp
-  convention, OpenGL camera axes, inlay's world axes) and one EXR per view,
-  full bounces, no objects.
+  convention, OpenGL camera axes, inlay's world axes, the field's `aabb`)
+  and one linear HDR EXR per view (half floats), full bounces, no objects.
 - `render.json`: Blender's version, the command, samples, seeds and the
   wall time of each image.
 """
@@ -77,8 +77,8 @@ def parse_args():
     p.add_argument("--cameras", default="", help="only these cameras (comma-separated names)")
     p.add_argument("--modes", default="bare,objects", help="bare and/or objects")
     p.add_argument("--light", default="direct,full", help="direct and/or full")
-    p.add_argument("--views", type=int, default=48, help="training views")
-    p.add_argument("--view-size", type=int, default=128)
+    p.add_argument("--views", type=int, default=32, help="training views")
+    p.add_argument("--view-size", type=int, default=96)
     p.add_argument("--view-samples", type=int, default=256)
     return p.parse_args(argv)
 
@@ -146,6 +146,8 @@ def medium_material(name, albedo, density):
     nt.links.new(s.outputs["Volume"], add.inputs[0])
     nt.links.new(a.outputs["Volume"], add.inputs[1])
     nt.links.new(add.outputs["Shader"], out.inputs["Volume"])
+    # Constant density: sampled analytically, not ray-marched in steps.
+    m.cycles.homogeneous_volume = True
     return m
 
 
@@ -167,17 +169,22 @@ def mesh_object(name, verts, faces, smooth, collection):
 
 
 def sphere_mesh(centre, radius, segments=192, rings=96):
-    verts, faces = [], []
-    for r in range(rings + 1):
+    """A watertight UV sphere (one vertex at each pole), faces counter-
+    clockwise seen from outside: a closed volume's faces must face out for
+    Cycles to know its inside."""
+    point = lambda th, ph: to_b([centre[i] + radius * d for i, d in enumerate((math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph)))])
+    verts = [point(0.0, 0.0)]
+    for r in range(1, rings):
         th = math.pi * r / rings
+        verts += [point(th, 2 * math.pi * s / segments) for s in range(segments)]
+    south = len(verts)
+    verts.append(point(math.pi, 0.0))
+    ring = lambda r, s: 1 + (r - 1) * segments + s % segments
+    faces = [(0, ring(1, s + 1), ring(1, s)) for s in range(segments)]
+    for r in range(1, rings - 1):
         for s in range(segments):
-            ph = 2 * math.pi * s / segments
-            d = (math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph))
-            verts.append(to_b([centre[i] + radius * d[i] for i in range(3)]))
-    for r in range(rings):
-        for s in range(segments):
-            a, b = r * segments + s, r * segments + (s + 1) % segments
-            faces.append((a, a + segments, b + segments, b))
+            faces.append((ring(r, s), ring(r, s + 1), ring(r + 1, s + 1), ring(r + 1, s)))
+    faces += [(south, ring(rings - 1, s), ring(rings - 1, s + 1)) for s in range(segments)]
     return verts, faces
 
 
@@ -190,27 +197,36 @@ def basis(axis):
     return a, u, np.cross(a, u)
 
 
-def cylinder_mesh(centre, axis, radius, height, segments=192):
-    """The side (smooth-shaded) and the two caps (flat, with vertices of
-    their own, so smoothing does not bend the side's normals into them)."""
+def cylinder_mesh(centre, axis, radius, height, watertight, segments=192):
+    """The side (smooth-shaded) and the two caps. For a surface the caps are
+    flat, with vertices of their own, so smoothing does not bend the side's
+    normals into them; for a medium's boundary the caps share the side's
+    rim vertices: Cycles tracks a volume's inside only across a watertight
+    mesh (with separate rims it rendered CUPS' glass with black caps)."""
     a, u, w = basis(axis)
     c = np.array(centre, float)
     ring = [radius * (u * math.cos(2 * math.pi * s / segments) + w * math.sin(2 * math.pi * s / segments)) for s in range(segments)]
-    side_v, side_f = [], []
+    verts, side = [], []
     for end in (-0.5, 0.5):
-        side_v += [to_b(c + a * end * height + r) for r in ring]
+        verts += [to_b(c + a * end * height + r) for r in ring]
     for s in range(segments):
         s1 = (s + 1) % segments
-        side_f.append((s, s1, segments + s1, segments + s))
-    caps_v, caps_f = [], []
-    for end, flip in ((-0.5, True), (0.5, False)):
-        base = len(caps_v)
-        caps_v += [to_b(c + a * end * height)] + [to_b(c + a * end * height + r) for r in ring]
+        side.append((s, s1, segments + s1, segments + s))
+    caps_v, caps = [], []
+    for end, rim, flip in ((-0.5, 0, True), (0.5, segments, False)):
+        if watertight:
+            centre_index = len(verts) + len(caps_v)
+            caps_v.append(to_b(c + a * end * height))
+            ring_index = [rim + s for s in range(segments)]
+        else:
+            base = 2 * segments + len(caps_v)
+            caps_v += [to_b(c + a * end * height)] + [to_b(c + a * end * height + r) for r in ring]
+            centre_index = base
+            ring_index = [base + 1 + s for s in range(segments)]
         for s in range(segments):
-            s1 = (s + 1) % segments
-            tri = (base, base + 1 + s, base + 1 + s1)
-            caps_f.append(tri[::-1] if flip else tri)
-    return (side_v, side_f), (caps_v, caps_f)
+            tri = (centre_index, ring_index[s], ring_index[(s + 1) % segments])
+            caps.append(tri[::-1] if flip else tri)
+    return verts + caps_v, side, caps
 
 
 def box_mesh(centre, size, rotation=None):
@@ -241,33 +257,20 @@ def build_recipe(recipe, collection):
         emission = vec3(p.get("emission"), [0.0, 0.0, 0.0])
         density = p.get("density")
         smooth = t in ("sphere", "cylinder")
-        extra = None
+        flat = []
         if t == "sphere":
             v, f = sphere_mesh(p["center"], p["radius"])
         elif t == "cylinder":
-            (v, f), extra = cylinder_mesh(p["center"], p["axis"], p["radius"], p["height"])
+            v, f, flat = cylinder_mesh(p["center"], p["axis"], p["radius"], p["height"], density is not None)
         elif t == "box":
             v, f = box_mesh(p["center"], p["size"])
         elif t == "plane":
             v, f = plane_mesh(p["point"], p["normal"])
         else:
             raise SystemExit(f"{name}: primitive type `{t}` is not translated")
-        obj = mesh_object(name, v, f, smooth, collection)
-        if extra is not None:
-            # Flat caps as a second mesh joined into the first.
-            caps = mesh_object(name + "-caps", extra[0], extra[1], False, collection)
-            offset = len(obj.data.vertices)
-            me = obj.data
-            verts = [tuple(vv.co) for vv in me.vertices] + [tuple(vv.co) for vv in caps.data.vertices]
-            faces = [tuple(pp.vertices) for pp in me.polygons] + [tuple(i + offset for i in pp.vertices) for pp in caps.data.polygons]
-            smooth_flags = [True] * len(me.polygons) + [False] * len(caps.data.polygons)
-            bpy.data.objects.remove(caps)
-            me2 = bpy.data.meshes.new(name)
-            me2.from_pydata(verts, [], faces)
-            me2.update()
-            for pp, sm in zip(me2.polygons, smooth_flags):
-                pp.use_smooth = sm
-            obj.data = me2
+        obj = mesh_object(name, v, f + flat, smooth, collection)
+        for poly in obj.data.polygons[len(f) :]:
+            poly.use_smooth = False
         if density is not None:
             mat = medium_material(name, albedo, float(density))
         elif max(emission) > 0:
@@ -668,7 +671,7 @@ def main():
             print(f"wrote {path}", flush=True)
 
     if "training" in what:
-        sc.render.image_settings.color_depth = "32"
+        sc.render.image_settings.color_depth = "16"
         show_objects(False)
         set_bounces(bounces)
         tdir = os.path.join(args.out, "training")

@@ -226,11 +226,15 @@ pub fn shadow_figures(
 /// objects themselves (not from any render).
 #[derive(Debug, Clone)]
 pub struct Coverage {
-    /// The fraction of the pixel's rays that see the field (a surface or
-    /// medium of the recipe inside its bounds) first.
+    /// The fraction of the pixel's rays that meet the field (a surface or
+    /// medium of the recipe inside its bounds) before any object.
     pub field: Vec<f64>,
-    /// The fraction whose first hit is an object.
+    /// The fraction that hit an object before any opaque surface of the
+    /// field (seen directly or through a medium such as glass).
     pub object: Vec<f64>,
+    /// The fraction that cross a medium (glass, foliage) before the first
+    /// opaque surface.
+    pub medium: Vec<f64>,
     /// Where the ray through the pixel's centre first meets the field.
     pub point: Vec<Option<DVec3>>,
 }
@@ -245,10 +249,14 @@ pub fn coverage(
     let meshes = MeshScene::new(objects);
     let env = Environment::Black;
     let tracer = PathTracer::new(recipe, &env, 0).with_objects(&meshes);
+    let surface_hit = |ray: &inlay_passes::geometry::Ray| -> Option<f64> {
+        let (t0, t1) = ray_box(ray, &recipe.bounds)?;
+        tracer.nearest_surface(ray, t0.max(0.0), t1).map(|(t, _)| t)
+    };
     let field_hit = |ray: &inlay_passes::geometry::Ray| -> Option<f64> {
         let (t0, t1) = ray_box(ray, &recipe.bounds)?;
         let t0 = t0.max(0.0);
-        let surface = tracer.nearest_surface(ray, t0, t1).map(|(t, _)| t);
+        let surface = surface_hit(ray);
         let medium = recipe
             .primitives
             .iter()
@@ -262,12 +270,23 @@ pub fn coverage(
             (a, b) => a.or(b),
         }
     };
+    let through_medium = |ray: &inlay_passes::geometry::Ray, t_end: f64| -> bool {
+        ray_box(ray, &recipe.bounds).is_some_and(|(t0, t1)| {
+            let (t0, t1) = (t0.max(0.0), t1.min(t_end));
+            recipe
+                .primitives
+                .iter()
+                .filter(|p| p.medium_density.is_some())
+                .filter_map(|p| p.shape.interval(ray))
+                .any(|(a, b)| b > t0 && a < t1)
+        })
+    };
     let (w, h) = (camera.width, camera.height);
-    let per_pixel: Vec<(f64, f64, Option<DVec3>)> = (0..w * h)
+    let per_pixel: Vec<(f64, f64, f64, Option<DVec3>)> = (0..w * h)
         .into_par_iter()
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let (mut field, mut object) = (0.0, 0.0);
+            let (mut field, mut object, mut medium) = (0.0, 0.0, 0.0);
             for j in 0..side * side {
                 let jx = ((j % side) as f64 + 0.5) / side as f64;
                 let jy = ((j / side) as f64 + 0.5) / side as f64;
@@ -276,26 +295,33 @@ pub fn coverage(
                     .nearest_object(&ray, 0.0, f64::INFINITY)
                     .map_or(f64::INFINITY, |(t, _)| t);
                 let t_field = field_hit(&ray).unwrap_or(f64::INFINITY);
-                if t_object < t_field {
+                let t_surface = surface_hit(&ray).unwrap_or(f64::INFINITY);
+                if t_object < t_surface {
                     object += 1.0;
-                } else if t_field.is_finite() {
+                }
+                if t_field < t_object {
                     field += 1.0;
+                }
+                if through_medium(&ray, t_surface.min(t_object)) {
+                    medium += 1.0;
                 }
             }
             let centre = camera.ray(x as f64 + 0.5, y as f64 + 0.5);
             let point = field_hit(&centre).map(|t| centre.at(t));
             let n = (side * side) as f64;
-            (field / n, object / n, point)
+            (field / n, object / n, medium / n, point)
         })
         .collect();
     let mut c = Coverage {
         field: Vec::with_capacity(per_pixel.len()),
         object: Vec::with_capacity(per_pixel.len()),
+        medium: Vec::with_capacity(per_pixel.len()),
         point: Vec::with_capacity(per_pixel.len()),
     };
-    for (f, o, p) in per_pixel {
+    for (f, o, m, p) in per_pixel {
         c.field.push(f);
         c.object.push(o);
+        c.medium.push(m);
         c.point.push(p);
     }
     c

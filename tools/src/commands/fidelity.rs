@@ -90,6 +90,15 @@ fn cycles_pair(dir: &Path, stem: &str) -> anyhow::Result<Option<CyclesPair>> {
     }))
 }
 
+/// A figure over `pixels` pixels, or a dash when there are none.
+fn figure(value: f64, pixels: usize) -> String {
+    if pixels == 0 || !value.is_finite() {
+        "—".into()
+    } else {
+        format!("{value:.3}")
+    }
+}
+
 /// Runs `fidelity`.
 pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
@@ -258,14 +267,14 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
             Ok(())
         };
         let field_only = |i: usize| field_px(i) && object_cover[i] == 0.0;
+        let object_count = (0..object_cover.len()).filter(|&i| object_px(i)).count();
         if !args.no_reference {
-            row(
-                &mut md,
-                "reference, bare",
-                &reference(false),
-                &bare,
-                &field_px,
-            )?;
+            let traced = reference(false);
+            row(&mut md, "reference, bare", &traced, &bare, &field_px)?;
+            if bare_cover.medium.iter().any(|&m| m > 0.0) {
+                let clear = |i: usize| field_px(i) && bare_cover.medium[i] == 0.0;
+                row(&mut md, "reference, bare, no media", &traced, &bare, &clear)?;
+            }
             if let Some(with) = &with {
                 row(
                     &mut md,
@@ -313,10 +322,9 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         );
         writeln!(
             insertion,
-            "| {name} | {:.3} | {:.3} | {} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) |",
-            mean_ratio(&inserted, &with.mean, object_px),
-            median_relative_error(&inserted, &with.mean, object_px),
-            (0..object_cover.len()).filter(|&i| object_px(i)).count(),
+            "| {name} | {} | {} | {object_count} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) |",
+            figure(mean_ratio(&inserted, &with.mean, object_px), object_count),
+            figure(median_relative_error(&inserted, &with.mean, object_px), object_count),
             shadow.correlation,
             shadow.area_ratio,
             shadow.truth_area,
