@@ -58,7 +58,7 @@ pub struct FitResult {
     /// it includes the sampling noise of E_env).
     pub final_loss: f64,
     /// The same error without the noise: the mean of r_A·r_B (see
-    /// [`point_loss`]), whose expectation is the squared residual of the
+    /// `point_loss`), whose expectation is the squared residual of the
     /// exact E_env; noise can take it slightly below zero when the fit is
     /// near exact.
     pub exact_loss: f64,

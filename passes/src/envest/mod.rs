@@ -5,7 +5,7 @@
 //! its CPU mirror [`near_field_reference`], the ray set [`hemisphere`]),
 //! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
 //! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]);
-//! [`estimate`] runs them in order, [`file`] stores the lobes, and
+//! `estimate` runs them in order, `file` stores the lobes, and
 //! [`truth`] checks them against a recipe's lights.
 
 pub mod adam;

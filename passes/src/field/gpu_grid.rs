@@ -1,5 +1,5 @@
 //! A grid field uploaded to the GPU, laid out for `shaders/field/grid.wgsl`:
-//! a uniform block of bounds and sizes, the nodes as vec4<f32>, and the
+//! a uniform block of bounds and sizes, the nodes as `vec4<f32>`, and the
 //! occupancy cells as u32.
 
 use std::sync::Arc;

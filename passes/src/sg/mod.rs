@@ -1,6 +1,6 @@
 //! Spherical Gaussians G(v; p, λ, μ) = μ·exp(λ(v·p − 1)) (METHOD.md eq. 2):
 //! evaluation, product, sphere integral, inner product and the clamped-cosine
-//! lobe, in f64 and f32 ([`math`]), mirrored by `shaders/common/sg.wgsl`;
+//! lobe, in f64 and f32 (`math`), mirrored by `shaders/common/sg.wgsl`;
 //! importance sampling for the path tracer; adaptive quadrature over the
 //! sphere that the tests check every identity against.
 

@@ -5,7 +5,7 @@
 //!
 //! Layout (also the GPU's): per direction texel a row of 1 + k values (the
 //! mean, then the k basis values), and per node k coefficients, so
-//! S(node, texel) = row[0] + Σ_c coef[c]·row[1 + c]. Directions between
+//! `S(node, texel) = row[0] + Σ_c coef[c]·row[1 + c]`. Directions between
 //! texel centres are read bilinearly, across the octahedral map's folded
 //! edges.
 

@@ -103,7 +103,7 @@ impl SilhouetteView {
     }
 }
 
-/// A mesh's welded edges, ready for [`SilhouetteMesh::signed_angle`].
+/// A mesh's welded edges, ready for `SilhouetteMesh::signed_angle`.
 #[derive(Debug, Clone)]
 pub struct SilhouetteMesh {
     /// The edges.

@@ -12,21 +12,21 @@ use crate::field_source::bake_with_progress;
 /// Options of `bake-scene`.
 #[derive(Args, Debug)]
 pub struct BakeSceneArgs {
-    /// The scene file (TOML with a [recipe]).
+    /// The scene file (TOML with a `[recipe]`).
     pub scene: PathBuf,
-    /// Output field file (default: <scene name>.inlayfield in the current directory).
+    /// Output field file (default: `<scene name>.inlayfield` in the current directory).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Nodes along the longest axis (overrides [bake] resolution).
+    /// Nodes along the longest axis (overrides `[bake] resolution`).
     #[arg(long)]
     pub resolution: Option<u32>,
-    /// Path-traced samples per node (overrides [bake] samples).
+    /// Path-traced samples per node (overrides `[bake] samples`).
     #[arg(long)]
     pub samples: Option<u32>,
-    /// Indirect bounces after direct light; 0 = direct only (overrides [bake] bounces).
+    /// Indirect bounces after direct light; 0 = direct only (overrides `[bake] bounces`).
     #[arg(long)]
     pub bounces: Option<u32>,
-    /// Random seed (overrides [bake] seed).
+    /// Random seed (overrides `[bake] seed`).
     #[arg(long)]
     pub seed: Option<u64>,
 }

@@ -16,7 +16,7 @@ use crate::ssdf_source::bake_ssdf_with_progress;
 pub struct BakeSsdfArgs {
     /// The object (.gltf or .glb).
     pub object: PathBuf,
-    /// Output file (default: <object name>.inlayssdf in the current directory).
+    /// Output file (default: `<object name>.inlayssdf` in the current directory).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Grid nodes along each axis (the grid spans 3 × the bounding sphere's radius).

@@ -30,10 +30,10 @@ use crate::insertion_view::InsertionView;
 pub struct EstimateEnvArgs {
     /// The scene file.
     pub scene: PathBuf,
-    /// The environment file to write (default: <scene name>-env.toml).
+    /// The environment file to write (default: `<scene name>-env.toml`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Equirectangular picture of the estimate (.png tonemapped, .exr linear; default: <out>.png).
+    /// Equirectangular picture of the estimate (.png tonemapped, .exr linear; default: `<out>.png`).
     #[arg(long)]
     pub picture: Option<PathBuf>,
     /// Use this field file instead of the scene's field or recipe.

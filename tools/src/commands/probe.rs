@@ -54,7 +54,7 @@ pub struct PlacementArgs {
         required = true
     )]
     pub at: Vec<f64>,
-    /// Probe layout (overrides [lighting] probe_map; default octahedral).
+    /// Probe layout (overrides `[lighting] probe_map`; default octahedral).
     #[arg(long, value_enum)]
     pub map: Option<MapArg>,
 }
@@ -84,19 +84,19 @@ pub struct ProbeArgs {
     /// Probe position and layout.
     #[command(flatten)]
     pub placement: PlacementArgs,
-    /// Probe resolution n: n × n octahedral, 2n × n equirect (overrides [lighting] probe_resolution).
+    /// Probe resolution n: n × n octahedral, 2n × n equirect (overrides `[lighting] probe_resolution`).
     #[arg(long)]
     pub resolution: Option<u32>,
-    /// Rays per texel side s, s × s per texel (overrides [lighting] probe_supersampling).
+    /// Rays per texel side s, s × s per texel (overrides `[lighting] probe_supersampling`).
     #[arg(long)]
     pub supersampling: Option<u32>,
-    /// Number of SG lobes M (overrides [lighting] lobes).
+    /// Number of SG lobes M (overrides `[lighting] lobes`).
     #[arg(long)]
     pub lobes: Option<u32>,
-    /// Levenberg–Marquardt iterations from the cold start (overrides [lighting] cold_iterations).
+    /// Levenberg–Marquardt iterations from the cold start (overrides `[lighting] cold_iterations`).
     #[arg(long)]
     pub iterations: Option<u32>,
-    /// Initial damping (overrides [lighting] damping).
+    /// Initial damping (overrides `[lighting] damping`).
     #[arg(long)]
     pub damping: Option<f64>,
     /// Output image: probe | fit | |fit − probe|; .exr is linear, .png tonemapped. Repeatable.
@@ -114,7 +114,7 @@ pub struct ProbeArgs {
     /// Use this field file instead of the scene's field or recipe.
     #[arg(long)]
     pub field: Option<PathBuf>,
-    /// Segments across the field's diagonal (overrides [march] samples_per_ray).
+    /// Segments across the field's diagonal (overrides `[march] samples_per_ray`).
     #[arg(long)]
     pub samples_per_ray: Option<u32>,
     /// Bake the recipe again even if a cached field exists.

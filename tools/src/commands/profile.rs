@@ -68,7 +68,7 @@ pub struct ProfileArgs {
     /// Light the objects with this environment file (`inlay estimate-env`).
     #[arg(long)]
     pub environment: Option<PathBuf>,
-    /// Segments across the field's diagonal (overrides [march] samples_per_ray).
+    /// Segments across the field's diagonal (overrides `[march] samples_per_ray`).
     #[arg(long)]
     pub samples_per_ray: Option<u32>,
     /// Bake again even where a cached field or SSDF exists.

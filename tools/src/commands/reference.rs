@@ -16,7 +16,7 @@ use crate::field_source::progress_bar;
 /// Options of `reference`.
 #[derive(Args, Debug)]
 pub struct ReferenceArgs {
-    /// The scene file (TOML with a [recipe]).
+    /// The scene file (TOML with a `[recipe]`).
     pub scene: PathBuf,
     /// Camera index or name.
     #[arg(long, default_value = "0")]
@@ -33,7 +33,7 @@ pub struct ReferenceArgs {
     /// Samples per pixel.
     #[arg(long, default_value_t = 64)]
     pub samples: u32,
-    /// Indirect bounces (default: the scene's [bake] bounces, so it matches the field).
+    /// Indirect bounces (default: the scene's `[bake] bounces`, so it matches the field).
     #[arg(long)]
     pub bounces: Option<u32>,
     /// Random seed.

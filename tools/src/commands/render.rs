@@ -37,10 +37,10 @@ pub struct RenderArgs {
     /// Light the objects with this environment file (`inlay estimate-env`) instead of the scene's.
     #[arg(long)]
     pub environment: Option<PathBuf>,
-    /// Segments across the field's diagonal (overrides [march] samples_per_ray).
+    /// Segments across the field's diagonal (overrides `[march] samples_per_ray`).
     #[arg(long)]
     pub samples_per_ray: Option<u32>,
-    /// Early-termination transmittance (overrides [march] termination).
+    /// Early-termination transmittance (overrides `[march] termination`).
     #[arg(long)]
     pub termination: Option<f64>,
     /// Turn off empty-space skipping.
@@ -58,7 +58,7 @@ pub struct RenderArgs {
     /// Render the bare field, without the scene's objects.
     #[arg(long)]
     pub no_objects: bool,
-    /// SG lobes for GGX's normal distribution (overrides [shading] ndf_lobes).
+    /// SG lobes for GGX's normal distribution (overrides `[shading] ndf_lobes`).
     #[arg(long)]
     pub ndf_lobes: Option<u32>,
     /// Draw no shadows (neither self-shadows nor the cast shadow).
@@ -70,16 +70,16 @@ pub struct RenderArgs {
     /// Draw no shadow cast onto the field.
     #[arg(long)]
     pub no_cast_shadow: bool,
-    /// How the SSDF is read outside its grid: correct, clamp or infinity (overrides [shadows] outside).
+    /// How the SSDF is read outside its grid: correct, clamp or infinity (overrides `[shadows] outside`).
     #[arg(long, value_parser = parse_outside)]
     pub shadow_outside: Option<OutsideMode>,
-    /// SSDF grid nodes per axis for objects baked on first use (overrides [shadows] grid).
+    /// SSDF grid nodes per axis for objects baked on first use (overrides `[shadows] grid`).
     #[arg(long)]
     pub ssdf_grid: Option<u32>,
-    /// SSDF direction map side for objects baked on first use (overrides [shadows] directions).
+    /// SSDF direction map side for objects baked on first use (overrides `[shadows] directions`).
     #[arg(long)]
     pub ssdf_directions: Option<u32>,
-    /// SSDF PCA components for objects baked on first use (overrides [shadows] components).
+    /// SSDF PCA components for objects baked on first use (overrides `[shadows] components`).
     #[arg(long)]
     pub ssdf_components: Option<u32>,
 }

@@ -1,7 +1,7 @@
 //! CPU mirror of shaders/demo/pattern.wgsl: the sky and quad layout the demo's
 //! GPU test checks rendered pixels against.
 
-/// HDR sky at uv in [0,1]² (v down) and time `t` (seconds).
+/// HDR sky at uv in `[0,1]²` (v down) and time `t` (seconds).
 pub fn demo_sky(uv: [f32; 2], t: f32) -> [f32; 3] {
     let h = 1.0 - uv[1];
     let lo = [0.9, 0.6, 0.4];
