@@ -198,6 +198,14 @@ fn bad_scene_files_name_the_key() {
             "lighting.probe_resolution",
         ),
         (
+            format!("{base}\n[lighting]\nprobe_supersampling = 0\n"),
+            "lighting.probe_supersampling",
+        ),
+        (
+            format!("{base}\n[lighting]\nprobe_supersampling = 64\n"),
+            "lighting.probe_supersampling",
+        ),
+        (
             format!("{base}\n[lighting]\nprobe_map = \"cube\"\n"),
             "cube",
         ),
