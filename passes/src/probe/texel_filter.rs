@@ -18,8 +18,8 @@ pub const BLUR_PER_SUBSAMPLE: f64 = 0.6;
 /// The sharpness κ of the kernel that blurs the environment's lobes for a
 /// probe over `map` with `side` × `side` rays per texel: angular variance
 /// 1/κ = (0.6 h)², h the sub-sample spacing of the map's largest texel
-/// (√Ω_max / side). At 32² octahedral and side 6, κ ≈ 4500: a blur of
-/// about 0.85° against texels about 6° across.
+/// (√Ω_max / side). At 32² octahedral and side 6, κ ≈ 5000: a blur of
+/// about 0.8° against texels about 6° across.
 pub fn environment_kernel(map: &DirectionMap, side: u32) -> f64 {
     let spacing_sq = map.max_solid_angle() / (side as f64 * side as f64);
     1.0 / (BLUR_PER_SUBSAMPLE * BLUR_PER_SUBSAMPLE * spacing_sq)
