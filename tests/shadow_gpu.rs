@@ -299,18 +299,25 @@ fn cast_shadow_matches_mirror_and_brute_force() {
             let Some(n) = field_normal(&grid_field, p) else {
                 continue;
             };
-            let mirror = cast_shadow_factor(
-                &ssdf.field,
-                &placed,
-                &fh.table,
-                &lobes,
-                p,
-                n,
-                OutsideMode::Correct,
-            );
-            worst_mirror = worst_mirror.max((mirror - g).abs().max_element());
+            let radiance =
+                DVec3::from_array(std::array::from_fn(|c| colour.pixels[i][c] as f64 / o));
+            let factor = |radiance| {
+                cast_shadow_factor(
+                    &ssdf.field,
+                    &placed,
+                    &fh.table,
+                    &lobes,
+                    p,
+                    n,
+                    radiance,
+                    OutsideMode::Correct,
+                )
+            };
+            worst_mirror = worst_mirror.max((factor(radiance) - g).abs().max_element());
             checked += 1;
-            candidates.push((mirror, p, n));
+            // The brute force knows only the lobes: compared without the
+            // field's irradiance floor.
+            candidates.push((factor(DVec3::ZERO), p, n));
         }
     }
     // The 30 most shadowed pixels by the model, and 30 spread over the rest.

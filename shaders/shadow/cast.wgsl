@@ -1,8 +1,10 @@
 // The cast shadow (eq. 7-8) of one object on the field: per pixel, the
 // point at the field's expected depth D̂/Ô, the normal −∇σ there, and
-// ρ = Σ_k w_k q(S(p'_k), λ'_k) / Σ_k w_k over the lobes L_k ⊗ cosine
-// (w_k = μ'_k f_h(π/2, λ'_k)); each lobe's occlusion 1 − q is capped by the
-// share of its energy the bounding sphere can block, and lobes whose
+// ρ = 1 − Σ_k w_k (1 − q(S(p'_k), λ'_k)) / max(Σ_k w_k, π L) over the
+// lobes L_k ⊗ cosine (w_k = μ'_k f_h(π/2, λ'_k); L the field's colour at
+// the pixel, π L the irradiance floor of an albedo ≤ 1 surface); each
+// lobe's occlusion 1 − q is capped by the share of its energy the
+// bounding sphere can block, and lobes whose
 // direction clears the sphere by a quarter turn, or of which it can block
 // under CAST_SKIP_SHARE, skip the SSDF (q = 1). Mirrors
 // passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
@@ -75,9 +77,12 @@ fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
     return min(peak * solid / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
 }
 
-fn cast_factor(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+// `radiance`: the field's colour at x; π × it floors the irradiance the
+// blocked light is taken from (an albedo ≤ 1 surface showing L receives at
+// least πL; runtime.rs cast_shadow_factor).
+fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     let cosine = sg_clamped_cosine(n);
-    var num = vec3<f32>(0.0);
+    var blocked = vec3<f32>(0.0);
     var den = vec3<f32>(0.0);
     var prepared = false;
     let m = arrayLength(&light_lobes) / 4u;
@@ -95,14 +100,16 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
             }
             q = max(fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness), 1.0 - share);
         }
-        num += w * q;
+        blocked += w * (1.0 - q);
     }
-    return select(vec3<f32>(1.0), num / max(den, vec3<f32>(1e-30)), den > vec3<f32>(0.0));
+    let total = max(den, SG_PI * radiance);
+    return select(vec3<f32>(1.0), vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), total > vec3<f32>(0.0));
 }
 
 // ρ at pixel `pixel` (1 where the field is empty or flat).
 fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
-    let opacity = textureLoad(field_colour, pixel, 0).a;
+    let colour = textureLoad(field_colour, pixel, 0);
+    let opacity = colour.a;
     if opacity <= 1e-4 {
         return vec3<f32>(1.0);
     }
@@ -118,7 +125,7 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
     if length(g) <= 1e-12 {
         return vec3<f32>(1.0);
     }
-    return cast_factor(x, -normalize(g));
+    return cast_factor(x, -normalize(g), colour.rgb / opacity);
 }
 
 @compute @workgroup_size(8, 8, 1)
