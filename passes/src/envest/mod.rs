@@ -6,7 +6,8 @@
 //! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
 //! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]);
 //! `estimate` runs them in order, `file` stores the lobes, and
-//! [`truth`] checks them against a recipe's lights.
+//! [`truth`] checks them against a recipe's lights ([`recovery`]: did it
+//! find each hidden emitter).
 
 pub mod adam;
 pub mod env_model;
@@ -20,6 +21,7 @@ pub mod near_field;
 pub mod near_field_reference;
 pub mod prune;
 pub mod quality;
+pub mod recovery;
 pub mod share_prior;
 pub mod surface;
 pub mod truth;
@@ -39,6 +41,7 @@ pub use fit::{fit_environment, fit_from, params_of, FitData, FitResult};
 pub use knobs::EnvEstimateKnobs;
 pub use near_field::{NearField, NearFieldTracer};
 pub use quality::{view_quality, QualityScore, ViewImage};
+pub use recovery::{emitter_recovery, EmitterRecovery};
 pub use surface::{surface_points, SurfacePoint};
 pub use truth::{
     hidden_light_lobes, light_irradiance, lobes_irradiance, test_points, Lights, Validation,

@@ -7,11 +7,11 @@
 use glam::DVec3;
 
 use super::env_model::{env_term, EnvSampler};
-use crate::bake::PathTracer;
+use crate::bake::{emitter_cone, sample_emitter, PathTracer};
 use crate::geometry::Ray;
 use crate::lighting::environment_lobes;
 use crate::rng::Pcg32;
-use crate::scene::{Environment, Primitive, Recipe, Scene, Shape};
+use crate::scene::{Environment, Primitive, Recipe, Scene};
 use crate::sg::Sg64;
 use crate::sgfit::model::luminance;
 
@@ -54,36 +54,7 @@ pub fn test_points(scene: &Scene, recipe: &Recipe) -> Vec<(DVec3, DVec3)> {
         .collect()
 }
 
-/// The cone an emitting sphere subtends from a point outside it.
-struct SphereCone {
-    /// Unit direction to the sphere's centre.
-    axis: DVec3,
-    /// Cosine of the cone's half-angle.
-    cos_max: f64,
-    /// Its solid angle.
-    solid: f64,
-}
-
-/// The cone sphere primitive `p` subtends from `x` (none for other shapes
-/// or when `x` is inside the sphere).
-fn sphere_cone(p: &Primitive, x: DVec3) -> Option<SphereCone> {
-    let Shape::Sphere { centre, radius } = p.shape else {
-        return None;
-    };
-    let to = centre - x;
-    let d = to.length();
-    if d <= radius {
-        return None;
-    }
-    let cos_max = (1.0 - (radius / d).powi(2)).max(0.0).sqrt();
-    Some(SphereCone {
-        axis: to / d,
-        cos_max,
-        solid: 2.0 * std::f64::consts::PI * (1.0 - cos_max),
-    })
-}
-
-fn emitters(recipe: &Recipe, lights: Lights) -> Vec<&Primitive> {
+pub(crate) fn emitters(recipe: &Recipe, lights: Lights) -> Vec<&Primitive> {
     let (inside, outside) = recipe.lights();
     match lights {
         Lights::Hidden => outside,
@@ -116,31 +87,20 @@ pub fn light_irradiance(
     let mut rng = Pcg32::new(seed, 0x7207);
     let mut e = DVec3::ZERO;
     for p in emitters(recipe, lights) {
-        let Some(SphereCone {
-            axis,
-            cos_max,
-            solid,
-        }) = sphere_cone(p, x)
-        else {
-            continue;
-        };
-        let (t, b) = axis.any_orthonormal_pair();
         for _ in 0..samples {
-            let [u, v] = rng.next_2d();
-            let c = 1.0 - u * (1.0 - cos_max);
-            let s = (1.0 - c * c).max(0.0).sqrt();
-            let phi = 2.0 * std::f64::consts::PI * v;
-            let dir = s * phi.cos() * t + s * phi.sin() * b + c * axis;
-            let cos = dir.dot(n);
+            let Some(ls) = sample_emitter(p, x, rng.next_2d()) else {
+                continue;
+            };
+            let cos = ls.dir.dot(n);
             if cos <= 0.0 {
                 continue;
             }
-            let ray = Ray { origin: x, dir };
-            let Some((t_hit, _)) = p.shape.interval(&ray) else {
-                continue;
+            let ray = Ray {
+                origin: x,
+                dir: ls.dir,
             };
-            let vis = visibility(&ray, t_hit * (1.0 - 1e-9));
-            e += p.emission * vis * cos * solid / samples as f64;
+            let vis = visibility(&ray, ls.distance * (1.0 - 1e-9));
+            e += p.emission * vis * cos / (ls.pdf * samples as f64);
         }
     }
     if !env.is_black() {
@@ -210,7 +170,7 @@ pub fn hidden_light_lobes(
 ) -> Vec<Sg64> {
     let mut lobes = environment_lobes(env);
     for p in emitters(recipe, Lights::Hidden) {
-        let Some(SphereCone { axis, solid, .. }) = sphere_cone(p, at) else {
+        let Some((axis, solid)) = emitter_cone(p, at) else {
             continue;
         };
         let sharpness = 2.0 * std::f64::consts::PI / solid;

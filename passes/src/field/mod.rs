@@ -9,6 +9,7 @@ mod format;
 mod gpu_grid;
 mod grid;
 mod occupancy;
+mod perturb;
 
 pub use format::{
     field_bytes, load_field, parse_field, save_field, FieldFormatError, FIELD_MAGIC, FIELD_VERSION,
@@ -16,6 +17,7 @@ pub use format::{
 pub use gpu_grid::{GpuGridField, GridBindings};
 pub use grid::GridField;
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
+pub use perturb::{perturb, Perturbation};
 
 use glam::DVec3;
 

@@ -12,14 +12,16 @@ use std::sync::Arc;
 use clap::Args;
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage};
+use inlay_passes::envest::recovery::SEARCH_CONE_DEGREES;
 use inlay_passes::envest::{
-    estimate_environment, hidden_light_lobes, save_environment_file, EnvEstimateKnobs, Stage,
-    Validation,
+    emitter_recovery, estimate_environment, hidden_light_lobes, save_environment_file,
+    EnvEstimateKnobs, Stage, Validation,
 };
-use inlay_passes::field::GpuGridField;
+use inlay_passes::field::{perturb, GpuGridField, Perturbation};
 use inlay_passes::march::MarchPass;
 use inlay_passes::scene::{load_scene, ObjectEnvironment, Scene};
 use inlay_passes::sg::Sg64;
+use inlay_passes::sgfit::model::luminance;
 
 use crate::field_source::{progress_bar, scene_field};
 use crate::headless::run_headless;
@@ -42,6 +44,11 @@ pub struct EstimateEnvArgs {
     /// Bake the recipe again even if a cached field exists.
     #[arg(long)]
     pub no_cache: bool,
+    /// Estimate on the field made worse as a trainer's can be, e.g.
+    /// `noise=0.2,floaters=40,see-through=0.3,seed=1` (any subset; see
+    /// `field::Perturbation`): to test the estimate on fields it did not make.
+    #[arg(long, value_parser = Perturbation::parse)]
+    pub perturb: Option<Perturbation>,
     /// Views kept after the quality check (paper: 100).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().views)]
     pub views: u32,
@@ -130,7 +137,14 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         anyhow::bail!("--{}: {m}", k.replace('_', "-"));
     }
     let scene = load_scene(&args.scene)?;
-    let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    let mut field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    if let Some(p) = args.perturb.filter(|p| !p.is_none()) {
+        field = perturb(&field, &p);
+        println!(
+            "perturbed the field: noise {}, {} floaters, see-through {} (seed {})",
+            p.noise, p.floaters, p.see_through, p.seed
+        );
+    }
     let lib = crate::shaders::embedded_library();
     let bars = [
         progress_bar("views", knobs.views as u64),
@@ -215,6 +229,33 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             100.0 * v.hidden_error(),
             100.0 * v.fraction_of_lights()
         );
+        let at = scene
+            .objects
+            .first()
+            .map_or(0.5 * (recipe.bounds.min + recipe.bounds.max), |o| {
+                o.sphere().0
+            });
+        for r in emitter_recovery(recipe, lobes, at) {
+            match r.angle_degrees {
+                Some(a) => println!(
+                    "hidden light `{}` seen from {:.2} {:.2} {:.2}: the strongest lobe within {:.0}° is {a:.1}° off, carrying {:.2}× its light",
+                    r.name, at.x, at.y, at.z, SEARCH_CONE_DEGREES, r.energy_ratio
+                ),
+                None => println!(
+                    "hidden light `{}` seen from {:.2} {:.2} {:.2}: no lobe within {:.0}° (missed)",
+                    r.name, at.x, at.y, at.z, SEARCH_CONE_DEGREES
+                ),
+            }
+        }
+        if !scene.objects.is_empty() {
+            // The first test point is the first object's centre, facing up.
+            let (e, h, a) = (v.estimated[0], v.hidden[0], v.all[0]);
+            println!(
+                "at the object, facing up: estimate / hidden light = {:.3}, estimate / all lights = {:.3}",
+                luminance(e) / luminance(h).max(1e-300),
+                luminance(e) / luminance(a).max(1e-300)
+            );
+        }
         println!(
             "  point                 normal        hidden (rgb)                   estimated (rgb)"
         );
