@@ -35,7 +35,19 @@ fn load(path: &Path) -> Rgb {
     Rgb::of(&HdrImage::load_exr(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
 }
 
-const SCENES: [&str; 4] = ["dog", "cups", "books", "plants"];
+const SCENES: [&str; 5] = ["dog", "cups", "books", "plants", "room"];
+
+/// The reference's 8 × 8-block tolerance per scene: 1.5 % where Cycles'
+/// two seeds differ by 0.1–0.6 % on the blocks; ROOM's 3 cm bulb is a mesh
+/// light Cycles samples by its triangles, and its seeds differ by 2.4 %
+/// there at 512 samples, so its tolerance is 4 %.
+fn reference_tolerance(scene: &str) -> f64 {
+    if scene == "room" {
+        0.04
+    } else {
+        0.015
+    }
+}
 
 /// The path tracer's bare image against Cycles' (both with the scene's
 /// bounces) on 8 × 8 blocks of the pixels the field covers without a
@@ -90,7 +102,7 @@ fn the_reference_path_tracer_matches_cycles() {
             let blocks = |x: &Rgb| block_means(x, 8, mask);
             let err = relative_l1(&blocks(&ours), &blocks(&cycles), |_| true);
             eprintln!("{name} {cam}: reference against Cycles, 8×8 blocks: relative L1 {err:.4}");
-            assert!(err < 0.015, "{name} {cam}: {err}");
+            assert!(err < reference_tolerance(name), "{name} {cam}: {err}");
         }
     }
 }
@@ -99,7 +111,7 @@ fn the_reference_path_tracer_matches_cycles() {
 /// centre against Cycles' sensor there. The field is baked at 64 nodes and
 /// 8 samples (the scenes bake 128 and 32): its light is noisier and
 /// blurrier than the full bake's, so the tolerance is 8 % where the full
-/// bake measures within 2.6 % (docs/fidelity.md); measured +0.3 to +3.5 %.
+/// bake measures within 2.6 % (docs/fidelity.md); measured −0.1 to +4.7 %.
 #[test]
 fn the_probe_irradiance_matches_cycles_sensors() {
     let ctx = common::gpu();
@@ -109,9 +121,7 @@ fn the_probe_irradiance_matches_cycles_sensors() {
         let field = common::bake_small(&scene, 64, 8, scene.bake.bounces);
         let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
         let knobs = scene.lighting.probe;
-        let pass =
-            ProbePass::new(&ctx, &lib, knobs, scene.march, &scene.object_light_lobes()).unwrap();
-        let map = pass.map();
+        let map = knobs.direction_map();
         let rb = Readback::new(
             &ctx,
             ImageDesc {
@@ -136,6 +146,8 @@ fn the_probe_irradiance_matches_cycles_sensors() {
             };
             let cycles = 0.5 * (sensor("s1") + sensor("s2"));
             let (centre, _) = object.sphere();
+            let env = scene.object_light_lobes(centre);
+            let pass = ProbePass::new(&ctx, &lib, knobs, scene.march, &env).unwrap();
             common::run_frame(&ctx, |graph| {
                 let probe = pass.add(graph, &gpu_field, centre);
                 rb.add_to_graph(graph, probe);

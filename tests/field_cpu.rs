@@ -95,6 +95,40 @@ fn recipes_hidden_lights_are_distant() {
     }
 }
 
+/// ROOM is the scene for a *near* hidden light (a ceiling bulb 1.5 m
+/// above the field, as the issue asks): its distant form seen from the
+/// field's centre misses the bulb's own irradiance at the validation points
+/// by more than 15 %, so ROOM really tests what a distant model cannot do;
+/// seen from the object instead (how `Scene::object_light_lobes` lights
+/// it), the lobes deliver the bulb's irradiance at the object within 2 %.
+#[test]
+fn rooms_bulb_is_near() {
+    use inlay_passes::envest::{
+        hidden_light_lobes, light_irradiance, lobes_irradiance, Lights, Validation,
+    };
+    let s = scene("room.toml");
+    let recipe = s.recipe().unwrap();
+    let centre = 0.5 * (recipe.bounds.min + recipe.bounds.max);
+    let lobes = hidden_light_lobes(recipe, &s.environment, centre, 1e4);
+    let error = Validation::new(&s, recipe, &lobes, 512, 3).hidden_error();
+    assert!(error > 0.15, "ROOM's bulb looks distant: {error:.3}");
+    let at = s.objects[0].sphere().0;
+    let object_lobes = s.object_light_lobes(at);
+    let ours = lobes_irradiance(recipe, &object_lobes, at, DVec3::Y, 4096, 5, true);
+    let truth = light_irradiance(
+        recipe,
+        &s.environment,
+        Lights::Hidden,
+        at,
+        DVec3::Y,
+        4096,
+        5,
+        true,
+    );
+    let ratio = ours.y / truth.y;
+    assert!((ratio - 1.0).abs() < 0.02, "at the object: {ratio:.4}");
+}
+
 #[test]
 fn skipping_empty_space_changes_nothing_and_saves_samples() {
     let s = scene("cups.toml");

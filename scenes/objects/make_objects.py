@@ -8,6 +8,10 @@ licensed with the project). Run from anywhere: python3 make_objects.py
 - toy.glb            binary glTF: a node hierarchy (stem + rotated, scaled
                      cap as a child), two materials, the cap without normals
                      (the loader computes flat ones)
+- monkey.glb         a Suzanne-like head (muzzle, brow, eye sockets, ears) as
+                     one closed star-shaped mesh of 3968 triangles, smooth
+                     normals: concave where ears and muzzle meet the head, so
+                     it self-shadows as the paper's monkey does
 """
 import base64, json, math, os, struct, zlib
 
@@ -97,6 +101,72 @@ def cube():
     return pos, nrm, uv, idx
 
 
+def monkey_radius(n):
+    """The head's radius along unit direction n (+Y up, +Z the face)."""
+    def unit(v):
+        l = math.sqrt(sum(c * c for c in v))
+        return tuple(c / l for c in v)
+
+    def bump(height, sharpness, axis):
+        a = unit(axis)
+        return height * math.exp(sharpness * (sum(x * y for x, y in zip(n, a)) - 1.0))
+
+    r = 1.0
+    r += bump(0.38, 10.0, (0.0, -0.45, 1.0))      # muzzle
+    r += bump(0.12, 25.0, (0.0, 0.4, 1.0))        # brow
+    for side in (-1.0, 1.0):
+        r += bump(0.6, 45.0, (side, 0.2, -0.1))   # ears
+        r -= bump(0.14, 70.0, (side * 0.38, 0.22, 1.0))  # eye sockets
+    return r
+
+
+def monkey(rings=32, segments=64):
+    """A closed star-shaped mesh: the unit sphere's grid pushed out to
+    monkey_radius, with normals averaged over the faces around each point
+    (seam and pole copies share theirs)."""
+    pos, idx = [], []
+    for r in range(rings + 1):
+        theta = math.pi * r / rings
+        for s in range(segments + 1):
+            phi = 2 * math.pi * s / segments
+            n = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
+            k = monkey_radius(n)
+            pos.append(tuple(k * c for c in n))
+    for r in range(rings):
+        for s in range(segments):
+            a, b = r * (segments + 1) + s, (r + 1) * (segments + 1) + s
+            if r > 0:
+                idx += [a, b, a + 1]
+            if r < rings - 1:
+                idx += [a + 1, b, b + 1]
+    acc = {}
+    key = lambda p: tuple(round(c, 9) for c in p)
+    for t in range(0, len(idx), 3):
+        p0, p1, p2 = (pos[i] for i in idx[t:t + 3])
+        e1 = [p1[i] - p0[i] for i in range(3)]
+        e2 = [p2[i] - p0[i] for i in range(3)]
+        fn = (e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0])
+        for i in idx[t:t + 3]:
+            a = acc.setdefault(key(pos[i]), [0.0, 0.0, 0.0])
+            for c in range(3):
+                a[c] += fn[c]
+    nrm = []
+    for p in pos:
+        a = acc[key(p)]
+        l = math.sqrt(sum(c * c for c in a))
+        nrm.append(tuple(c / l for c in a))
+    return pos, nrm, None, idx
+
+
+def write_glb(path, doc, data):
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    data = bytes(data) + b"\x00" * (-len(data) % 4)
+    glb = struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(js) + 8 + len(data))
+    glb += struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(data), 0x004E4942) + data
+    open(path, "wb").write(glb)
+
+
 def gltf_doc(b, meshes, nodes, materials, extra=None):
     doc = {"asset": {"version": "2.0", "generator": "inlay scenes/objects/make_objects.py"},
            "scene": 0, "scenes": [{"nodes": [0]}], "nodes": nodes, "meshes": meshes,
@@ -155,4 +225,12 @@ data += b"\x00" * (-len(data) % 4)
 glb = struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(js) + 8 + len(data))
 glb += struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(data), 0x004E4942) + data
 open(os.path.join(HERE, "toy.glb"), "wb").write(glb)
-print("wrote metal-sphere.gltf, checker-cube.gltf (+ .bin, 2 PNGs), toy.glb")
+
+# Suzanne-like head, clay grey, binary glTF.
+b = Builder()
+prim = b.primitive(*monkey(), material=0)
+doc = gltf_doc(b, [{"name": "monkey", "primitives": [prim]}], [{"name": "monkey", "mesh": 0}],
+               [{"name": "clay", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.66, 0.6, 1.0],
+                                                          "metallicFactor": 0.0, "roughnessFactor": 0.7}}])
+write_glb(os.path.join(HERE, "monkey.glb"), doc, b.data)
+print("wrote metal-sphere.gltf, checker-cube.gltf (+ .bin, 2 PNGs), toy.glb, monkey.glb")

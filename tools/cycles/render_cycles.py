@@ -8,10 +8,13 @@ Run by hand (never in CI) with Debian's Blender 3.4:
 
 The scene file is translated, not re-modelled: every recipe primitive
 becomes a mesh (planes as large quads, spheres and cylinders finely
-tessellated and smooth-shaded, boxes as cubes), Lambertian surfaces a pure
-Diffuse BSDF (Cycles' Diffuse BSDF at roughness 0 is Lambert, so the
-recipe's surfaces are modelled exactly; the Principled BSDF's Burley
-diffuse would not be), emitters an Emission shader whose strength 1 makes
+tessellated and smooth-shaded, boxes as cubes turned by their `rotation`,
+quads as the thin box behind their face, whose one outward face alone
+carries the emission), Lambertian surfaces a pure Diffuse BSDF (Cycles'
+Diffuse BSDF at roughness 0 is Lambert, so the recipe's surfaces are
+modelled exactly; the Principled BSDF's Burley diffuse would not be; a
+`checker` albedo is built from math nodes on the world position, the
+same cubes as inlay's), emitters an Emission shader whose strength 1 makes
 the colour the emitted radiance (both sides; the recipe's spheres are
 closed, so only the outside is seen), media a Volume Scatter plus Volume
 Absorption pair whose extinction is the recipe's density and whose
@@ -87,6 +90,10 @@ def parse_args():
 C = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
 
 
+# inlay's scene::QUAD_THICKNESS: a quad is a thin box behind its face.
+QUAD_THICKNESS = 0.01
+
+
 def to_b(v):
     return Vector((v[0], -v[2], v[1]))
 
@@ -100,7 +107,44 @@ def vec3(v, default=None):
 # ---------------------------------------------------------------- materials
 
 
-def diffuse_material(name, albedo):
+def checker_colour(nt, albedo, checker):
+    """A colour socket with inlay's world-space 3D checkerboard: the cube
+    of edge `size` holding x has checker["albedo"] when
+    floor(x/s) + floor(y/s) + floor(z/s) is odd (inlay axes), else `albedo`."""
+    geo = nt.nodes.new("ShaderNodeNewGeometry")
+    sep = nt.nodes.new("ShaderNodeSeparateXYZ")
+    nt.links.new(geo.outputs["Position"], sep.inputs[0])
+    size = float(checker["size"])
+
+    def op(name, a, b=None):
+        n = nt.nodes.new("ShaderNodeMath")
+        n.operation = name
+        for i, v in enumerate((a, b)):
+            if v is None:
+                continue
+            if isinstance(v, (int, float)):
+                n.inputs[i].default_value = float(v)
+            else:
+                nt.links.new(v, n.inputs[i])
+        return n.outputs[0]
+
+    # inlay (x, y, z) = Blender (x, z, -y).
+    cells = [
+        op("FLOOR", op("DIVIDE", sep.outputs["X"], size)),
+        op("FLOOR", op("DIVIDE", sep.outputs["Z"], size)),
+        op("FLOOR", op("DIVIDE", op("MULTIPLY", sep.outputs["Y"], -1.0), size)),
+    ]
+    total = op("ADD", op("ADD", cells[0], cells[1]), cells[2])
+    odd = op("SUBTRACT", total, op("MULTIPLY", op("FLOOR", op("MULTIPLY", total, 0.5)), 2.0))
+    mix = nt.nodes.new("ShaderNodeMixRGB")
+    mix.blend_type = "MIX"
+    nt.links.new(odd, mix.inputs["Fac"])
+    mix.inputs["Color1"].default_value = (*albedo, 1.0)
+    mix.inputs["Color2"].default_value = (*[float(c) for c in checker["albedo"]], 1.0)
+    return mix.outputs["Color"]
+
+
+def diffuse_material(name, albedo, checker=None):
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nt = m.node_tree
@@ -108,6 +152,8 @@ def diffuse_material(name, albedo):
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     d = nt.nodes.new("ShaderNodeBsdfDiffuse")
     d.inputs["Color"].default_value = (*albedo, 1.0)
+    if checker is not None:
+        nt.links.new(checker_colour(nt, albedo, checker), d.inputs["Color"])
     d.inputs["Roughness"].default_value = 0.0
     nt.links.new(d.outputs["BSDF"], out.inputs["Surface"])
     return m
@@ -242,6 +288,39 @@ def box_mesh(centre, size, rotation=None):
     return corners, faces
 
 
+def rotation_matrix(degrees):
+    """World from box axes for a scene's `rotation` (degrees; extrinsic X,
+    then Y, then Z, in inlay axes), as inlay's rotation_matrix."""
+    rx, ry, rz = (math.radians(a) for a in degrees)
+
+    def rot(axis, a):
+        c, s = math.cos(a), math.sin(a)
+        i, j = [k for k in range(3) if k != axis]
+        R = np.eye(3)
+        R[i, i], R[i, j], R[j, i], R[j, j] = c, -s, s, c
+        return R
+
+    return rot(2, rz) @ rot(1, ry) @ rot(0, rx)
+
+
+def quad_frame(p):
+    """A quad's box (centre, size, rotation) and its face: the same frame
+    as inlay's (height along `up` made perpendicular to the normal)."""
+    n = np.array(p["normal"], float)
+    n /= np.linalg.norm(n)
+    if "up" in p:
+        up = np.array(p["up"], float)
+        up /= np.linalg.norm(up)
+    else:
+        up = np.array([0.0, 0.0, -1.0]) if abs(n[1]) > 0.9 else np.array([0.0, 1.0, 0.0])
+    v = up - n * up.dot(n)
+    v /= np.linalg.norm(v)
+    u = np.cross(v, n)
+    t = float(p.get("thickness", QUAD_THICKNESS))
+    centre = np.array(p["center"], float) - n * 0.5 * t
+    return centre, [float(p["width"]), float(p["height"]), t], np.stack([u, v, n], axis=1)
+
+
 def plane_mesh(point, normal, extent=1e3):
     n, u, w = basis(normal)
     p = np.array(point, float)
@@ -263,7 +342,10 @@ def build_recipe(recipe, collection):
         elif t == "cylinder":
             v, f, flat = cylinder_mesh(p["center"], p["axis"], p["radius"], p["height"], density is not None)
         elif t == "box":
-            v, f = box_mesh(p["center"], p["size"])
+            R = rotation_matrix(p["rotation"]) if "rotation" in p else None
+            v, f = box_mesh(p["center"], p["size"], R)
+        elif t == "quad":
+            v, f = box_mesh(*quad_frame(p))
         elif t == "plane":
             v, f = plane_mesh(p["point"], p["normal"])
         else:
@@ -273,10 +355,16 @@ def build_recipe(recipe, collection):
             poly.use_smooth = False
         if density is not None:
             mat = medium_material(name, albedo, float(density))
+        elif max(emission) > 0 and t == "quad":
+            # One-sided: only the box's +z face (the quad's face) emits;
+            # emission inside the closed box never leaves it.
+            obj.data.materials.append(diffuse_material(name + "-back", albedo))
+            mat = emitter_material(name, albedo, emission)
+            obj.data.polygons[1].material_index = 1
         elif max(emission) > 0:
             mat = emitter_material(name, albedo, emission)
         else:
-            mat = diffuse_material(name, albedo)
+            mat = diffuse_material(name, albedo, p.get("checker"))
         obj.data.materials.append(mat)
 
 
@@ -614,7 +702,9 @@ def main():
     placed = []
     for o in spec.get("objects", []):
         root, parts = import_object(scene_dir, o, objects)
-        placed.append((root.name, parts))
+        # The scene's name, not Blender's (which adds .001 when a glTF
+        # node of the same name came first).
+        placed.append((o.get("name", os.path.splitext(os.path.basename(o["file"]))[0]), parts))
     bounces = int(spec.get("bake", {}).get("bounces", 1))
     seeds = [int(s) for s in args.seeds.split(",") if s]
     what = set(args.what.split(","))

@@ -112,7 +112,6 @@ impl InsertionView {
         use_cache: bool,
     ) -> anyhow::Result<Self> {
         let shadows = scene.shadows.any() && !scene.objects.is_empty();
-        let env = scene.object_light_lobes();
         let mut objects = Vec::with_capacity(scene.objects.len());
         anyhow::ensure!(
             scene.objects.len() <= 64,
@@ -131,13 +130,15 @@ impl InsertionView {
             objects.push(ViewObject {
                 placed: Mutex::new(placed.clone()),
                 gpu: GpuObject::upload(ctx, &placed.mesh)?,
+                // Lit from where it is placed: a recipe's hidden lights are
+                // lobes seen from there (and stay so while it is dragged).
                 light: IncidentLight::new(
                     ctx,
                     lib,
                     scene.lighting.probe,
                     scene.lighting.fit,
                     *march.knobs(),
-                    &env,
+                    &scene.object_light_lobes(centre),
                 )?,
                 ssdf: if shadows {
                     let f = crate::ssdf_source::object_ssdf(

@@ -1,9 +1,10 @@
-//! A path tracer over a recipe's analytic primitives: Lambertian surfaces,
-//! homogeneous isotropic media, emitting spheres and the distant
-//! environment, plus (for ground truth with objects) placed triangle
-//! meshes with the simplified Disney BRDF. Next-event estimation samples
-//! every emitting sphere (cone sampling) and the environment (multiple
-//! importance sampling with the BSDF); `bounces` more scattering events add
+//! A path tracer over a recipe's analytic primitives: Lambertian surfaces
+//! (checkerboard albedo too), homogeneous isotropic media, emitting spheres
+//! and one-sided quads, and the distant environment, plus (for ground truth
+//! with objects) placed triangle meshes with the simplified Disney BRDF.
+//! Next-event estimation samples every emitter (spheres by cone, quads'
+//! faces by area) and the environment (multiple importance sampling with
+//! the BSDF); `bounces` more scattering events add
 //! indirect light (0: direct light only). Objects cast shadows on the field
 //! and receive its full radiance (direct plus `bounces`), but, as the
 //! method assumes, there is no interreflection through them: light that
@@ -14,11 +15,12 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
+use super::light_sample::sample_emitter;
 use super::mesh_bvh::{MeshScene, MeshSurface};
 use crate::brdf::{disney, SurfaceMaterial};
 use crate::geometry::Ray;
 use crate::rng::Pcg32;
-use crate::scene::{Environment, Recipe, Shape};
+use crate::scene::{Environment, Recipe};
 
 /// What a ray segment met first.
 #[derive(Debug, Clone, Copy)]
@@ -250,12 +252,13 @@ impl<'a> PathTracer<'a> {
     /// plus reflected light) with outward normal `n`.
     pub fn surface_radiance(&self, prim: usize, p: DVec3, n: DVec3, rng: &mut Pcg32) -> DVec3 {
         let pr = &self.recipe.primitives[prim];
-        let reflected = if pr.albedo.max_element() > 0.0 {
-            pr.albedo * self.scattered(p + n * self.epsilon, Scatter::Lambert(n), 0, rng)
+        let albedo = pr.albedo_at(p);
+        let reflected = if albedo.max_element() > 0.0 {
+            albedo * self.scattered(p + n * self.epsilon, Scatter::Lambert(n), 0, rng)
         } else {
             DVec3::ZERO
         };
-        pr.emission + reflected
+        pr.emission_at(n) + reflected
     }
 
     /// Radiance scattered towards any direction from point `p` inside medium
@@ -270,42 +273,24 @@ impl<'a> PathTracer<'a> {
     /// `bounces`).
     fn scattered(&self, p: DVec3, s: Scatter, depth: u32, rng: &mut Pcg32) -> DVec3 {
         let mut sum = DVec3::ZERO;
-        // Emitting spheres, sampled uniformly in the cone they subtend.
+        // Emitters: spheres in the cone they subtend, quads by area.
         for light in &self.recipe.primitives {
             if !light.is_emitter() {
                 continue;
             }
-            let Shape::Sphere { centre, radius } = light.shape else {
+            let Some(ls) = sample_emitter(light, p, rng.next_2d()) else {
                 continue;
             };
-            let to = centre - p;
-            let d2 = to.length_squared();
-            if d2 <= radius * radius * (1.0 + 1e-9) {
-                continue;
-            }
-            let axis = to / d2.sqrt();
-            let sin2 = radius * radius / d2;
-            // 1 − cos θmax without cancellation for far, small lights.
-            let one_minus_cos_max = sin2 / (1.0 + (1.0 - sin2).sqrt());
-            let [u0, u1] = rng.next_2d();
-            let one_minus_cos = u0 * one_minus_cos_max;
-            let cos = 1.0 - one_minus_cos;
-            let sin = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
-            let phi = 2.0 * PI * u1;
-            let (t, b) = axis.any_orthonormal_pair();
-            let w = sin * phi.cos() * t + sin * phi.sin() * b + cos * axis;
-            let fc = s.f_cos(w);
+            let fc = s.f_cos(ls.dir);
             if fc.max_element() <= 0.0 {
                 continue;
             }
-            let ray = Ray { origin: p, dir: w };
-            let hit = light
-                .shape
-                .interval(&ray)
-                .map_or(d2.sqrt(), |(t0, _)| t0.max(0.0));
-            let vis = self.visibility(&ray, hit * (1.0 - 1e-9));
-            let pdf = 1.0 / (2.0 * PI * one_minus_cos_max);
-            sum += light.emission * fc * vis / pdf;
+            let ray = Ray {
+                origin: p,
+                dir: ls.dir,
+            };
+            let vis = self.visibility(&ray, ls.distance * (1.0 - 1e-9));
+            sum += light.emission * fc * vis / ls.pdf;
         }
         // Environment by its own sampler (MIS against the BSDF).
         if !self.env.is_black() {
@@ -348,7 +333,7 @@ impl<'a> PathTracer<'a> {
                 let n = pr.shape.normal(q);
                 if n.dot(w) < 0.0 {
                     // Emission is counted by next-event estimation.
-                    sum += (self.surface_radiance(prim, q, n, rng) - pr.emission) * weight;
+                    sum += (self.surface_radiance(prim, q, n, rng) - pr.emission_at(n)) * weight;
                 }
             }
             Event::Medium { t, prim } if s.is_object() => {
@@ -359,10 +344,11 @@ impl<'a> PathTracer<'a> {
                 let q = ray.at(t);
                 let n = pr.shape.normal(q);
                 // Light sources are counted by next-event estimation only.
-                if pr.albedo.max_element() > 0.0 && n.dot(w) < 0.0 {
+                let albedo = pr.albedo_at(q);
+                if albedo.max_element() > 0.0 && n.dot(w) < 0.0 {
                     let inner =
                         self.scattered(q + n * self.epsilon, Scatter::Lambert(n), depth + 1, rng);
-                    sum += pr.albedo * inner * weight;
+                    sum += albedo * inner * weight;
                 }
             }
             Event::Medium { t, prim } if depth < self.bounces => {
@@ -381,7 +367,7 @@ mod tests {
     use super::*;
     use crate::bake::MeshScene;
     use crate::geometry::Aabb;
-    use crate::scene::{EquirectMap, Primitive};
+    use crate::scene::{EquirectMap, Primitive, Shape};
 
     fn floor(albedo: f64) -> Primitive {
         Primitive {
@@ -391,7 +377,9 @@ mod tests {
                 normal: DVec3::Y,
             },
             albedo: DVec3::splat(albedo),
+            checker: None,
             emission: DVec3::ZERO,
+            face: None,
             medium_density: None,
             in_field: None,
         }
@@ -406,7 +394,9 @@ mod tests {
                 radius: 0.05,
             },
             albedo: DVec3::ZERO,
+            checker: None,
             emission: DVec3::splat(1e4),
+            face: None,
             medium_density: None,
             in_field: Some(false),
         }
@@ -438,6 +428,50 @@ mod tests {
         assert!((l.y - 1.0).abs() < 0.01, "{l}");
     }
 
+    /// A one-sided square panel of radiance L facing down, at height h over
+    /// a floor point: the floor's irradiance is π L · 4 F, with F the
+    /// closed-form form factor from a point to a parallel rectangle seen
+    /// from its corner (A = B = a/h). Turned to face up, it lights nothing.
+    #[test]
+    fn floor_under_a_quad_light_matches_the_form_factor() {
+        let (a, h, radiance) = (0.4f64, 1.0f64, 3.0);
+        let panel = |normal: DVec3| {
+            let face = crate::scene::Face {
+                centre: DVec3::new(0.0, h, 0.0),
+                u: DVec3::X * a,
+                v: DVec3::Z * a * -normal.y,
+                normal,
+            };
+            let t = crate::scene::QUAD_THICKNESS;
+            Primitive {
+                name: "panel".into(),
+                shape: Shape::Box {
+                    centre: face.centre - normal * (0.5 * t),
+                    half: DVec3::new(a, a, 0.5 * t),
+                    rotation: glam::DMat3::from_cols(face.u / a, face.v / a, normal),
+                },
+                albedo: DVec3::ZERO,
+                checker: None,
+                emission: DVec3::splat(radiance),
+                face: Some(face),
+                medium_density: None,
+                in_field: Some(false),
+            }
+        };
+        let env = Environment::Black;
+        let r = recipe(vec![floor(0.8), panel(DVec3::NEG_Y)]);
+        let t = PathTracer::new(&r, &env, 0);
+        let l = mean_radiance(&t, DVec3::ZERO, DVec3::Y, 20_000);
+        let x = a / h;
+        let s = (1.0 + x * x).sqrt();
+        let corner = (2.0 * x / s * (x / s).atan()) / (2.0 * PI);
+        let expected = 0.8 / PI * PI * radiance * 4.0 * corner;
+        assert!((l.y / expected - 1.0).abs() < 0.01, "{} vs {expected}", l.y);
+        let up = recipe(vec![floor(0.8), panel(DVec3::Y)]);
+        let t = PathTracer::new(&up, &env, 0);
+        assert_eq!(mean_radiance(&t, DVec3::ZERO, DVec3::Y, 1000), DVec3::ZERO);
+    }
+
     /// Under a small sphere light straight above: L_o = a/π · L_e · π (r/D)².
     #[test]
     fn floor_under_a_sphere_light_matches_the_solid_angle_formula() {
@@ -455,9 +489,12 @@ mod tests {
             shape: Shape::Box {
                 centre: DVec3::new(0.0, 1.0, 0.0),
                 half: DVec3::splat(0.2),
+                rotation: glam::DMat3::IDENTITY,
             },
             albedo: DVec3::ZERO,
+            checker: None,
             emission: DVec3::ZERO,
+            face: None,
             medium_density: None,
             in_field: None,
         });
@@ -470,9 +507,12 @@ mod tests {
             shape: Shape::Box {
                 centre: DVec3::new(0.0, 1.0, 0.0),
                 half: DVec3::new(1.0, 0.25, 1.0),
+                rotation: glam::DMat3::IDENTITY,
             },
             albedo: DVec3::ZERO,
+            checker: None,
             emission: DVec3::ZERO,
+            face: None,
             medium_density: Some(2.0),
             in_field: None,
         });
@@ -550,9 +590,12 @@ mod tests {
             shape: Shape::Box {
                 centre: DVec3::new(0.0, 1.0, -0.6),
                 half: DVec3::new(2.0, 1.0, 0.1),
+                rotation: glam::DMat3::IDENTITY,
             },
             albedo: DVec3::splat(0.9),
+            checker: None,
             emission: DVec3::ZERO,
+            face: None,
             medium_density: None,
             in_field: None,
         });

@@ -2,11 +2,19 @@
 //! field file — plus the distant environment light, cameras and quality
 //! knobs. `scenes/README.md` documents the format with an example.
 
+mod checker;
 mod environment;
+mod face;
+mod primitive;
 mod shape;
 pub(crate) mod spec;
 
+pub use checker::Checker;
 pub use environment::{Environment, EquirectMap};
+pub use face::Face;
+#[cfg(test)]
+pub(crate) use primitive::parse as parse_primitive;
+pub use primitive::QUAD_THICKNESS;
 pub use shape::Shape;
 
 use std::path::{Path, PathBuf};
@@ -19,7 +27,7 @@ use crate::camera::CameraSpec;
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
 use crate::object::{load_gltf, ObjectMesh, PlacedObject, Pose};
-use spec::{PrimitiveSpec, SceneSpec};
+use spec::SceneSpec;
 
 /// Why a scene file could not be used: the file, the key and the problem.
 #[derive(Debug, thiserror::Error)]
@@ -60,8 +68,14 @@ pub struct Primitive {
     pub shape: Shape,
     /// Lambertian albedo (surfaces) or single-scattering albedo (media).
     pub albedo: DVec3,
-    /// Emitted radiance (spheres only).
+    /// A checkerboard alternating [`Self::albedo`] with a second colour
+    /// (opaque surfaces only).
+    pub checker: Option<Checker>,
+    /// Emitted radiance (spheres: from all of the surface; quads: from
+    /// [`Self::face`] only).
     pub emission: DVec3,
+    /// For quads: the one face that emits.
+    pub face: Option<Face>,
     /// `Some(σ)`: a homogeneous, semi-transparent medium of density σ
     /// scattering isotropically; `None`: an opaque surface.
     pub medium_density: Option<f64>,
@@ -73,6 +87,21 @@ impl Primitive {
     /// Whether it emits light.
     pub fn is_emitter(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+
+    /// The albedo at surface point `x`.
+    pub fn albedo_at(&self, x: DVec3) -> DVec3 {
+        self.checker
+            .map_or(self.albedo, |c| c.albedo_at(self.albedo, x))
+    }
+
+    /// The radiance emitted from a surface point with outward normal `n`
+    /// (a quad emits only from its face).
+    pub fn emission_at(&self, n: DVec3) -> DVec3 {
+        match self.face {
+            Some(f) if n.dot(f.normal) < 0.5 => DVec3::ZERO,
+            _ => self.emission,
+        }
     }
 }
 
@@ -252,21 +281,22 @@ impl Scene {
         })
     }
 
-    /// The distant light L_env the objects are lit with, as SG lobes: the
-    /// environment file's if the scene names one; otherwise, for a recipe,
-    /// the whole light from outside the field — the declared environment
-    /// and every emitter outside the bounds as a lobe seen from the
-    /// field's centre ([`crate::envest::hidden_light_lobes`]), since an
-    /// object in the recipe's world is lit by those lights as the field is;
-    /// for a field file, the declared environment
+    /// The distant light L_env an object at `at` is lit with, as SG lobes:
+    /// the environment file's if the scene names one; otherwise, for a
+    /// recipe, the whole light from outside the field — the declared
+    /// environment and every emitter outside the bounds as a lobe seen
+    /// from `at` ([`crate::envest::hidden_light_lobes`]), since an object in
+    /// the recipe's world is lit by those lights as the field is (seen from
+    /// the field's centre instead, ROOM's bulb 2.7 m above its monkey lit
+    /// it 1.33× too brightly); for a field file, the declared environment
     /// ([`crate::lighting::environment_lobes`]).
-    pub fn object_light_lobes(&self) -> Vec<crate::sg::Sg64> {
+    pub fn object_light_lobes(&self, at: DVec3) -> Vec<crate::sg::Sg64> {
         match (&self.object_environment, self.recipe()) {
             (Some(o), _) => o.lobes.clone(),
             (None, Some(r)) => crate::envest::hidden_light_lobes(
                 r,
                 &self.environment,
-                0.5 * (r.bounds.min + r.bounds.max),
+                at,
                 crate::sgfit::model::MAX_SHARPNESS,
             ),
             (None, None) => crate::lighting::environment_lobes(&self.environment),
@@ -498,7 +528,7 @@ fn recipe(
     let mut primitives = Vec::new();
     for (i, p) in spec.primitives.into_iter().enumerate() {
         let f = format!("recipe.primitives[{i}] ({})", p.name);
-        let prim = primitive(p, &bounds).map_err(|m| e(&f, m))?;
+        let prim = primitive::parse(p, &bounds).map_err(|m| e(&f, m))?;
         if primitives.iter().any(|q: &Primitive| q.name == prim.name) {
             return Err(e(&f, "duplicate name".into()));
         }
@@ -511,141 +541,4 @@ fn recipe(
         ));
     }
     Ok(Recipe { bounds, primitives })
-}
-
-fn positive(name: &str, v: Option<f64>) -> Result<f64, String> {
-    match v {
-        None => Err(format!("missing `{name}`")),
-        Some(x) if x.is_finite() && x > 0.0 => Ok(x),
-        Some(x) => Err(format!("`{name}` = {x} must be finite and > 0")),
-    }
-}
-
-fn vector(name: &str, v: Option<DVec3>) -> Result<DVec3, String> {
-    match v {
-        None => Err(format!("missing `{name}`")),
-        Some(x) if x.is_finite() => Ok(x),
-        Some(x) => Err(format!("`{name}` = {x} must be finite")),
-    }
-}
-
-fn direction(name: &str, v: Option<DVec3>) -> Result<DVec3, String> {
-    vector(name, v)?
-        .try_normalize()
-        .ok_or_else(|| format!("`{name}` must be non-zero"))
-}
-
-fn primitive(p: PrimitiveSpec, bounds: &Aabb) -> Result<Primitive, String> {
-    let given = |name: &str| match name {
-        "point" => p.point.is_some(),
-        "normal" => p.normal.is_some(),
-        "center" => p.center.is_some(),
-        "radius" => p.radius.is_some(),
-        "size" => p.size.is_some(),
-        "axis" => p.axis.is_some(),
-        "height" => p.height.is_some(),
-        _ => false,
-    };
-    let keys: &[&str] = match p.kind.as_str() {
-        "plane" => &["point", "normal"],
-        "sphere" => &["center", "radius"],
-        "box" => &["center", "size"],
-        "cylinder" => &["center", "axis", "radius", "height"],
-        other => {
-            return Err(format!(
-                "unknown type `{other}` (plane, sphere, box, cylinder)"
-            ))
-        }
-    };
-    for k in [
-        "point", "normal", "center", "radius", "size", "axis", "height",
-    ] {
-        if given(k) && !keys.contains(&k) {
-            return Err(format!("`{k}` does not apply to a {}", p.kind));
-        }
-    }
-    let shape = match p.kind.as_str() {
-        "plane" => Shape::Plane {
-            point: vector("point", p.point)?,
-            normal: direction("normal", p.normal)?,
-        },
-        "sphere" => Shape::Sphere {
-            centre: vector("center", p.center)?,
-            radius: positive("radius", p.radius)?,
-        },
-        "box" => {
-            let size = vector("size", p.size)?;
-            if size.min_element() <= 0.0 {
-                return Err(format!("`size` = {size} must be > 0 on every axis"));
-            }
-            Shape::Box {
-                centre: vector("center", p.center)?,
-                half: size * 0.5,
-            }
-        }
-        _ => Shape::Cylinder {
-            centre: vector("center", p.center)?,
-            axis: direction("axis", p.axis)?,
-            radius: positive("radius", p.radius)?,
-            half_height: positive("height", p.height)? * 0.5,
-        },
-    };
-    let albedo = p.albedo.unwrap_or(DVec3::splat(0.5));
-    if !(albedo.is_finite() && albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
-        return Err(format!(
-            "`albedo` = {albedo} must lie in [0, 1] per channel"
-        ));
-    }
-    let emission = p.emission.unwrap_or(DVec3::ZERO);
-    if !(emission.is_finite() && emission.min_element() >= 0.0) {
-        return Err(format!("`emission` = {emission} must be finite and ≥ 0"));
-    }
-    let medium_density = match p.density {
-        None => None,
-        Some(d) => {
-            if !shape.is_bounded() {
-                return Err("a plane cannot be a medium (`density`)".into());
-            }
-            if emission.max_element() > 0.0 {
-                return Err("a medium (`density`) cannot emit".into());
-            }
-            Some(positive("density", Some(d))?)
-        }
-    };
-    let prim = Primitive {
-        name: p.name,
-        shape,
-        albedo,
-        emission,
-        medium_density,
-        in_field: p.in_field,
-    };
-    if prim.is_emitter() {
-        if !matches!(prim.shape, Shape::Sphere { .. }) {
-            return Err(
-                "only spheres may emit (the path tracer samples emitters as spheres)".into(),
-            );
-        }
-        let b = prim.shape.bounds().expect("spheres are bounded");
-        match prim.in_field {
-            None => return Err(
-                "an emitter must say `in_field = true` or `false` (whether the field contains it)"
-                    .into(),
-            ),
-            Some(true) if !bounds.contains_box(&b) => {
-                return Err(
-                    "declared `in_field = true` but it is not inside the recipe's bounds".into(),
-                )
-            }
-            Some(false) if bounds.overlaps(&b) => {
-                return Err(
-                    "declared `in_field = false` but it overlaps the recipe's bounds".into(),
-                )
-            }
-            _ => {}
-        }
-    } else if prim.in_field.is_some() {
-        return Err("`in_field` applies to emitters only".into());
-    }
-    Ok(prim)
 }

@@ -1,7 +1,7 @@
 //! The analytic shapes a recipe is made of: signed distance (for the baked
 //! density), ray intervals (for the path tracer) and outward normals.
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 use crate::geometry::{Aabb, Ray};
 
@@ -23,12 +23,15 @@ pub enum Shape {
         /// Radius.
         radius: f64,
     },
-    /// An axis-aligned box.
+    /// A box, turned by `rotation` about its centre.
     Box {
         /// Centre.
         centre: DVec3,
-        /// Half the edge lengths.
+        /// Half the edge lengths, along the box's own axes.
         half: DVec3,
+        /// World from box axes (orthonormal, determinant +1; identity for
+        /// an axis-aligned box).
+        rotation: DMat3,
     },
     /// A capped cylinder.
     Cylinder {
@@ -49,8 +52,12 @@ impl Shape {
         match *self {
             Shape::Plane { point, normal } => (x - point).dot(normal),
             Shape::Sphere { centre, radius } => (x - centre).length() - radius,
-            Shape::Box { centre, half } => {
-                let q = (x - centre).abs() - half;
+            Shape::Box {
+                centre,
+                half,
+                rotation,
+            } => {
+                let q = (rotation.transpose() * (x - centre)).abs() - half;
                 q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
             }
             Shape::Cylinder {
@@ -84,16 +91,21 @@ impl Shape {
         match *self {
             Shape::Plane { normal, .. } => normal,
             Shape::Sphere { centre, .. } => (p - centre).normalize_or(DVec3::Y),
-            Shape::Box { centre, half } => {
-                let q = (p - centre) / half;
+            Shape::Box {
+                centre,
+                half,
+                rotation,
+            } => {
+                let q = rotation.transpose() * (p - centre) / half;
                 let a = q.abs();
-                if a.x >= a.y && a.x >= a.z {
-                    DVec3::X * q.x.signum()
-                } else if a.y >= a.z {
-                    DVec3::Y * q.y.signum()
-                } else {
-                    DVec3::Z * q.z.signum()
-                }
+                rotation
+                    * if a.x >= a.y && a.x >= a.z {
+                        DVec3::X * q.x.signum()
+                    } else if a.y >= a.z {
+                        DVec3::Y * q.y.signum()
+                    } else {
+                        DVec3::Z * q.z.signum()
+                    }
             }
             Shape::Cylinder {
                 centre,
@@ -145,7 +157,19 @@ impl Shape {
                 let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
                 Some((t0.min(t1), t0.max(t1)))
             }
-            Shape::Box { centre, half } => slab(ray.origin - centre, ray.dir, -half, half),
+            Shape::Box {
+                centre,
+                half,
+                rotation,
+            } => {
+                let to_box = rotation.transpose();
+                slab(
+                    to_box * (ray.origin - centre),
+                    to_box * ray.dir,
+                    -half,
+                    half,
+                )
+            }
             Shape::Cylinder {
                 centre,
                 axis,
@@ -193,7 +217,20 @@ impl Shape {
         match *self {
             Shape::Plane { .. } => None,
             Shape::Sphere { centre, radius } => Some(Aabb::new(centre - radius, centre + radius)),
-            Shape::Box { centre, half } => Some(Aabb::new(centre - half, centre + half)),
+            Shape::Box {
+                centre,
+                half,
+                rotation,
+            } => {
+                // Per world axis, Σ_j |R_ij| h_j.
+                let abs = DMat3::from_cols(
+                    rotation.x_axis.abs(),
+                    rotation.y_axis.abs(),
+                    rotation.z_axis.abs(),
+                );
+                let e = abs * half;
+                Some(Aabb::new(centre - e, centre + e))
+            }
             Shape::Cylinder {
                 centre,
                 axis,
@@ -259,6 +296,17 @@ mod tests {
             Shape::Box {
                 centre: DVec3::new(-0.1, 0.0, 0.2),
                 half: DVec3::new(0.5, 0.3, 0.7),
+                rotation: DMat3::IDENTITY,
+            },
+            Shape::Box {
+                centre: DVec3::new(0.1, -0.1, 0.0),
+                half: DVec3::new(0.6, 0.2, 0.4),
+                rotation: DMat3::from_quat(glam::DQuat::from_euler(
+                    glam::EulerRot::ZYX,
+                    0.4,
+                    -0.7,
+                    1.1,
+                )),
             },
             Shape::Cylinder {
                 centre: DVec3::new(0.0, 0.1, 0.0),
@@ -312,16 +360,48 @@ mod tests {
         }
     }
 
+    /// The bounds of every bounded shape (cylinder, turned box included)
+    /// contain every point inside it.
     #[test]
-    fn cylinder_bounds_contain_the_cylinder() {
-        let s = &shapes()[3];
-        let b = s.bounds().unwrap();
-        let mut rng = crate::rng::Pcg32::new(2, 1);
-        for _ in 0..5000 {
-            let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 3.0 - 1.5;
-            if s.sdf(p) < 0.0 {
-                assert!(b.contains(p));
+    fn bounds_contain_the_shape() {
+        for s in shapes().iter().filter(|s| s.is_bounded()) {
+            let b = s.bounds().unwrap();
+            let mut rng = crate::rng::Pcg32::new(2, 1);
+            let mut inside = 0;
+            for _ in 0..20_000 {
+                let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 3.0 - 1.5;
+                if s.sdf(p) < 0.0 {
+                    inside += 1;
+                    assert!(b.contains(p), "{s:?} at {p}");
+                }
             }
+            assert!(inside > 100, "{s:?}");
+        }
+    }
+
+    /// A turned box is the axis-aligned box seen in its own frame: the
+    /// same signed distance at corresponding points.
+    #[test]
+    fn turned_box_is_the_box_in_its_frame() {
+        let Shape::Box {
+            centre,
+            half,
+            rotation,
+        } = shapes()[3].clone()
+        else {
+            panic!()
+        };
+        let aligned = Shape::Box {
+            centre: DVec3::ZERO,
+            half,
+            rotation: DMat3::IDENTITY,
+        };
+        let turned = &shapes()[3];
+        let mut rng = crate::rng::Pcg32::new(3, 1);
+        for _ in 0..500 {
+            let local = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - 1.0;
+            let world = centre + rotation * local;
+            assert!((turned.sdf(world) - aligned.sdf(local)).abs() < 1e-12);
         }
     }
 }

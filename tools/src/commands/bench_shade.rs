@@ -51,7 +51,7 @@ pub fn run(args: &BenchShadeArgs) -> anyhow::Result<()> {
         ..scene.lighting.probe
     };
     let map = probe_knobs.direction_map();
-    let env = scene.object_light_lobes();
+    let env = scene.object_light_lobes(at);
     let texels = trace_probe(&field, at, &probe_knobs, &scene.march, &env);
     let samples = ProbeSamples::new(&map, &texels);
     let classes = [

@@ -125,7 +125,6 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     let library = crate::shaders::library()?;
     // Probe irradiance per object.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
-    let env = scene.object_light_lobes();
     writeln!(md, "Irradiance at each object's centre (luminance; Cycles: a 1 mm white sensor per axis, two seeds):\n")?;
     writeln!(
         md,
@@ -140,6 +139,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         let (centre, _) = object.sphere();
+        let env = scene.object_light_lobes(centre);
         let traced = crate::commands::probe::trace_and_fit(
             ctx,
             &gpu_field,
@@ -314,12 +314,26 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         row(&mut md, "insertion", &inserted, &with, &|i| {
             field_px(i) || object_px(i)
         })?;
-        let shadow = shadow_figures(
-            &shadow_ratio(&inserted, &field_image),
-            &shadow_ratio(&with.mean, &bare.mean),
-            field_only,
-            far_px,
+        let (ours, theirs) = (
+            shadow_ratio(&inserted, &field_image),
+            shadow_ratio(&with.mean, &bare.mean),
         );
+        if let Some(dir) = &args.images {
+            // Cycles' ratio | inlay's | difference, over the field's own
+            // pixels (elsewhere 1): where each darkens the field.
+            let ratio_image = |r: &[f64]| Rgb {
+                width: w,
+                height: h,
+                pixels: (0..r.len())
+                    .map(|i| DVec3::splat(if field_only(i) { r[i] } else { 1.0 }))
+                    .collect(),
+            };
+            let file = dir.join(format!("{}-{name}-shadow-ratio.png", scene.name));
+            side_by_side(&ratio_image(&theirs), &ratio_image(&ours))
+                .to_hdr()
+                .save(&file, 1.0)?;
+        }
+        let shadow = shadow_figures(&ours, &theirs, field_only, far_px);
         writeln!(
             insertion,
             "| {name} | {} | {} | {object_count} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) |",
