@@ -628,7 +628,9 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
     ] {
         assert!(text.contains(want), "no `{want}` in:\n{text}");
     }
-    let lobes = inlay_passes::envest::load_environment_file(&env).unwrap();
+    let lobes = inlay_passes::envest::load_environment_file(&env)
+        .unwrap()
+        .lobes;
     assert_eq!(lobes.len(), 4);
     let img = HdrImage::load_exr(&picture).unwrap();
     assert_eq!((img.width, img.height), (256, 128));
@@ -641,7 +643,9 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
     let o = inlay(&args2[..args2.len() - 6], &dir);
     assert!(o.status.success(), "{}", common::output_text(&o));
     assert_eq!(
-        inlay_passes::envest::load_environment_file(&again).unwrap(),
+        inlay_passes::envest::load_environment_file(&again)
+            .unwrap()
+            .lobes,
         lobes
     );
     // render lights the objects with it; a bad file is named.

@@ -12,13 +12,26 @@
 //! direction = [0.5, 0.8, 0.35]   # finite, non-zero (normalised on load)
 //! sharpness = 120.0              # in (0, 1e4]
 //! amplitude = [9.0, 8.4, 7.4]    # RGB radiance on the axis, finite, ≥ 0
+//! [[lights]]                     # optional: point lights near the field
+//! position = [0.1, 2.9, 0.3]     # finite (scene units)
+//! intensity = [22.0, 20.0, 17.0] # RGB radiant intensity, finite, ≥ 0
 //! ```
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use super::near_lights::PointLight;
 use crate::sg::Sg64;
+
+/// What an environment file holds: distant lobes and near point lights.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct EstimatedLight {
+    /// The distant lobes.
+    pub lobes: Vec<Sg64>,
+    /// The point lights near the field.
+    pub lights: Vec<PointLight>,
+}
 
 /// The version this reader understands.
 pub const ENV_FILE_VERSION: u32 = 1;
@@ -51,6 +64,8 @@ struct EnvFileSpec {
     estimate: Option<toml::Table>,
     #[serde(default)]
     lobes: Vec<Sg64>,
+    #[serde(default)]
+    lights: Vec<PointLight>,
 }
 
 /// Why one lobe cannot be used, if it cannot (shared with scene files).
@@ -68,7 +83,7 @@ pub fn lobe_problem(l: &Sg64) -> Option<String> {
 }
 
 /// Reads an environment file's lobes (directions normalised).
-pub fn load_environment_file(path: &Path) -> Result<Vec<Sg64>, EnvFileError> {
+pub fn load_environment_file(path: &Path) -> Result<EstimatedLight, EnvFileError> {
     let text = std::fs::read_to_string(path).map_err(|x| EnvFileError {
         path: path.to_owned(),
         field: "file".into(),
@@ -78,7 +93,7 @@ pub fn load_environment_file(path: &Path) -> Result<Vec<Sg64>, EnvFileError> {
 }
 
 /// Parses the text of an environment file read from `path`.
-pub fn parse_environment_file(path: &Path, text: &str) -> Result<Vec<Sg64>, EnvFileError> {
+pub fn parse_environment_file(path: &Path, text: &str) -> Result<EstimatedLight, EnvFileError> {
     let e = |field: &str, message: String| EnvFileError {
         path: path.to_owned(),
         field: field.to_owned(),
@@ -113,13 +128,28 @@ pub fn parse_environment_file(path: &Path, text: &str) -> Result<Vec<Sg64>, EnvF
         }
         l.direction = l.direction.normalize();
     }
-    Ok(lobes)
+    for (i, l) in spec.lights.iter().enumerate() {
+        if !l.position.is_finite() {
+            return Err(e(&format!("lights[{i}]"), "position must be finite".into()));
+        }
+        if !(l.intensity.is_finite() && l.intensity.min_element() >= 0.0) {
+            return Err(e(
+                &format!("lights[{i}]"),
+                "intensity must be finite and ≥ 0".into(),
+            ));
+        }
+    }
+    Ok(EstimatedLight {
+        lobes,
+        lights: spec.lights,
+    })
 }
 
 /// The text of an environment file for `lobes`, estimated from scene
 /// `source`, with `estimate` lines (`key = value` TOML) recording how.
 pub fn environment_file_text(
     lobes: &[Sg64],
+    lights: &[PointLight],
     source: &str,
     estimate: &[(String, String)],
 ) -> String {
@@ -141,6 +171,13 @@ pub fn environment_file_text(
             d.x, d.y, d.z, l.sharpness, a.x, a.y, a.z
         );
     }
+    for l in lights {
+        let (p, i) = (l.position, l.intensity);
+        s += &format!(
+            "\n[[lights]]\nposition = [{:e}, {:e}, {:e}]\nintensity = [{:e}, {:e}, {:e}]\n",
+            p.x, p.y, p.z, i.x, i.y, i.z
+        );
+    }
     s
 }
 
@@ -148,12 +185,15 @@ pub fn environment_file_text(
 pub fn save_environment_file(
     path: &Path,
     lobes: &[Sg64],
+    lights: &[PointLight],
     source: &str,
     estimate: &[(String, String)],
 ) -> Result<(), EnvFileError> {
-    std::fs::write(path, environment_file_text(lobes, source, estimate)).map_err(|x| EnvFileError {
-        path: path.to_owned(),
-        field: "file".into(),
-        message: x.to_string(),
+    std::fs::write(path, environment_file_text(lobes, lights, source, estimate)).map_err(|x| {
+        EnvFileError {
+            path: path.to_owned(),
+            field: "file".into(),
+            message: x.to_string(),
+        }
     })
 }

@@ -20,6 +20,7 @@ use super::env_model::{env_term, initial_params, lobes, project, EnvSampler};
 use super::knobs::EnvEstimateKnobs;
 use super::mlp::AlbedoMlp;
 use super::near_field::NearField;
+use super::near_lights::{self, near_term, PointLight};
 use super::prune::prune_unseen;
 use super::share_prior::SharePrior;
 use super::surface::SurfacePoint;
@@ -50,6 +51,9 @@ pub struct FitData<'a> {
 pub struct FitResult {
     /// The environment's lobes.
     pub lobes: Vec<Sg64>,
+    /// The hidden lights near the field, as points
+    /// ([`super::near_lights`]).
+    pub lights: Vec<PointLight>,
     /// The albedo network.
     pub albedo: AlbedoMlp,
     /// (step, mean squared error of that step's batch), every few steps.
@@ -81,10 +85,11 @@ fn point_loss(
     env: &[f64],
     env_lobes: &[Sg64],
     sampler: &EnvSampler,
+    lights: &[PointLight],
     samples: u32,
     rng: &mut Pcg32,
     prior: &SharePrior,
-    grads: Option<(&mut [f64], &mut [f64], f64)>,
+    grads: Option<PointGrads>,
 ) -> (f64, f64) {
     let p = &data.points[i];
     let trace = mlp.forward(p.position);
@@ -92,30 +97,53 @@ fn point_loss(
     let half = samples.div_ceil(2);
     let term_a = env_term(env_lobes, sampler, p.normal, half, &visibility, rng);
     let term_b = env_term(env_lobes, sampler, p.normal, half, &visibility, rng);
-    let e_a = data.near.irradiance[i] + term_a.irradiance;
-    let e_b = data.near.irradiance[i] + term_b.irradiance;
+    let near_light = near_term(lights, p.position, p.normal, &visibility);
+    let e_a = data.near.irradiance[i] + term_a.irradiance + near_light.irradiance;
+    let e_b = data.near.irradiance[i] + term_b.irradiance + near_light.irradiance;
     let a = trace.albedo;
     let inv_pi = 1.0 / std::f64::consts::PI;
     let r_a = a * e_a * inv_pi - p.radiance;
     let r_b = a * e_b * inv_pi - p.radiance;
     let loss = 0.5 * (r_a.length_squared() + r_b.length_squared()) / 3.0;
-    if let Some((g_mlp, g_env, scale)) = grads {
+    if let Some(PointGrads {
+        mlp: g_mlp,
+        env: g_env,
+        lights: g_lights,
+        diagonal,
+        scale,
+    }) = grads
+    {
         let k = scale / 3.0;
         mlp.backward(&trace, k * (e_a * r_b + r_a * e_b) * inv_pi, g_mlp);
         term_a.backward(env, k * r_b * a * inv_pi, g_env);
         term_b.backward(env, k * r_a * a * inv_pi, g_env);
+        near_light.backward(lights, diagonal, k * (r_a + r_b) * a * inv_pi, g_lights);
         if prior.weight > 0.0 {
             // Each half's gradient scaled by the slope the other half sees,
-            // so the noise of the two does not multiply.
+            // so the noise of the two does not multiply. The near lights
+            // are hidden light too: they count in the share.
             let near = luminance(data.near.irradiance[i]);
-            let slope_a = prior.slope(near, luminance(term_a.irradiance));
-            let slope_b = prior.slope(near, luminance(term_b.irradiance));
+            let lit = luminance(near_light.irradiance);
+            let slope_a = prior.slope(near, luminance(term_a.irradiance) + lit);
+            let slope_b = prior.slope(near, luminance(term_b.irradiance) + lit);
             let w = LUMINANCE_WEIGHTS * (0.5 * scale);
             term_a.backward(env, w * slope_b, g_env);
             term_b.backward(env, w * slope_a, g_env);
+            near_light.backward(lights, diagonal, w * (slope_a + slope_b), g_lights);
         }
     }
     (loss, r_a.dot(r_b) / 3.0)
+}
+
+/// Where one point's gradients go.
+struct PointGrads<'a> {
+    mlp: &'a mut [f64],
+    env: &'a mut [f64],
+    lights: &'a mut [f64],
+    /// The field's diagonal (the lights' position unit).
+    diagonal: f64,
+    /// The point's weight in the batch.
+    scale: f64,
 }
 
 /// The mean radiance luminance of `points` (sets the starting environment
@@ -174,7 +202,17 @@ pub fn fit_from(
         knobs.albedo_octaves,
         knobs.seed,
     );
+    let diagonal = data.bounds.diagonal();
+    // Near lights start dim (a twentieth of the points' mean irradiance
+    // scale at the field's centre); with a known environment, none.
+    let mut near = if fit_env {
+        let start = 0.05 * std::f64::consts::PI * mean_luminance(data.points);
+        near_lights::initial_params(knobs.near_lights as usize, &data.bounds, start)
+    } else {
+        Vec::new()
+    };
     let mut adam_env = Adam::new(env.len());
+    let mut adam_near = Adam::new(near.len());
     let mut adam_mlp = Adam::new(mlp.params.len());
     let mut history = Vec::new();
     let n = data.points.len();
@@ -188,15 +226,18 @@ pub fn fit_from(
         );
         let env_lobes = lobes(&env);
         let sampler = EnvSampler::new(&env_lobes);
+        let lights = near_lights::lights(&near, diagonal);
         let mut rng = Pcg32::new(knobs.seed, 0xBA7C_0000_0000 | step as u64);
         let picks: Vec<usize> = (0..batch).map(|_| rng.next_u32() as usize % n).collect();
         let scale = 1.0 / batch as f64;
-        let parts: Vec<(f64, Vec<f64>, Vec<f64>)> = picks
+        type Part = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
+        let parts: Vec<Part> = picks
             .par_chunks(CHUNK)
             .enumerate()
             .map(|(c, chunk)| {
                 let mut g_mlp = vec![0.0; mlp.params.len()];
                 let mut g_env = vec![0.0; env.len()];
+                let mut g_near = vec![0.0; near.len()];
                 let mut rng = Pcg32::new(knobs.seed ^ 0x5A3D, ((step as u64) << 24) | c as u64);
                 let mut loss = 0.0;
                 for &i in chunk {
@@ -207,28 +248,39 @@ pub fn fit_from(
                         &env,
                         &env_lobes,
                         &sampler,
+                        &lights,
                         knobs.env_samples,
                         &mut rng,
                         &prior,
-                        Some((&mut g_mlp, &mut g_env, scale)),
+                        Some(PointGrads {
+                            mlp: &mut g_mlp,
+                            env: &mut g_env,
+                            lights: &mut g_near,
+                            diagonal,
+                            scale,
+                        }),
                     )
                     .0;
                 }
-                (loss, g_mlp, g_env)
+                (loss, g_mlp, g_env, g_near)
             })
             .collect();
         let mut loss = 0.0;
         let mut g_mlp = vec![0.0; mlp.params.len()];
         let mut g_env = vec![0.0; env.len()];
-        for (l, gm, ge) in parts {
+        let mut g_near = vec![0.0; near.len()];
+        for (l, gm, ge, gn) in parts {
             loss += l;
             g_mlp.iter_mut().zip(gm).for_each(|(a, b)| *a += b);
             g_env.iter_mut().zip(ge).for_each(|(a, b)| *a += b);
+            g_near.iter_mut().zip(gn).for_each(|(a, b)| *a += b);
         }
         let decay = 0.1f64.powf(step as f64 / steps.max(1) as f64);
         if fit_env {
             adam_env.step(&mut env, &g_env, knobs.env_rate * decay);
             project(&mut env, knobs.max_sharpness);
+            adam_near.step(&mut near, &g_near, knobs.env_rate * decay);
+            near_lights::project(&mut near, &data.bounds);
         }
         adam_mlp.step(&mut mlp.params, &g_mlp, knobs.albedo_rate * decay);
         let loss = loss * scale;
@@ -243,6 +295,7 @@ pub fn fit_from(
     }
     let env_lobes = lobes(&env);
     let sampler = EnvSampler::new(&env_lobes);
+    let lights = near_lights::prune_dim(data, near_lights::lights(&near, diagonal));
     let (final_loss, exact_loss) = (0..n)
         .into_par_iter()
         .map(|i| {
@@ -254,6 +307,7 @@ pub fn fit_from(
                 &env,
                 &env_lobes,
                 &sampler,
+                &lights,
                 knobs.env_samples,
                 &mut rng,
                 &prior,
@@ -266,6 +320,7 @@ pub fn fit_from(
     let per_point = 1.0 / n.max(1) as f64;
     FitResult {
         lobes: env_lobes,
+        lights,
         albedo: mlp,
         history,
         final_loss: final_loss * per_point,

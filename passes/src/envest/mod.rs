@@ -19,6 +19,7 @@ pub mod knobs;
 pub mod mlp;
 pub mod near_field;
 pub mod near_field_reference;
+pub mod near_lights;
 pub mod prune;
 pub mod quality;
 pub mod recovery;
@@ -35,14 +36,16 @@ pub use estimate::{
 };
 pub use file::{
     environment_file_text, load_environment_file, parse_environment_file, save_environment_file,
-    EnvFileError, ENV_FILE_VERSION,
+    EnvFileError, EstimatedLight, ENV_FILE_VERSION,
 };
 pub use fit::{fit_environment, fit_from, params_of, FitData, FitResult};
 pub use knobs::EnvEstimateKnobs;
 pub use near_field::{NearField, NearFieldTracer};
+pub use near_lights::PointLight;
 pub use quality::{view_quality, QualityScore, ViewImage};
 pub use recovery::{emitter_recovery, EmitterRecovery};
 pub use surface::{surface_points, SurfacePoint};
 pub use truth::{
-    hidden_light_lobes, light_irradiance, lobes_irradiance, test_points, Lights, Validation,
+    hidden_light_lobes, light_irradiance, lobes_irradiance, point_lights_irradiance, test_points,
+    Lights, Validation,
 };

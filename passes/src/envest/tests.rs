@@ -215,8 +215,14 @@ fn environment_file_round_trips_and_names_bad_fields() {
         },
     ];
     let path = std::path::Path::new("books-env.toml");
-    let text = environment_file_text(&lobes, "books", &[("views".into(), "100".into())]);
+    let lights = vec![super::near_lights::PointLight {
+        position: DVec3::new(0.1, 2.9, -0.3),
+        intensity: DVec3::new(22.0, 20.5, 1e-20),
+    }];
+    let text = environment_file_text(&lobes, &lights, "books", &[("views".into(), "100".into())]);
     let back = parse_environment_file(path, &text).unwrap();
+    assert_eq!(back.lights, lights);
+    let back = back.lobes;
     assert_eq!(back.len(), 2);
     for (a, b) in lobes.iter().zip(&back) {
         assert!((a.direction - b.direction).length() < 1e-15);
@@ -242,10 +248,13 @@ fn environment_file_round_trips_and_names_bad_fields() {
         "format = \"inlay-environment\"\nversion = 1\n[[lobes]]\ndirection = [0, 1, 0]\nsharpness = 1.0\namplitude = [1, -1, 1]\n",
         "lobes[0]",
     );
-    assert!(
-        parse_environment_file(path, "format = \"inlay-environment\"\nversion = 1\n")
-            .unwrap()
-            .is_empty()
+    bad(
+        "format = \"inlay-environment\"\nversion = 1\n[[lights]]\nposition = [0, 1, 0]\nintensity = [1, -1, 1]\n",
+        "lights[0]",
+    );
+    assert_eq!(
+        parse_environment_file(path, "format = \"inlay-environment\"\nversion = 1\n").unwrap(),
+        super::file::EstimatedLight::default()
     );
 }
 

@@ -7,6 +7,7 @@
 use glam::DVec3;
 
 use super::env_model::{env_term, EnvSampler};
+use super::near_lights::PointLight;
 use crate::bake::{emitter_cone, sample_emitter, PathTracer};
 use crate::geometry::Ray;
 use crate::lighting::environment_lobes;
@@ -157,6 +158,38 @@ pub fn lobes_irradiance(
     env_term(lobes, &sampler, n, samples, &visibility, &mut rng).irradiance
 }
 
+/// Irradiance at `x` with normal `n` from point `lights`, occluded by
+/// `recipe` when `occluded` (the hidden emitters they stand for do not
+/// occlude, as in [`lobes_irradiance`]).
+pub fn point_lights_irradiance(
+    recipe: &Recipe,
+    lights: &[PointLight],
+    x: DVec3,
+    n: DVec3,
+    occluded: bool,
+) -> DVec3 {
+    if lights.is_empty() {
+        return DVec3::ZERO;
+    }
+    let mut geometry = recipe.clone();
+    geometry
+        .primitives
+        .retain(|p| !p.is_emitter() || p.in_field == Some(true));
+    let env = Environment::Black;
+    let tracer = PathTracer::new(&geometry, &env, 0);
+    lights
+        .iter()
+        .map(|l| {
+            let (e, dir) = l.irradiance(x, n);
+            if e.max_element() <= 0.0 || !occluded {
+                return e;
+            }
+            let d = (l.position - x).length();
+            e * tracer.visibility(&Ray { origin: x, dir }, d)
+        })
+        .sum()
+}
+
 /// The recipe's hidden light as distant SG lobes seen from `at`: the
 /// environment's lobes, and each emitter outside the field as one lobe
 /// along its direction with amplitude its radiance and sharpness 2π/Ω (Ω
@@ -205,6 +238,18 @@ pub struct Validation {
 impl Validation {
     /// Checks `lobes` on `scene`'s recipe with `samples` per light and point.
     pub fn new(scene: &Scene, recipe: &Recipe, lobes: &[Sg64], samples: u32, seed: u64) -> Self {
+        Self::with_lights(scene, recipe, lobes, &[], samples, seed)
+    }
+
+    /// Checks `lobes` and near point `lights` together.
+    pub fn with_lights(
+        scene: &Scene,
+        recipe: &Recipe,
+        lobes: &[Sg64],
+        lights: &[PointLight],
+        samples: u32,
+        seed: u64,
+    ) -> Self {
         let points = test_points(scene, recipe);
         let env = &scene.environment;
         let mut v = Self {
@@ -215,8 +260,10 @@ impl Validation {
         };
         for (i, (x, n)) in points.into_iter().enumerate() {
             let s = seed.wrapping_add(i as u64);
-            v.estimated
-                .push(lobes_irradiance(recipe, lobes, x, n, samples, s, true));
+            v.estimated.push(
+                lobes_irradiance(recipe, lobes, x, n, samples, s, true)
+                    + point_lights_irradiance(recipe, lights, x, n, true),
+            );
             v.hidden.push(light_irradiance(
                 recipe,
                 env,

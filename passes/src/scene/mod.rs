@@ -156,6 +156,8 @@ pub struct ObjectEnvironment {
     pub file: PathBuf,
     /// Its lobes.
     pub lobes: Vec<crate::sg::Sg64>,
+    /// Its point lights near the field.
+    pub lights: Vec<crate::envest::PointLight>,
 }
 
 /// An object's files, as the scene names them.
@@ -282,7 +284,8 @@ impl Scene {
     }
 
     /// The distant light L_env an object at `at` is lit with, as SG lobes:
-    /// the environment file's if the scene names one; otherwise, for a
+    /// the environment file's if the scene names one (its near point
+    /// lights as lobes seen from `at`); otherwise, for a
     /// recipe, the whole light from outside the field — the declared
     /// environment and every emitter outside the bounds as a lobe seen
     /// from `at` ([`crate::envest::hidden_light_lobes`]), since an object in
@@ -292,7 +295,16 @@ impl Scene {
     /// ([`crate::lighting::environment_lobes`]).
     pub fn object_light_lobes(&self, at: DVec3) -> Vec<crate::sg::Sg64> {
         match (&self.object_environment, self.recipe()) {
-            (Some(o), _) => o.lobes.clone(),
+            (Some(o), _) => o
+                .lobes
+                .iter()
+                .copied()
+                .chain(
+                    o.lights
+                        .iter()
+                        .map(|l| l.lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)),
+                )
+                .collect(),
             (None, Some(r)) => crate::envest::hidden_light_lobes(
                 r,
                 &self.environment,
@@ -406,9 +418,13 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         None => None,
         Some(file) => {
             let file = dir.join(file);
-            let lobes = crate::envest::load_environment_file(&file)
+            let light = crate::envest::load_environment_file(&file)
                 .map_err(|x| e("lighting.environment", x.to_string()))?;
-            Some(ObjectEnvironment { file, lobes })
+            Some(ObjectEnvironment {
+                file,
+                lobes: light.lobes,
+                lights: light.lights,
+            })
         }
     };
     let shading = ShadingKnobs {

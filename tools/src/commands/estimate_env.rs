@@ -13,6 +13,7 @@ use clap::Args;
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::envest::recovery::SEARCH_CONE_DEGREES;
+use inlay_passes::envest::PointLight;
 use inlay_passes::envest::{
     emitter_recovery, estimate_environment, hidden_light_lobes, save_environment_file,
     EnvEstimateKnobs, Stage, Validation,
@@ -70,6 +71,14 @@ pub struct EstimateEnvArgs {
     /// SG lobes (paper: 32).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().lobes)]
     pub lobes: u32,
+    /// A surface point brighter than this multiple of its view's median is
+    /// taken for a light source and left out.
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().emitter_ratio)]
+    pub emitter_ratio: f64,
+    /// Point lights near the field fitted beside the lobes (0: the paper's
+    /// distant model alone).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().near_lights)]
+    pub near_lights: u32,
     /// Width of the albedo MLP's hidden layers.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().albedo_width)]
     pub albedo_width: u32,
@@ -118,6 +127,8 @@ impl EstimateEnvArgs {
             opacity_map: self.opacity_map,
             quality_threshold: self.quality_threshold,
             lobes: self.lobes,
+            near_lights: self.near_lights,
+            emitter_ratio: self.emitter_ratio,
             albedo_width: self.albedo_width,
             albedo_octaves: self.albedo_octaves,
             iterations: self.iterations,
@@ -211,7 +222,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             format!("{:.1}", estimate.seconds.iter().sum::<f64>()),
         ),
     ];
-    save_environment_file(&out, lobes, &scene.name, &record)?;
+    save_environment_file(&out, lobes, &estimate.fit.lights, &scene.name, &record)?;
     println!("wrote {}", out.display());
     let picture = args
         .picture
@@ -220,8 +231,15 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     let (image, exposure) = equirect_picture(lobes, 256, 128);
     image.save(&picture, exposure)?;
     println!("wrote {}", picture.display());
+    for l in &estimate.fit.lights {
+        println!(
+            "near light at {:.2} {:.2} {:.2}, intensity {:.4} {:.4} {:.4}",
+            l.position.x, l.position.y, l.position.z, l.intensity.x, l.intensity.y, l.intensity.z
+        );
+    }
     if let Some(recipe) = scene.recipe() {
-        let v = Validation::new(&scene, recipe, lobes, 4096, knobs.seed);
+        let lights = &estimate.fit.lights;
+        let v = Validation::with_lights(&scene, recipe, lobes, lights, 4096, knobs.seed);
         println!(
             "against the recipe's lights at {} test points: hidden-light irradiance error {:.1} %, \
              estimate = {:.2} % of all the lights' irradiance",
@@ -235,7 +253,13 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             .map_or(0.5 * (recipe.bounds.min + recipe.bounds.max), |o| {
                 o.sphere().0
             });
-        for r in emitter_recovery(recipe, lobes, at) {
+        // The near lights count as lobes seen from the object.
+        let seen: Vec<Sg64> = lobes
+            .iter()
+            .copied()
+            .chain(lights.iter().map(|l| l.lobe_from(at, 1e4)))
+            .collect();
+        for r in emitter_recovery(recipe, &seen, at) {
             match r.angle_degrees {
                 Some(a) => println!(
                     "hidden light `{}` seen from {:.2} {:.2} {:.2}: the strongest lobe within {:.0}° is {a:.1}° off, carrying {:.2}× its light",
@@ -275,7 +299,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(path) = &args.compare {
-        compare(ctx, args, &scene, &field, lobes, path)?;
+        compare(ctx, args, &scene, &field, lobes, &estimate.fit.lights, path)?;
     }
     Ok(())
 }
@@ -323,12 +347,14 @@ fn render_with(
     scene: &Scene,
     field: &inlay_passes::field::GridField,
     lobes: Vec<Sg64>,
+    lights: Vec<PointLight>,
     what: &str,
 ) -> anyhow::Result<HdrImage> {
     let mut scene = scene.clone();
     scene.object_environment = Some(ObjectEnvironment {
         file: PathBuf::from(what),
         lobes,
+        lights,
     });
     let library = crate::shaders::library()?;
     let camera = scene.camera(&args.camera)?.clone();
@@ -351,6 +377,7 @@ fn compare(
     scene: &Scene,
     field: &inlay_passes::field::GridField,
     lobes: &[Sg64],
+    lights: &[PointLight],
     path: &Path,
 ) -> anyhow::Result<()> {
     let recipe = scene.recipe().ok_or_else(|| {
@@ -366,8 +393,24 @@ fn compare(
     );
     let at = scene.objects.iter().map(|o| o.sphere().0).sum::<DVec3>() / scene.objects.len() as f64;
     let truth = hidden_light_lobes(recipe, &scene.environment, at, 1e4);
-    let a = render_with(ctx, args, scene, field, truth, "the recipe's hidden light")?;
-    let b = render_with(ctx, args, scene, field, lobes.to_vec(), "the estimate")?;
+    let a = render_with(
+        ctx,
+        args,
+        scene,
+        field,
+        truth,
+        Vec::new(),
+        "the recipe's hidden light",
+    )?;
+    let b = render_with(
+        ctx,
+        args,
+        scene,
+        field,
+        lobes.to_vec(),
+        lights.to_vec(),
+        "the estimate",
+    )?;
     let (w, h) = (a.width, a.height);
     let mut pixels = Vec::with_capacity((3 * w * h) as usize);
     let (mut diff, mut total, mut sq) = (0.0f64, 0.0f64, 0.0f64);

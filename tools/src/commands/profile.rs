@@ -147,8 +147,10 @@ pub fn profile_view(
 pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
     let mut scene = load_scene(&args.scene)?;
     if let Some(file) = &args.environment {
+        let light = load_environment_file(file)?;
         scene.object_environment = Some(ObjectEnvironment {
-            lobes: load_environment_file(file)?,
+            lobes: light.lobes,
+            lights: light.lights,
             file: file.clone(),
         });
     }

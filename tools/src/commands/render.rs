@@ -103,8 +103,10 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         scene.objects.clear();
     }
     if let Some(file) = &args.environment {
+        let light = load_environment_file(file)?;
         scene.object_environment = Some(ObjectEnvironment {
-            lobes: load_environment_file(file)?,
+            lobes: light.lobes,
+            lights: light.lights,
             file: file.clone(),
         });
     }
