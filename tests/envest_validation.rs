@@ -74,3 +74,16 @@ fn dog_hidden_light_is_recovered_within_15_percent() {
     let e = validate("dog.toml", 8192).hidden_error();
     assert!(e < 0.15, "error {:.1} %", 100.0 * e);
 }
+
+/// ROOM's estimate with its softbox inside the field and a bulb 1.5 m above
+/// it (docs/fidelity.md, "The environment estimate on ROOM"): far from the
+/// 15 % target, but held below 250 % (measured 151 %); with the old light-
+/// source threshold (50 × the median) the softbox's pixels stayed in the
+/// fit and the error was 829 %. Ignored (a 128-node bake and an estimate,
+/// minutes): `cargo test --release --test envest_validation -- --ignored room`.
+#[test]
+#[ignore]
+fn room_with_an_in_field_softbox_stays_within_bounds() {
+    let e = validate("room.toml", 8192).hidden_error();
+    assert!(e < 2.5, "error {:.1} %", 100.0 * e);
+}

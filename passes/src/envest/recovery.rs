@@ -1,8 +1,8 @@
 //! Did an estimate find each hidden light? For every emitter of a recipe
-//! outside its field, seen from a point (an object's centre): the lobe of
-//! the estimate that carries the most light within a search cone around
-//! the emitter's direction, how far that lobe points from it, and how much
-//! light it carries against the emitter's.
+//! outside its field, seen from a point (an object's centre): the lobes of
+//! the estimate within a search cone around the emitter's direction, how
+//! far their energy-weighted mean direction and their strongest lobe
+//! point from it, and how much light they carry against the emitter's.
 
 use glam::DVec3;
 
@@ -30,6 +30,12 @@ pub struct EmitterRecovery {
     /// That lobe's integrated luminance over the emitter's (radiance × solid
     /// angle); 0 when there is none.
     pub energy_ratio: f64,
+    /// Angle (degrees) from the emitter to the energy-weighted mean
+    /// direction of all the lobes within the cone (an estimate may spread
+    /// one bulb over several lobes); `None` when none is there.
+    pub centroid_degrees: Option<f64>,
+    /// Their summed integrated luminance over the emitter's.
+    pub cone_energy_ratio: f64,
 }
 
 /// How `lobes` recovered each hidden emitter of `recipe`, seen from `at`.
@@ -40,22 +46,22 @@ pub fn emitter_recovery(recipe: &Recipe, lobes: &[Sg64], at: DVec3) -> Vec<Emitt
         .filter_map(|p| {
             let (direction, solid) = emitter_cone(p, at)?;
             let energy = luminance(p.emission) * solid;
-            let best = lobes
+            let near: Vec<(&Sg64, f64)> = lobes
                 .iter()
                 .filter(|l| l.direction.dot(direction) >= cos_cone)
                 .map(|l| (l, luminance(l.integral())))
-                .max_by(|a, b| a.1.total_cmp(&b.1));
+                .collect();
+            let best = near.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1));
+            let total: f64 = near.iter().map(|(_, e)| e).sum();
+            let centroid: DVec3 = near.iter().map(|(l, e)| l.direction * *e).sum();
+            let angle = |d: DVec3| d.dot(direction).clamp(-1.0, 1.0).acos().to_degrees();
             Some(EmitterRecovery {
                 name: p.name.clone(),
                 direction,
-                angle_degrees: best.map(|(l, _)| {
-                    l.direction
-                        .dot(direction)
-                        .clamp(-1.0, 1.0)
-                        .acos()
-                        .to_degrees()
-                }),
+                angle_degrees: best.map(|(l, _)| angle(l.direction)),
                 energy_ratio: best.map_or(0.0, |(_, e)| e / energy.max(1e-300)),
+                centroid_degrees: centroid.try_normalize().map(angle),
+                cone_energy_ratio: total / energy.max(1e-300),
             })
         })
         .collect()
@@ -107,6 +113,17 @@ mod tests {
         };
         let r = &emitter_recovery(&recipe, &turn(20.0), at)[0];
         assert!((r.angle_degrees.unwrap() - 20.0).abs() < 1e-6);
+        // Split in two halves ±15° either side: each is 15° off, their
+        // centroid on the bulb, their sum all of its light.
+        let mut split = turn(15.0);
+        split.extend(turn(-15.0));
+        for l in &mut split {
+            l.amplitude *= 0.5;
+        }
+        let r = &emitter_recovery(&recipe, &split, at)[0];
+        assert!((r.angle_degrees.unwrap() - 15.0).abs() < 1e-6);
+        assert!(r.centroid_degrees.unwrap() < 1e-6);
+        assert!((r.cone_energy_ratio - 1.0).abs() < 1e-3);
         let r = &emitter_recovery(&recipe, &turn(60.0), at)[0];
         assert_eq!(r.angle_degrees, None);
         assert_eq!(r.energy_ratio, 0.0);

@@ -260,24 +260,36 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             .chain(lights.iter().map(|l| l.lobe_from(at, 1e4)))
             .collect();
         for r in emitter_recovery(recipe, &seen, at) {
-            match r.angle_degrees {
-                Some(a) => println!(
-                    "hidden light `{}` seen from {:.2} {:.2} {:.2}: the strongest lobe within {:.0}° is {a:.1}° off, carrying {:.2}× its light",
-                    r.name, at.x, at.y, at.z, SEARCH_CONE_DEGREES, r.energy_ratio
+            let here = format!(
+                "hidden light `{}` seen from {:.2} {:.2} {:.2}",
+                r.name, at.x, at.y, at.z
+            );
+            match (r.angle_degrees, r.centroid_degrees) {
+                (Some(a), Some(c)) => println!(
+                    "{here}: the lobes within {:.0}° carry {:.2}× its light, their centre {c:.1}° off; the strongest of them is {a:.1}° off with {:.2}×",
+                    SEARCH_CONE_DEGREES, r.cone_energy_ratio, r.energy_ratio
                 ),
-                None => println!(
-                    "hidden light `{}` seen from {:.2} {:.2} {:.2}: no lobe within {:.0}° (missed)",
-                    r.name, at.x, at.y, at.z, SEARCH_CONE_DEGREES
+                _ => println!(
+                    "{here}: no lobe within {:.0}° (missed)",
+                    SEARCH_CONE_DEGREES
                 ),
             }
         }
         if !scene.objects.is_empty() {
             // The first test point is the first object's centre, facing up.
             let (e, h, a) = (v.estimated[0], v.hidden[0], v.all[0]);
+            let ratio = |x: DVec3| {
+                let y = luminance(x);
+                if y > 1e-9 * luminance(a).max(1e-300) {
+                    format!("{:.3}", luminance(e) / y)
+                } else {
+                    "— (none there)".to_string()
+                }
+            };
             println!(
-                "at the object, facing up: estimate / hidden light = {:.3}, estimate / all lights = {:.3}",
-                luminance(e) / luminance(h).max(1e-300),
-                luminance(e) / luminance(a).max(1e-300)
+                "at the object, facing up: estimate / hidden light = {}, estimate / all lights = {}",
+                ratio(h),
+                ratio(a)
             );
         }
         println!(
