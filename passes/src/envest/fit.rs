@@ -153,6 +153,13 @@ pub(super) fn mean_luminance(points: &[SurfacePoint]) -> f64 {
     sum / points.len().max(1) as f64
 }
 
+/// The mean near-field irradiance luminance over the points of `data`
+/// (the scale of the field's own light at them).
+pub(super) fn mean_near_luminance(data: &FitData) -> f64 {
+    let sum: f64 = data.near.irradiance.iter().map(|e| luminance(*e)).sum();
+    sum / data.points.len().max(1) as f64
+}
+
 /// Runs the fit from the starting environment
 /// ([`super::env_model::initial_params`]); `progress(step, steps, batch
 /// loss)` every few steps.

@@ -209,13 +209,7 @@ pub const MIN_LIGHT_SHARE: f64 = 0.01;
 pub fn prune_dim(data: &super::fit::FitData, lights: Vec<PointLight>) -> Vec<PointLight> {
     use crate::sgfit::model::luminance;
     let n = data.points.len().max(1) as f64;
-    let reference: f64 = data
-        .near
-        .irradiance
-        .iter()
-        .map(|e| luminance(*e))
-        .sum::<f64>()
-        / n;
+    let reference = super::fit::mean_near_luminance(data);
     lights
         .into_iter()
         .filter(|l| {

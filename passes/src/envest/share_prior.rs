@@ -2,8 +2,7 @@
 //! only the model's misfit asks for (not in the paper): a charge on the
 //! environment's share of each surface point's irradiance.
 
-use super::fit::{mean_luminance, FitData};
-use crate::sgfit::model::luminance;
+use super::fit::{mean_luminance, mean_near_luminance, FitData};
 
 /// The prior that keeps out of the environment light which only the
 /// model's misfit asks for: the loss gains `weight`·s̄, the mean over
@@ -29,14 +28,7 @@ pub struct SharePrior {
 impl SharePrior {
     /// The prior for knob `kappa` on `data`.
     pub fn new(kappa: f64, data: &FitData) -> Self {
-        let n = data.points.len().max(1) as f64;
-        let mean_near = data
-            .near
-            .irradiance
-            .iter()
-            .map(|e| luminance(*e))
-            .sum::<f64>()
-            / n;
+        let mean_near = mean_near_luminance(data);
         let mean = mean_luminance(data.points);
         Self {
             weight: kappa * mean * mean,
