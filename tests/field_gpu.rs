@@ -263,9 +263,13 @@ fn clipping_removes_the_field_behind_the_object() {
 /// the visible surface up to a voxel in front of the true one; both images
 /// also carry Monte-Carlo noise (32 samples per node, 128 per pixel).
 /// Measured on this 48×27 view of CUPS (mean |Δ| over mean radiance, and
-/// mean |Δ coverage|): 0.187 / 0.049 with a 24-node field, 0.100 / 0.022
-/// with a 48-node field. The bounds leave ~25 % headroom over the 48-node
-/// figures, and the finer field must match better.
+/// mean |Δ coverage|): 0.309 / 0.083 with a 24-node field, 0.130 / 0.029
+/// with a 48-node field (0.187 / 0.049 and 0.100 / 0.022 before the bake
+/// moved surfaces' density inside them and thin shapes' outwards: at 48
+/// nodes CUPS' 2 cm plate is a fifth of a voxel thick, and keeping it
+/// opaque widens it; at 128 nodes the field came closer to Cycles). The
+/// bounds leave ~25 % headroom over the 48-node figures, and the finer
+/// field must match better.
 #[test]
 fn marched_field_matches_the_path_traced_reference() {
     let ctx = common::gpu();
@@ -306,12 +310,12 @@ fn marched_field_matches_the_path_traced_reference() {
         errors.push((relative, coverage));
     }
     assert!(
-        errors[1].0 < 0.125,
+        errors[1].0 < 0.16,
         "48-node field: relative error {:.4}",
         errors[1].0
     );
     assert!(
-        errors[1].1 < 0.03,
+        errors[1].1 < 0.037,
         "48-node field: coverage error {:.4}",
         errors[1].1
     );

@@ -11,7 +11,10 @@ use inlay::shaders::embedded_library;
 use inlay_engine::shader::{compile, Define, ShaderStage};
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback};
 use inlay_passes::field::{GpuGridField, GridField};
-use inlay_passes::lighting::{environment_lobes, IncidentLight, LightingWork};
+use inlay_passes::lighting::{
+    direct_lights, environment_lobes, lobe_rays, sharp_limit, split_environment, IncidentLight,
+    LightingWork,
+};
 use inlay_passes::march::MarchKnobs;
 use inlay_passes::probe::{trace_probe, MapKind, ProbeKnobs, ProbePass, PROBE_FORMAT};
 use inlay_passes::sg::Sg64;
@@ -137,6 +140,10 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
         resolution: 16,
         supersampling: 2,
     };
+    // BOOKS' sun (λ 800) is too sharp for the fit: it is shaded directly,
+    // and the probe holds the sky alone.
+    let broad = split_environment(&env, sharp_limit(&probe_knobs)).broad;
+    assert_eq!(broad.len(), env.len() - 1);
     let fit_knobs = FitKnobs {
         lobes: 8,
         cold_iterations: 20,
@@ -164,7 +171,7 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
     assert!(executed.iter().any(|p| p == "probe-trace") && executed.iter().any(|p| p == "sg-fit"));
     let gpu = light.fit.read_report().unwrap();
     // The same probe on the CPU.
-    let cpu_probe = trace_probe(&field, centre, &probe_knobs, &march(), &env);
+    let cpu_probe = trace_probe(&field, centre, &probe_knobs, &march(), &broad);
     let cpu = fit_reference(
         &ProbeSamples::new(&light.probe.map(), &cpu_probe),
         &fit_knobs,
@@ -182,7 +189,9 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
     let (work, executed) = frame(&mut light, centre, 0);
     assert_eq!(work, LightingWork::Reuse);
     assert!(
-        !executed.iter().any(|p| p == "probe-trace" || p == "sg-fit"),
+        !executed
+            .iter()
+            .any(|p| p == "probe-trace" || p == "sg-fit" || p == "direct-light"),
         "{executed:?}"
     );
     // The object moves, or the lighting changes: a warm update.
@@ -199,4 +208,117 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
         let r = light.fit.read_report().unwrap();
         assert!(!r.started_cold && r.relative_residual() <= 1.1 * gpu.relative_residual() + 0.01);
     }
+}
+
+/// The direct light on BOOKS (small bake): L_env's lobes too sharp for
+/// the fit — its sun, and needles chosen where the field hides them
+/// wholly, by half and least — come out of the `direct-light` pass
+/// after the fitted lobes (copied unchanged), each attenuated by the
+/// field's transmittance along its rays as the f64 reference computes it.
+/// Tolerance: the march's, 3e-4 in opacity per ray (tests/field_gpu.rs),
+/// so 3e-4 of each lobe's amplitude.
+#[test]
+fn direct_light_matches_the_cpu_reference() {
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let s = common::bundled_scene("books.toml");
+    let field = common::bake_small(&s, 24, 4, 0);
+    let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
+    let probe_knobs = ProbeKnobs {
+        map: MapKind::Octahedral,
+        resolution: 16,
+        supersampling: 3,
+    };
+    let centre = DVec3::new(0.1, 0.3, 0.1);
+    // Needles (λ 400) in Fibonacci directions, sorted by how much of them
+    // the field lets through; keep the darkest, a middling one and the
+    // clearest.
+    let needle = |k: u32| Sg64 {
+        direction: inlay_passes::sgfit::fibonacci_axis(k, 400),
+        sharpness: 400.0,
+        amplitude: DVec3::new(300.0, 200.0, 100.0),
+    };
+    let clear = |g: &Sg64| {
+        inlay_passes::lighting::direct_reference::transmittance(
+            &field,
+            centre,
+            &lobe_rays(g, probe_knobs.supersampling),
+            &march(),
+        )
+    };
+    let mut needles: Vec<(f64, Sg64)> = (0..400).map(|k| (clear(&needle(k)), needle(k))).collect();
+    needles.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let middling = needles
+        .iter()
+        .min_by(|a, b| (a.0 - 0.5).abs().total_cmp(&(b.0 - 0.5).abs()))
+        .unwrap();
+    assert!(needles[0].0 < 0.05, "no needle is hidden: {}", needles[0].0);
+    assert!(
+        (0.2..0.8).contains(&middling.0),
+        "no needle half hidden: {}",
+        middling.0
+    );
+    // (The small bake's walls and ceiling are thick: nothing is wholly clear.)
+    assert!(
+        needles[399].0 > 0.5,
+        "no needle is clear: {}",
+        needles[399].0
+    );
+    let mut env = environment_lobes(&s.environment);
+    env.extend([needles[0].1, middling.1, needles[399].1]);
+    let split = split_environment(&env, sharp_limit(&probe_knobs));
+    assert_eq!(split.sharp.len(), 4);
+    let fit_knobs = FitKnobs {
+        lobes: 8,
+        cold_iterations: 10,
+        ..FitKnobs::default()
+    };
+    let light = IncidentLight::new(&ctx, &lib, probe_knobs, fit_knobs, march(), &env).unwrap();
+    assert!(light.has_environment());
+    let work = light.plan(centre, 0);
+    let report = common::run_frame(&ctx, |graph| {
+        let lights = light.add(graph, &gpu_field, centre, work).unwrap();
+        assert_eq!(lights.count, 8 + 4);
+        light.add_readback(graph);
+    });
+    assert!(report.executed.iter().any(|p| p == "direct-light"));
+    let gpu = light.read_lights().unwrap();
+    let fitted = light.fit.read_report().unwrap().lobes;
+    assert_eq!(gpu.len(), 12);
+    assert_eq!(
+        &gpu[..8],
+        &fitted[..],
+        "the fitted lobes are copied unchanged"
+    );
+    let fitted64: Vec<Sg64> = fitted.iter().map(|g| g.to_f64()).collect();
+    let cpu = direct_lights(
+        &field,
+        centre,
+        &fitted64,
+        &split.sharp,
+        probe_knobs.supersampling,
+        &march(),
+    );
+    for (k, (g, c)) in gpu[8..].iter().zip(&cpu[8..]).enumerate() {
+        let g = g.to_f64();
+        assert!((g.direction - c.direction).length() < 1e-6, "lobe {k}");
+        assert!((g.sharpness - c.sharpness).abs() <= 1e-6 * c.sharpness);
+        let full = split.sharp[k].amplitude.max_element();
+        let err = (g.amplitude - c.amplitude).abs().max_element();
+        eprintln!(
+            "sharp lobe {k}: transmittance GPU {:.5} CPU {:.5}",
+            g.amplitude.max_element() / full,
+            c.amplitude.max_element() / full
+        );
+        assert!(err <= 3e-4 * full, "lobe {k}: GPU {g:?} CPU {c:?}");
+    }
+    // With the environment off, the fit's lobes are the whole light.
+    let report = common::run_frame(&ctx, |graph| {
+        let lights = light
+            .add_with(graph, &gpu_field, centre, work, false)
+            .unwrap();
+        assert_eq!(lights.count, 8);
+    });
+    assert!(!report.executed.iter().any(|p| p == "direct-light"));
+    common::assert_no_validation_errors(&ctx);
 }

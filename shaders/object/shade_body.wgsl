@@ -18,20 +18,29 @@ struct ShadePush {
     object_index: f32,
     forward: vec3<f32>,
     write_empty: u32,
+    // Lobes of `light_lobes` that light the object (from its start).
+    light_count: u32,
+    // How many of them, at the end, are direct lobes (too sharp for the
+    // fit), and rays per lobe (read by shade_self_shadow_direct.wgsl).
+    direct_lobes: u32,
+    direct_rays: u32,
+    pad0: u32,
 }
 
 var<immediate> pc: ShadePush;
 @group(0) @binding(0) var normal_roughness: texture_2d<f32>;
 @group(0) @binding(1) var albedo_metallic: texture_2d<f32>;
 @group(0) @binding(2) var distance_id: texture_2d<f32>;
-// The SG fit's lobe buffer: slot 0 holds the current M lobes as (p, λ), (μ, 0).
+// The object's lobes as (p, λ), (μ, 0): the fit's current M (then its
+// candidates, unread) or the fitted and the direct lobes
+// (passes/src/lighting: LightLobes); the first pc.light_count are the light.
 @group(0) @binding(3) var<storage, read> light_lobes: array<vec4<f32>>;
 // (c_j, k_j) of the NDF mixture (passes/src/brdf/ndf_lobes.rs).
 @group(0) @binding(4) var<storage, read> ndf_lobes: array<vec2<f32>>;
 @group(0) @binding(5) var out_object: texture_storage_2d<rgba32float, write>;
 
 fn shading_light_count() -> u32 {
-    return arrayLength(&light_lobes) / 4u;
+    return pc.light_count;
 }
 
 fn shading_light(k: u32) -> Sg {

@@ -1,148 +1,17 @@
-// The cast shadow (eq. 7-8) of one object on the field: per pixel, the
-// point at the field's expected depth D̂/Ô, the normal −∇σ there, and
-// ρ = 1 − Σ_k w_k (1 − q(S(p'_k), λ'_k)) / max(Σ_k w_k, π L) over the
-// lobes L_k ⊗ cosine (w_k = μ'_k f_h(π/2, λ'_k); L the field's colour at
-// the pixel, π L the irradiance floor of an albedo ≤ 1 surface); each
-// lobe's occlusion 1 − q is capped by the share of its energy the
-// bounding sphere can block, and lobes whose
-// direction clears the sphere by a quarter turn, or of which it can block
-// under CAST_SKIP_SHARE, skip the SSDF (q = 1). Mirrors
-// passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
-// multiplies the previous object's ρ image. Output: ρ in rgb.
-// Needs: the shadow defines (passes/src/shadow/gpu.rs).
-#include "field/grid.wgsl"
-#include "common/camera.wgsl"
-#include "common/sg.wgsl"
+// The cast shadow (eq. 7-8) of one object whose light has no direct
+// lobes: every lobe's visibility from the SSDF (shadow/cast_body.wgsl).
+#include "shadow/cast_body.wgsl"
 
-struct CastPush {
-    origin: vec3<f32>,
-    width: u32,
-    right: vec3<f32>,
-    height: u32,
-    up: vec3<f32>,
-    normal_step: f32,
-    forward: vec3<f32>,
-    _pad: u32,
-}
-
-var<immediate> pc: CastPush;
-@group(0) @binding(3) var field_colour: texture_2d<f32>;
-@group(0) @binding(4) var field_depth: texture_2d<f32>;
-@group(0) @binding(5) var<storage, read> light_lobes: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> fh_table: array<f32>;
-@group(0) @binding(7) var<storage, read> ssdf: SsdfObject;
-@group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
-@group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
-@group(0) @binding(10) var previous: texture_2d<f32>;
-@group(0) @binding(11) var out_shadow: texture_storage_2d<rgba32float, write>;
-
-#include "shadow/fh.wgsl"
-#include "shadow/ssdf.wgsl"
-
-const CAST_HALF_PI: f32 = 1.57079632679490;
-
-fn density(x: vec3<f32>) -> f32 {
-    return grid_sample(x).w;
-}
-
-fn clears_sphere(x: vec3<f32>, dir: vec3<f32>) -> bool {
-    let to = ssdf.world_sphere.xyz - x;
-    let dist = length(to);
-    let r = ssdf.world_sphere.w;
-    if dist <= r {
-        return false;
-    }
-    return ssdf_angle_between(dir, to / dist) - asin(r / dist) >= CAST_HALF_PI;
-}
-
-// Below this share of a lobe's energy the object can block, the lobe is
-// left unshadowed (runtime.rs CAST_SKIP_SHARE).
-const CAST_SKIP_SHARE: f32 = 1e-3;
-
-// The largest share of lobe p's hemisphere energy the bounding sphere can
-// block from x: p's largest value over the sphere's cone times the cone's
-// solid angle, over p's hemisphere integral (runtime.rs sphere_share).
-fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
-    let to = ssdf.world_sphere.xyz - x;
-    let dist = length(to);
-    let r = ssdf.world_sphere.w;
-    if dist <= r {
-        return 1.0;
-    }
-    let beta = asin(r / dist);
-    let gamma = ssdf_angle_between(p.direction, to / dist);
-    let peak = exp(p.sharpness * (cos(max(gamma - beta, 0.0)) - 1.0));
-    let s = sin(0.5 * beta);
-    let solid = 4.0 * SG_PI * s * s;
-    return min(peak * solid / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
-}
-
-// `radiance`: the field's colour at x; π × it floors the irradiance the
-// blocked light is taken from (an albedo ≤ 1 surface showing L receives at
-// least πL; runtime.rs cast_shadow_factor).
-fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
-    let cosine = sg_clamped_cosine(n);
-    var blocked = vec3<f32>(0.0);
-    var den = vec3<f32>(0.0);
-    var prepared = false;
-    let m = arrayLength(&light_lobes) / 4u;
-    for (var k = 0u; k < m; k++) {
-        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
-        let p = sg_product(g, cosine);
-        let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
-        den += w;
-        var q = 1.0;
-        let share = sphere_share(x, p);
-        if !clears_sphere(x, p.direction) && share >= CAST_SKIP_SHARE {
-            if !prepared {
-                ssdf_prepare(ssdf_to_object_point(x));
-                prepared = true;
-            }
-            q = max(fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness), 1.0 - share);
-        }
-        blocked += w * (1.0 - q);
-    }
-    let total = max(den, SG_PI * radiance);
-    return select(vec3<f32>(1.0), vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), total > vec3<f32>(0.0));
-}
-
-// ρ at pixel `pixel` (1 where the field is empty or flat).
-fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
-    let colour = textureLoad(field_colour, pixel, 0);
-    let opacity = colour.a;
-    if opacity <= 1e-4 {
-        return vec3<f32>(1.0);
-    }
-    let size = vec2<f32>(f32(pc.width), f32(pc.height));
-    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(pixel) + vec2<f32>(0.5));
-    let x = pc.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
-    let h = pc.normal_step;
-    let g = vec3<f32>(
-        density(x + vec3<f32>(h, 0.0, 0.0)) - density(x - vec3<f32>(h, 0.0, 0.0)),
-        density(x + vec3<f32>(0.0, h, 0.0)) - density(x - vec3<f32>(0.0, h, 0.0)),
-        density(x + vec3<f32>(0.0, 0.0, h)) - density(x - vec3<f32>(0.0, 0.0, h)),
-    );
-    if length(g) <= 1e-12 {
-        return vec3<f32>(1.0);
-    }
-    return cast_factor(x, -normalize(g), colour.rgb / opacity);
+fn cast_direct_visibility(x: vec3<f32>, lobe: u32, rays: u32) -> f32 {
+    return 1.0;
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
-        return;
-    }
-    let pixel = vec2<i32>(id.xy);
-    textureStore(out_shadow, pixel, vec4<f32>(pixel_factor(pixel), 1.0));
+    cast_main(id);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_chained(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
-        return;
-    }
-    let pixel = vec2<i32>(id.xy);
-    let rho = pixel_factor(pixel) * textureLoad(previous, pixel, 0).rgb;
-    textureStore(out_shadow, pixel, vec4<f32>(rho, 1.0));
+    cast_main_chained(id);
 }

@@ -159,6 +159,39 @@ pub fn correlation(x: &[f64], y: &[f64], mask: &impl Fn(usize) -> bool) -> f64 {
     sxy / (sxx * syy).sqrt()
 }
 
+/// The mean of each pixel's (2·`radius` + 1)² neighbours where `mask` holds
+/// (the pixel itself where none does): Monte-Carlo noise averaged down,
+/// across `mask`'s edges nothing mixed in.
+pub fn masked_box_mean(img: &Rgb, radius: u32, mask: impl Fn(usize) -> bool) -> Rgb {
+    let (w, h) = (img.width as i64, img.height as i64);
+    let r = radius as i64;
+    let pixels = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let (mut sum, mut n) = (DVec3::ZERO, 0u32);
+            for yy in (y - r).max(0)..=(y + r).min(h - 1) {
+                for xx in (x - r).max(0)..=(x + r).min(w - 1) {
+                    let i = (yy * w + xx) as usize;
+                    if mask(i) {
+                        sum += img.pixels[i];
+                        n += 1;
+                    }
+                }
+            }
+            if n == 0 {
+                img.pixels[(y * w + x) as usize]
+            } else {
+                sum / n as f64
+            }
+        })
+        .collect();
+    Rgb {
+        width: img.width,
+        height: img.height,
+        pixels,
+    }
+}
+
 /// The shadow an object casts: luminance of the image with the object over
 /// the image without it, 1 where the bare image is black.
 pub fn shadow_ratio(with: &Rgb, bare: &Rgb) -> Vec<f64> {
@@ -400,6 +433,11 @@ mod tests {
         assert_eq!(psnr(&a, &a, 1.0, |_| true), f64::INFINITY);
         assert!((correlation(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0], &|_| true) - 1.0).abs() < 1e-12);
         assert!((srgb(1.0) - 1.0).abs() < 1e-6 && srgb(-1.0) == 0.0);
+        // The box mean skips masked-out neighbours and keeps a lone pixel.
+        let row = img(&[1.0, 3.0, 5.0, 7.0]);
+        let boxed = masked_box_mean(&row, 1, |i| i != 2);
+        let v: Vec<f64> = boxed.pixels.iter().map(|p| p.x).collect();
+        assert_eq!(v, vec![2.0, 2.0, 5.0, 7.0]);
         let b4 = block_means(&img(&[1.0, 3.0, 5.0, 7.0]), 2, |_| true);
         assert_eq!(b4.pixels, vec![DVec3::ZERO; 0]);
         let wide = Rgb {

@@ -150,7 +150,7 @@ impl InsertionView {
                         &scene.shadows.bake,
                         use_cache,
                     )?;
-                    Some(GpuSsdf::upload(ctx, Arc::new(f))?)
+                    Some(GpuSsdf::upload(ctx, Arc::new(f), &placed.mesh)?)
                 } else {
                     None
                 },
@@ -274,7 +274,7 @@ impl crate::headless::Scene for InsertionView {
         }
         // Incident light, for the objects that show or shadow what shows.
         let version = effects.environment as u64;
-        if !self.objects[0].light.probe.has_environment() {
+        if !self.objects[0].light.has_environment() {
             graph.note_skipped("environment-term", "the environment is black");
         } else if !effects.environment {
             graph.note_skipped("environment-term", "environment light off");
@@ -382,7 +382,7 @@ impl InsertionView {
         field: &inlay_passes::march::MarchOutputs,
         casts: &[bool],
         ssdf: &[Option<inlay_passes::shadow::SsdfBindings>],
-        lobes: &[Option<inlay_engine::graph::BufferHandle>],
+        lobes: &[Option<inlay_passes::lighting::LightLobes>],
         fh: Option<inlay_engine::graph::BufferHandle>,
     ) -> Option<ImageHandle> {
         let (cast, fh_table) = (self.cast.as_ref()?, fh?);

@@ -12,7 +12,7 @@ use crate::timings_table::quantile;
 /// The modules of Table 1 and the passes each is made of.
 pub const MODULES: [(&str, &[&str]); 6] = [
     ("NeRF rendering", &["nerf-march"]),
-    ("Lighting", &["probe-trace"]),
+    ("Lighting", &["probe-trace", "direct-light"]),
     ("SG updating", &["sg-fit"]),
     ("Rendering", &["object-gbuffer", "object-shade"]),
     ("Compositing", &["composite"]),

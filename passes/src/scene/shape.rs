@@ -75,6 +75,23 @@ impl Shape {
         }
     }
 
+    /// The largest depth of a point inside the shape below its surface
+    /// (the largest −sdf): a ball's radius, a box's smallest half edge, the
+    /// smaller of a cylinder's radius and half height; a half-space has no
+    /// limit.
+    pub fn inner_radius(&self) -> f64 {
+        match *self {
+            Shape::Plane { .. } => f64::INFINITY,
+            Shape::Sphere { radius, .. } => radius,
+            Shape::Box { half, .. } => half.min_element(),
+            Shape::Cylinder {
+                radius,
+                half_height,
+                ..
+            } => radius.min(half_height),
+        }
+    }
+
     /// Unit gradient of the signed distance at `x` (central differences).
     pub fn sdf_gradient(&self, x: DVec3) -> DVec3 {
         let e = 1e-6 * (1.0 + x.abs().max_element());

@@ -19,6 +19,7 @@ use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 use crate::brdf::NdfLobes;
 use crate::camera::CameraFrame;
 use crate::gbuffer::GBuffer;
+use crate::lighting::LightLobes;
 use crate::shadow::{shadow_defines, SsdfBindings};
 
 /// Format of the object radiance image.
@@ -34,11 +35,13 @@ pub struct SelfShadow {
     pub ssdf: SsdfBindings,
 }
 
-/// The shading pipelines (without and with self-shadows) and the NDF
-/// mixture they use.
+/// The shading pipelines (without self-shadows; with them from the SSDF;
+/// with them from the SSDF and, for direct lobes, from rays cast against
+/// the mesh) and the NDF mixture they use.
 pub struct ShadePass {
     pipeline: ComputePipeline,
     self_shadowed: ComputePipeline,
+    self_shadowed_direct: ComputePipeline,
     ndf: Arc<Buffer>,
     ndf_lobes: NdfLobes,
 }
@@ -49,16 +52,14 @@ impl ShadePass {
         let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
         let shader = compile(lib, "object/shade.wgsl", "main", ShaderStage::Compute, &[])?;
-        let shadowed = compile(
-            lib,
-            "object/shade_self_shadow.wgsl",
-            "main",
-            ShaderStage::Compute,
-            &shadow_defines(),
-        )?;
+        let shadowed = |file: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(lib, file, "main", ShaderStage::Compute, &shadow_defines())?;
+            Ok(ComputePipeline::new(ctx, &shader)?)
+        };
         Ok(Self {
             pipeline: ComputePipeline::new(ctx, &shader)?,
-            self_shadowed: ComputePipeline::new(ctx, &shadowed)?,
+            self_shadowed: shadowed("object/shade_self_shadow.wgsl")?,
+            self_shadowed_direct: shadowed("object/shade_self_shadow_direct.wgsl")?,
             ndf: Arc::new(Buffer::with_data(
                 ctx,
                 "ndf lobes",
@@ -82,7 +83,7 @@ impl ShadePass {
         graph: &mut FrameGraph<'a>,
         camera: &CameraFrame,
         gbuffer: &GBuffer,
-        lobes: &[BufferHandle],
+        lobes: &[LightLobes],
         self_shadow: &[Option<SelfShadow>],
     ) -> ImageHandle {
         let (width, height) = (camera.width, camera.height);
@@ -105,21 +106,21 @@ impl ShadePass {
         }
         let mut declared = Vec::new();
         for l in lobes {
-            if !declared.contains(l) {
-                pass.buffer(*l, BufferAccess::StorageRead);
-                declared.push(*l);
+            if !declared.contains(&l.buffer) {
+                pass.buffer(l.buffer, BufferAccess::StorageRead);
+                declared.push(l.buffer);
             }
         }
         pass.buffer(ndf, BufferAccess::StorageRead);
-        for s in self_shadow.iter().flatten() {
-            for (b, access) in [
-                (s.fh_table, BufferAccess::StorageRead),
-                (s.ssdf.object, BufferAccess::StorageRead),
-                (s.ssdf.rows, BufferAccess::StorageRead),
-                (s.ssdf.coefs, BufferAccess::StorageRead),
-            ] {
+        for (i, s) in self_shadow.iter().enumerate() {
+            let Some(s) = s else { continue };
+            let mut reads = vec![s.fh_table, s.ssdf.object, s.ssdf.rows, s.ssdf.coefs];
+            if let Some(d) = lobes.get(i).and_then(|l| l.direct) {
+                reads.extend([s.ssdf.bvh_nodes, s.ssdf.bvh_triangles, d.rays]);
+            }
+            for b in reads {
                 if !declared.contains(&b) {
-                    pass.buffer(b, access);
+                    pass.buffer(b, BufferAccess::StorageRead);
                     declared.push(b);
                 }
             }
@@ -131,12 +132,18 @@ impl ShadePass {
         let cam = *camera;
         pass.exec(move |ctx| {
             for (i, l) in lobes.iter().enumerate() {
-                let push = cam.push_prefix(i as f32).u32((i == 0) as u32);
+                let push = cam
+                    .push_prefix(i as f32)
+                    .u32((i == 0) as u32)
+                    .u32(l.count)
+                    .u32(l.direct.map_or(0, |d| d.lobes))
+                    .u32(l.direct.map_or(0, |d| d.rays_per_lobe))
+                    .u32(0);
                 let mut bindings = vec![
                     Binding::SampledImage(g.normal_roughness),
                     Binding::SampledImage(g.albedo_metallic),
                     Binding::SampledImage(g.distance_id),
-                    Binding::StorageBuffer(*l),
+                    Binding::StorageBuffer(l.buffer),
                     Binding::StorageBuffer(ndf),
                     Binding::StorageImage(out),
                 ];
@@ -148,7 +155,17 @@ impl ShadePass {
                             Binding::StorageBuffer(s.ssdf.rows),
                             Binding::StorageBuffer(s.ssdf.coefs),
                         ]);
-                        &self.self_shadowed
+                        match l.direct {
+                            Some(d) => {
+                                bindings.extend([
+                                    Binding::StorageBuffer(s.ssdf.bvh_nodes),
+                                    Binding::StorageBuffer(s.ssdf.bvh_triangles),
+                                    Binding::StorageBuffer(d.rays),
+                                ]);
+                                &self.self_shadowed_direct
+                            }
+                            None => &self.self_shadowed,
+                        }
                     }
                     None => &self.pipeline,
                 };

@@ -2,7 +2,9 @@
 //! ρ per pixel from the field's depth and density gradient, the object's
 //! fitted lighting and its SSDF field (`shaders/shadow/cast.wgsl`, mirrored
 //! by [`super::cast_shadow_factor`]). One pass per object; each after the
-//! first multiplies the previous object's ρ.
+//! first multiplies the previous object's ρ. Where the object's light ends
+//! in direct lobes (too sharp for the fit), `shaders/shadow/cast_direct.wgsl`
+//! ray-casts their shadows against the object's mesh ([`super::direct`]).
 
 use std::sync::Arc;
 
@@ -15,33 +17,33 @@ use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 use super::gpu::{shadow_defines, SsdfBindings};
 use crate::camera::CameraFrame;
 use crate::field::GpuGridField;
+use crate::lighting::LightLobes;
 use crate::march::MarchOutputs;
 
 /// Format of the ρ image (rgb: per-channel factor).
 pub const SHADOW_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
-/// The cast-shadow pipelines.
+/// The cast-shadow pipelines: first or chained, without or with direct
+/// lobes.
 pub struct CastShadowPass {
     first: ComputePipeline,
     chained: ComputePipeline,
+    first_direct: ComputePipeline,
+    chained_direct: ComputePipeline,
 }
 
 impl CastShadowPass {
     /// Compiles the pass.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(
-                lib,
-                "shadow/cast.wgsl",
-                entry,
-                ShaderStage::Compute,
-                &shadow_defines(),
-            )?;
+        let build = |file: &str, entry: &str| -> anyhow::Result<ComputePipeline> {
+            let shader = compile(lib, file, entry, ShaderStage::Compute, &shadow_defines())?;
             Ok(ComputePipeline::new(ctx, &shader)?)
         };
         Ok(Self {
-            first: build("main")?,
-            chained: build("main_chained")?,
+            first: build("shadow/cast.wgsl", "main")?,
+            chained: build("shadow/cast.wgsl", "main_chained")?,
+            first_direct: build("shadow/cast_direct.wgsl", "main")?,
+            chained_direct: build("shadow/cast_direct.wgsl", "main_chained")?,
         })
     }
 
@@ -54,7 +56,7 @@ impl CastShadowPass {
         field: &GpuGridField,
         camera: &CameraFrame,
         march: &MarchOutputs,
-        lobes: BufferHandle,
+        lobes: LightLobes,
         fh_table: BufferHandle,
         ssdf: SsdfBindings,
         previous: Option<ImageHandle>,
@@ -70,14 +72,21 @@ impl CastShadowPass {
             },
         );
         let step = (field.bounds.size() / (field.resolution.as_dvec3() - 1.0)).min_element() as f32;
-        let push = camera.push_prefix(step).u32(0);
+        let direct = lobes.direct;
+        let push = camera
+            .push_prefix(step)
+            .u32(lobes.count)
+            .u32(direct.map_or(0, |d| d.lobes))
+            .u32(direct.map_or(0, |d| d.rays_per_lobe))
+            .u32(0)
+            .u32(0);
         let mut pass = graph.add_pass("cast-shadow", PassKind::Compute);
         // The occupancy grid is not read (binding 2 is compiled out).
         pass.buffer(grid.info, BufferAccess::Uniform);
         pass.buffer(grid.nodes, BufferAccess::StorageRead);
         pass.image(march.colour_opacity, ImageAccess::Sampled);
         pass.image(march.depth, ImageAccess::Sampled);
-        pass.buffer(lobes, BufferAccess::StorageRead);
+        pass.buffer(lobes.buffer, BufferAccess::StorageRead);
         pass.buffer(fh_table, BufferAccess::StorageRead);
         pass.buffer(ssdf.object, BufferAccess::StorageRead);
         pass.buffer(ssdf.rows, BufferAccess::StorageRead);
@@ -85,12 +94,18 @@ impl CastShadowPass {
         if let Some(p) = previous {
             pass.image(p, ImageAccess::Sampled);
         }
+        if let Some(d) = direct {
+            for b in [ssdf.bvh_nodes, ssdf.bvh_triangles, d.rays] {
+                pass.buffer(b, BufferAccess::StorageRead);
+            }
+        }
         let out = pass.image(out, ImageAccess::StorageWrite);
         let m = *march;
-        let pipeline = if previous.is_some() {
-            &self.chained
-        } else {
-            &self.first
+        let pipeline = match (previous.is_some(), direct.is_some()) {
+            (false, false) => &self.first,
+            (true, false) => &self.chained,
+            (false, true) => &self.first_direct,
+            (true, true) => &self.chained_direct,
         };
         pass.exec(move |ctx| {
             let mut bindings = vec![
@@ -98,7 +113,7 @@ impl CastShadowPass {
                 Binding::StorageBuffer(grid.nodes),
                 Binding::SampledImage(m.colour_opacity),
                 Binding::SampledImage(m.depth),
-                Binding::StorageBuffer(lobes),
+                Binding::StorageBuffer(lobes.buffer),
                 Binding::StorageBuffer(fh_table),
                 Binding::StorageBuffer(ssdf.object),
                 Binding::StorageBuffer(ssdf.rows),
@@ -108,6 +123,13 @@ impl CastShadowPass {
                 bindings.push(Binding::SampledImage(p));
             }
             bindings.push(Binding::StorageImage(out));
+            if let Some(d) = direct {
+                bindings.extend([
+                    Binding::StorageBuffer(ssdf.bvh_nodes),
+                    Binding::StorageBuffer(ssdf.bvh_triangles),
+                    Binding::StorageBuffer(d.rays),
+                ]);
+            }
             ctx.dispatch(
                 pipeline,
                 &bindings,

@@ -12,7 +12,7 @@ use inlay_engine::{vk, Buffer, Context};
 use super::bake::MAX_SSDF_COMPONENTS;
 use super::fh::{FhTable, FH_COLUMNS, FH_ROWS, FH_SHARPNESS_RANGE};
 use super::field::{OutsideMode, SsdfField};
-use crate::object::PlacedObject;
+use crate::object::{ObjectMesh, PlacedObject};
 
 /// The defines of `shadow/fh.wgsl` and `shadow/ssdf.wgsl`.
 pub fn shadow_defines() -> Vec<Define> {
@@ -57,12 +57,16 @@ impl GpuFhTable {
     }
 }
 
-/// An object's SSDF field on the GPU.
+/// An object's shadow geometry on the GPU: its SSDF field, and its mesh
+/// in a bounding-volume hierarchy for the direct lobes' ray-cast shadows
+/// ([`super::direct`]), both in the object's own frame.
 pub struct GpuSsdf {
     /// The field (for the CPU mirrors and the per-frame block).
     pub field: Arc<SsdfField>,
     rows: Arc<Buffer>,
     coefs: Arc<Buffer>,
+    bvh_nodes: Arc<Buffer>,
+    bvh_triangles: Arc<Buffer>,
 }
 
 /// A [`GpuSsdf`]'s buffers in one frame's graph.
@@ -75,14 +79,38 @@ pub struct SsdfBindings {
     pub rows: BufferHandle,
     /// Per node: coefficients.
     pub coefs: BufferHandle,
+    /// The mesh's hierarchy: nodes (`shaders/shadow/mesh_bvh.wgsl`).
+    pub bvh_nodes: BufferHandle,
+    /// The mesh's hierarchy: triangles.
+    pub bvh_triangles: BufferHandle,
 }
 
 impl GpuSsdf {
-    /// Uploads `field`.
-    pub fn upload(ctx: &Arc<Context>, field: Arc<SsdfField>) -> anyhow::Result<Self> {
+    /// Uploads `field` and the hierarchy of `mesh` (the mesh it was baked
+    /// from); fails with a clear message when the mesh's triangles exceed
+    /// the device's largest storage binding.
+    pub fn upload(
+        ctx: &Arc<Context>,
+        field: Arc<SsdfField>,
+        mesh: &Arc<ObjectMesh>,
+    ) -> anyhow::Result<Self> {
+        let (nodes, triangles) = super::object_scene(mesh).packed();
+        let limit = ctx.info().max_storage_buffer_range as u64;
+        let bytes = triangles.len() as u64 * 4;
+        anyhow::ensure!(
+            bytes <= limit,
+            "object `{}`: its {} triangles take {} MiB for the shadow rays, beyond this \
+             device's largest storage binding ({} MiB): simplify the mesh",
+            mesh.name,
+            triangles.len() / 12,
+            bytes >> 20,
+            limit >> 20
+        );
         Ok(Self {
             rows: storage(ctx, "ssdf rows", &field.texel_rows)?,
             coefs: storage(ctx, "ssdf coefficients", &field.coefficients)?,
+            bvh_nodes: storage(ctx, "shadow bvh nodes", &nodes)?,
+            bvh_triangles: storage(ctx, "shadow bvh triangles", &triangles)?,
             field,
         })
     }
@@ -98,6 +126,8 @@ impl GpuSsdf {
             object: graph.upload_buffer("ssdf object", object_block(&self.field, placed, mode)),
             rows: graph.import_buffer(&self.rows, None),
             coefs: graph.import_buffer(&self.coefs, None),
+            bvh_nodes: graph.import_buffer(&self.bvh_nodes, None),
+            bvh_triangles: graph.import_buffer(&self.bvh_triangles, None),
         }
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod bake;
 pub mod cast;
+pub mod direct;
 pub mod fh;
 pub mod field;
 pub mod format;
@@ -15,6 +16,7 @@ pub use bake::{
     bake_reference, grid_for, lookup_points, object_scene, SsdfBaker, SsdfKnobs, SsdfSamples,
 };
 pub use cast::{CastShadowPass, SHADOW_FORMAT};
+pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};
 pub use field::{OutsideMode, SsdfField};
 pub use format::{load_ssdf, parse_ssdf, save_ssdf, ssdf_bytes, SsdfFormatError, SSDF_VERSION};

@@ -18,9 +18,12 @@
 //! ([`self_shadow_factors`]): measured against Blender Cycles, the plain
 //! half-space model darkened the field by a few tenths of a per cent to a
 //! few per cent everywhere and the object's unoccluded surfaces by ~30 %.
+//! The direct lobes (too sharp for the fit) are shadowed by ray casting
+//! against the mesh instead ([`super::direct`]).
 
 use glam::DVec3;
 
+use super::direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 use super::fh::{hemisphere_integral, FhTable};
 use super::field::{OutsideMode, SsdfField};
 use super::gpu::world_to_object;
@@ -54,7 +57,10 @@ pub fn world_ssdf(
 /// (q(0, λ) ≈ 0.5–0.7 for broad lobes: a ~30 % darkening of unoccluded
 /// surfaces), so Γ is the visibility relative to the tangent plane's. A
 /// lobe (almost) wholly below the horizon (q(e) < 10⁻⁶) adds nothing to
-/// the shading and keeps Γ = 1.
+/// the shading and keeps Γ = 1. The `direct` lobes (the last ones) take
+/// Γ as the share of their rays above the tangent plane that leave the
+/// surface clear, cast from [`DIRECT_RAY_OFFSET`] radii off it.
+#[allow(clippy::too_many_arguments)]
 pub fn self_shadow_factors(
     field: &SsdfField,
     placed: &PlacedObject,
@@ -63,11 +69,18 @@ pub fn self_shadow_factors(
     x: DVec3,
     n: DVec3,
     mode: OutsideMode,
+    direct: Option<DirectOcclusion<'_>>,
 ) -> Vec<f64> {
     let cosine = Sg64::clamped_cosine(n);
+    let first = direct.map_or(lobes.len(), |d| d.first(lobes.len()));
+    let lifted = x + n * (DIRECT_RAY_OFFSET * placed.sphere().1);
     lobes
         .iter()
-        .map(|g| {
+        .enumerate()
+        .map(|(k, g)| {
+            if let Some(d) = direct.filter(|_| k >= first) {
+                return d.clear_fraction(placed, lifted, k - first, Some(n));
+            }
             let p = g.product(&cosine);
             let elevation = n.dot(p.direction).clamp(-1.0, 1.0).asin();
             let horizon = table.fraction(elevation as f32, p.sharpness as f32) as f64;
@@ -132,7 +145,8 @@ pub fn sphere_clear_of(x: DVec3, dir: DVec3, c: DVec3, r: f64) -> bool {
 /// far from it, lit by lights the object sees at a slant (a wall facing
 /// the object under a ceiling bulb), receives more than they say, and
 /// without the floor its shadow darkened ROOM's whole field by 4 %. Zero
-/// `radiance` gives the paper's ratio.
+/// `radiance` gives the paper's ratio. The `direct` lobes (the last ones)
+/// are occluded by the share of their rays from `x` the mesh blocks.
 #[allow(clippy::too_many_arguments)]
 pub fn cast_shadow_factor(
     field: &SsdfField,
@@ -143,17 +157,21 @@ pub fn cast_shadow_factor(
     n: DVec3,
     radiance: DVec3,
     mode: OutsideMode,
+    direct: Option<DirectOcclusion<'_>>,
 ) -> DVec3 {
     let cosine = Sg64::clamped_cosine(n);
     let (c, r) = placed.sphere();
+    let first = direct.map_or(lobes.len(), |d| d.first(lobes.len()));
     let (mut blocked, mut den) = (DVec3::ZERO, DVec3::ZERO);
-    for g in lobes {
+    for (k, g) in lobes.iter().enumerate() {
         let p = g.product(&cosine);
         let w = p.amplitude * hemisphere_integral(p.sharpness);
         den += w;
         let share = sphere_share(x, &p, c, r);
         let q = if sphere_clear_of(x, p.direction, c, r) || share < CAST_SKIP_SHARE {
             1.0
+        } else if let Some(d) = direct.filter(|_| k >= first) {
+            d.clear_fraction(placed, x, k - first, None)
         } else {
             let s = world_ssdf(field, placed, x, p.direction, mode);
             (table.fraction(s as f32, p.sharpness as f32) as f64).max(1.0 - share)

@@ -10,17 +10,15 @@ use clap::{Args, ValueEnum};
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback, Renderer, SubmitSync};
 use inlay_passes::field::GpuGridField;
+use inlay_passes::lighting::{sharp_limit, split_environment, IncidentLight};
 use inlay_passes::march::MarchKnobs;
 use inlay_passes::probe::{
-    lobes_irradiance, probe_irradiance, DirectionMap, MapKind, ProbeKnobs, ProbePass, AXES,
-    PROBE_FORMAT,
+    lobes_irradiance, probe_irradiance, DirectionMap, MapKind, ProbeKnobs, AXES, PROBE_FORMAT,
 };
 use inlay_passes::scene::load_scene;
 use inlay_passes::sg::Sg32;
 use inlay_passes::sg::Sg64;
-use inlay_passes::sgfit::{
-    fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, SgFitPass, Start,
-};
+use inlay_passes::sgfit::{fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, Start};
 
 use crate::field_source::scene_field;
 
@@ -152,7 +150,6 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     let env = scene.object_light_lobes(at);
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let traced = trace_and_fit(ctx, &gpu_field, at, probe_knobs, fit_knobs, march, &env)?;
-    let (probe_image, report, renderer) = (traced.probe, traced.report, traced.renderer);
     let map = probe_knobs.direction_map();
     print_report(
         ctx,
@@ -161,15 +158,15 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
         &probe_knobs,
         &fit_knobs,
         &env,
-        &report,
-        &renderer,
+        &traced,
     );
+    let (probe_image, report) = (&traced.probe, &traced.report);
     let texels: Vec<[f64; 4]> = probe_image
         .pixels
         .iter()
         .map(|p| p.map(|v| v as f64))
         .collect();
-    print_irradiance(&map, &texels, &report);
+    print_irradiance(&map, &texels, &traced);
     if args.cpu_check {
         let cpu = fit_reference(
             &ProbeSamples::new(&map, &texels),
@@ -185,7 +182,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
         );
     }
     anyhow::ensure!((1..=64).contains(&args.zoom), "--zoom must be in 1..=64");
-    let panels = side_by_side(&probe_image, &report.lobes, &map, args.zoom);
+    let panels = side_by_side(probe_image, &report.lobes, &map, args.zoom);
     anyhow::ensure!(
         panels.non_finite_count() == 0,
         "the fit produced non-finite values"
@@ -199,16 +196,28 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
 
 /// A probe traced and fitted cold on the GPU.
 pub struct TracedProbe {
-    /// The probe image (rgb radiance, alpha opacity).
+    /// The probe image (rgb radiance, alpha opacity) of L_env's broad
+    /// lobes and the field.
     pub probe: HdrImage,
-    /// The fit's report, lobes included.
+    /// The fit's report, the fitted lobes included.
     pub report: FitReport,
+    /// The lobes shading receives: the fitted ones, then L_env's sharp
+    /// lobes attenuated by the field (`inlay_passes::lighting::sharp`).
+    pub lights: Vec<Sg64>,
     /// The renderer that ran it (for its timings).
     pub renderer: Renderer,
 }
 
+impl TracedProbe {
+    /// The sharp lobes shaded directly (after the fitted ones).
+    pub fn direct(&self) -> &[Sg64] {
+        &self.lights[self.report.lobes.len().min(self.lights.len())..]
+    }
+}
+
 /// Traces the probe at `at` through `field` with L_env `env` and fits it
-/// from a cold start for the knobs' cold iterations.
+/// from a cold start for the knobs' cold iterations; L_env's lobes too
+/// sharp for the fit are attenuated by the field and kept as they are.
 pub fn trace_and_fit(
     ctx: &Arc<Context>,
     field: &GpuGridField,
@@ -219,9 +228,8 @@ pub fn trace_and_fit(
     env: &[Sg64],
 ) -> anyhow::Result<TracedProbe> {
     let library = crate::shaders::library()?;
-    let probe = ProbePass::new(ctx, &library, probe_knobs, march, env)?;
-    let fit = SgFitPass::new(ctx, &library, fit_knobs, probe.map())?;
-    let map = probe.map();
+    let light = IncidentLight::new(ctx, &library, probe_knobs, fit_knobs, march, env)?;
+    let map = light.probe.map();
     let readback = Readback::new(
         ctx,
         ImageDesc {
@@ -233,28 +241,34 @@ pub fn trace_and_fit(
     let mut renderer = Renderer::new(ctx, 1)?;
     renderer.begin_frame()?;
     let mut graph = inlay_engine::graph::FrameGraph::new();
-    let image = probe.add(&mut graph, field, at);
-    fit.add(&mut graph, image, FitStart::Cold, fit_knobs.cold_iterations)?;
+    let image = light.probe.add(&mut graph, field, at);
+    let lobes = light
+        .fit
+        .add(&mut graph, image, FitStart::Cold, fit_knobs.cold_iterations)?;
+    if let Some(d) = &light.direct {
+        d.add(&mut graph, field, at, lobes);
+    }
     readback.add_to_graph(&mut graph, image);
-    fit.add_readback(&mut graph);
+    light.add_readback(&mut graph);
     renderer.submit(graph, &SubmitSync::none())?;
     renderer.finish()?;
     Ok(TracedProbe {
         probe: readback.read()?,
-        report: fit.read_report()?,
+        report: light.fit.read_report()?,
+        lights: light.read_lights()?.iter().map(|g| g.to_f64()).collect(),
         renderer,
     })
 }
 
 /// The irradiance at the probe's centre from each axis' hemisphere, from
-/// the probe's texels and from the fitted lobes (what shading receives):
-/// the figures an independent renderer's irradiance sensors measure.
-fn print_irradiance(map: &DirectionMap, texels: &[[f64; 4]], report: &FitReport) {
-    let lobes: Vec<Sg64> = report.lobes.iter().map(|g| g.to_f64()).collect();
+/// the probe's texels (with the directly shaded lobes) and from all the
+/// lobes shading receives: the figures an independent renderer's
+/// irradiance sensors measure.
+fn print_irradiance(map: &DirectionMap, texels: &[[f64; 4]], traced: &TracedProbe) {
     println!("irradiance E(n) at the centre (rgb):");
     for (name, n) in AXES {
-        let p = probe_irradiance(map, texels, n);
-        let f = lobes_irradiance(&lobes, n);
+        let p = probe_irradiance(map, texels, n) + lobes_irradiance(traced.direct(), n);
+        let f = lobes_irradiance(&traced.lights, n);
         println!(
             "  {name}: probe [{:.5}, {:.5}, {:.5}]  fit [{:.5}, {:.5}, {:.5}]",
             p.x, p.y, p.z, f.x, f.y, f.z
@@ -270,9 +284,9 @@ fn print_report(
     probe: &ProbeKnobs,
     fit: &FitKnobs,
     env: &[inlay_passes::sg::Sg64],
-    report: &FitReport,
-    renderer: &Renderer,
+    traced: &TracedProbe,
 ) {
+    let (report, renderer) = (&traced.report, &traced.renderer);
     let map = probe.direction_map();
     println!(
         "{scene}: probe at {at}, {} {}×{} ({} texels, {}×{} rays each), environment: {}",
@@ -285,7 +299,15 @@ fn print_report(
         if env.is_empty() {
             "none (L_env not evaluated)".to_string()
         } else {
-            format!("{} SG lobes", env.len())
+            match traced.direct().len() {
+                0 => format!("{} SG lobes", env.len()),
+                k => format!(
+                    "{} SG lobes, {k} of them too sharp for the fit and shaded directly \
+                     (attenuated by the field to {})",
+                    env.len(),
+                    transmittances(env, traced.direct(), sharp_limit(probe))
+                ),
+            }
         }
     );
     if report.invalid > 0 {
@@ -304,12 +326,29 @@ fn print_report(
         report.relative_residual()
     );
     if let Some(t) = renderer.latest_timings() {
-        for name in ["probe-trace", "sg-fit"] {
+        for name in ["probe-trace", "sg-fit", "direct-light"] {
             if let Some(ms) = t.gpu_ms(name) {
                 println!("{name}: {ms:.3} ms GPU on {}", ctx.info().name);
             }
         }
     }
+}
+
+/// The field's transmittance towards each sharp lobe of `env` (sharper
+/// than `limit`), read off the `direct` lobes it left: "0.98, 0.41".
+fn transmittances(env: &[Sg64], direct: &[Sg64], limit: f64) -> String {
+    split_environment(env, limit)
+        .sharp
+        .iter()
+        .zip(direct)
+        .map(|(g, d)| {
+            format!(
+                "{:.2}",
+                d.amplitude.max_element() / g.amplitude.max_element()
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// probe | fit | |fit − probe| in one image, each texel a zoom × zoom block.

@@ -223,9 +223,16 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
         for o in &mut view.objects {
             if let Some(s) = &o.ssdf {
                 if s.field.components > knobs.components {
+                    let mesh = o
+                        .placed
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .mesh
+                        .clone();
                     o.ssdf = Some(GpuSsdf::upload(
                         ctx,
                         Arc::new(s.field.truncated(knobs.components)),
+                        &mesh,
                     )?);
                 }
             }

@@ -1,0 +1,51 @@
+//! The CPU reference (f64) of the direct-light pass
+//! (`shaders/probe/direct.wgsl`): the object's shading lobes are the M
+//! fitted lobes followed by each sharp lobe of L_env scaled by the field's
+//! mean transmittance 1 − Ô along its rays ([`super::sharp::lobe_rays`]),
+//! marched from the object's centre with the probe's quadrature.
+
+use glam::DVec3;
+
+use super::sharp::{attenuated, lobe_rays};
+use crate::field::RadianceField;
+use crate::geometry::Ray;
+use crate::march::{march_ray, MarchKnobs};
+use crate::sg::Sg64;
+
+/// The field's mean transmittance from `origin` along `rays`.
+pub fn transmittance(
+    field: &dyn RadianceField,
+    origin: DVec3,
+    rays: &[DVec3],
+    march: &MarchKnobs,
+) -> f64 {
+    if rays.is_empty() {
+        return 1.0;
+    }
+    let sum: f64 = rays
+        .iter()
+        .map(|&dir| 1.0 - march_ray(field, &Ray { origin, dir }, f64::INFINITY, march).opacity)
+        .sum();
+    sum / rays.len() as f64
+}
+
+/// The lobes an object at `origin` is shaded with: `fitted`, then each of
+/// `sharp` attenuated by the field along its `side`² rays.
+pub fn direct_lights(
+    field: &dyn RadianceField,
+    origin: DVec3,
+    fitted: &[Sg64],
+    sharp: &[Sg64],
+    side: u32,
+    march: &MarchKnobs,
+) -> Vec<Sg64> {
+    fitted
+        .iter()
+        .copied()
+        .chain(
+            sharp
+                .iter()
+                .map(|g| attenuated(g, transmittance(field, origin, &lobe_rays(g, side), march))),
+        )
+        .collect()
+}

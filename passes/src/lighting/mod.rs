@@ -1,0 +1,257 @@
+//! The object's incident light, per frame (METHOD.md §4.4 step 1): the
+//! probe trace followed by the SG fit, run only when the object moved or
+//! the field's lighting changed, warm-started from the previous fit; and,
+//! where L_env has lobes sharper than the fit can hold, those lobes shaded
+//! directly with the field's transmittance towards them ([`sharp`]).
+
+mod direct_pass;
+pub mod direct_reference;
+pub mod sharp;
+
+pub use direct_pass::DirectLightPass;
+pub use direct_reference::direct_lights;
+pub use sharp::{lobe_rays, split_environment, SplitEnvironment};
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use inlay_engine::graph::{BufferHandle, FrameGraph};
+use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::Context;
+
+use crate::field::GpuGridField;
+use crate::march::MarchKnobs;
+use crate::probe::{ProbeKnobs, ProbePass};
+use crate::sg::Sg64;
+use crate::sgfit::{FitKnobs, FitStart, SgFitPass};
+
+/// What a frame has to do for the incident light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LightingWork {
+    /// Nothing changed: the lobes of the last fit stand.
+    Reuse,
+    /// Trace the probe and fit from `start` for `iterations` iterations.
+    Update {
+        /// Cold on the first frame, warm afterwards.
+        start: FitStart,
+        /// Iterations of the fit.
+        iterations: u32,
+    },
+}
+
+/// The lobes an object is shaded with, as a frame sees them: a buffer of
+/// packed lobes ((p, λ), (μ, 0)) whose first `count` are the light (the
+/// fit's buffer holds a second slot of candidates after them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LightLobes {
+    /// The buffer.
+    pub buffer: BufferHandle,
+    /// How many lobes, from the start, are the light.
+    pub count: u32,
+    /// The direct lobes at the end of those, when there are any.
+    pub direct: Option<DirectRays>,
+}
+
+/// The last `lobes` lobes of a [`LightLobes`] are direct (too sharp for the
+/// fit), shadowed by casting their rays against the object's mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DirectRays {
+    /// How many direct lobes.
+    pub lobes: u32,
+    /// Each lobe's rays, `rays_per_lobe` world directions (xyz, w unused)
+    /// after another ([`lobe_rays`]).
+    pub rays: BufferHandle,
+    /// Rays per lobe.
+    pub rays_per_lobe: u32,
+}
+
+/// The probe and fit passes with the state that decides when they run.
+pub struct IncidentLight {
+    /// The probe trace (of the broad lobes of L_env).
+    pub probe: ProbePass,
+    /// The SG fit.
+    pub fit: SgFitPass,
+    /// The sharp lobes of L_env, shaded directly (None when there are
+    /// none: the fit's lobes are the whole light).
+    pub direct: Option<DirectLightPass>,
+    last: std::sync::Mutex<Option<([u64; 3], u64)>>,
+}
+
+impl IncidentLight {
+    /// Builds the passes; `environment` is L_env (empty: none). Its lobes
+    /// sharper than the fit can hold on this probe
+    /// ([`crate::sgfit::model::max_sharpness`]) skip the probe and are
+    /// shaded directly, each attenuated along `probe.supersampling`² rays
+    /// (a sharp lobe is integrated as a texel is).
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        probe: ProbeKnobs,
+        fit: FitKnobs,
+        march: MarchKnobs,
+        environment: &[Sg64],
+    ) -> anyhow::Result<Self> {
+        let split = split_environment(environment, sharp_limit(&probe));
+        let side = probe.supersampling;
+        let probe = ProbePass::new(ctx, lib, probe, march, &split.broad)?;
+        let direct = DirectLightPass::new(ctx, lib, fit.lobes, &split.sharp, side, march)?;
+        let fit = SgFitPass::new(ctx, lib, fit, probe.map())?;
+        Ok(Self {
+            probe,
+            fit,
+            direct,
+            last: Default::default(),
+        })
+    }
+
+    /// Whether any environment light is evaluated (broad lobes in the
+    /// probe or sharp ones shaded directly).
+    pub fn has_environment(&self) -> bool {
+        self.probe.has_environment() || self.direct.is_some()
+    }
+
+    /// Decides this frame's work for an object centred at `centre` in a
+    /// field whose lighting is at `version` (bump it whenever the field or
+    /// the environment light changes), and remembers them (interior
+    /// mutability, so a view that builds frames through `&self` can plan).
+    pub fn plan(&self, centre: DVec3, version: u64) -> LightingWork {
+        let key = (centre.to_array().map(f64::to_bits), version);
+        let knobs = *self.fit.knobs();
+        let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+        let work = match *last {
+            None => LightingWork::Update {
+                start: FitStart::Cold,
+                iterations: knobs.cold_iterations,
+            },
+            Some(last) if last != key => LightingWork::Update {
+                start: FitStart::Warm,
+                iterations: knobs.warm_iterations,
+            },
+            Some(_) => LightingWork::Reuse,
+        };
+        *last = Some(key);
+        work
+    }
+
+    /// Forgets the last fit: the next frame starts cold.
+    pub fn reset(&self) {
+        *self.last.lock().unwrap_or_else(|p| p.into_inner()) = None;
+    }
+
+    /// Adds the probe trace (with L_env) and the fit when `work` asks for
+    /// them, then the direct light; returns the shading lobes (as written
+    /// this frame, or as the last run left them).
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: &GpuGridField,
+        centre: DVec3,
+        work: LightingWork,
+    ) -> anyhow::Result<LightLobes> {
+        self.add_with(graph, field, centre, work, true)
+    }
+
+    /// As [`Self::add`], with L_env left out (the probe's term and the
+    /// sharp lobes) when `environment` is false (fold that switch into the
+    /// `version` given to [`Self::plan`]). A frame that reuses the fit
+    /// notes its passes as skipped.
+    pub fn add_with<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        field: &GpuGridField,
+        centre: DVec3,
+        work: LightingWork,
+        environment: bool,
+    ) -> anyhow::Result<LightLobes> {
+        let fitted = self.fit.knobs().lobes;
+        let direct = self.direct.as_ref().filter(|_| environment);
+        if self.direct.is_some() && !environment {
+            graph.note_skipped("direct-light", "environment light off");
+        }
+        match work {
+            LightingWork::Reuse => {
+                graph.note_skipped("probe-trace", "object and lighting unchanged");
+                graph.note_skipped("sg-fit", "object and lighting unchanged");
+                if direct.is_some() {
+                    graph.note_skipped("direct-light", "object and lighting unchanged");
+                }
+                Ok(match direct {
+                    Some(d) => d.reused(graph),
+                    None => LightLobes {
+                        buffer: graph.import_buffer(self.fit.lobes(), None),
+                        count: fitted,
+                        direct: None,
+                    },
+                })
+            }
+            LightingWork::Update { start, iterations } => {
+                let probe = self.probe.add_with(graph, field, centre, environment);
+                let lobes = self.fit.add(graph, probe, start, iterations)?;
+                Ok(match direct {
+                    Some(d) => d.add(graph, field, centre, lobes),
+                    None => LightLobes {
+                        buffer: lobes,
+                        count: fitted,
+                        direct: None,
+                    },
+                })
+            }
+        }
+    }
+
+    /// Adds readbacks of the fit and of the direct light;
+    /// [`Self::read_lights`] reads them once the frame has finished.
+    pub fn add_readback(&self, graph: &mut FrameGraph<'_>) {
+        self.fit.add_readback(graph);
+        if let Some(d) = &self.direct {
+            d.add_readback(graph);
+        }
+    }
+
+    /// The shading lobes of the frame that carried [`Self::add_readback`]
+    /// (with the environment on): the fitted lobes, then the sharp ones.
+    pub fn read_lights(&self) -> anyhow::Result<Vec<crate::sg::Sg32>> {
+        match &self.direct {
+            Some(d) => d.read(),
+            None => Ok(self.fit.read_report()?.lobes),
+        }
+    }
+}
+
+/// The sharpness above which a lobe of L_env is shaded directly on a probe
+/// of `knobs`: the fit's largest ([`crate::sgfit::model::max_sharpness`]).
+pub fn sharp_limit(knobs: &ProbeKnobs) -> f64 {
+    crate::sgfit::model::max_sharpness(knobs.direction_map().texels())
+}
+
+/// The distant light L_env as M SG lobes from a scene's declared
+/// environment: none for a black one, its own lobes for an SG one, and for
+/// an equirect map an SG fit (f64 reference LM, [`FitKnobs::default`], cold
+/// start) of the map sampled on an octahedral 32 × 32 probe. This is the
+/// scene author's ground truth; the estimated L_env (METHOD.md eq. 3-4)
+/// replaces it where the environment is unknown.
+pub fn environment_lobes(env: &crate::scene::Environment) -> Vec<Sg64> {
+    use crate::scene::Environment;
+    match env {
+        Environment::Black => Vec::new(),
+        Environment::Lobes { lobes, .. } => lobes.clone(),
+        Environment::Map(map) => {
+            let dirs = ProbeKnobs::default().direction_map();
+            let texels: Vec<[f64; 4]> = (0..dirs.texels())
+                .map(|i| {
+                    let l = map.eval(dirs.direction(i as u32 % dirs.width, i as u32 / dirs.width));
+                    [l.x, l.y, l.z, 0.0]
+                })
+                .collect();
+            let samples = crate::sgfit::ProbeSamples::new(&dirs, &texels);
+            let knobs = FitKnobs::default();
+            crate::sgfit::fit_reference(
+                &samples,
+                &knobs,
+                crate::sgfit::Start::Cold,
+                knobs.cold_iterations,
+            )
+            .lobes
+        }
+    }
+}

@@ -1,0 +1,56 @@
+// The object's shading lobes (passes/src/lighting/direct_pass.rs): the M
+// fitted lobes copied from the fit's buffer, then each lobe of L_env too
+// sharp for the fit, its amplitude scaled by the field's mean
+// transmittance 1 − Ô along its rays from the object's centre (the rays
+// are the lobe's own stratified directions, passes/src/lighting/sharp.rs
+// lobe_rays). One invocation per output lobe. Mirrors
+// passes/src/lighting/direct_reference.rs.
+#include "common/ray_box.wgsl"
+#include "field/grid.wgsl"
+#include "nerf/volume_march.wgsl"
+
+struct DirectPush {
+    origin: vec3<f32>,
+    step: f32,
+    termination: f32,
+    fitted: u32,
+    sharp: u32,
+    rays: u32,
+}
+
+var<immediate> pc: DirectPush;
+
+// The fit's lobe buffer: slot 0 holds the current M lobes as (p, λ), (μ, 0).
+@group(0) @binding(3) var<storage, read> fitted_lobes: array<vec4<f32>>;
+// The sharp lobes of L_env, two vec4 each.
+@group(0) @binding(4) var<storage, read> sharp_lobes: array<vec4<f32>>;
+// `rays` unit directions per sharp lobe (xyz; w unused).
+@group(0) @binding(5) var<storage, read> sharp_rays: array<vec4<f32>>;
+// Output: M + K lobes, two vec4 each.
+@group(0) @binding(6) var<storage, read_write> lights: array<vec4<f32>>;
+
+const DIRECT_NO_OBJECT: f32 = 3.0e38;
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i < pc.fitted {
+        lights[2u * i] = fitted_lobes[2u * i];
+        lights[2u * i + 1u] = fitted_lobes[2u * i + 1u];
+        return;
+    }
+    if i >= pc.fitted + pc.sharp {
+        return;
+    }
+    let k = i - pc.fitted;
+    var clear = 0.0;
+    for (var r = 0u; r < pc.rays; r++) {
+        let dir = sharp_rays[k * pc.rays + r].xyz;
+        let m = march_ray(pc.origin, dir, DIRECT_NO_OBJECT, pc.step, pc.termination);
+        clear += 1.0 - m.opacity;
+    }
+    let t = clamp(clear / f32(max(pc.rays, 1u)), 0.0, 1.0);
+    let amplitude = sharp_lobes[2u * k + 1u];
+    lights[2u * i] = sharp_lobes[2u * k];
+    lights[2u * i + 1u] = vec4<f32>(amplitude.xyz * t, 0.0);
+}
