@@ -40,22 +40,25 @@ pub fn edge_profile(s: f64) -> f64 {
 /// 0.93 the expected depth lies within 0.3 voxels of the surface from
 /// normal to 10° incidence, wherever the surface falls between the nodes
 /// (`rays_end_on_the_baked_surface`). A shape too thin for that keeps
-/// less of the inset, or is moved outwards ([`surface_inset`]).
+/// less of the inset, or none ([`surface_inset`]).
 pub const SURFACE_INSET: f64 = 0.93;
 
 /// The inset of `shape`'s profile of half-width `width`, in half-widths:
 /// [`SURFACE_INSET`], or as much as lets the profile reach its full density
-/// at the shape's deepest point — negative (the profile moved outwards) for
-/// a shape thinner than the edge. CUPS' 2 cm plate and ROOM's 1 cm softbox
-/// would have turned translucent with the full inset; centred, ROOM's
-/// softbox (0.6 voxels thick) fell between the grid's nodes in stripes.
+/// at the shape's deepest point, but never negative: a shape thinner than
+/// the edge keeps its profile centred on its surface. Moved outwards, the
+/// profile of a thin shape at a coarse bake reached two edge widths beyond
+/// it (BOOKS' top book at 24 nodes swelled by 0.2 m and closed the space
+/// above the desk); centred, a slab of any thinness still holds
+/// `density_scale × falloff_voxels` optical depths across it, opaque
+/// (`thin_shapes_stay_opaque`), and stands at most one edge width proud.
 pub fn surface_inset(shape: &crate::scene::Shape, width: f64) -> f64 {
-    (shape.inner_radius() / width - 1.0).clamp(-1.0, SURFACE_INSET)
+    (shape.inner_radius() / width - 1.0).clamp(0.0, SURFACE_INSET)
 }
 
 /// Changes whenever baking would give different nodes for the same recipe
 /// and knobs (cached bakes carry it in their key).
-pub const BAKE_REVISION: u32 = 6;
+pub const BAKE_REVISION: u32 = 7;
 
 /// Nodes per axis for a bake at `resolution` along the longest axis.
 pub fn grid_resolution(recipe: &Recipe, resolution: u32) -> UVec3 {
@@ -260,26 +263,46 @@ mod tests {
         assert!(worst < 0.35, "a ray ends {worst:.2} voxels off the surface");
     }
 
-    /// Every shape reaches the full density at its deepest point: a thick
-    /// one with the whole inset, a thin one with less, one thinner than the
-    /// edge with its profile moved outwards.
+    /// A thick shape takes the whole inset, a thinner one less and one
+    /// thinner than the edge none; every one is opaque across (optical
+    /// depth through its centre ≥ 20, by quadrature of the profile at the
+    /// default knobs) and no density lies farther than one edge width
+    /// outside it.
     #[test]
     fn thin_shapes_stay_opaque() {
         use crate::scene::Shape;
-        let width = 1.5;
+        let knobs = BakeKnobs::default();
+        let voxel = 0.05;
+        let width = knobs.falloff_voxels * voxel;
+        let sigma_max = knobs.density_scale / voxel;
         let slab = |half: f64| Shape::Box {
             centre: DVec3::ZERO,
             half: DVec3::new(10.0, half, 10.0),
             rotation: glam::DMat3::IDENTITY,
         };
         assert_eq!(surface_inset(&slab(100.0), width), SURFACE_INSET);
-        assert_eq!(surface_inset(&slab(1.5), width), 0.0);
-        for half in [0.01, 0.3, 1.0, 2.0, 2.5, 100.0] {
-            let c = surface_inset(&slab(half), width);
-            assert!((-1.0..=SURFACE_INSET).contains(&c));
+        assert_eq!(surface_inset(&slab(width), width), 0.0);
+        assert_eq!(surface_inset(&slab(0.3 * width), width), 0.0);
+        for half in [0.001, 0.01, 0.05, 0.1, 0.15, 0.3, 1.0] {
+            let shape = slab(half);
+            let c = surface_inset(&shape, width);
+            assert!((0.0..=SURFACE_INSET).contains(&c));
+            let sigma =
+                |y: f64| sigma_max * edge_profile(shape.sdf(DVec3::new(0.0, y, 0.0)) / width + c);
+            let n = 20_000;
+            let reach = half + 2.0 * width;
+            let dy = 2.0 * reach / n as f64;
+            let depth: f64 = (0..n)
+                .map(|i| sigma(-reach + (i as f64 + 0.5) * dy) * dy)
+                .sum();
             assert!(
-                (edge_profile(-half / width + c) - 1.0).abs() < 1e-12,
-                "half thickness {half}: inset {c}"
+                depth >= 20.0,
+                "half thickness {half}: optical depth {depth}"
+            );
+            assert_eq!(
+                sigma(half + width * 1.0001),
+                0.0,
+                "half thickness {half}: swollen"
             );
         }
     }
