@@ -55,6 +55,7 @@ use inlay_engine::{vk, Buffer, ImageDesc, Readback};
 use inlay_passes::bake::MeshScene;
 use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::field::GpuGridField;
+use inlay_passes::geometry::Ray;
 use inlay_passes::lighting::{lobe_rays, DirectRays, LightLobes};
 use inlay_passes::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
 use inlay_passes::object::PlacedObject;
@@ -62,9 +63,10 @@ use inlay_passes::rng::Pcg32;
 use inlay_passes::sg::Sg64;
 use inlay_passes::shadow::reference::{hits, ssdf_by_ray_casting};
 use inlay_passes::shadow::{
-    cast_shadow_factor, field_normal, self_shadow_factors, CastShadowPass, DirectOcclusion,
-    GpuFhTable, GpuSsdf, OutsideMode, SsdfField, SsdfKnobs, SHADOW_FORMAT,
+    cast_shadow_factor, field_normal, hemisphere_integral, self_shadow_factors, CastShadowPass,
+    DirectOcclusion, GpuFhTable, GpuSsdf, OutsideMode, SsdfField, SsdfKnobs, SHADOW_FORMAT,
 };
+use std::f64::consts::PI;
 
 /// An SSDF field baked on the GPU at test size.
 fn small_field(
@@ -203,8 +205,12 @@ fn test_lobes() -> Vec<Sg64> {
     ]
 }
 
-/// ρ by brute force: ∫ L V (ω·n)+ / ∫ L (ω·n)+ over a 96² octahedral map,
-/// one ray cast against the placed object per direction.
+/// ρ by brute force: ∫ L' (ω·n)+ / ∫ L (ω·n)+ over a 96² octahedral map,
+/// one ray cast against the placed object per direction; L' is L where
+/// the ray escapes and, where it hits the mesh, the radiance of a
+/// Lambertian surface of the hit's albedo and shading normal lit by the
+/// lobes (what the cast shadow's bounce models with the bounding sphere's
+/// cap), capped at 1 as the model is.
 fn rho_brute_force(scene: &MeshScene, lobes: &[Sg64], x: DVec3, n: DVec3) -> DVec3 {
     let map = inlay_passes::probe::DirectionMap::new(inlay_passes::probe::MapKind::Octahedral, 96);
     let (mut num, mut den) = (DVec3::ZERO, DVec3::ZERO);
@@ -218,11 +224,27 @@ fn rho_brute_force(scene: &MeshScene, lobes: &[Sg64], x: DVec3, n: DVec3) -> DVe
         let l: DVec3 = lobes.iter().map(|g| g.eval(w)).sum();
         let e = l * cos * map.solid_angle(tx, ty);
         den += e;
-        if !hits(scene, x + n * 1e-4, w) {
-            num += e;
+        let ray = Ray {
+            origin: x + n * 1e-4,
+            dir: w,
+        };
+        match scene.intersect(&ray, 0.0, f64::INFINITY) {
+            None => num += e,
+            Some(hit) => {
+                let s = scene.surface(&ray, &hit);
+                let facing = Sg64::clamped_cosine(s.normal);
+                let irradiance: DVec3 = lobes
+                    .iter()
+                    .map(|g| {
+                        let p = g.product(&facing);
+                        p.amplitude * hemisphere_integral(p.sharpness)
+                    })
+                    .sum();
+                num += s.material.albedo * irradiance / PI * cos * map.solid_angle(tx, ty);
+            }
         }
     }
-    num / den
+    (num / den).min(DVec3::ONE)
 }
 
 /// How the cast shadow of one configuration compares.
@@ -347,6 +369,7 @@ fn compare_cast_shadow(lobes: &[Sg64], direct: usize) -> CastComparison {
                     radiance,
                     OutsideMode::Correct,
                     (direct > 0).then_some(occlusion),
+                    &ssdf.reflectance,
                 )
             };
             let diff = (factor(radiance) - g).abs().max_element();
@@ -357,8 +380,12 @@ fn compare_cast_shadow(lobes: &[Sg64], direct: usize) -> CastComparison {
             }
             checked += 1;
             // The brute force knows only the lobes: compared without the
-            // field's irradiance floor.
-            candidates.push((factor(DVec3::ZERO), p, n));
+            // field's irradiance floor; not at field points inside the
+            // mesh (the sphere sinks into the small bake's book), hidden
+            // by the object, where its rays meet the mesh from within.
+            if !mesh_scene.inside(p) {
+                candidates.push((factor(DVec3::ZERO), p, n));
+            }
         }
     }
     candidates.sort_by(|a, b| a.0.y.total_cmp(&b.0.y));
@@ -401,10 +428,12 @@ fn cast_shadow_matches_mirror_and_brute_force() {
         c.worst_mirror
     );
     assert!(c.shadowed >= 5, "{} shadowed pixels", c.shadowed);
-    // Measured on lavapipe: mean 0.0086, worst 0.090 (the half-space model
-    // at the penumbra's edge, an 8³ grid of 16² directions).
-    assert!(c.mean < 0.04, "mean |Δρ| {}", c.mean);
-    assert!(c.worst < 0.25, "worst |Δρ| {}", c.worst);
+    // Measured on lavapipe: mean 0.0092, worst 0.082 (the half-space model
+    // at the penumbra's edge, an 8³ grid of 16² directions; the bounce's
+    // cap against the mesh's own faces). Without the bounce in the model
+    // the umbra's 30 pixels alone miss the brute force by 0.05–0.1 each.
+    assert!(c.mean < 0.025, "mean |Δρ| {}", c.mean);
+    assert!(c.worst < 0.15, "worst |Δρ| {}", c.worst);
 }
 
 /// The same with the sun shaded directly (as a lobe of L_env too sharp for
@@ -430,7 +459,7 @@ fn direct_lobe_shadow_matches_mirror_and_brute_force() {
         c.worst_mirror
     );
     assert!(c.shadowed >= 5, "{} shadowed pixels", c.shadowed);
-    // Measured on lavapipe: mean 0.0076, worst 0.036 (SSDF: 0.0086, 0.090).
+    // Measured on lavapipe: mean 0.0082, worst 0.040 (SSDF: 0.0092, 0.082).
     assert!(c.mean < 0.02, "mean |Δρ| {}", c.mean);
     assert!(c.worst < 0.1, "worst |Δρ| {}", c.worst);
 }

@@ -12,7 +12,8 @@
 // bounding sphere can block, and lobes whose
 // direction clears the sphere by a quarter turn, or of which it can block
 // under CAST_SKIP_SHARE, skip the SSDF (q = 1); a direct lobe takes q
-// from its rays instead of the SSDF. Mirrors
+// from its rays instead of the SSDF; the light the object sends back
+// (shadow/bounce.wgsl) offsets the blocked light, never beyond it. Mirrors
 // passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
 // multiplies the previous object's ρ image (cast_main_chained). Output: ρ in rgb.
 // Needs: the shadow defines (passes/src/shadow/gpu.rs).
@@ -50,6 +51,7 @@ var<immediate> pc: CastPush;
 
 #include "shadow/fh.wgsl"
 #include "shadow/ssdf.wgsl"
+#include "shadow/bounce.wgsl"
 
 const CAST_HALF_PI: f32 = 1.57079632679490;
 
@@ -73,7 +75,8 @@ const CAST_SKIP_SHARE: f32 = 1e-3;
 
 // The largest share of lobe p's hemisphere energy the bounding sphere can
 // block from x: p's largest value over the sphere's cone times the cone's
-// solid angle, over p's hemisphere integral (runtime.rs sphere_share).
+// solid angle, covered to the mesh's fill far away and wholly at the
+// sphere, over p's hemisphere integral (runtime.rs sphere_share).
 fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
     let to = ssdf.world_sphere.xyz - x;
     let dist = length(to);
@@ -86,7 +89,9 @@ fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
     let peak = exp(p.sharpness * (cos(max(gamma - beta, 0.0)) - 1.0));
     let s = sin(0.5 * beta);
     let solid = 4.0 * SG_PI * s * s;
-    return min(peak * solid / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
+    let fill = ssdf.reflectance.w;
+    let covered = fill + (1.0 - fill) * (r / dist) * (r / dist);
+    return min(peak * solid * covered / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
 }
 
 // `radiance`: the field's colour at x; π × it floors the irradiance the
@@ -116,6 +121,9 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
             q = max(fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness), 1.0 - share);
         }
         blocked += w * (1.0 - q);
+    }
+    if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {
+        blocked = max(blocked - cast_bounce(x, n), vec3<f32>(0.0));
     }
     let total = max(den, SG_PI * radiance);
     return select(vec3<f32>(1.0), vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), total > vec3<f32>(0.0));

@@ -23,6 +23,10 @@ struct SsdfObject {
     world_sphere: vec4<f32>,
     // Nodes per axis, direction map side, components, outside mode.
     dims: vec4<u32>,
+    // The share of the sphere's silhouette the mesh fills times its albedo
+    // (rgb; the cast shadow's bounce, shadow/bounce.wgsl), and the share
+    // alone (w; the cast shadow's sphere_share).
+    reflectance: vec4<f32>,
 }
 
 var<private> ssdf_coef: array<f32, SSDF_MAX_COMPONENTS>;

@@ -157,7 +157,7 @@ fn region(p: &Primitive, field: &GridField, reach: f64) -> Option<EmitterRegion>
 /// Scales the colour of the nodes each emitter of `recipe` owns (`owner(x)`
 /// names the primitive whose colour node x carries) so that the field's
 /// power equals the recipe's: a sphere's ([`field_power`] over the sphere
-/// grown by `reach`) π r² L, a quad's ([`face_power`] over its face grown
+/// grown by `reach`) π r² L, a quad's (`face_power` over its face grown
 /// by `reach`) L × area. Emitters whose grown extent leaves the field, or
 /// that the field does not resolve (no measured power), are left as baked.
 /// Returns the factor applied to each emitter, by primitive index.

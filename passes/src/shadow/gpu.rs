@@ -67,6 +67,9 @@ pub struct GpuSsdf {
     coefs: Arc<Buffer>,
     bvh_nodes: Arc<Buffer>,
     bvh_triangles: Arc<Buffer>,
+    /// How much of its bounding sphere the mesh fills, with what albedo
+    /// (the light it sends back onto the field, [`super::bounce`]).
+    pub reflectance: super::ObjectReflectance,
 }
 
 /// A [`GpuSsdf`]'s buffers in one frame's graph.
@@ -111,6 +114,7 @@ impl GpuSsdf {
             coefs: storage(ctx, "ssdf coefficients", &field.coefficients)?,
             bvh_nodes: storage(ctx, "shadow bvh nodes", &nodes)?,
             bvh_triangles: storage(ctx, "shadow bvh triangles", &triangles)?,
+            reflectance: super::ObjectReflectance::measure(mesh),
             field,
         })
     }
@@ -123,7 +127,10 @@ impl GpuSsdf {
         mode: OutsideMode,
     ) -> SsdfBindings {
         SsdfBindings {
-            object: graph.upload_buffer("ssdf object", object_block(&self.field, placed, mode)),
+            object: graph.upload_buffer(
+                "ssdf object",
+                object_block(&self.field, placed, mode, &self.reflectance),
+            ),
             rows: graph.import_buffer(&self.rows, None),
             coefs: graph.import_buffer(&self.coefs, None),
             bvh_nodes: graph.import_buffer(&self.bvh_nodes, None),
@@ -137,8 +144,15 @@ pub fn world_to_object(placed: &PlacedObject) -> DMat4 {
     placed.pose.matrix().inverse()
 }
 
-/// The `SsdfObject` block: world → object rows, grid, world sphere, dims.
-pub fn object_block(field: &SsdfField, placed: &PlacedObject, mode: OutsideMode) -> Vec<u8> {
+/// The `SsdfObject` block: world → object rows, grid, world sphere, dims,
+/// the object's silhouette reflectance ([`super::ObjectReflectance::of`])
+/// and fill.
+pub fn object_block(
+    field: &SsdfField,
+    placed: &PlacedObject,
+    mode: OutsideMode,
+    object: &super::ObjectReflectance,
+) -> Vec<u8> {
     let m = world_to_object(placed);
     let mut f: Vec<f32> = Vec::with_capacity(20);
     for r in 0..3 {
@@ -151,6 +165,9 @@ pub fn object_block(field: &SsdfField, placed: &PlacedObject, mode: OutsideMode)
     let mut bytes: Vec<u8> = f.iter().flat_map(|v| v.to_le_bytes()).collect();
     for u in [g.nodes, field.directions, field.components, mode.index()] {
         bytes.extend(u.to_le_bytes());
+    }
+    for v in object.of(placed).extend(object.fill).to_array() {
+        bytes.extend((v as f32).to_le_bytes());
     }
     bytes
 }

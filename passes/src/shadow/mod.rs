@@ -2,6 +2,7 @@
 //! integral f_h ([`fh`]).
 
 pub mod bake;
+pub mod bounce;
 pub mod cast;
 pub mod direct;
 pub mod fh;
@@ -15,6 +16,7 @@ pub mod silhouette;
 pub use bake::{
     bake_reference, grid_for, lookup_points, object_scene, SsdfBaker, SsdfKnobs, SsdfSamples,
 };
+pub use bounce::{bounce_irradiance, ObjectReflectance};
 pub use cast::{CastShadowPass, SHADOW_FORMAT};
 pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};

@@ -1,0 +1,197 @@
+//! The light an inserted object sends back onto the field, in place of the
+//! light it blocks (beyond the paper; mirrored by `shaders/shadow/bounce.wgsl`).
+//!
+//! The paper's cast shadow removes the light the object blocks and adds
+//! nothing: an object of albedo 0. Against Blender Cycles that darkened
+//! every surface facing the object, a few bounding radii away, by the
+//! share of its sky the object covers (ROOM: 2.4 % over the far field,
+//! where Cycles measures −0.1 to 0.2 %): a real object reflects back about
+//! as much as it hides. Here the object seen from a field point `x` is its
+//! bounding sphere's cap, filled to the share of the sphere's silhouette
+//! the mesh covers (its [`ObjectReflectance::fill`], mean over directions),
+//! showing the radiance of a Lambertian surface of the mesh's mean albedo
+//! facing `x`, lit by the object's own lobes (their irradiance on the
+//! normal towards `x`, through the clamped-cosine SG: a uniform sky L
+//! gives πL). A face of normals spread over the hemisphere towards `x`
+//! would average in more light from the side; one SG for that average
+//! (half the cosine's sharpness) weighted a bulb straight above eight times
+//! too much on the faces turned below it, and changed ROOM's shadow
+//! figures by less than their noise, so the plain cosine stays. Its
+//! irradiance at `x` is the cap's projected solid angle (π sin²β cos θ,
+//! exact while the cap is above `x`'s horizon; sin β = 1 inside the
+//! sphere) times that radiance. The cast shadow subtracts it
+//! from the blocked light, never below zero: the object does not brighten
+//! the field (its own shadow on the object, the view-dependence of its
+//! reflection and light it sends past its bounding sphere are left out).
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::geometry::Ray;
+use crate::object::{ObjectMesh, PlacedObject};
+use crate::sg::Sg64;
+
+/// Directions the silhouette is measured from.
+const FILL_DIRECTIONS: u32 = 64;
+/// Parallel rays per side of the square around the bounding sphere's disc.
+const FILL_RAYS: u32 = 32;
+
+/// How much of its bounding sphere's silhouette a mesh covers, and with
+/// what albedo, averaged over the directions it is seen from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectReflectance {
+    /// The mean share of the bounding sphere's disc the mesh covers.
+    pub fill: f64,
+    /// The mean albedo of the mesh's surface where it covers the disc
+    /// (its own materials, textures included).
+    pub albedo: DVec3,
+}
+
+impl ObjectReflectance {
+    /// Measures `mesh` by casting parallel rays across its bounding
+    /// sphere's disc from 64 directions (`FILL_DIRECTIONS`).
+    pub fn measure(mesh: &Arc<ObjectMesh>) -> Self {
+        let scene = super::object_scene(mesh);
+        let (c, r) = mesh.bounding_sphere();
+        let (mut disc, mut hits, mut albedo) = (0u64, 0u64, DVec3::ZERO);
+        for k in 0..FILL_DIRECTIONS {
+            let d = crate::sgfit::fibonacci_axis(k, FILL_DIRECTIONS);
+            let (t, b) = d.any_orthonormal_pair();
+            for i in 0..FILL_RAYS {
+                for j in 0..FILL_RAYS {
+                    let s = (i as f64 + 0.5) / FILL_RAYS as f64 * 2.0 - 1.0;
+                    let v = (j as f64 + 0.5) / FILL_RAYS as f64 * 2.0 - 1.0;
+                    if s * s + v * v > 1.0 {
+                        continue;
+                    }
+                    disc += 1;
+                    let ray = Ray {
+                        origin: c - d * (2.0 * r) + (t * s + b * v) * r,
+                        dir: d,
+                    };
+                    if let Some(hit) = scene.intersect(&ray, 0.0, 4.0 * r) {
+                        hits += 1;
+                        albedo += scene.surface(&ray, &hit).material.albedo;
+                    }
+                }
+            }
+        }
+        Self {
+            fill: hits as f64 / disc.max(1) as f64,
+            albedo: if hits > 0 {
+                albedo / hits as f64
+            } else {
+                DVec3::ZERO
+            },
+        }
+    }
+
+    /// fill × albedo for `placed`, whose material override (if any)
+    /// replaces the mesh's colours.
+    pub fn of(&self, placed: &PlacedObject) -> DVec3 {
+        self.fill * placed.material.base_color.unwrap_or(self.albedo)
+    }
+}
+
+/// The irradiance at field point `x` (unit normal `n`) from the object in
+/// bounding sphere (`c`, `r`) under `lobes` (the light at the object), for
+/// an object of silhouette reflectance `reflectance` ([`ObjectReflectance::of`]).
+/// Zero at the sphere's centre and where the object lies below `x`'s
+/// horizon.
+pub fn bounce_irradiance(
+    lobes: &[Sg64],
+    x: DVec3,
+    n: DVec3,
+    c: DVec3,
+    r: f64,
+    reflectance: DVec3,
+) -> DVec3 {
+    let to = c - x;
+    let dist = to.length();
+    if dist <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let u = to / dist;
+    let projected = (r / dist).powi(2).min(1.0) * n.dot(u).max(0.0);
+    if projected <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let facing = Sg64::clamped_cosine(-u);
+    let irradiance: DVec3 = lobes.iter().map(|g| g.inner_product(&facing)).sum();
+    // π sin²β cos θ × albedo × E / π.
+    projected * reflectance * irradiance
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::object::{MaterialOverride, Pose};
+
+    /// A sphere fills its own silhouette; its albedo is its material's; an
+    /// override replaces it.
+    #[test]
+    fn a_sphere_fills_its_bounding_disc() {
+        let mesh = crate::shadow::tests::bundled_mesh("metal-sphere.gltf");
+        let m = ObjectReflectance::measure(&mesh);
+        // The tessellation's silhouette is inscribed in the circle.
+        assert!((0.97..=1.0).contains(&m.fill), "fill {}", m.fill);
+        let own = mesh.materials[0].base_colour.truncate();
+        assert!(
+            (m.albedo - own).abs().max_element() < 1e-9,
+            "{} vs {own}",
+            m.albedo
+        );
+        let placed = PlacedObject {
+            name: "ball".into(),
+            mesh: mesh.clone(),
+            pose: Pose::default(),
+            material: MaterialOverride {
+                base_color: Some(DVec3::new(0.2, 0.4, 0.6)),
+                ..Default::default()
+            },
+        };
+        let rgb = m.of(&placed);
+        assert!(
+            (rgb - m.fill * DVec3::new(0.2, 0.4, 0.6))
+                .abs()
+                .max_element()
+                < 1e-12
+        );
+    }
+
+    /// A white sphere under a (nearly) uniform sky seen from far away
+    /// sends back the light it blocks: π sin²β cos θ × L, the cap's
+    /// projected solid angle times the sky's radiance (closed form).
+    #[test]
+    fn a_white_object_under_a_uniform_sky_returns_what_it_blocks() {
+        // λ = 1e-4: within 2e-4 of uniform over the sphere.
+        let sky = Sg64 {
+            direction: DVec3::Y,
+            sharpness: 1e-4,
+            amplitude: DVec3::splat(2.0),
+        };
+        let (c, r) = (DVec3::new(0.0, 1.0, 0.0), 0.5);
+        let x = DVec3::new(3.0, 0.0, 0.0);
+        let n = DVec3::Y;
+        let u = (c - x).normalize();
+        let sin2 = (r / (c - x).length()).powi(2);
+        let expected = std::f64::consts::PI * sin2 * n.dot(u) * 2.0;
+        let got = bounce_irradiance(&[sky], x, n, c, r, DVec3::ONE);
+        assert!(
+            (got.x / expected - 1.0).abs() < 1e-3,
+            "{} vs {}",
+            got.x,
+            expected
+        );
+        // Below the horizon: nothing; inside the sphere, the whole
+        // hemisphere's projected solid angle π at most.
+        assert_eq!(
+            bounce_irradiance(&[sky], x, -n, c, r, DVec3::ONE),
+            DVec3::ZERO
+        );
+        let inside = bounce_irradiance(&[sky], c - DVec3::Y * 0.1, n, c, r, DVec3::ONE);
+        assert!((inside.x / (std::f64::consts::PI * 2.0) - 1.0).abs() < 1e-3);
+        assert!(bounce_irradiance(&[sky], c, n, c, r, DVec3::ONE).is_finite());
+    }
+}
