@@ -13,7 +13,7 @@ use super::fit::{fit_environment, FitData, FitResult};
 use super::knobs::EnvEstimateKnobs;
 use super::near_field::{NearField, NearFieldTracer};
 use super::quality::{view_quality, QualityScore, ViewImage};
-use super::surface::{surface_points, SurfacePoint};
+use super::surface::{draw_points, emitter_limit, view_candidates, SurfacePoint};
 use super::views::random_view;
 use crate::camera::CameraFrame;
 use crate::field::{GpuGridField, GridField};
@@ -108,6 +108,7 @@ pub fn sample_surface(
     let pass = MarchPass::new(ctx, lib, march)?;
     let mut renderer = Renderer::new(ctx, 1)?;
     let distance = 0.5 * field.bounds.size().max_element();
+    let mut views: Vec<(u32, super::surface::ViewPoints)> = Vec::new();
     let max_tries = knobs.views * knobs.max_tries_per_view;
     let mut out = SurfaceSample {
         points: Vec::new(),
@@ -125,21 +126,12 @@ pub fn sample_surface(
         let score = view_quality(&image, distance);
         let mut keep = score.score <= knobs.quality_threshold;
         if keep {
-            let mut rng = Pcg32::new(knobs.seed, 0x5E1E_C700_0000 | out.views_tried as u64);
-            let drawn = surface_points(
-                field,
-                &frame,
-                &image,
-                out.views_tried - 1,
-                knobs.pixels_per_view as usize,
-                knobs.emitter_ratio,
-                &mut rng,
-            );
+            let candidates = view_candidates(field, &frame, &image, out.views_tried - 1);
             // A view with no surface to draw from is as poor as an empty one.
-            keep = !drawn.points.is_empty();
-            out.emitters += drawn.emitters;
-            out.mixed += drawn.mixed;
-            out.points.extend(drawn.points);
+            keep = !candidates.points.is_empty();
+            if keep {
+                views.push((out.views_tried, candidates));
+            }
         }
         out.scores.push((score, keep));
         if keep {
@@ -151,6 +143,15 @@ pub fn sample_surface(
                 None,
             );
         }
+    }
+    // Light sources are judged against all the views' median at once.
+    let limit = emitter_limit(views.iter().map(|(_, v)| v), knobs.emitter_ratio);
+    for (tried, candidates) in views {
+        let mut rng = Pcg32::new(knobs.seed, 0x5E1E_C700_0000 | tried as u64);
+        let drawn = draw_points(candidates, limit, knobs.pixels_per_view as usize, &mut rng);
+        out.emitters += drawn.emitters;
+        out.mixed += drawn.mixed;
+        out.points.extend(drawn.points);
     }
     anyhow::ensure!(
         !out.points.is_empty(),

@@ -69,9 +69,9 @@ pub struct EnvEstimateKnobs {
     pub share_prior: f64,
     /// Largest lobe sharpness the fit may reach.
     pub max_sharpness: f64,
-    /// A point whose luminance exceeds this multiple of the median point's is
-    /// taken for a light source in the field and left out (a Lambertian
-    /// reflector cannot explain it). 8, not 50: ROOM's softbox is 20–30 ×
+    /// A point whose luminance exceeds this multiple of the median point's
+    /// (over all the views' candidate points) is taken for a light source
+    /// in the field and left out (a Lambertian reflector cannot explain it). 8, not 50: ROOM's softbox is 20–30 ×
     /// the median, and kept in the fit as a reflector it asks for twenty
     /// times the room's light (the error 829 % at 50, 151 % at 8); DOG,
     /// CUPS and PLANTS estimate the same at both, BOOKS 11.8 % → 12.5 %

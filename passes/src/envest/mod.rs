@@ -44,7 +44,7 @@ pub use near_field::{NearField, NearFieldTracer};
 pub use near_lights::PointLight;
 pub use quality::{view_quality, QualityScore, ViewImage};
 pub use recovery::{emitter_recovery, EmitterRecovery};
-pub use surface::{surface_points, SurfacePoint};
+pub use surface::{draw_points, emitter_limit, view_candidates, SurfacePoint, ViewPoints};
 pub use truth::{
     hidden_light_lobes, light_irradiance, lobes_irradiance, point_lights_irradiance, test_points,
     Lights, Validation,

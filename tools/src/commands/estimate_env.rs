@@ -71,8 +71,8 @@ pub struct EstimateEnvArgs {
     /// SG lobes (paper: 32).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().lobes)]
     pub lobes: u32,
-    /// A surface point brighter than this multiple of its view's median is
-    /// taken for a light source and left out.
+    /// A surface point brighter than this multiple of the median surface
+    /// point over all the views is taken for a light source and left out.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().emitter_ratio)]
     pub emitter_ratio: f64,
     /// Point lights near the field fitted beside the lobes (0: the paper's
