@@ -5,8 +5,8 @@
 //! nothing: an object of albedo 0. Against Blender Cycles that darkened
 //! every surface facing the object, a few bounding radii away, by the
 //! share of its sky the object covers (ROOM: 2.4 % over the far field,
-//! where Cycles measures −0.1 to 0.2 %): a real object reflects back about
-//! as much as it hides. Here the object seen from a field point `x` is its
+//! where Cycles measures −0.3 %; −0.3 to +0.2 % over the bundled scenes):
+//! a real object reflects back about as much as it hides. Here the object seen from a field point `x` is its
 //! bounding sphere's cap, filled to the share of the sphere's silhouette
 //! the mesh covers (its [`ObjectReflectance::fill`], mean over directions),
 //! showing the radiance of a Lambertian surface of the mesh's mean albedo
