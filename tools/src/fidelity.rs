@@ -101,19 +101,42 @@ pub fn mean_ratio(a: &Rgb, b: &Rgb, mask: impl Fn(usize) -> bool) -> f64 {
 /// The median over the mask of |a − b| / b in luminance (pixels where b is
 /// black are left out).
 pub fn median_relative_error(a: &Rgb, b: &Rgb, mask: impl Fn(usize) -> bool) -> f64 {
-    let mut e: Vec<f64> = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .enumerate()
-        .filter(|(i, (_, y))| mask(*i) && luminance(**y) > 0.0)
-        .map(|(_, (x, y))| (luminance(*x) / luminance(*y) - 1.0).abs())
-        .collect();
-    if e.is_empty() {
+    median(
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .enumerate()
+            .filter(|(i, (_, y))| mask(*i) && luminance(**y) > 0.0)
+            .map(|(_, (x, y))| (luminance(*x) / luminance(*y) - 1.0).abs())
+            .collect(),
+    )
+}
+
+/// The upper median of `values` (NaN when empty).
+fn median(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
         return f64::NAN;
     }
-    e.sort_by(f64::total_cmp);
-    e[e.len() / 2]
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// The median over the mask of |s0 − s1| / (s0 + s1) in luminance: how far
+/// the mean of two independent renders (seeds) lies from the noise-free
+/// image in the median pixel, since the half-difference of two seeds has
+/// the same spread as their mean's error. A perfect renderer compared with
+/// the mean of the seeds by [`median_relative_error`] scores about this.
+pub fn median_seed_noise(s0: &Rgb, s1: &Rgb, mask: impl Fn(usize) -> bool) -> f64 {
+    median(
+        s0.pixels
+            .iter()
+            .zip(&s1.pixels)
+            .enumerate()
+            .map(|(i, (x, y))| (i, luminance(*x), luminance(*y)))
+            .filter(|&(i, x, y)| mask(i) && x + y > 0.0)
+            .map(|(_, x, y)| (x - y).abs() / (x + y))
+            .collect(),
+    )
 }
 
 /// The engine's sRGB encoding (of a value clamped to [0, 1]), in f64.
@@ -224,7 +247,17 @@ pub struct ShadowFigures {
     pub truth_far_darkening: f64,
     /// How many pixels are far.
     pub far_pixels: usize,
+    /// The umbra: pixels the truth darkens below [`UMBRA`].
+    pub umbra_pixels: usize,
+    /// The truth's mean ratio over the umbra.
+    pub truth_umbra: f64,
+    /// inlay's mean ratio over the same pixels.
+    pub umbra: f64,
 }
+
+/// The shadow ratio below which the truth's shadow counts as its umbra,
+/// where the shadow's depth (not its extent) is compared.
+pub const UMBRA: f64 = 0.5;
 
 /// The shadow figures over the pixels where `field` holds (the field alone
 /// seen); the far-field darkening over those where `far` holds too.
@@ -240,6 +273,11 @@ pub fn shadow_figures(
     let far: Vec<usize> = (0..truth.len()).filter(|&i| field(i) && far(i)).collect();
     let mean_over = |d: &[f64]| far.iter().map(|&i| d[i]).sum::<f64>() / far.len().max(1) as f64;
     let truth_area = area(truth);
+    let umbra: Vec<usize> = (0..truth.len())
+        .filter(|&i| field(i) && truth[i] < UMBRA)
+        .collect();
+    let umbra_mean =
+        |r: &[f64]| umbra.iter().map(|&i| r[i]).sum::<f64>() / umbra.len().max(1) as f64;
     ShadowFigures {
         correlation: correlation(&di, &dt, &field),
         area_ratio: area(inlay) as f64 / truth_area.max(1) as f64,
@@ -247,6 +285,9 @@ pub fn shadow_figures(
         far_darkening: mean_over(&di),
         truth_far_darkening: mean_over(&dt),
         far_pixels: far.len(),
+        umbra_pixels: umbra.len(),
+        truth_umbra: umbra_mean(truth),
+        umbra: umbra_mean(inlay),
     }
 }
 
@@ -431,6 +472,11 @@ mod tests {
         assert!((median_relative_error(&a, &b, |_| true) - 0.0).abs() < 1e-12);
         assert!((median_relative_error(&a, &b, |i| i == 3) - 1.0).abs() < 1e-12);
         assert_eq!(psnr(&a, &a, 1.0, |_| true), f64::INFINITY);
+        // Seeds 1 and 3 around a truth of 2: a half-difference of 1 over a
+        // mean of 2; identical seeds carry no noise.
+        let (s0, s1) = (img(&[1.0, 2.0, 6.0]), img(&[3.0, 2.0, 2.0]));
+        assert!((median_seed_noise(&s0, &s1, |_| true) - 0.5).abs() < 1e-12);
+        assert_eq!(median_seed_noise(&s0, &s1, |i| i == 1), 0.0);
         assert!((correlation(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0], &|_| true) - 1.0).abs() < 1e-12);
         assert!((srgb(1.0) - 1.0).abs() < 1e-6 && srgb(-1.0) == 0.0);
         // The box mean skips masked-out neighbours and keeps a lone pixel.
@@ -457,8 +503,8 @@ mod tests {
 
     #[test]
     fn shadow_figures_of_a_known_shadow() {
-        let truth = [1.0, 0.5, 0.8, 1.0, 1.0, 0.3];
-        let inlay = [1.0, 0.5, 0.8, 0.98, 1.0, 0.3];
+        let truth = [1.0, 0.4, 0.8, 1.0, 1.0, 0.3];
+        let inlay = [1.0, 0.6, 0.8, 0.98, 1.0, 0.3];
         // Pixel 5 is the object; pixels 3 and 4 are far.
         let f = shadow_figures(&inlay, &truth, |i| i != 5, |i| i == 3 || i == 4);
         assert_eq!(f.truth_area, 2);
@@ -466,6 +512,9 @@ mod tests {
         assert!((f.far_darkening - 0.01).abs() < 1e-12);
         assert!(f.truth_far_darkening.abs() < 1e-12);
         assert_eq!(f.far_pixels, 2);
-        assert!(f.correlation > 0.95);
+        assert!(f.correlation > 0.9);
+        // The umbra is pixel 1 alone (pixel 5 is not the field's).
+        assert_eq!(f.umbra_pixels, 1);
+        assert!((f.truth_umbra - 0.4).abs() < 1e-12 && (f.umbra - 0.6).abs() < 1e-12);
     }
 }

@@ -23,8 +23,8 @@ use inlay_passes::probe::{lobes_irradiance, probe_irradiance, AXES};
 use inlay_passes::scene::load_scene;
 
 use crate::fidelity::{
-    block_means, coverage, luminance, masked_box_mean, mean_ratio, median_relative_error, psnr,
-    relative_l1, shadow_figures, shadow_ratio, side_by_side, Rgb,
+    block_means, coverage, luminance, masked_box_mean, mean_ratio, median_relative_error,
+    median_seed_noise, psnr, relative_l1, shadow_figures, shadow_ratio, side_by_side, Rgb, UMBRA,
 };
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
@@ -274,6 +274,10 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         };
         let field_only = |i: usize| field_px(i) && object_cover[i] == 0.0;
         let object_count = (0..object_cover.len()).filter(|&i| object_px(i)).count();
+        // The path tracer's image with the objects, when rendered: its
+        // error on the objects is the two renderers' material models',
+        // which the insertion cannot be expected to beat.
+        let mut traced_objects = None;
         if !args.no_reference {
             let traced = reference(false);
             row(&mut md, "reference, bare", &traced, &bare, &field_px)?;
@@ -282,13 +286,11 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                 row(&mut md, "reference, bare, no media", &traced, &bare, &clear)?;
             }
             if let Some(with) = &with {
-                row(
-                    &mut md,
-                    "reference, objects",
-                    &reference(true),
-                    with,
-                    &|i| field_px(i) || object_px(i),
-                )?;
+                let traced = reference(true);
+                row(&mut md, "reference, objects", &traced, with, &|i| {
+                    field_px(i) || object_px(i)
+                })?;
+                traced_objects = Some(traced);
             }
         }
         let mut view_scene = scene.clone();
@@ -356,28 +358,38 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                 .save(&file, 1.0)?;
         }
         let shadow = shadow_figures(&ours, &theirs, field_only, far_px);
+        let traced_median = traced_objects.as_ref().map_or("—".to_string(), |t| {
+            figure(
+                median_relative_error(t, &with.mean, object_px),
+                object_count,
+            )
+        });
         writeln!(
             insertion,
-            "| {name} | {} | {} | {object_count} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) | {:.3}, {:.2} |",
+            "| {name} | {} | {} | {traced_median} | {} | {object_count} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) | {:.2} / {:.2} ({} px) | {:.3}, {:.2} |",
             figure(mean_ratio(&inserted, &with.mean, object_px), object_count),
             figure(median_relative_error(&inserted, &with.mean, object_px), object_count),
+            figure(median_seed_noise(&with.seeds.0, &with.seeds.1, object_px), object_count),
             shadow.correlation,
             shadow.area_ratio,
             shadow.truth_area,
             100.0 * shadow.far_darkening,
             100.0 * shadow.truth_far_darkening,
             shadow.far_pixels,
+            shadow.truth_umbra,
+            shadow.umbra,
+            shadow.umbra_pixels,
             seeds.correlation,
             seeds.area_ratio,
         )?;
     }
     writeln!(md)?;
     if !insertion.is_empty() {
-        writeln!(md, "The insertion against Cycles with the objects (object mask: pixels whose 16 rays all hit an object first; shadow: the luminance ratio of the images with and without the objects, each a mean over 3 × 3 pixels of the field alone, inlay's against Cycles', over the pixels the field alone covers; far: surface points more than {FAR_RADII} bounding radii from every object; Cycles' two seeds against each other give the noise's scale):\n")?;
-        writeln!(md, "| camera | object brightness inlay / Cycles | median relative error | mask px | shadow correlation | shadow area (< 0.9) inlay / Cycles | far darkening, inlay | far darkening, Cycles | Cycles seeds: correlation, area |")?;
+        writeln!(md, "The insertion against Cycles with the objects (object mask: pixels whose 16 rays all hit an object first; median relative error of inlay's path tracer with the objects, where rendered: the two renderers' material models; of Cycles' noise: the median |s₀ − s₁| / (s₀ + s₁) of its two seeds, what a noise-free renderer scores against their mean; shadow: the luminance ratio of the images with and without the objects, each a mean over 3 × 3 pixels of the field alone, inlay's against Cycles', over the pixels the field alone covers; far: surface points more than {FAR_RADII} bounding radii from every object; Cycles' two seeds against each other give the noise's scale):\n")?;
+        writeln!(md, "| camera | object brightness inlay / Cycles | median relative error | median relative error, path tracer | median error of Cycles' noise | mask px | shadow correlation | shadow area (< 0.9) inlay / Cycles | far darkening, inlay | far darkening, Cycles | umbra (Cycles < {UMBRA}): Cycles / inlay mean ratio | Cycles seeds: correlation, area |")?;
         writeln!(
             md,
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
         )?;
         md.push_str(&insertion);
         writeln!(md)?;
