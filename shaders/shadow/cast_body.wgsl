@@ -122,10 +122,14 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
         }
         blocked += w * (1.0 - q);
     }
-    if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {
-        blocked = max(blocked - cast_bounce(x, n), vec3<f32>(0.0));
-    }
     let total = max(den, SG_PI * radiance);
+    if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {
+        // The bounce, its light from below x's plane at x's own ratio
+        // before it (runtime.rs cast_shadow_factor: the field the object's
+        // face sees there is shadowed about as deeply as x).
+        let ratio = clamp(vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), vec3<f32>(0.0), vec3<f32>(1.0));
+        blocked = max(blocked - cast_bounce(x, n, ratio), vec3<f32>(0.0));
+    }
     return select(vec3<f32>(1.0), vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), total > vec3<f32>(0.0));
 }
 
