@@ -159,8 +159,9 @@ pub fn sphere_clear_of(x: DVec3, dir: DVec3, c: DVec3, r: f64) -> bool {
 /// `radiance` gives the paper's ratio. The `direct` lobes (the last ones)
 /// are occluded by the share of their rays from `x` the mesh blocks. The
 /// light the object sends back ([`super::bounce_irradiance`] with its
-/// silhouette reflectance, `object`; zero fill and albedo give the paper's
-/// black occluder) offsets the blocked light, never beyond it.
+/// silhouette reflectance, `object`, its light from below `x`'s plane at
+/// `x`'s ratio before it; zero fill and albedo give the paper's black
+/// occluder) offsets the blocked light, never beyond it.
 #[allow(clippy::too_many_arguments)]
 pub fn cast_shadow_factor(
     field: &SsdfField,
@@ -195,12 +196,9 @@ pub fn cast_shadow_factor(
     }
     let total = den.max(std::f64::consts::PI * radiance);
     if blocked.max_element() > 0.0 {
-        // The object's face turned to x is lit, from below x's plane, by
-        // the field around x, which lies in the object's shadow about as
-        // deeply as x does (the probe saw it unshadowed): that light is
-        // taken at x's own ratio before the bounce. Without this, the umbra
-        // under DOG's ball came out 0.24 of the bare field where Cycles' is
-        // 0.13.
+        // x's own ratio before the bounce: the bounce's light from below
+        // x's plane is the field around x, shadowed about as deeply
+        // ([`super::bounce_irradiance`]).
         let ratio =
             (DVec3::ONE - blocked / total.max(DVec3::splat(1e-300))).clamp(DVec3::ZERO, DVec3::ONE);
         let back = super::bounce_irradiance(lobes, x, n, c, r, object.of(placed), ratio);
