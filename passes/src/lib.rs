@@ -1,6 +1,6 @@
 //! The method's passes — NeRF ray march, incident-light probe trace, SG
 //! Levenberg–Marquardt fit, object G-buffer and SG shading, compositing and
-//! shadows (see `../shared/spec/METHOD.md`) — each with its CPU reference, and
+//! shadows (`docs/METHOD.md` in the repository) — each with its CPU reference, and
 //! the math they share. Every pass is a pass of the engine's frame graph and
 //! uses only the engine's safe API.
 //!
