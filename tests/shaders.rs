@@ -172,3 +172,86 @@ fn run_headless_rgba32(
     renderer.finish().unwrap();
     readback.read().unwrap().pixels
 }
+
+/// The library compiles a compute pipeline once per (device, file, entry
+/// point, defines) and hands the same one out again; other defines or
+/// another entry point compile anew; changing a file forgets them all.
+/// Objects share kernels this way: four objects' incident-light passes
+/// (probe trace, SG fit) compile no more than the first one did.
+#[test]
+fn pipelines_are_compiled_once_per_key() {
+    use std::sync::Arc;
+    let ctx = common::gpu();
+    let mut lib = embedded_library();
+    assert_eq!(lib.compiled_pipelines(), 0);
+    let on = [Define::Bool("SKIP_EMPTY", true)];
+    let a = lib
+        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .unwrap();
+    let b = lib
+        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .unwrap();
+    assert!(Arc::ptr_eq(&a, &b));
+    assert_eq!(lib.compiled_pipelines(), 1);
+    let off = [Define::Bool("SKIP_EMPTY", false)];
+    let c = lib
+        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &off)
+        .unwrap();
+    assert!(!Arc::ptr_eq(&a, &c));
+    assert_eq!(lib.compiled_pipelines(), 2);
+    // A clone shares the pipelines; a changed file starts afresh.
+    let clone = lib.clone();
+    clone
+        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .unwrap();
+    assert_eq!(clone.compiled_pipelines(), 2);
+    let source = lib.get("nerf/march.wgsl").unwrap().to_owned();
+    lib.insert("nerf/march.wgsl", &source);
+    assert_eq!(lib.compiled_pipelines(), 0);
+    let d = lib
+        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .unwrap();
+    assert!(!Arc::ptr_eq(&a, &d));
+
+    use inlay_passes::lighting::IncidentLight;
+    use inlay_passes::march::MarchKnobs;
+    use inlay_passes::probe::ProbeKnobs;
+    use inlay_passes::sgfit::FitKnobs;
+    let lib = embedded_library();
+    let object = || {
+        let t = std::time::Instant::now();
+        let light = IncidentLight::new(
+            &ctx,
+            &lib,
+            ProbeKnobs::default(),
+            FitKnobs::default(),
+            MarchKnobs::default(),
+            &[],
+        )
+        .unwrap();
+        (light, t.elapsed())
+    };
+    let (first, first_time) = object();
+    let after_one = lib.compiled_pipelines();
+    assert!(
+        after_one >= 10,
+        "the probe and the fit have {after_one} kernels?"
+    );
+    let mut more = Vec::new();
+    let t = std::time::Instant::now();
+    for _ in 0..3 {
+        more.push(object().0);
+    }
+    assert_eq!(
+        lib.compiled_pipelines(),
+        after_one,
+        "a second object compiled kernels again"
+    );
+    eprintln!(
+        "first object's incident-light passes: {:.0} ms ({after_one} pipelines); three more: {:.0} ms",
+        first_time.as_secs_f64() * 1e3,
+        t.elapsed().as_secs_f64() * 1e3
+    );
+    drop((first, more));
+    common::assert_no_validation_errors(&ctx);
+}

@@ -3,13 +3,21 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::Arc;
 
+use super::compose::Define;
+use super::pipeline_cache::PipelineCache;
+use crate::context::Context;
 use crate::error::{EngineError, Result};
+use crate::pipeline::ComputePipeline;
 
-/// WGSL source files by path relative to the library root (`common/x.wgsl`).
+/// WGSL source files by path relative to the library root (`common/x.wgsl`),
+/// and the compute pipelines compiled from them (shared by the library's
+/// clones until one of them changes a file).
 #[derive(Debug, Clone, Default)]
 pub struct ShaderLibrary {
     files: BTreeMap<String, String>,
+    pipelines: Arc<PipelineCache>,
 }
 
 impl ShaderLibrary {
@@ -20,6 +28,7 @@ impl ShaderLibrary {
                 .into_iter()
                 .map(|(p, s)| (p.to_owned(), s.to_owned()))
                 .collect(),
+            pipelines: Arc::default(),
         }
     }
 
@@ -55,12 +64,36 @@ impl ShaderLibrary {
                 }
             }
         }
-        Ok(Self { files })
+        Ok(Self {
+            files,
+            pipelines: Arc::default(),
+        })
     }
 
-    /// Adds or replaces one file.
+    /// Adds or replaces one file (and forgets the pipelines compiled so
+    /// far: they may include it).
     pub fn insert(&mut self, path: &str, source: &str) {
         self.files.insert(path.to_owned(), source.to_owned());
+        self.pipelines = Arc::default();
+    }
+
+    /// The compute pipeline of `entry` in `file` with `defines` on `ctx`'s
+    /// device: compiled on first use, the same pipeline for every later
+    /// request with the same key (device, file, entry point, defines).
+    pub fn compute_pipeline(
+        &self,
+        ctx: &Arc<Context>,
+        file: &str,
+        entry: &str,
+        defines: &[Define],
+    ) -> Result<Arc<ComputePipeline>> {
+        self.pipelines.compute(self, ctx, file, entry, defines)
+    }
+
+    /// How many compute pipelines [`Self::compute_pipeline`] has compiled
+    /// (requests it could not answer from the ones it had).
+    pub fn compiled_pipelines(&self) -> usize {
+        self.pipelines.compiled()
     }
 
     /// The source of one file.

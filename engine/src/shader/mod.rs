@@ -5,6 +5,7 @@
 mod compile;
 mod compose;
 mod library;
+mod pipeline_cache;
 
 pub use compile::{compile, CompiledShader, DescriptorKind, ReflectedBinding, ShaderStage};
 pub use compose::{compose, Composed, Define};

@@ -11,7 +11,7 @@
 use std::sync::Arc;
 
 use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
-use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc, Push};
 
 /// Format of the composited image.
@@ -49,9 +49,9 @@ fn output_image(graph: &mut FrameGraph<'_>, field: ImageHandle) -> (ImageHandle,
 /// The compositing pipelines (without and with a cast shadow, and the
 /// shadowed field alone).
 pub struct CompositePass {
-    pipeline: ComputePipeline,
-    shadowed: ComputePipeline,
-    field_shadowed: ComputePipeline,
+    pipeline: Arc<ComputePipeline>,
+    shadowed: Arc<ComputePipeline>,
+    field_shadowed: Arc<ComputePipeline>,
 }
 
 /// Which layer is in front when the object is composited.
@@ -67,15 +67,8 @@ pub enum Layering {
 impl CompositePass {
     /// Compiles the pass.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(
-                lib,
-                "composite/composite.wgsl",
-                entry,
-                ShaderStage::Compute,
-                &[],
-            )?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
+        let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
+            Ok(lib.compute_pipeline(ctx, "composite/composite.wgsl", entry, &[])?)
         };
         Ok(Self {
             pipeline: build("main")?,

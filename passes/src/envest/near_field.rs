@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use inlay_engine::graph::{Binding, BufferAccess, FrameGraph, PassKind};
-use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{
     vk, Buffer, BufferReadback, ComputePipeline, Context, Push, Renderer, SubmitSync,
 };
@@ -93,8 +93,8 @@ pub fn ray_seed(seed: u64) -> u32 {
 
 /// The compiled near-field kernels.
 pub struct NearFieldTracer {
-    irradiance: ComputePipeline,
-    opacity: ComputePipeline,
+    irradiance: Arc<ComputePipeline>,
+    opacity: Arc<ComputePipeline>,
     march: MarchKnobs,
 }
 
@@ -106,15 +106,8 @@ impl NearFieldTracer {
             Define::Bool("OCTAHEDRAL", true),
             Define::U32("NF_RAYS_PER_INVOCATION", RAYS_PER_INVOCATION),
         ];
-        let pipeline = |entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(
-                lib,
-                "envest/near_field.wgsl",
-                entry,
-                ShaderStage::Compute,
-                &defines,
-            )?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
+        let pipeline = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
+            Ok(lib.compute_pipeline(ctx, "envest/near_field.wgsl", entry, &defines)?)
         };
         Ok(Self {
             irradiance: pipeline("irradiance")?,

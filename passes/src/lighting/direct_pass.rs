@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use inlay_engine::graph::{Binding, BufferAccess, BufferHandle, FrameGraph, PassKind};
-use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
 
 use super::sharp::lobe_rays;
@@ -23,7 +23,7 @@ const LOBE_BYTES: u64 = 32;
 
 /// The sharp lobes, their rays and the assembled light buffer.
 pub struct DirectLightPass {
-    pipeline: ComputePipeline,
+    pipeline: Arc<ComputePipeline>,
     sharp: Arc<Buffer>,
     rays: Arc<Buffer>,
     lights: Arc<Buffer>,
@@ -50,14 +50,12 @@ impl DirectLightPass {
             return Ok(None);
         }
         let side = side.max(1);
-        let shader = compile(
-            lib,
+        let pipeline = lib.compute_pipeline(
+            ctx,
             "probe/direct.wgsl",
             "main",
-            ShaderStage::Compute,
             &[Define::Bool("SKIP_EMPTY", march.skip_empty)],
         )?;
-        let pipeline = ComputePipeline::new(ctx, &shader)?;
         let lobe_bytes: Vec<u8> = sharp
             .iter()
             .flat_map(|g| g.to_f32().packed())

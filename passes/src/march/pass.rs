@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
-use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::knobs::MarchKnobs;
@@ -17,8 +17,8 @@ pub const MARCH_DEPTH_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
 
 /// The march's pipelines for one set of knobs.
 pub struct MarchPass {
-    unclipped: ComputePipeline,
-    clipped: ComputePipeline,
+    unclipped: Arc<ComputePipeline>,
+    clipped: Arc<ComputePipeline>,
     knobs: MarchKnobs,
 }
 
@@ -38,15 +38,8 @@ impl MarchPass {
             .check()
             .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
         let defines = [Define::Bool("SKIP_EMPTY", knobs.skip_empty)];
-        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(
-                lib,
-                "nerf/march.wgsl",
-                entry,
-                ShaderStage::Compute,
-                &defines,
-            )?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
+        let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
+            Ok(lib.compute_pipeline(ctx, "nerf/march.wgsl", entry, &defines)?)
         };
         Ok(Self {
             unclipped: build("main_unclipped")?,

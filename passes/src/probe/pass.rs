@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
-use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, Push};
 
 use super::direction_map::{DirectionMap, MapKind};
@@ -20,14 +20,14 @@ pub const PROBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// L_env's lobes and the entry point that adds them.
 struct ProbeEnvironment {
-    pipeline: ComputePipeline,
+    pipeline: Arc<ComputePipeline>,
     lobes: Arc<Buffer>,
     count: u32,
 }
 
 /// The probe trace for one set of knobs and one environment light.
 pub struct ProbePass {
-    field_only: ComputePipeline,
+    field_only: Arc<ComputePipeline>,
     environment: Option<ProbeEnvironment>,
     image: Arc<Image>,
     map: DirectionMap,
@@ -57,15 +57,8 @@ impl ProbePass {
             Define::Bool("SKIP_EMPTY", march.skip_empty),
             Define::Bool("OCTAHEDRAL", knobs.map == MapKind::Octahedral),
         ];
-        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(
-                lib,
-                "probe/trace.wgsl",
-                entry,
-                ShaderStage::Compute,
-                &defines,
-            )?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
+        let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
+            Ok(lib.compute_pipeline(ctx, "probe/trace.wgsl", entry, &defines)?)
         };
         let field_only = build("main_field_only")?;
         let map = knobs.direction_map();

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use inlay_engine::graph::{
     Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
 };
-use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
 
 use super::knobs::{FitKnobs, MAX_ITERATIONS};
@@ -67,16 +67,16 @@ impl FitReport {
 }
 
 struct Kernels {
-    filter_probe: ComputePipeline,
-    init_cold: ComputePipeline,
-    cost: ComputePipeline,
-    select_start: ComputePipeline,
-    jacobian: ComputePipeline,
-    normal_tile: ComputePipeline,
-    solve: ComputePipeline,
-    decide: ComputePipeline,
-    conserve_energy: ComputePipeline,
-    finish_energy: ComputePipeline,
+    filter_probe: Arc<ComputePipeline>,
+    init_cold: Arc<ComputePipeline>,
+    cost: Arc<ComputePipeline>,
+    select_start: Arc<ComputePipeline>,
+    jacobian: Arc<ComputePipeline>,
+    normal_tile: Arc<ComputePipeline>,
+    solve: Arc<ComputePipeline>,
+    decide: Arc<ComputePipeline>,
+    conserve_energy: Arc<ComputePipeline>,
+    finish_energy: Arc<ComputePipeline>,
 }
 
 /// Sizes derived from the knobs and the probe.
@@ -162,9 +162,8 @@ impl SgFitPass {
                 super::model::max_sharpness(map.texels()) as f32,
             ),
         ];
-        let build = |entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(lib, "sgfit/fit.wgsl", entry, ShaderStage::Compute, &defines)?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
+        let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
+            Ok(lib.compute_pipeline(ctx, "sgfit/fit.wgsl", entry, &defines)?)
         };
         let kernels = Kernels {
             filter_probe: build("filter_probe")?,

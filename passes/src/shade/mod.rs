@@ -13,7 +13,7 @@ use std::sync::Arc;
 use inlay_engine::graph::{
     Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
 };
-use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
 use crate::brdf::NdfLobes;
@@ -39,9 +39,9 @@ pub struct SelfShadow {
 /// with them from the SSDF and, for direct lobes, from rays cast against
 /// the mesh) and the NDF mixture they use.
 pub struct ShadePass {
-    pipeline: ComputePipeline,
-    self_shadowed: ComputePipeline,
-    self_shadowed_direct: ComputePipeline,
+    pipeline: Arc<ComputePipeline>,
+    self_shadowed: Arc<ComputePipeline>,
+    self_shadowed_direct: Arc<ComputePipeline>,
     ndf: Arc<Buffer>,
     ndf_lobes: NdfLobes,
 }
@@ -51,13 +51,9 @@ impl ShadePass {
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, ndf_lobes: u32) -> anyhow::Result<Self> {
         let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
-        let shader = compile(lib, "object/shade.wgsl", "main", ShaderStage::Compute, &[])?;
-        let shadowed = |file: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(lib, file, "main", ShaderStage::Compute, &shadow_defines())?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
-        };
+        let shadowed = |file: &str| lib.compute_pipeline(ctx, file, "main", &shadow_defines());
         Ok(Self {
-            pipeline: ComputePipeline::new(ctx, &shader)?,
+            pipeline: lib.compute_pipeline(ctx, "object/shade.wgsl", "main", &[])?,
             self_shadowed: shadowed("object/shade_self_shadow.wgsl")?,
             self_shadowed_direct: shadowed("object/shade_self_shadow_direct.wgsl")?,
             ndf: Arc::new(Buffer::with_data(

@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use inlay_engine::graph::{Binding, BufferAccess, FrameGraph, PassKind};
-use inlay_engine::shader::{compile, Define, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
 use super::grid::SsdfGrid;
@@ -165,7 +165,7 @@ pub fn bake_reference(
 
 /// The bake kernel.
 pub struct SsdfBaker {
-    pipeline: ComputePipeline,
+    pipeline: Arc<ComputePipeline>,
 }
 
 /// Nodes per submission: small enough that progress moves and no single
@@ -175,20 +175,17 @@ const NODES_PER_BATCH: usize = 32;
 impl SsdfBaker {
     /// Compiles the kernel.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let shader = compile(
-            lib,
+        let pipeline = lib.compute_pipeline(
+            ctx,
             "shadow/ssdf_bake.wgsl",
             "main",
-            ShaderStage::Compute,
             &[
                 Define::U32("ARC_PIECES", ARC_PIECES),
                 Define::F32("OUTSIDE_OFFSET", OUTSIDE_OFFSET as f32),
                 Define::Bool("OCTAHEDRAL", true),
             ],
         )?;
-        Ok(Self {
-            pipeline: ComputePipeline::new(ctx, &shader)?,
-        })
+        Ok(Self { pipeline })
     }
 
     /// Bakes S for `mesh` with `knobs` (`progress(done, total)` after each

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use inlay_engine::graph::{
     Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
 };
-use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
+use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::gpu::{shadow_defines, SsdfBindings};
@@ -26,18 +26,17 @@ pub const SHADOW_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// The cast-shadow pipelines: first or chained, without or with direct
 /// lobes.
 pub struct CastShadowPass {
-    first: ComputePipeline,
-    chained: ComputePipeline,
-    first_direct: ComputePipeline,
-    chained_direct: ComputePipeline,
+    first: Arc<ComputePipeline>,
+    chained: Arc<ComputePipeline>,
+    first_direct: Arc<ComputePipeline>,
+    chained_direct: Arc<ComputePipeline>,
 }
 
 impl CastShadowPass {
     /// Compiles the pass.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let build = |file: &str, entry: &str| -> anyhow::Result<ComputePipeline> {
-            let shader = compile(lib, file, entry, ShaderStage::Compute, &shadow_defines())?;
-            Ok(ComputePipeline::new(ctx, &shader)?)
+        let build = |file: &str, entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
+            Ok(lib.compute_pipeline(ctx, file, entry, &shadow_defines())?)
         };
         Ok(Self {
             first: build("shadow/cast.wgsl", "main")?,

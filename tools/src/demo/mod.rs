@@ -25,9 +25,9 @@ const VERTEX_BYTES: u64 = 32;
 
 /// The demo's pipelines, built once.
 pub struct DemoPipelines {
-    sky: ComputePipeline,
-    quads: ComputePipeline,
-    heatmap: ComputePipeline,
+    sky: Arc<ComputePipeline>,
+    quads: Arc<ComputePipeline>,
+    heatmap: Arc<ComputePipeline>,
     background: GraphicsPipeline,
     quad: GraphicsPipeline,
 }
@@ -35,12 +35,7 @@ pub struct DemoPipelines {
 impl DemoPipelines {
     /// Compiles the demo's shaders and builds its pipelines.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let cs = |file: &str| -> anyhow::Result<ComputePipeline> {
-            Ok(ComputePipeline::new(
-                ctx,
-                &compile(lib, file, "main", ShaderStage::Compute, &[])?,
-            )?)
-        };
+        let cs = |file: &str| lib.compute_pipeline(ctx, file, "main", &[]);
         let raster = |vs: &str, fs: &str, depth_test: bool| -> anyhow::Result<GraphicsPipeline> {
             let v = compile(lib, "demo/scene.wgsl", vs, ShaderStage::Vertex, &[])?;
             let f = compile(lib, "demo/scene.wgsl", fs, ShaderStage::Fragment, &[])?;
