@@ -174,8 +174,9 @@ fn run_headless_rgba32(
 }
 
 /// The library compiles a compute pipeline once per (device, file, entry
-/// point, defines) and hands the same one out again; other defines or
-/// another entry point compile anew; changing a file forgets them all.
+/// point, defines) and hands the same one out again while it is held;
+/// other defines compile anew; a clone shares them; changing a file
+/// forgets them all; a pipeline nobody holds is not kept (nor its device).
 /// Objects share kernels this way: four objects' incident-light passes
 /// (probe trace, SG fit) compile no more than the first one did.
 #[test]

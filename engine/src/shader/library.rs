@@ -12,8 +12,8 @@ use crate::error::{EngineError, Result};
 use crate::pipeline::ComputePipeline;
 
 /// WGSL source files by path relative to the library root (`common/x.wgsl`),
-/// and the compute pipelines compiled from them (shared by the library's
-/// clones until one of them changes a file).
+/// and the compute pipelines compiled from them that are still in use
+/// (shared by the library's clones until one of them changes a file).
 #[derive(Debug, Clone, Default)]
 pub struct ShaderLibrary {
     files: BTreeMap<String, String>,
@@ -79,7 +79,9 @@ impl ShaderLibrary {
 
     /// The compute pipeline of `entry` in `file` with `defines` on `ctx`'s
     /// device: compiled on first use, the same pipeline for every later
-    /// request with the same key (device, file, entry point, defines).
+    /// request with the same key (device, file, entry point, defines) as
+    /// long as someone still holds it (the library does not keep a device
+    /// alive).
     pub fn compute_pipeline(
         &self,
         ctx: &Arc<Context>,

@@ -1,5 +1,5 @@
-//! Principal component analysis of the SSDF samples (METHOD.md: "compress
-//! all sampled SSDFs with PCA"): each node's S over the direction map is a
+//! Principal component analysis of the SSDF samples (METHOD.md "SSDF
+//! field": the samples are compressed by PCA): each node's S over the direction map is a
 //! row; rows are stored as the mean row plus k coefficients on k orthonormal
 //! basis rows. The basis comes from randomised subspace iteration (Halko,
 //! Martinsson & Tropp 2011, alg. 4.4: k + 8 columns, 4 power iterations) in

@@ -50,8 +50,8 @@ pub fn world_ssdf(
 }
 
 /// Γ_k for each lobe at world point `x` with unit normal `n`: the share of
-/// the lobe's cosine-weighted light, L_k ⊗ cosine = (p', λ'), that the
-/// object hides beyond its own tangent plane,
+/// the lobe's cosine-weighted light, L_k ⊗ cosine = (p', λ'), above its
+/// own tangent plane that the object leaves visible,
 /// Γ_k = clamp(q(S(p'; x), λ') / q(e, λ'), 0, 1), e = asin(n·p') the
 /// elevation of p' above the tangent plane. Shading already integrates the
 /// lobe against the clamped cosine, which removes the light below the
