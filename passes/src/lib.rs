@@ -20,6 +20,7 @@ pub mod camera;
 pub mod composite;
 pub mod envest;
 pub mod field;
+pub mod frame;
 pub mod gbuffer;
 pub mod geometry;
 pub mod lighting;

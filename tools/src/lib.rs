@@ -8,7 +8,6 @@ pub mod commands;
 pub mod demo;
 pub mod fidelity;
 pub mod field_source;
-pub mod field_view;
 pub mod headless;
 pub mod insertion_view;
 pub mod measure;

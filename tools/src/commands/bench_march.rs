@@ -16,8 +16,8 @@ use inlay_passes::march::{march_image, MarchKnobs, MarchPass};
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::scene_field;
-use crate::field_view::FieldView;
 use crate::headless::run_headless;
+use crate::insertion_view::InsertionView;
 use crate::measure::{parse_size, relative_error};
 use crate::timings_table::quantile;
 
@@ -70,11 +70,20 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
     );
     println!("| image | march ms p50 | p95 | Mrays/s | samples/ray | Msamples/s |");
     println!("| --- | --- | --- | --- | --- | --- |");
-    let mut view = FieldView {
-        march: MarchPass::new(ctx, &library, knobs)?,
-        field: gpu_field,
-        camera: spec.clone(),
-    };
+    // The frame every command renders, without the scene's objects: the
+    // march alone.
+    let mut bare = scene.clone();
+    bare.objects.clear();
+    bare.object_sources.clear();
+    let mut view = InsertionView::new(
+        ctx,
+        &library,
+        &bare,
+        MarchPass::new(ctx, &library, knobs)?,
+        gpu_field,
+        spec.clone(),
+        true,
+    )?;
     for size in &args.sizes {
         let (w, h) = parse_size(size)?;
         let run = run_headless(ctx, &view, w, h, args.frames.max(2), 0.0)?;
@@ -111,7 +120,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
         termination: 0.0,
         ..knobs
     };
-    view.march = MarchPass::new(ctx, &library, fine_knobs)?;
+    view.frame.march = MarchPass::new(ctx, &library, fine_knobs)?;
     let fine = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
     let reference = scene.recipe().map(|recipe| {
         render_reference(
@@ -140,7 +149,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
             samples_per_ray: n,
             ..knobs
         };
-        view.march = MarchPass::new(ctx, &library, k)?;
+        view.frame.march = MarchPass::new(ctx, &library, k)?;
         let img = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
         println!(
             "| {n} | {:.4} | {:.4} | {} |",

@@ -220,15 +220,12 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
             !args.no_cache,
         )
         .map_err(|e| e.context(format!("configuration {}", knobs.label())))?;
-        for o in &mut view.objects {
+        let meshes: Vec<_> = (0..view.objects().len())
+            .filter_map(|i| view.placed(i).map(|p| p.mesh))
+            .collect();
+        for (o, mesh) in view.objects_mut().iter_mut().zip(meshes) {
             if let Some(s) = &o.ssdf {
                 if s.field.components > knobs.components {
-                    let mesh = o
-                        .placed
-                        .lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .mesh
-                        .clone();
                     o.ssdf = Some(GpuSsdf::upload(
                         ctx,
                         Arc::new(s.field.truncated(knobs.components)),
@@ -248,7 +245,7 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
         let totals: Vec<f64> = dragged.iter().map(|f| f.gpu_total_ms).collect();
         // The error of a still frame: the object where the scene puts it,
         // lit by a cold fit with this configuration's iterations.
-        for o in &view.objects {
+        for o in view.objects() {
             o.light.reset();
         }
         let still: HdrImage = run_headless(ctx, &view, w, h, 1, 0.0)?.image;

@@ -170,7 +170,7 @@ impl Controls {
             MouseButton::Left => {
                 let frame = view.frame(extent.0.max(1), extent.1.max(1));
                 let ray = frame.ray(self.cursor.0, self.cursor.1);
-                let placed: Vec<PlacedObject> = (0..view.objects.len())
+                let placed: Vec<PlacedObject> = (0..view.objects().len())
                     .filter_map(|i| view.placed(i))
                     .collect();
                 match pick_visible(&placed, &ray, field, &self.march, view.effects().occlusion) {

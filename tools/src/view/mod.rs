@@ -150,7 +150,7 @@ impl Viewer {
             self.use_cache,
         )?;
         view.set_effects(self.view.effects());
-        for i in 0..self.view.objects.len() {
+        for i in 0..self.view.objects().len() {
             if let Some(p) = self.view.placed(i) {
                 view.set_placed(i, p);
             }
@@ -201,7 +201,7 @@ impl crate::window_app::WindowScene for Viewer {
         let (w, h) = self.controls.extent.get();
         if frame == 0 {
             let cam = self.view.frame(w.max(1), h.max(1));
-            for i in 0..self.view.objects.len() {
+            for i in 0..self.view.objects().len() {
                 if let Some(p) = self.view.placed(i) {
                     let at = cam.project(p.sphere().0);
                     println!(

@@ -1,0 +1,337 @@
+//! One frame of the method, with virtual objects inserted into a field
+//! seen from one camera: the per-frame passes of METHOD.md §4.4 in one
+//! frame graph — per object the probe trace and SG fit (only when the
+//! object moved or the lighting changed), the object G-buffer, the march
+//! clipped at the object, SG shading with self-shadows, the cast shadow on
+//! the field and compositing. No pass runs whose result the frame does
+//! not need: without objects it is the bare march; an object off screen is
+//! neither lit nor drawn unless its shadow may reach the screen; each
+//! effect can be turned off between frames ([`Effects`]). Passes left out
+//! are noted in the frame's timings with the reason. The frame takes plain
+//! inputs (camera, placements, effects); the program that shows it keeps
+//! them between frames.
+
+use std::sync::Arc;
+
+use inlay_engine::graph::{FrameGraph, ImageHandle};
+use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::{vk, Context};
+
+use crate::camera::CameraFrame;
+use crate::composite::{CompositePass, Layering, COMPOSITE_FORMAT};
+use crate::field::GpuGridField;
+use crate::gbuffer::{GBufferPass, ObjectDraw};
+use crate::lighting::IncidentLight;
+use crate::march::MarchPass;
+use crate::object::{GpuObject, PlacedObject};
+use crate::scene::{Scene as SceneFile, ShadowKnobs};
+use crate::shade::{SelfShadow, ShadePass};
+use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, SsdfField};
+
+/// How far, in bounding-sphere radii from the object's centre, its cast
+/// shadow is drawn when the object itself is off screen: beyond 8 radii
+/// the object covers under 1/64 of a cosine-weighted hemisphere, so the
+/// shadow it casts there from broad light is below 1.6 %. (A sharp lobe
+/// can throw a shadow further; such a shadow is dropped while its object
+/// is off screen.)
+pub const OFF_SCREEN_SHADOW_REACH: f64 = 8.0;
+
+/// The effects a frame draws; each can be switched between frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Effects {
+    /// The estimated or declared distant light L_env in the probe (off, or
+    /// a black environment: the term is not evaluated).
+    pub environment: bool,
+    /// Self-shadows on the objects (eq. 9).
+    pub self_shadow: bool,
+    /// Shadows cast onto the field (eq. 7-8).
+    pub cast_shadow: bool,
+    /// The field hides the objects where it is in front of them (eq. 6);
+    /// off, the objects are drawn over the unclipped field.
+    pub occlusion: bool,
+}
+
+impl Effects {
+    /// The effects a scene file asks for.
+    pub fn of_scene(shadows: &ShadowKnobs) -> Self {
+        Self {
+            environment: true,
+            self_shadow: shadows.self_shadow,
+            cast_shadow: shadows.cast,
+            occlusion: true,
+        }
+    }
+}
+
+/// One object of the frame: its uploaded mesh, its incident light and
+/// its SSDF field.
+pub struct FrameObject {
+    /// Mesh and textures on the GPU.
+    pub gpu: GpuObject,
+    /// Probe and SG fit at the object's centre.
+    pub light: IncidentLight,
+    /// Its SSDF field on the GPU (when the scene draws shadows).
+    pub ssdf: Option<GpuSsdf>,
+}
+
+/// The field, its objects and the passes that insert them.
+pub struct InsertionFrame {
+    /// The march.
+    pub march: MarchPass,
+    /// The field on the GPU.
+    pub field: GpuGridField,
+    /// The objects (may be empty), in the scene's order.
+    pub objects: Vec<FrameObject>,
+    /// How the SSDF is read outside its grid.
+    pub shadow_outside: crate::shadow::OutsideMode,
+    gbuffer: GBufferPass,
+    shade: ShadePass,
+    composite: CompositePass,
+    cast: Option<CastShadowPass>,
+    fh: Option<GpuFhTable>,
+}
+
+/// The format of a frame's image.
+pub const FRAME_FORMAT: vk::Format = COMPOSITE_FORMAT;
+
+impl InsertionFrame {
+    /// Builds the passes for `scene`'s objects (knobs from the scene file)
+    /// over `field`. `ssdfs[i]` is object i's SSDF field, given for every
+    /// object when the scene draws shadows (loaded or baked by the caller),
+    /// else none.
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        scene: &SceneFile,
+        march: MarchPass,
+        field: GpuGridField,
+        ssdfs: Vec<Option<Arc<SsdfField>>>,
+    ) -> anyhow::Result<Self> {
+        anyhow::ensure!(
+            scene.objects.len() <= 64,
+            "{}: {} objects; at most 64 are inserted at once",
+            scene.path.display(),
+            scene.objects.len()
+        );
+        anyhow::ensure!(
+            ssdfs.len() == scene.objects.len(),
+            "{} SSDF fields for {} objects",
+            ssdfs.len(),
+            scene.objects.len()
+        );
+        let shadows = ssdfs.iter().any(Option::is_some);
+        let mut objects = Vec::with_capacity(scene.objects.len());
+        for (placed, ssdf) in scene.objects.iter().zip(ssdfs) {
+            let (centre, _) = placed.sphere();
+            if !field.bounds.contains(centre) {
+                log::warn!(
+                    "object `{}` is centred at {centre}, outside the field's bounds: it is lit by what the field shows from there",
+                    placed.name
+                );
+            }
+            objects.push(FrameObject {
+                gpu: GpuObject::upload(ctx, &placed.mesh)?,
+                // Lit from where it is placed: a recipe's hidden lights are
+                // lobes seen from there (and stay so while it is dragged).
+                light: IncidentLight::new(
+                    ctx,
+                    lib,
+                    scene.lighting.probe,
+                    scene.lighting.fit,
+                    *march.knobs(),
+                    &scene.object_light_lobes(centre),
+                )?,
+                ssdf: match ssdf {
+                    Some(f) => Some(GpuSsdf::upload(ctx, f, &placed.mesh)?),
+                    None => None,
+                },
+            });
+        }
+        Ok(Self {
+            gbuffer: GBufferPass::new(ctx, lib)?,
+            shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes)?,
+            composite: CompositePass::new(ctx, lib)?,
+            cast: if shadows {
+                Some(CastShadowPass::new(ctx, lib)?)
+            } else {
+                None
+            },
+            fh: if shadows {
+                Some(GpuFhTable::new(ctx)?)
+            } else {
+                None
+            },
+            shadow_outside: scene.shadows.outside,
+            march,
+            field,
+            objects,
+        })
+    }
+
+    /// Whether any object has an SSDF field (shadows can be drawn).
+    pub fn has_shadows(&self) -> bool {
+        self.fh.is_some()
+    }
+
+    /// Adds the frame seen through `frame` to `graph`, object i placed as
+    /// `placed[i]`, drawing `effects`; returns its image ([`FRAME_FORMAT`]).
+    pub fn add<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        frame: &CameraFrame,
+        placed: &[PlacedObject],
+        effects: Effects,
+    ) -> anyhow::Result<ImageHandle> {
+        if self.objects.is_empty() {
+            return Ok(self
+                .march
+                .add(graph, &self.field, frame, None)
+                .colour_opacity);
+        }
+        anyhow::ensure!(
+            placed.len() == self.objects.len(),
+            "{} placements for {} objects",
+            placed.len(),
+            self.objects.len()
+        );
+        let on_screen: Vec<bool> = placed
+            .iter()
+            .map(|p| {
+                let (c, r) = p.sphere();
+                frame.sphere_visible(c, r)
+            })
+            .collect();
+        let can_cast = effects.cast_shadow && self.cast.is_some() && self.fh.is_some();
+        let casts: Vec<bool> = self
+            .objects
+            .iter()
+            .zip(placed)
+            .map(|(o, p)| {
+                let (c, r) = p.sphere();
+                can_cast && o.ssdf.is_some() && frame.sphere_visible(c, r * OFF_SCREEN_SHADOW_REACH)
+            })
+            .collect();
+        if !effects.cast_shadow {
+            graph.note_skipped("cast-shadow", "cast shadows off");
+        } else if self.fh.is_none() {
+            graph.note_skipped("cast-shadow", "the scene draws no shadows");
+        } else if !casts.contains(&true) {
+            graph.note_skipped("cast-shadow", "objects and their shadows off screen");
+        }
+        // Incident light, for the objects that show or shadow what shows.
+        let version = effects.environment as u64;
+        if !self.objects[0].light.has_environment() {
+            graph.note_skipped("environment-term", "the environment is black");
+        } else if !effects.environment {
+            graph.note_skipped("environment-term", "environment light off");
+        }
+        let mut lobes = Vec::with_capacity(self.objects.len());
+        for (i, (o, p)) in self.objects.iter().zip(placed).enumerate() {
+            if !(on_screen[i] || casts[i]) {
+                graph.note_skipped("probe-trace", "object off screen");
+                graph.note_skipped("sg-fit", "object off screen");
+                lobes.push(None);
+                continue;
+            }
+            let (centre, _) = p.sphere();
+            let work = o.light.plan(centre, version);
+            lobes.push(Some(o.light.add_with(
+                graph,
+                &self.field,
+                centre,
+                work,
+                effects.environment,
+            )?));
+        }
+        let shown: Vec<usize> = (0..placed.len()).filter(|&i| on_screen[i]).collect();
+        let fh = self.fh.as_ref().map(|t| t.import(graph));
+        // Each object's SSDF bindings this frame, where a shadow needs them.
+        let ssdf: Vec<_> = self
+            .objects
+            .iter()
+            .zip(placed)
+            .enumerate()
+            .map(|(i, (o, p))| {
+                let needed = casts[i] || (on_screen[i] && effects.self_shadow);
+                match (&o.ssdf, fh) {
+                    (Some(s), Some(_)) if needed => Some(s.import(graph, p, self.shadow_outside)),
+                    _ => None,
+                }
+            })
+            .collect();
+        if shown.is_empty() {
+            graph.note_skipped("object-gbuffer", "objects off screen");
+            graph.note_skipped("object-shade", "objects off screen");
+            let field = self.march.add(graph, &self.field, frame, None);
+            let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
+            return Ok(match shadow {
+                Some(s) => self
+                    .composite
+                    .add_field_shadowed(graph, field.colour_opacity, s),
+                None => {
+                    graph.note_skipped("composite", "no object and no shadow on screen");
+                    field.colour_opacity
+                }
+            });
+        }
+        let draws: Vec<ObjectDraw<'_>> = shown
+            .iter()
+            .map(|&i| ObjectDraw {
+                placed: &placed[i],
+                gpu: &self.objects[i].gpu,
+            })
+            .collect();
+        let g = self.gbuffer.add(graph, frame, &draws)?;
+        let clip = effects.occlusion.then_some(g.distance_id);
+        let field = self.march.add(graph, &self.field, frame, clip);
+        let shown_lobes: Vec<_> = shown.iter().filter_map(|&i| lobes[i]).collect();
+        let self_shadow: Vec<Option<SelfShadow>> = shown
+            .iter()
+            .map(|&i| match (&ssdf[i], fh) {
+                (Some(ssdf), Some(fh_table)) if effects.self_shadow => Some(SelfShadow {
+                    fh_table,
+                    ssdf: *ssdf,
+                }),
+                _ => None,
+            })
+            .collect();
+        if !effects.self_shadow {
+            graph.note_skipped("self-shadow", "self-shadows off");
+        }
+        let object = self.shade.add(graph, frame, &g, &shown_lobes, &self_shadow);
+        let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
+        let layering = if effects.occlusion {
+            Layering::FieldOverObject
+        } else {
+            Layering::ObjectOverField
+        };
+        Ok(self
+            .composite
+            .add_layered(graph, field.colour_opacity, object, shadow, layering))
+    }
+}
+
+impl InsertionFrame {
+    /// Chains one `cast-shadow` pass per object that `casts`; returns the
+    /// product ρ image, or None when no object casts.
+    #[allow(clippy::too_many_arguments)]
+    fn cast_shadows<'a>(
+        &'a self,
+        graph: &mut FrameGraph<'a>,
+        frame: &CameraFrame,
+        field: &crate::march::MarchOutputs,
+        casts: &[bool],
+        ssdf: &[Option<crate::shadow::SsdfBindings>],
+        lobes: &[Option<crate::lighting::LightLobes>],
+        fh: Option<inlay_engine::graph::BufferHandle>,
+    ) -> Option<ImageHandle> {
+        let (cast, fh_table) = (self.cast.as_ref()?, fh?);
+        let mut shadow = None;
+        for i in 0..casts.len() {
+            if let (true, Some(s), Some(l)) = (casts[i], ssdf[i], lobes[i]) {
+                shadow = Some(cast.add(graph, &self.field, frame, field, l, fh_table, s, shadow));
+            }
+        }
+        shadow
+    }
+}
