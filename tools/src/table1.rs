@@ -9,15 +9,9 @@ use serde::Serialize;
 
 use crate::timings_table::quantile;
 
-/// The modules of Table 1 and the passes each is made of.
-pub const MODULES: [(&str, &[&str]); 6] = [
-    ("NeRF rendering", &["nerf-march"]),
-    ("Lighting", &["probe-trace", "direct-light"]),
-    ("SG updating", &["sg-fit"]),
-    ("Rendering", &["object-gbuffer", "object-shade"]),
-    ("Compositing", &["composite"]),
-    ("Shadow", &["cast-shadow"]),
-];
+/// The modules of Table 1 and the passes each is made of, as the frame
+/// declares them.
+pub use inlay_passes::frame::TABLE1 as MODULES;
 
 /// One module's row.
 #[derive(Debug, Clone, Serialize, PartialEq)]

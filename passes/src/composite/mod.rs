@@ -14,6 +14,10 @@ use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKin
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc, Push};
 
+/// The compositing pass's name in the frame graph (and in timings and
+/// traces).
+pub const COMPOSITE: &str = "composite";
+
 /// Format of the composited image.
 pub const COMPOSITE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
@@ -100,7 +104,7 @@ impl CompositePass {
         layering: Layering,
     ) -> ImageHandle {
         let (out, width, height) = output_image(graph, field);
-        let mut pass = graph.add_pass("composite", PassKind::Compute);
+        let mut pass = graph.add_pass(COMPOSITE, PassKind::Compute);
         pass.image(field, ImageAccess::Sampled);
         pass.image(object, ImageAccess::Sampled);
         if let Some(s) = shadow {
@@ -145,7 +149,7 @@ impl CompositePass {
         shadow: ImageHandle,
     ) -> ImageHandle {
         let (out, width, height) = output_image(graph, field);
-        let mut pass = graph.add_pass("composite", PassKind::Compute);
+        let mut pass = graph.add_pass(COMPOSITE, PassKind::Compute);
         pass.image(field, ImageAccess::Sampled);
         pass.image(shadow, ImageAccess::Sampled);
         let out = pass.image(out, ImageAccess::StorageWrite);

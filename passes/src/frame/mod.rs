@@ -18,15 +18,17 @@ use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Context};
 
 use crate::camera::CameraFrame;
-use crate::composite::{CompositePass, Layering, COMPOSITE_FORMAT};
+use crate::composite::{CompositePass, Layering, COMPOSITE, COMPOSITE_FORMAT};
 use crate::field::GpuGridField;
-use crate::gbuffer::{GBufferPass, ObjectDraw};
-use crate::lighting::IncidentLight;
-use crate::march::MarchPass;
+use crate::gbuffer::{GBufferPass, ObjectDraw, OBJECT_GBUFFER};
+use crate::lighting::{IncidentLight, DIRECT_LIGHT};
+use crate::march::{MarchPass, NERF_MARCH};
 use crate::object::{GpuObject, PlacedObject};
+use crate::probe::PROBE_TRACE;
 use crate::scene::{Scene as SceneFile, ShadowKnobs};
-use crate::shade::{SelfShadow, ShadePass};
-use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, SsdfField};
+use crate::sgfit::SG_FIT;
+use crate::shade::{SelfShadow, ShadePass, OBJECT_SHADE};
+use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, SsdfField, CAST_SHADOW};
 
 /// How far, in bounding-sphere radii from the object's centre, its cast
 /// shadow is drawn when the object itself is off screen: beyond 8 radii
@@ -90,6 +92,17 @@ pub struct InsertionFrame {
     cast: Option<CastShadowPass>,
     fh: Option<GpuFhTable>,
 }
+
+/// The modules of the paper's Table 1, in its order, and the frame's
+/// passes each is made of (the profiler, the HUD and the sweep read it).
+pub const TABLE1: [(&str, &[&str]); 6] = [
+    ("NeRF rendering", &[NERF_MARCH]),
+    ("Lighting", &[PROBE_TRACE, DIRECT_LIGHT]),
+    ("SG updating", &[SG_FIT]),
+    ("Rendering", &[OBJECT_GBUFFER, OBJECT_SHADE]),
+    ("Compositing", &[COMPOSITE]),
+    ("Shadow", &[CAST_SHADOW]),
+];
 
 /// The format of a frame's image.
 pub const FRAME_FORMAT: vk::Format = COMPOSITE_FORMAT;
@@ -212,11 +225,11 @@ impl InsertionFrame {
             })
             .collect();
         if !effects.cast_shadow {
-            graph.note_skipped("cast-shadow", "cast shadows off");
+            graph.note_skipped(CAST_SHADOW, "cast shadows off");
         } else if self.fh.is_none() {
-            graph.note_skipped("cast-shadow", "the scene draws no shadows");
+            graph.note_skipped(CAST_SHADOW, "the scene draws no shadows");
         } else if !casts.contains(&true) {
-            graph.note_skipped("cast-shadow", "objects and their shadows off screen");
+            graph.note_skipped(CAST_SHADOW, "objects and their shadows off screen");
         }
         // Incident light, for the objects that show or shadow what shows.
         let version = effects.environment as u64;
@@ -228,8 +241,8 @@ impl InsertionFrame {
         let mut lobes = Vec::with_capacity(self.objects.len());
         for (i, (o, p)) in self.objects.iter().zip(placed).enumerate() {
             if !(on_screen[i] || casts[i]) {
-                graph.note_skipped("probe-trace", "object off screen");
-                graph.note_skipped("sg-fit", "object off screen");
+                graph.note_skipped(PROBE_TRACE, "object off screen");
+                graph.note_skipped(SG_FIT, "object off screen");
                 lobes.push(None);
                 continue;
             }
@@ -260,8 +273,8 @@ impl InsertionFrame {
             })
             .collect();
         if shown.is_empty() {
-            graph.note_skipped("object-gbuffer", "objects off screen");
-            graph.note_skipped("object-shade", "objects off screen");
+            graph.note_skipped(OBJECT_GBUFFER, "objects off screen");
+            graph.note_skipped(OBJECT_SHADE, "objects off screen");
             let field = self.march.add(graph, &self.field, frame, None);
             let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
             return Ok(match shadow {
@@ -269,7 +282,7 @@ impl InsertionFrame {
                     .composite
                     .add_field_shadowed(graph, field.colour_opacity, s),
                 None => {
-                    graph.note_skipped("composite", "no object and no shadow on screen");
+                    graph.note_skipped(COMPOSITE, "no object and no shadow on screen");
                     field.colour_opacity
                 }
             });

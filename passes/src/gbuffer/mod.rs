@@ -21,6 +21,9 @@ use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, Image, ImageDesc
 use crate::camera::CameraFrame;
 use crate::object::{GpuObject, PlacedObject};
 
+/// The G-buffer pass's name in the frame graph (and in timings).
+pub const OBJECT_GBUFFER: &str = "object-gbuffer";
+
 /// Format of the normal + roughness target.
 pub const NORMAL_ROUGHNESS_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Format of the base colour + metallic target.
@@ -186,7 +189,7 @@ impl GBufferPass {
         let am = target(graph, "gbuffer-albedo-metallic", ALBEDO_METALLIC_FORMAT);
         let di = target(graph, "gbuffer-distance-id", DISTANCE_ID_FORMAT);
         let depth = target(graph, "gbuffer-depth", DEPTH_FORMAT);
-        let mut pass = graph.add_pass("object-gbuffer", PassKind::Raster);
+        let mut pass = graph.add_pass(OBJECT_GBUFFER, PassKind::Raster);
         pass.buffer(camera_buffer, BufferAccess::Uniform);
         pass.buffer(draw_buffer, BufferAccess::StorageRead);
         // Each resource is declared once, however many draws use it.

@@ -18,6 +18,9 @@ use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::{Sg32, Sg64};
 
+/// The direct-light pass's name in the frame graph (and in timings).
+pub const DIRECT_LIGHT: &str = "direct-light";
+
 /// Bytes of one packed lobe ((p, λ), (μ, 0)).
 const LOBE_BYTES: u64 = 32;
 
@@ -141,7 +144,7 @@ impl DirectLightPass {
             .u32(self.fitted)
             .u32(self.count - self.fitted)
             .u32(self.side * self.side);
-        let mut pass = graph.add_pass("direct-light", PassKind::Compute);
+        let mut pass = graph.add_pass(DIRECT_LIGHT, PassKind::Compute);
         grid.declare_reads(&mut pass);
         let fitted = pass.buffer(fitted, BufferAccess::StorageRead);
         let sharp = pass.buffer(sharp, BufferAccess::StorageRead);

@@ -8,7 +8,7 @@ mod direct_pass;
 pub mod direct_reference;
 pub mod sharp;
 
-pub use direct_pass::DirectLightPass;
+pub use direct_pass::{DirectLightPass, DIRECT_LIGHT};
 pub use direct_reference::direct_lights;
 pub use sharp::{lobe_rays, split_environment, SplitEnvironment};
 
@@ -21,9 +21,9 @@ use inlay_engine::Context;
 
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
-use crate::probe::{ProbeKnobs, ProbePass};
+use crate::probe::{ProbeKnobs, ProbePass, PROBE_TRACE};
 use crate::sg::Sg64;
-use crate::sgfit::{FitKnobs, FitStart, SgFitPass};
+use crate::sgfit::{FitKnobs, FitStart, SgFitPass, SG_FIT};
 
 /// What a frame has to do for the incident light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -166,14 +166,14 @@ impl IncidentLight {
         let fitted = self.fit.knobs().lobes;
         let direct = self.direct.as_ref().filter(|_| environment);
         if self.direct.is_some() && !environment {
-            graph.note_skipped("direct-light", "environment light off");
+            graph.note_skipped(DIRECT_LIGHT, "environment light off");
         }
         match work {
             LightingWork::Reuse => {
-                graph.note_skipped("probe-trace", "object and lighting unchanged");
-                graph.note_skipped("sg-fit", "object and lighting unchanged");
+                graph.note_skipped(PROBE_TRACE, "object and lighting unchanged");
+                graph.note_skipped(SG_FIT, "object and lighting unchanged");
                 if direct.is_some() {
-                    graph.note_skipped("direct-light", "object and lighting unchanged");
+                    graph.note_skipped(DIRECT_LIGHT, "object and lighting unchanged");
                 }
                 Ok(match direct {
                     Some(d) => d.reused(graph),

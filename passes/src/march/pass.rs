@@ -10,6 +10,9 @@ use super::knobs::MarchKnobs;
 use crate::camera::CameraFrame;
 use crate::field::GpuGridField;
 
+/// The march pass's name in the frame graph (and in timings and traces).
+pub const NERF_MARCH: &str = "nerf-march";
+
 /// Format of the (Ĉ, Ô) image.
 pub const MARCH_COLOUR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 /// Format of the D̂ image and of the object-depth image the pass reads.
@@ -84,7 +87,7 @@ impl MarchPass {
         let step = self.knobs.step(field.diagonal) as f32;
         let termination = self.knobs.termination as f32;
         let push = camera.push_prefix(step).f32(termination);
-        let mut pass = graph.add_pass("nerf-march", PassKind::Compute);
+        let mut pass = graph.add_pass(NERF_MARCH, PassKind::Compute);
         grid.declare_reads(&mut pass);
         let colour = pass.image(colour, ImageAccess::StorageWrite);
         let depth = pass.image(depth, ImageAccess::StorageWrite);

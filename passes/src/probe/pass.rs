@@ -15,6 +15,9 @@ use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::Sg64;
 
+/// The probe trace's name in the frame graph (and in timings).
+pub const PROBE_TRACE: &str = "probe-trace";
+
 /// Format of the probe image: L_i in rgb, Ô in alpha.
 pub const PROBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
@@ -166,7 +169,7 @@ impl ProbePass {
             .u32(0)
             .u32(0)
             .u32(0);
-        let mut pass = graph.add_pass("probe-trace", PassKind::Compute);
+        let mut pass = graph.add_pass(PROBE_TRACE, PassKind::Compute);
         grid.declare_reads(&mut pass);
         let probe = pass.image(probe, ImageAccess::StorageWrite);
         if let Some((b, _)) = env {

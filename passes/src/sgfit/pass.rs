@@ -18,6 +18,9 @@ use super::reference::relative_residual;
 use crate::probe::{DirectionMap, MapKind};
 use crate::sg::Sg32;
 
+/// The SG fit's name in the frame graph (and in timings and traces).
+pub const SG_FIT: &str = "sg-fit";
+
 /// Where a GPU fit starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FitStart {
@@ -294,7 +297,7 @@ impl SgFitPass {
         // The transients are written before they are read within the pass
         // (StorageWrite: no previous content); the lobes and the state
         // carry over from the previous fit.
-        let mut pass = graph.add_pass("sg-fit", PassKind::Compute);
+        let mut pass = graph.add_pass(SG_FIT, PassKind::Compute);
         pass.image(probe, ImageAccess::Sampled);
         let lobes = pass.buffer(lobes, BufferAccess::StorageReadWrite);
         let state = pass.buffer(state, BufferAccess::StorageReadWrite);

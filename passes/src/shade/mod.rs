@@ -22,6 +22,9 @@ use crate::gbuffer::GBuffer;
 use crate::lighting::LightLobes;
 use crate::shadow::{shadow_defines, SsdfBindings};
 
+/// The shading pass's name in the frame graph (and in timings).
+pub const OBJECT_SHADE: &str = "object-shade";
+
 /// Format of the object radiance image.
 pub const OBJECT_COLOUR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
@@ -92,7 +95,7 @@ impl ShadePass {
             },
         );
         let ndf = graph.import_buffer(&self.ndf, None);
-        let mut pass = graph.add_pass("object-shade", PassKind::Compute);
+        let mut pass = graph.add_pass(OBJECT_SHADE, PassKind::Compute);
         for img in [
             gbuffer.normal_roughness,
             gbuffer.albedo_metallic,

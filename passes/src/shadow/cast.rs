@@ -20,6 +20,9 @@ use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::MarchOutputs;
 
+/// The cast-shadow pass's name in the frame graph (and in timings).
+pub const CAST_SHADOW: &str = "cast-shadow";
+
 /// Format of the ρ image (rgb: per-channel factor).
 pub const SHADOW_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
@@ -79,7 +82,7 @@ impl CastShadowPass {
             .u32(direct.map_or(0, |d| d.rays_per_lobe))
             .u32(0)
             .u32(0);
-        let mut pass = graph.add_pass("cast-shadow", PassKind::Compute);
+        let mut pass = graph.add_pass(CAST_SHADOW, PassKind::Compute);
         // The occupancy grid is not read (binding 2 is compiled out).
         pass.buffer(grid.info, BufferAccess::Uniform);
         pass.buffer(grid.nodes, BufferAccess::StorageRead);

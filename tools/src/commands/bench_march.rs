@@ -94,7 +94,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
             .flat_map(|t| {
                 t.passes
                     .iter()
-                    .filter(|p| p.name == "nerf-march")
+                    .filter(|p| p.name == inlay_passes::march::NERF_MARCH)
                     .map(|p| p.gpu_ms)
             })
             .collect();

@@ -72,8 +72,8 @@ fn measure(
         renderer.submit(graph, &SubmitSync::none())?;
         renderer.finish()?;
         if let Some(t) = renderer.latest_timings() {
-            trace_ms.extend(t.gpu_ms("probe-trace"));
-            fit_ms.extend(t.gpu_ms("sg-fit"));
+            trace_ms.extend(t.gpu_ms(inlay_passes::probe::PROBE_TRACE));
+            fit_ms.extend(t.gpu_ms(inlay_passes::sgfit::SG_FIT));
         }
     }
     Ok((

@@ -326,7 +326,11 @@ fn print_report(
         report.relative_residual()
     );
     if let Some(t) = renderer.latest_timings() {
-        for name in ["probe-trace", "sg-fit", "direct-light"] {
+        for name in [
+            inlay_passes::probe::PROBE_TRACE,
+            inlay_passes::sgfit::SG_FIT,
+            inlay_passes::lighting::DIRECT_LIGHT,
+        ] {
             if let Some(ms) = t.gpu_ms(name) {
                 println!("{name}: {ms:.3} ms GPU on {}", ctx.info().name);
             }
