@@ -136,7 +136,7 @@ fn an_unknown_device_name_lists_the_devices() {
 #[test]
 fn a_broken_shader_directory_is_reported_with_file_and_line() {
     let dir = scratch("shaders");
-    let lib = inlay::shaders::embedded_library();
+    let lib = inlay_passes::shaders::embedded_library();
     for path in lib.paths() {
         let source = lib.get(path).unwrap().to_string();
         let dest = dir.join(path);

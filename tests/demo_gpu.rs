@@ -7,7 +7,7 @@ mod common;
 use inlay::demo::pattern::{demo_quad, demo_sky};
 use inlay::demo::{DemoPipelines, DemoScene};
 use inlay::headless::run_headless;
-use inlay::shaders::embedded_library;
+use inlay_passes::shaders::embedded_library;
 
 /// f16 storage rounds to a relative half-ulp of 2^-11 ≈ 4.9e-4; the GPU's
 /// exp/sin differ from Rust's by far less. 1e-3 relative (+1e-3 absolute for
@@ -21,12 +21,12 @@ fn close(gpu: f32, cpu: f32) -> bool {
 fn demo_pixels_match_the_cpu_pattern_and_depth_test_wins() {
     let ctx = common::gpu();
     let lib = embedded_library();
-    let scene = DemoScene {
+    let mut scene = DemoScene {
         pipelines: DemoPipelines::new(&ctx, &lib).unwrap(),
         keep_heatmap: false,
     };
     let (w, h) = (64u32, 48u32);
-    let run = run_headless(&ctx, &scene, w, h, 3, 0.0).unwrap();
+    let run = run_headless(&ctx, &mut scene, w, h, 3, 0.0).unwrap();
     common::assert_no_validation_errors(&ctx);
     let img = &run.image;
     assert_eq!(img.non_finite_count(), 0);
@@ -90,7 +90,7 @@ fn demo_timings_cover_every_pass_and_the_debug_pass_is_culled_unless_consumed() 
         pipelines: DemoPipelines::new(&ctx, &lib).unwrap(),
         keep_heatmap: false,
     };
-    let run = run_headless(&ctx, &scene, 32, 32, 5, 0.0).unwrap();
+    let run = run_headless(&ctx, &mut scene, 32, 32, 5, 0.0).unwrap();
     assert_eq!(run.culled, ["heatmap"]);
     assert_eq!(run.timings.len(), 5, "every frame's timings are collected");
     for (i, f) in run.timings.iter().enumerate() {
@@ -114,7 +114,7 @@ fn demo_timings_cover_every_pass_and_the_debug_pass_is_culled_unless_consumed() 
     );
 
     scene.keep_heatmap = true;
-    let run = run_headless(&ctx, &scene, 32, 32, 1, 0.0).unwrap();
+    let run = run_headless(&ctx, &mut scene, 32, 32, 1, 0.0).unwrap();
     assert!(run.culled.is_empty());
     assert!(run.timings[0].gpu_ms("heatmap").is_some());
     common::assert_no_validation_errors(&ctx);

@@ -13,7 +13,7 @@ fn near_field_kernels_match_the_cpu_mirror() {
     let ctx = common::gpu();
     let scene = common::bundled_scene("plants.toml");
     let field = common::bake_small(&scene, 32, 2, 0);
-    let lib = inlay::shaders::embedded_library();
+    let lib = inlay_passes::shaders::embedded_library();
     let gpu = GpuGridField::upload(&ctx, &field).unwrap();
     let knobs = EnvEstimateKnobs {
         views: 3,
@@ -91,7 +91,7 @@ fn near_field_sums_many_rays_per_point() {
     let ctx = common::gpu();
     let scene = common::bundled_scene("plants.toml");
     let field = common::bake_small(&scene, 32, 2, 0);
-    let lib = inlay::shaders::embedded_library();
+    let lib = inlay_passes::shaders::embedded_library();
     let gpu = GpuGridField::upload(&ctx, &field).unwrap();
     let point = inlay_passes::envest::SurfacePoint {
         position: glam::DVec3::new(0.3, 0.03, 0.4),

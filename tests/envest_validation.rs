@@ -28,7 +28,7 @@ use inlay_passes::envest::{estimate_environment, EnvEstimateKnobs, Validation};
 fn validate(name: &str, rays_per_point: u32) -> Validation {
     let scene = common::bundled_scene(name);
     let ctx = common::gpu();
-    let lib = inlay::shaders::embedded_library();
+    let lib = inlay_passes::shaders::embedded_library();
     let field = inlay::field_source::scene_field(&scene, None, false).unwrap();
     let knobs = EnvEstimateKnobs {
         views: 30,

@@ -18,12 +18,12 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use inlay::fidelity::{block_means, coverage, luminance, relative_l1, Rgb};
-use inlay::shaders::embedded_library;
 use inlay_engine::{HdrImage, ImageDesc, Readback};
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::field::GpuGridField;
 use inlay_passes::probe::{probe_irradiance, ProbePass, PROBE_FORMAT};
+use inlay_passes::shaders::embedded_library;
 
 fn cycles_dir(scene: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -8,8 +8,7 @@ mod common;
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay::shaders::embedded_library;
-use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, PassKind};
+use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{compile, ShaderStage};
 use inlay_engine::{ComputePipeline, Context, HdrImage, ImageDesc, Push, Readback, Renderer};
 use inlay_passes::bake::{render_reference, ReferenceOptions};
@@ -38,21 +37,23 @@ fn gpu_march(
     knobs: MarchKnobs,
     clip: Option<(f32, f32)>,
 ) -> (HdrImage, HdrImage) {
-    let lib = embedded_library();
+    let lib = common::test_library();
     let march = MarchPass::new(ctx, &lib, knobs).unwrap();
     let gpu_field = GpuGridField::upload(ctx, field).unwrap();
-    let pattern = ComputePipeline::new(
-        ctx,
-        &compile(
-            &lib,
-            "checks/object_depth_pattern.wgsl",
-            "main",
-            ShaderStage::Compute,
-            &[],
+    let pattern = std::sync::Arc::new(
+        ComputePipeline::new(
+            ctx,
+            &compile(
+                &lib,
+                "checks/object_depth_pattern.wgsl",
+                "main",
+                ShaderStage::Compute,
+                &[],
+            )
+            .unwrap(),
         )
         .unwrap(),
-    )
-    .unwrap();
+    );
     let (w, h) = (camera.width, camera.height);
     let colour_rb = Readback::new(
         ctx,
@@ -84,18 +85,12 @@ fn gpu_march(
                 format: MARCH_DEPTH_FORMAT,
             },
         );
-        let mut pass = graph.add_pass("object-depth-pattern", PassKind::Compute);
-        let img = pass.image(img, ImageAccess::StorageWrite);
-        let pattern = &pattern;
-        pass.exec(move |pc| {
-            let push = Push::new().u32(w).u32(h).f32(near).f32(mid);
-            pc.dispatch(
-                pattern,
-                &[Binding::StorageImage(img)],
-                push.bytes(),
-                pattern.groups_for([w, h, 1]),
-            )
-        });
+        let mut img = img;
+        graph
+            .compute("object-depth-pattern", &pattern)
+            .write("out_depth", &mut img)
+            .push(&Push::new().u32(w).u32(h).f32(near).f32(mid))
+            .threads([w, h, 1]);
         img
     });
     let out = march.add(&mut graph, &gpu_field, camera, object_depth);

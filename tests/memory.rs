@@ -32,7 +32,7 @@ fn rendering_frame_after_frame_keeps_memory_flat() {
         return;
     }
     let ctx = common::gpu();
-    let lib = inlay::shaders::library().unwrap();
+    let lib = inlay_passes::shaders::library().unwrap();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dog.toml");
     let mut scene = Preset::Fast.apply(&inlay_passes::scene::load_scene(&path).unwrap());
     assert!(scene.shadows.cast && scene.shadows.self_shadow);
@@ -42,13 +42,13 @@ fn rendering_frame_after_frame_keeps_memory_flat() {
     scene.bake.samples = 2;
     scene.bake.bounces = 0;
     scene.shadows.bake.grid = 4;
-    let view = open_view(&ctx, &lib, &scene, scene.march, None, "0", true).unwrap();
+    let mut view = open_view(&ctx, &lib, &scene, scene.march, None, "0", true).unwrap();
     let (w, h) = (64, 36);
     // Warm-up: pipelines, pools, the allocator's blocks.
-    profile_view(&ctx, &view, w, h, 12, Motion::Drag).unwrap();
+    profile_view(&ctx, &mut view, w, h, 12, Motion::Drag).unwrap();
     let before = resident_mib().unwrap();
     let frames = 60;
-    let run = profile_view(&ctx, &view, w, h, frames, Motion::Drag).unwrap();
+    let run = profile_view(&ctx, &mut view, w, h, frames, Motion::Drag).unwrap();
     let after = resident_mib().unwrap();
     common::assert_no_validation_errors(&ctx);
     let ran = |name: &str| {

@@ -6,11 +6,11 @@ mod common;
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay::shaders::embedded_library;
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback};
 use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::gbuffer::{GBufferPass, ObjectDraw, DISTANCE_ID_FORMAT, NORMAL_ROUGHNESS_FORMAT};
 use inlay_passes::object::{load_gltf, GpuObject, MaterialOverride, PlacedObject, Pose, Scale};
+use inlay_passes::shaders::embedded_library;
 
 use common::objects_dir;
 
@@ -166,10 +166,10 @@ struct Shaded {
     colour: HdrImage,
 }
 
-fn read_shaded<'a>(
+fn read_shaded(
     ctx: &Arc<Context>,
     cam: &CameraFrame,
-    build: impl FnOnce(&mut FrameGraph<'a>) -> (GBuffer, inlay_engine::graph::ImageHandle),
+    build: impl FnOnce(&mut FrameGraph) -> (GBuffer, inlay_engine::graph::ImageHandle),
 ) -> Shaded {
     let (w, h) = (cam.width, cam.height);
     let rb = [
@@ -349,7 +349,7 @@ fn sg_shading_matches_brute_force_against_the_probe() {
     let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
     let march = inlay_passes::march::MarchKnobs::default();
     let env = environment_lobes(&scene.environment);
-    let light = IncidentLight::new(
+    let mut light = IncidentLight::new(
         &ctx,
         &lib,
         scene.lighting.probe,
@@ -499,7 +499,7 @@ fn composite_hides_the_object_partly_behind_foliage() {
     let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
     let march = MarchPass::new(&ctx, &lib, scene.march).unwrap();
     let env = environment_lobes(&scene.environment);
-    let light = IncidentLight::new(
+    let mut light = IncidentLight::new(
         &ctx,
         &lib,
         scene.lighting.probe,

@@ -21,9 +21,9 @@ struct OverlayScene {
 }
 
 impl Scene for OverlayScene {
-    fn build<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    fn build(
+        &mut self,
+        graph: &mut FrameGraph,
         width: u32,
         height: u32,
         _time: f32,
@@ -54,7 +54,7 @@ impl Scene for OverlayScene {
 #[test]
 fn overlay_glyphs_match_the_cpu_mirror() {
     let ctx = common::gpu();
-    let lib = inlay::shaders::library().unwrap();
+    let lib = inlay_passes::shaders::library().unwrap();
     let lines: Vec<String> = vec![
         "9.6 fps  GPU 53.7 ms".into(),
         "Shadow: skipped (off)".into(),
@@ -62,12 +62,12 @@ fn overlay_glyphs_match_the_cpu_mirror() {
         "é → non-ASCII".into(),
     ];
     for (scale, (w, h)) in [(1u32, (150u32, 44u32)), (2, (120, 60))] {
-        let scene = OverlayScene {
+        let mut scene = OverlayScene {
             pass: OverlayPass::new(&ctx, &lib, FORMAT).unwrap(),
             lines: lines.clone(),
             scale,
         };
-        let image = run_headless(&ctx, &scene, w, h, 1, 0.0).unwrap().image;
+        let image = run_headless(&ctx, &mut scene, w, h, 1, 0.0).unwrap().image;
         let layout = OverlayLayout::new(w, h, &lines, scale).unwrap();
         let (mut lit, mut worst) = (0, 0.0f32);
         for y in 0..h {

@@ -7,7 +7,6 @@ mod common;
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay::shaders::embedded_library;
 use inlay_engine::shader::{compile, Define, ShaderStage};
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback};
 use inlay_passes::field::{GpuGridField, GridField};
@@ -19,6 +18,7 @@ use inlay_passes::march::MarchKnobs;
 use inlay_passes::probe::{trace_probe, MapKind, ProbeKnobs, ProbePass, PROBE_FORMAT};
 use inlay_passes::sg::Sg64;
 use inlay_passes::sgfit::{fit_reference, FitKnobs, FitStart, ProbeSamples, Start};
+use inlay_passes::shaders::embedded_library;
 
 fn march() -> MarchKnobs {
     MarchKnobs {
@@ -273,7 +273,7 @@ fn direct_light_matches_the_cpu_reference() {
         cold_iterations: 10,
         ..FitKnobs::default()
     };
-    let light = IncidentLight::new(&ctx, &lib, probe_knobs, fit_knobs, march(), &env).unwrap();
+    let mut light = IncidentLight::new(&ctx, &lib, probe_knobs, fit_knobs, march(), &env).unwrap();
     assert!(light.has_environment());
     let work = light.plan(centre, 0);
     let report = common::run_frame(&ctx, |graph| {

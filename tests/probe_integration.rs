@@ -10,7 +10,6 @@ mod common;
 use std::f64::consts::PI;
 
 use glam::{DVec3, UVec3};
-use inlay::shaders::embedded_library;
 use inlay_engine::{ImageDesc, Readback};
 use inlay_passes::field::{GpuGridField, GridField, RadianceField};
 use inlay_passes::geometry::{Aabb, Ray};
@@ -19,6 +18,7 @@ use inlay_passes::probe::{
     trace_probe, DirectionMap, MapKind, ProbeKnobs, ProbePass, PROBE_FORMAT,
 };
 use inlay_passes::sg::Sg64;
+use inlay_passes::shaders::embedded_library;
 
 fn march() -> MarchKnobs {
     MarchKnobs {

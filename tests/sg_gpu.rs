@@ -6,8 +6,6 @@ mod common;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
-use inlay::shaders::embedded_library;
-use inlay_engine::graph::{Binding, BufferAccess, PassKind};
 use inlay_engine::shader::{compile, ShaderStage};
 use inlay_engine::{vk, Buffer, BufferLocation, BufferReadback, ComputePipeline};
 use inlay_passes::rng::Pcg32;
@@ -75,7 +73,7 @@ fn cases() -> Vec<(Sg32, Sg32, Vec3)> {
 }
 
 fn run_on_gpu(ctx: &Arc<inlay_engine::Context>, cases: &[(Sg32, Sg32, Vec3)]) -> Vec<f32> {
-    let lib = embedded_library();
+    let lib = common::test_library();
     let shader = compile(
         &lib,
         "checks/sg_ops.wgsl",
@@ -84,7 +82,7 @@ fn run_on_gpu(ctx: &Arc<inlay_engine::Context>, cases: &[(Sg32, Sg32, Vec3)]) ->
         &[],
     )
     .unwrap();
-    let pipeline = ComputePipeline::new(ctx, &shader).unwrap();
+    let pipeline = Arc::new(ComputePipeline::new(ctx, &shader).unwrap());
     let input: Vec<u8> = cases
         .iter()
         .flat_map(|(a, b, v)| {
@@ -121,18 +119,12 @@ fn run_on_gpu(ctx: &Arc<inlay_engine::Context>, cases: &[(Sg32, Sg32, Vec3)]) ->
     common::run_frame(ctx, |graph| {
         let input = graph.import_buffer(&input, None);
         let out = graph.import_buffer(&results, None);
-        let mut pass = graph.add_pass("sg-ops", PassKind::Compute);
-        pass.buffer(input, BufferAccess::StorageRead);
-        let out = pass.buffer(out, BufferAccess::StorageWrite);
-        let pipeline = &pipeline;
-        pass.exec(move |pc| {
-            pc.dispatch(
-                pipeline,
-                &[Binding::StorageBuffer(input), Binding::StorageBuffer(out)],
-                &[],
-                pipeline.groups_for([n, 1, 1]),
-            )
-        });
+        let mut out = out;
+        graph
+            .compute("sg-ops", &pipeline)
+            .read("cases", input)
+            .write("results", &mut out)
+            .threads([n, 1, 1]);
         readback.add_to_graph(graph, "read-sg-results", out);
     });
     readback.read_f32().unwrap()

@@ -8,7 +8,6 @@ mod common;
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay::shaders::embedded_library;
 use inlay_engine::{vk, Context, Image, ImageDesc};
 use inlay_passes::probe::{DirectionMap, MapKind, PROBE_FORMAT};
 use inlay_passes::sg::Sg64;
@@ -16,6 +15,7 @@ use inlay_passes::sgfit::model::{self, MAX_SHARPNESS, MIN_SHARPNESS};
 use inlay_passes::sgfit::{
     fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, SgFitPass, Start,
 };
+use inlay_passes::shaders::embedded_library;
 
 fn sky_and_sun() -> Vec<Sg64> {
     vec![

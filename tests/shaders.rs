@@ -4,12 +4,12 @@
 mod common;
 
 use inlay::headless::Scene;
-use inlay::shaders::embedded_library;
-use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
+use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::{compile, Define, ShaderStage};
 use inlay_engine::tonemap::{aces_filmic, srgb_encode};
 use inlay_engine::Push;
 use inlay_engine::{vk, ComputePipeline, ImageDesc};
+use inlay_passes::shaders::embedded_library;
 
 /// Every entry point of every shipped shader file compiles and validates.
 #[test]
@@ -75,13 +75,13 @@ fn a_broken_shader_is_reported_with_file_and_line() {
 }
 
 struct TonemapProbe {
-    pipeline: ComputePipeline,
+    pipeline: std::sync::Arc<ComputePipeline>,
 }
 
 impl Scene for TonemapProbe {
-    fn build<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    fn build(
+        &mut self,
+        graph: &mut FrameGraph,
         width: u32,
         height: u32,
         _time: f32,
@@ -94,16 +94,12 @@ impl Scene for TonemapProbe {
                 format: vk::Format::R32G32B32A32_SFLOAT,
             },
         );
-        let mut pass = graph.add_pass("tonemap-probe", PassKind::Compute);
-        let out = pass.image(result, ImageAccess::StorageWrite);
-        pass.exec(move |ctx| {
-            ctx.dispatch(
-                &self.pipeline,
-                &[Binding::StorageImage(out)],
-                Push::new().u32(width).u32(height).bytes(),
-                self.pipeline.groups_for([width, height, 1]),
-            )
-        });
+        let mut out = result;
+        graph
+            .compute("tonemap-probe", &self.pipeline)
+            .write("result", &mut out)
+            .push(&Push::new().u32(width).u32(height))
+            .threads([width, height, 1]);
         Ok(out)
     }
 }
@@ -111,7 +107,7 @@ impl Scene for TonemapProbe {
 #[test]
 fn tonemap_gpu_matches_cpu() {
     let ctx = common::gpu();
-    let lib = embedded_library();
+    let lib = common::test_library();
     let shader = compile(
         &lib,
         "checks/tonemap_probe.wgsl",
@@ -120,12 +116,12 @@ fn tonemap_gpu_matches_cpu() {
         &[],
     )
     .unwrap();
-    let probe = TonemapProbe {
-        pipeline: ComputePipeline::new(&ctx, &shader).unwrap(),
+    let mut probe = TonemapProbe {
+        pipeline: std::sync::Arc::new(ComputePipeline::new(&ctx, &shader).unwrap()),
     };
     // The headless runner reads RGBA16F back; this probe writes RGBA32F, so
     // read through a dedicated 32-bit readback instead.
-    let run = run_headless_rgba32(&ctx, &probe, 16, 16);
+    let run = run_headless_rgba32(&ctx, &mut probe, 16, 16);
     common::assert_no_validation_errors(&ctx);
     for p in &run {
         let v = p[0];
@@ -150,7 +146,7 @@ fn tonemap_gpu_matches_cpu() {
 
 fn run_headless_rgba32(
     ctx: &std::sync::Arc<inlay_engine::Context>,
-    scene: &TonemapProbe,
+    scene: &mut TonemapProbe,
     w: u32,
     h: u32,
 ) -> Vec<[f32; 4]> {
@@ -187,30 +183,30 @@ fn pipelines_are_compiled_once_per_key() {
     assert_eq!(lib.compiled_pipelines(), 0);
     let on = [Define::Bool("SKIP_EMPTY", true)];
     let a = lib
-        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .compute_pipeline(&ctx, "march/march.wgsl", "main_unclipped", &on)
         .unwrap();
     let b = lib
-        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .compute_pipeline(&ctx, "march/march.wgsl", "main_unclipped", &on)
         .unwrap();
     assert!(Arc::ptr_eq(&a, &b));
     assert_eq!(lib.compiled_pipelines(), 1);
     let off = [Define::Bool("SKIP_EMPTY", false)];
     let c = lib
-        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &off)
+        .compute_pipeline(&ctx, "march/march.wgsl", "main_unclipped", &off)
         .unwrap();
     assert!(!Arc::ptr_eq(&a, &c));
     assert_eq!(lib.compiled_pipelines(), 2);
     // A clone shares the pipelines; a changed file starts afresh.
     let clone = lib.clone();
     clone
-        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .compute_pipeline(&ctx, "march/march.wgsl", "main_unclipped", &on)
         .unwrap();
     assert_eq!(clone.compiled_pipelines(), 2);
-    let source = lib.get("nerf/march.wgsl").unwrap().to_owned();
-    lib.insert("nerf/march.wgsl", &source);
+    let source = lib.get("march/march.wgsl").unwrap().to_owned();
+    lib.insert("march/march.wgsl", &source);
     assert_eq!(lib.compiled_pipelines(), 0);
     let d = lib
-        .compute_pipeline(&ctx, "nerf/march.wgsl", "main_unclipped", &on)
+        .compute_pipeline(&ctx, "march/march.wgsl", "main_unclipped", &on)
         .unwrap();
     assert!(!Arc::ptr_eq(&a, &d));
 
@@ -255,4 +251,103 @@ fn pipelines_are_compiled_once_per_key() {
     );
     drop((first, more));
     common::assert_no_validation_errors(&ctx);
+}
+
+/// A kernel reading two storage buffers into a third, for the binding layer.
+const SUM_KERNEL: &str = "
+@group(0) @binding(0) var<storage, read> first: array<f32>;
+@group(0) @binding(1) var<storage, read> second: array<f32>;
+@group(0) @binding(2) var<storage, read_write> sum: array<f32>;
+@compute @workgroup_size(4, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    sum[id.x] = first[id.x] + 2.0 * second[id.x];
+}
+";
+
+/// Passes declared by binding (`FrameGraph::compute`): one buffer read at
+/// two bindings is declared once, a binding the shader does not have is
+/// left out, and an unbound binding or a resource of the wrong kind is an
+/// error that names the binding, before anything runs.
+#[test]
+fn passes_are_declared_by_binding() {
+    use inlay_engine::graph::Plan;
+    use inlay_engine::{Buffer, BufferReadback, Renderer, SubmitSync};
+    use std::sync::Arc;
+    let ctx = common::gpu();
+    let mut lib = embedded_library();
+    lib.insert("checks/sum.wgsl", SUM_KERNEL);
+    let pipeline = lib
+        .compute_pipeline(&ctx, "checks/sum.wgsl", "main", &[])
+        .unwrap();
+    let values = [1.0f32, 2.0, 3.0, 4.0];
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let input = Arc::new(
+        Buffer::with_data(
+            &ctx,
+            "sum input",
+            &bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )
+        .unwrap(),
+    );
+    let readback = BufferReadback::new(&ctx, "sum readback", 16).unwrap();
+    let mut renderer = Renderer::new(&ctx, 1).unwrap();
+    renderer.begin_frame().unwrap();
+    let mut graph = FrameGraph::new();
+    let x = graph.import_buffer(&input, None);
+    let mut sum = graph.create_buffer("sum", 16);
+    let image = graph.create_image(
+        "never bound",
+        ImageDesc {
+            width: 1,
+            height: 1,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+        },
+    );
+    graph
+        .compute("sum", &pipeline)
+        .read("first", x)
+        .read(1, x)
+        .read("not_in_the_shader", image)
+        .write("sum", &mut sum)
+        .push(&Push::new())
+        .threads([4, 1, 1]);
+    readback.add_to_graph(&mut graph, "sum readback", sum);
+    renderer.submit(graph, &SubmitSync::none()).unwrap();
+    renderer.finish().unwrap();
+    common::assert_no_validation_errors(&ctx);
+    let got = readback.read_f32().unwrap();
+    let want: Vec<f32> = values.iter().map(|v| 3.0 * v).collect();
+    assert_eq!(got, want);
+
+    let mut graph = FrameGraph::new();
+    let x = graph.import_buffer(&input, None);
+    let mut sum = graph.create_buffer("sum", 16);
+    graph
+        .compute("sum", &pipeline)
+        .read("first", x)
+        .write("sum", &mut sum)
+        .threads([4, 1, 1]);
+    let e = Plan::new(&graph).expect_err("an unbound binding fails");
+    assert!(e.to_string().contains("1 (`second`)"), "{e}");
+
+    let mut graph = FrameGraph::new();
+    let x = graph.import_buffer(&input, None);
+    let img = graph.create_image(
+        "image",
+        ImageDesc {
+            width: 1,
+            height: 1,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+        },
+    );
+    let mut sum = graph.create_buffer("sum", 16);
+    graph
+        .compute("sum", &pipeline)
+        .read("first", x)
+        .read("second", img)
+        .write("sum", &mut sum)
+        .threads([4, 1, 1]);
+    let e = Plan::new(&graph).expect_err("an image at a buffer binding fails");
+    assert!(e.to_string().contains("`second`"), "{e}");
 }

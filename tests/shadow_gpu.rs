@@ -5,8 +5,8 @@ mod common;
 
 use std::sync::Arc;
 
-use inlay::shaders::embedded_library;
 use inlay_passes::object::ObjectMesh;
+use inlay_passes::shaders::embedded_library;
 use inlay_passes::shadow::{bake_reference, grid_for, lookup_points, object_scene, SsdfBaker};
 
 use common::bundled_object as bundled;
@@ -614,8 +614,8 @@ use inlay_passes::gbuffer::{
 use inlay_passes::object::GpuObject;
 use inlay_passes::shade::{SelfShadow, ShadePass, OBJECT_COLOUR_FORMAT};
 
-/// The self-shadowed shading kernels (`object/shade_self_shadow.wgsl`, and
-/// `object/shade_self_shadow_direct.wgsl` whose last lobe is a direct one,
+/// The self-shadowed shading kernels (`shade/shade_self_shadow.wgsl`, and
+/// `shade/shade_self_shadow_direct.wgsl` whose last lobe is a direct one,
 /// its Γ ray-cast against the mesh) against their f64 mirror: Γ from
 /// `self_shadow_factors`, shading from `shade_sg_split`, at every pixel of
 /// the toy (which shadows itself under its cap), from the G-buffer's own

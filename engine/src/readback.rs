@@ -58,7 +58,7 @@ impl Readback {
 
     /// Adds a transfer pass named `readback` that copies `image` into the
     /// buffer; the buffer is left ready for host reads.
-    pub fn add_to_graph(&self, graph: &mut FrameGraph<'_>, image: ImageHandle) {
+    pub fn add_to_graph(&self, graph: &mut FrameGraph, image: ImageHandle) {
         let export = SyncState {
             stage: vk::PipelineStageFlags2::HOST,
             access: vk::AccessFlags2::HOST_READ,
@@ -143,7 +143,7 @@ impl BufferReadback {
 
     /// Adds a transfer pass named `pass` copying `source` (which needs
     /// transfer-source usage) into this buffer, left ready for host reads.
-    pub fn add_to_graph(&self, graph: &mut FrameGraph<'_>, pass: &str, source: BufferHandle) {
+    pub fn add_to_graph(&self, graph: &mut FrameGraph, pass: &str, source: BufferHandle) {
         let export = SyncState {
             stage: vk::PipelineStageFlags2::HOST,
             access: vk::AccessFlags2::HOST_READ,

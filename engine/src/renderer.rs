@@ -194,7 +194,7 @@ impl Renderer {
 
     /// Plans, records and submits `graph` as the frame begun with
     /// [`Self::begin_frame`] (begun implicitly if not).
-    pub fn submit(&mut self, graph: FrameGraph<'_>, sync: &SubmitSync) -> Result<FrameReport> {
+    pub fn submit(&mut self, graph: FrameGraph, sync: &SubmitSync) -> Result<FrameReport> {
         let token = self.begin_frame()?;
         self.begun = None;
         self.next_frame += 1;
@@ -354,7 +354,7 @@ impl Drop for Renderer {
 }
 
 fn resolve(
-    graph: &FrameGraph<'_>,
+    graph: &FrameGraph,
     plan: &Plan,
     physical: &[SlotResource],
     keep_images: &mut Vec<Arc<Image>>,

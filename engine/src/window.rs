@@ -303,7 +303,7 @@ impl WindowTarget {
     }
 
     /// Imports the acquired image into `graph`; the graph leaves it ready to present.
-    pub fn import(&self, graph: &mut FrameGraph<'_>, acquired: Acquired) -> ImageHandle {
+    pub fn import(&self, graph: &mut FrameGraph, acquired: Acquired) -> ImageHandle {
         let desc = ImageDesc {
             width: self.extent.width,
             height: self.extent.height,

@@ -17,7 +17,7 @@
 #include "common/ray_box.wgsl"
 #include "common/direction_map.wgsl"
 #include "field/grid.wgsl"
-#include "nerf/volume_march.wgsl"
+#include "march/volume_march.wgsl"
 #include "common/tangent_basis.wgsl"
 #include "envest/hemisphere.wgsl"
 

@@ -11,7 +11,7 @@
 #include "common/sg.wgsl"
 #include "common/direction_map.wgsl"
 #include "field/grid.wgsl"
-#include "nerf/volume_march.wgsl"
+#include "march/volume_march.wgsl"
 
 struct ProbePush {
     origin: vec3<f32>,

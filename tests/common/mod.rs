@@ -74,9 +74,9 @@ pub fn bake_small(
 
 /// Builds one frame with `build`, runs it to completion and checks the
 /// validation layer.
-pub fn run_frame<'a>(
+pub fn run_frame(
     ctx: &std::sync::Arc<Context>,
-    build: impl FnOnce(&mut inlay_engine::graph::FrameGraph<'a>),
+    build: impl FnOnce(&mut inlay_engine::graph::FrameGraph),
 ) -> inlay_engine::FrameReport {
     let mut renderer = inlay_engine::Renderer::new(ctx, 1).unwrap();
     renderer.begin_frame().unwrap();
@@ -88,4 +88,24 @@ pub fn run_frame<'a>(
     renderer.finish().unwrap();
     assert_no_validation_errors(ctx);
     report
+}
+
+/// The shipped shaders plus the test-only kernels of tests/shaders/, as
+/// `checks/NAME` (they are not shipped in the binary).
+pub fn test_library() -> inlay_engine::shader::ShaderLibrary {
+    let mut lib = inlay_passes::shaders::embedded_library();
+    for (name, source) in [
+        (
+            "checks/object_depth_pattern.wgsl",
+            include_str!("../shaders/object_depth_pattern.wgsl"),
+        ),
+        ("checks/sg_ops.wgsl", include_str!("../shaders/sg_ops.wgsl")),
+        (
+            "checks/tonemap_probe.wgsl",
+            include_str!("../shaders/tonemap_probe.wgsl"),
+        ),
+    ] {
+        lib.insert(name, source);
+    }
+    lib
 }

@@ -10,13 +10,14 @@ use inlay_engine::{
 };
 
 /// Something that renders an HDR image through a frame graph (object-safe:
-/// the targets take `&dyn Scene`).
+/// the targets take `&mut dyn Scene`).
 pub trait Scene {
     /// Adds passes that render a `width`×`height` linear HDR image
-    /// at time `time` (seconds) and returns it.
-    fn build<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    /// at time `time` (seconds) and returns it (a scene may keep state
+    /// from frame to frame, such as when its lighting was last fitted).
+    fn build(
+        &mut self,
+        graph: &mut FrameGraph,
         width: u32,
         height: u32,
         time: f32,
@@ -45,7 +46,7 @@ pub struct HeadlessRun {
 /// flight, at times `time + i/60`, and reads the last one back.
 pub fn run_headless(
     ctx: &Arc<Context>,
-    scene: &dyn Scene,
+    scene: &mut dyn Scene,
     width: u32,
     height: u32,
     frames: u32,

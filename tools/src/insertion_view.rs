@@ -2,7 +2,7 @@
 //! a headless or window scene: the frame of `inlay_passes::frame` with the
 //! state a viewer changes between frames (camera, placements, effects).
 
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
@@ -21,13 +21,13 @@ pub struct InsertionView {
     /// The passes, the field and the objects' GPU state.
     pub frame: InsertionFrame,
     /// The camera (changeable between frames).
-    pub camera: Mutex<CameraSpec>,
+    camera: CameraSpec,
     /// Each object's pose and material override (changeable between
     /// frames), in the frame's order.
-    placed: Vec<Mutex<PlacedObject>>,
+    placed: Vec<PlacedObject>,
     /// Which effects are drawn (changeable between frames; shadows need
     /// the objects' SSDF fields, loaded when the scene asked for shadows).
-    effects: Mutex<Effects>,
+    effects: Effects,
 }
 
 impl InsertionView {
@@ -67,9 +67,9 @@ impl InsertionView {
             .collect::<anyhow::Result<Vec<_>>>()?;
         Ok(Self {
             frame: InsertionFrame::new(ctx, lib, scene, march, field, ssdfs)?,
-            camera: Mutex::new(camera),
-            placed: scene.objects.iter().cloned().map(Mutex::new).collect(),
-            effects: Mutex::new(Effects::of_scene(&scene.shadows)),
+            camera,
+            placed: scene.objects.clone(),
+            effects: Effects::of_scene(&scene.shadows),
         })
     }
 
@@ -84,44 +84,45 @@ impl InsertionView {
     }
 }
 
-/// Locks `m`, recovering the value if a panicking thread poisoned it.
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
 impl InsertionView {
     /// This frame's camera for a `width`×`height` image.
     pub fn frame(&self, width: u32, height: u32) -> CameraFrame {
-        CameraFrame::new(&lock(&self.camera), width, height)
+        CameraFrame::new(&self.camera, width, height)
     }
 
-    /// Moves the camera from the next frame on.
-    pub fn set_camera(&self, camera: CameraSpec) {
+    /// The camera.
+    pub fn camera(&self) -> &CameraSpec {
+        &self.camera
+    }
+
+    /// Moves the camera from the next frame on (a camera with a problem
+    /// is ignored).
+    pub fn set_camera(&mut self, camera: CameraSpec) {
         if camera.problem().is_none() {
-            *lock(&self.camera) = camera;
+            self.camera = camera;
         }
     }
 
     /// A copy of object `index`'s current placement.
     pub fn placed(&self, index: usize) -> Option<PlacedObject> {
-        self.placed.get(index).map(|p| lock(p).clone())
+        self.placed.get(index).cloned()
     }
 
     /// Replaces object `index`'s placement (pose and material).
-    pub fn set_placed(&self, index: usize, placed: PlacedObject) {
-        if let Some(p) = self.placed.get(index) {
-            *lock(p) = placed;
+    pub fn set_placed(&mut self, index: usize, placed: PlacedObject) {
+        if let Some(p) = self.placed.get_mut(index) {
+            *p = placed;
         }
     }
 
     /// The effects drawn now.
     pub fn effects(&self) -> Effects {
-        *lock(&self.effects)
+        self.effects
     }
 
     /// Sets the effects drawn from the next frame on.
-    pub fn set_effects(&self, effects: Effects) {
-        *lock(&self.effects) = effects;
+    pub fn set_effects(&mut self, effects: Effects) {
+        self.effects = effects;
     }
 
     /// Whether any object has an SSDF field (shadows can be drawn).
@@ -131,17 +132,15 @@ impl InsertionView {
 }
 
 impl crate::headless::Scene for InsertionView {
-    fn build<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    fn build(
+        &mut self,
+        graph: &mut FrameGraph,
         width: u32,
         height: u32,
         _time: f32,
     ) -> anyhow::Result<ImageHandle> {
-        let frame = self.frame(width, height);
-        // This frame's placements (copied out of the locks).
-        let placed: Vec<PlacedObject> = self.placed.iter().map(|p| lock(p).clone()).collect();
-        self.frame.add(graph, &frame, &placed, self.effects())
+        let camera = self.frame(width, height);
+        self.frame.add(graph, &camera, &self.placed, self.effects)
     }
 
     fn output_format(&self) -> vk::Format {

@@ -14,7 +14,6 @@ pub mod measure;
 pub mod overlay;
 pub mod present;
 pub mod scene_view;
-pub mod shaders;
 pub mod ssdf_source;
 pub mod sweep;
 pub mod table1;

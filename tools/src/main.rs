@@ -167,7 +167,7 @@ fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
         "--exposure must be a positive number, got {}",
         args.exposure
     );
-    let library = inlay::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     if !args.headless {
         let options = WindowOptions {
             context: gpu.options(),
@@ -205,11 +205,11 @@ fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
         }
     }
     let ctx = Context::new(&gpu.options(), None)?;
-    let scene = DemoScene {
+    let mut scene = DemoScene {
         pipelines: DemoPipelines::new(&ctx, &library)?,
         keep_heatmap: args.keep_heatmap,
     };
     let frames = args.frames.unwrap_or(8).clamp(1, 100_000) as u32;
-    let run = run_headless(&ctx, &scene, args.width, args.height, frames, args.time)?;
+    let run = run_headless(&ctx, &mut scene, args.width, args.height, frames, args.time)?;
     run.report(&ctx, &args.out, args.exposure)
 }

@@ -4,9 +4,7 @@
 
 use std::sync::Arc;
 
-use inlay_engine::graph::{
-    Binding, BufferAccess, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind,
-};
+use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, Buffer, Context, GraphicsDesc, GraphicsPipeline, Push};
 
@@ -107,7 +105,7 @@ impl OverlayLayout {
 
 /// The overlay pipeline for one swapchain format, with the font uploaded.
 pub struct OverlayPass {
-    pipeline: GraphicsPipeline,
+    pipeline: Arc<GraphicsPipeline>,
     font: Arc<Buffer>,
     format: vk::Format,
 }
@@ -131,7 +129,7 @@ impl OverlayPass {
         };
         let bytes: Vec<u8> = font_words().iter().flat_map(|w| w.to_le_bytes()).collect();
         Ok(Self {
-            pipeline: GraphicsPipeline::new(ctx, &v, &f, &desc)?,
+            pipeline: Arc::new(GraphicsPipeline::new(ctx, &v, &f, &desc)?),
             font: Arc::new(Buffer::with_data(
                 ctx,
                 "overlay-font",
@@ -150,9 +148,9 @@ impl OverlayPass {
     /// Adds the `overlay` pass drawing `lines` over `target` (kept) at
     /// glyph magnification `scale`, from 4 pixels in; nothing when
     /// `lines` is empty.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         target: ImageHandle,
         lines: &[String],
         scale: u32,
@@ -170,26 +168,21 @@ impl OverlayPass {
             grid.iter().flat_map(|c| c.to_le_bytes()).collect(),
         );
         let font = graph.import_buffer(&self.font, None);
-        let mut pass = graph.add_pass("overlay", PassKind::Raster);
-        pass.buffer(font, BufferAccess::StorageRead);
-        pass.buffer(text, BufferAccess::StorageRead);
-        let out = pass.image(target, ImageAccess::ColorAttachment(LoadOp::Load));
         let push = Push::new()
             .u32(cols)
             .u32(rows)
             .u32(scale)
             .u32(ORIGIN)
             .u32(ORIGIN);
-        let pipeline = &self.pipeline;
-        pass.exec(move |ctx| {
-            ctx.draw(
-                pipeline,
-                &[Binding::StorageBuffer(font), Binding::StorageBuffer(text)],
-                push.bytes(),
-                3,
-                1,
-            )
-        });
+        let mut out = target;
+        let mut pass = graph.raster_pass("overlay");
+        pass.color(&mut out, LoadOp::Load);
+        pass.draw(&self.pipeline)
+            .read("font", font)
+            .read("text", text)
+            .push(&push)
+            .vertices(3, 1);
+        pass.finish();
         out
     }
 }

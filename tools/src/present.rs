@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind};
+use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline};
 
@@ -10,7 +10,7 @@ use inlay_engine::Push;
 
 /// The tonemapping pipeline for one swapchain format.
 pub struct PresentPipeline {
-    pipeline: GraphicsPipeline,
+    pipeline: Arc<GraphicsPipeline>,
     format: vk::Format,
     encode_srgb: bool,
 }
@@ -35,7 +35,7 @@ impl PresentPipeline {
             cull_back: false,
         };
         Ok(Self {
-            pipeline: GraphicsPipeline::new(ctx, &v, &f, &desc)?,
+            pipeline: Arc::new(GraphicsPipeline::new(ctx, &v, &f, &desc)?),
             format,
             encode_srgb: !srgb_format,
         })
@@ -47,26 +47,22 @@ impl PresentPipeline {
     }
 
     /// Adds the `present` pass: `hdr` (sampled) → `target` (colour attachment).
-    pub fn add_pass<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add_pass(
+        &self,
+        graph: &mut FrameGraph,
         hdr: ImageHandle,
         target: ImageHandle,
         exposure: f32,
     ) -> ImageHandle {
-        let mut pass = graph.add_pass("present", PassKind::Raster);
-        pass.image(hdr, ImageAccess::Sampled);
-        let out = pass.image(target, ImageAccess::ColorAttachment(LoadOp::DontCare));
         let push = Push::new().f32(exposure).u32(self.encode_srgb as u32);
-        pass.exec(move |ctx| {
-            ctx.draw(
-                &self.pipeline,
-                &[Binding::SampledImage(hdr)],
-                push.bytes(),
-                3,
-                1,
-            )
-        });
+        let mut out = target;
+        let mut pass = graph.raster_pass("present");
+        pass.color(&mut out, LoadOp::DontCare);
+        pass.draw(&self.pipeline)
+            .read("hdr", hdr)
+            .push(&push)
+            .vertices(3, 1);
+        pass.finish();
         out
     }
 }

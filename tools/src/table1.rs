@@ -7,11 +7,13 @@
 use inlay_engine::timing::FrameTimings;
 use serde::Serialize;
 
+use inlay_passes::frame::Table1Module;
+
 use crate::timings_table::quantile;
 
-/// The modules of Table 1 and the passes each is made of, as the frame
-/// declares them.
-pub use inlay_passes::frame::TABLE1 as MODULES;
+/// The modules of Table 1 and the passes each is made of, as the frame's
+/// passes declare them.
+pub use inlay_passes::frame::table1 as modules;
 
 /// One module's row.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -66,20 +68,21 @@ pub fn module_ms(frame: &FrameTimings, passes: &[&str]) -> Option<f64> {
 
 /// The module a pass belongs to, if it is one of Table 1's.
 pub fn module_of(pass: &str) -> Option<&'static str> {
-    MODULES
-        .iter()
+    modules()
+        .into_iter()
         .find(|(_, passes)| passes.contains(&pass))
-        .map(|(m, _)| *m)
+        .map(|(m, _)| m)
 }
 
 /// Summarises `frames` (oldest first, the first frame being the run's
 /// first) with the wall-clock frame times `wall_ms` (may be empty).
 pub fn summarise(frames: &[FrameTimings], wall_ms: &[f64]) -> Table1 {
-    let modules = MODULES
-        .iter()
+    let modules = modules()
+        .into_iter()
         .map(|(module, passes)| {
-            let per_frame: Vec<Option<f64>> = frames.iter().map(|f| module_ms(f, passes)).collect();
-            let first_is_apart = *module == "SG updating";
+            let per_frame: Vec<Option<f64>> =
+                frames.iter().map(|f| module_ms(f, &passes)).collect();
+            let first_is_apart = module == Table1Module::SgUpdating.name();
             let first_frame_ms = per_frame.first().copied().flatten();
             let counted: Vec<f64> = per_frame
                 .iter()

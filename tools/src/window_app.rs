@@ -79,7 +79,7 @@ pub struct HudStats<'a> {
 /// rebuilds itself on request and writes the overlay's lines.
 pub trait WindowScene {
     /// The scene to render.
-    fn scene(&self) -> &dyn Scene;
+    fn scene(&mut self) -> &mut dyn Scene;
 
     /// Sees a window event (`extent`: the drawable size).
     fn input(&mut self, _event: &WindowEvent, _extent: (u32, u32)) -> Response {
@@ -92,7 +92,7 @@ pub trait WindowScene {
     }
 
     /// The overlay's lines (none: no overlay pass).
-    fn hud(&self, _stats: &HudStats<'_>) -> Vec<String> {
+    fn hud(&mut self, _stats: &HudStats<'_>) -> Vec<String> {
         Vec::new()
     }
 
@@ -104,8 +104,8 @@ pub trait WindowScene {
 pub struct Passive(pub Box<dyn Scene>);
 
 impl WindowScene for Passive {
-    fn scene(&self) -> &dyn Scene {
-        &*self.0
+    fn scene(&mut self) -> &mut dyn Scene {
+        &mut *self.0
     }
 }
 

@@ -86,25 +86,25 @@ pub(crate) struct BufferUse {
 }
 
 /// A pass's recording callback.
-pub(crate) type PassFn<'a> = Box<dyn FnOnce(&mut PassContext<'_>) -> Result<()> + 'a>;
+pub(crate) type PassFn = Box<dyn FnOnce(&mut PassContext<'_>) -> Result<()>>;
 
-pub(crate) struct PassDecl<'a> {
+pub(crate) struct PassDecl {
     pub name: String,
     pub kind: PassKind,
     pub images: Vec<ImageUse>,
     pub buffers: Vec<BufferUse>,
     pub keep: bool,
-    pub exec: Option<PassFn<'a>>,
+    pub exec: Option<PassFn>,
 }
 
 /// One frame's graph: declare resources and passes, then hand it to the
 /// [`Renderer`](crate::Renderer) (or [`Plan::new`](super::Plan::new) to inspect the plan).
 /// Rebuilt every frame; declaration is cheap.
 #[derive(Default)]
-pub struct FrameGraph<'a> {
+pub struct FrameGraph {
     pub(crate) images: Vec<ImageDecl>,
     pub(crate) buffers: Vec<BufferDecl>,
-    pub(crate) passes: Vec<PassDecl<'a>>,
+    pub(crate) passes: Vec<PassDecl>,
     pub(crate) skipped: Vec<SkippedPass>,
     pub(crate) error: Option<GraphError>,
 }
@@ -120,7 +120,7 @@ pub struct SkippedPass {
     pub reason: String,
 }
 
-impl<'a> FrameGraph<'a> {
+impl FrameGraph {
     /// An empty graph.
     pub fn new() -> Self {
         Self::default()
@@ -353,7 +353,7 @@ impl<'a> FrameGraph<'a> {
 
     /// Starts declaring a pass. Declare its accesses on the returned builder,
     /// then give it its recording callback with [`PassBuilder::exec`].
-    pub fn add_pass(&mut self, name: &str, kind: PassKind) -> PassBuilder<'_, 'a> {
+    pub fn add_pass(&mut self, name: &str, kind: PassKind) -> PassBuilder<'_> {
         self.passes.push(PassDecl {
             name: name.into(),
             kind,
@@ -398,12 +398,12 @@ impl<'a> FrameGraph<'a> {
 
 /// Declares one pass's accesses. Errors are recorded and reported when the
 /// graph is planned, so declarations read as a plain list.
-pub struct PassBuilder<'g, 'a> {
-    graph: &'g mut FrameGraph<'a>,
+pub struct PassBuilder<'g> {
+    graph: &'g mut FrameGraph,
     index: usize,
 }
 
-impl<'a> PassBuilder<'_, 'a> {
+impl PassBuilder<'_> {
     fn pass_name(&self) -> String {
         self.graph.passes[self.index].name.clone()
     }
@@ -533,13 +533,18 @@ impl<'a> PassBuilder<'_, 'a> {
         }
     }
 
+    /// Records a declaration error, reported when the graph is planned.
+    pub(crate) fn fail(&mut self, e: GraphError) {
+        self.graph.fail(e);
+    }
+
     /// Marks the pass as having effects outside the graph: never culled.
     pub fn keep(&mut self) {
         self.graph.passes[self.index].keep = true;
     }
 
     /// Sets the callback that records the pass's commands.
-    pub fn exec(self, f: impl FnOnce(&mut PassContext<'_>) -> Result<()> + 'a) {
+    pub fn exec(self, f: impl FnOnce(&mut PassContext<'_>) -> Result<()> + 'static) {
         self.graph.passes[self.index].exec = Some(Box::new(f));
     }
 }

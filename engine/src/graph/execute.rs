@@ -76,7 +76,7 @@ pub(crate) struct RecordOutput {
 pub struct PassContext<'r> {
     ctx: &'r Context,
     cmd: vk::CommandBuffer,
-    pass: &'r PassDecl<'r>,
+    pass: &'r PassDecl,
     resolved: &'r Resolved,
     descriptors: &'r mut DescriptorArena,
     samplers: &'r Samplers,
@@ -612,7 +612,7 @@ pub(crate) fn texel_bytes(format: vk::Format) -> Option<u32> {
 fn record_barriers(
     ctx: &Context,
     cmd: vk::CommandBuffer,
-    graph: &FrameGraph<'_>,
+    graph: &FrameGraph,
     resolved: &Resolved,
     barriers: &[Barrier],
 ) {
@@ -670,7 +670,7 @@ fn record_barriers(
 fn begin_rendering(
     ctx: &Context,
     cmd: vk::CommandBuffer,
-    pass: &PassDecl<'_>,
+    pass: &PassDecl,
     resolved: &Resolved,
 ) -> vk::Extent2D {
     let mut extent = vk::Extent2D::default();
@@ -781,7 +781,7 @@ pub(crate) struct RecordEnv<'r> {
 /// barriers before each and timestamps around each.
 pub(crate) fn record_graph(
     env: RecordEnv<'_>,
-    mut graph: FrameGraph<'_>,
+    mut graph: FrameGraph,
     plan: &Plan,
     resolved: &Resolved,
 ) -> Result<RecordOutput> {

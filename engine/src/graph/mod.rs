@@ -12,6 +12,7 @@
 //! [`Renderer`](crate::Renderer).
 
 mod access;
+mod bind;
 mod builder;
 mod execute;
 mod plan;
@@ -19,6 +20,9 @@ mod plan;
 mod tests;
 
 pub use access::{BufferAccess, ImageAccess, LoadOp, PassKind, SyncState};
+#[doc(hidden)]
+pub use bind::Resource;
+pub use bind::{find_binding, BoundPass, BoundPipeline, Call, Dispatch, Draw, GraphResource, Slot};
 pub(crate) use builder::{BufferBacking, ImageBacking};
 pub use builder::{BufferHandle, FrameGraph, ImageHandle, PassBuilder, SkippedPass};
 pub(crate) use execute::texel_bytes;
@@ -75,6 +79,15 @@ pub enum GraphError {
     UnknownHandle {
         /// The pass.
         pass: String,
+    },
+    /// A dispatch bound a resource its shader cannot take there, or left a
+    /// binding its shader uses unbound.
+    #[error("pass `{pass}`: {message}")]
+    Binding {
+        /// The pass.
+        pass: String,
+        /// What is wrong.
+        message: String,
     },
     /// Passes depend on each other in a circle (through stale handles).
     #[error("passes depend on each other in a cycle: {0:?}")]

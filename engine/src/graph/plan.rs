@@ -181,7 +181,7 @@ struct Use {
 impl Plan {
     /// Plans a declared graph: fails with the first declaration error, or a
     /// cycle among passes.
-    pub fn new(graph: &FrameGraph<'_>) -> Result<Plan, GraphError> {
+    pub fn new(graph: &FrameGraph) -> Result<Plan, GraphError> {
         if let Some(e) = &graph.error {
             return Err(e.clone());
         }
@@ -480,7 +480,7 @@ impl Plan {
     }
 
     /// The aspect mask to use in a barrier on this logical image.
-    pub(crate) fn aspect(graph: &FrameGraph<'_>, id: u32) -> vk::ImageAspectFlags {
+    pub(crate) fn aspect(graph: &FrameGraph, id: u32) -> vk::ImageAspectFlags {
         aspect_of(graph.images[id as usize].desc.format)
     }
 }
@@ -494,8 +494,8 @@ fn take_slot(slots: &mut Vec<SlotDesc>, free: &mut Vec<usize>, desc: SlotDesc) -
 }
 
 fn check_attachments(
-    graph: &FrameGraph<'_>,
-    pass: &super::builder::PassDecl<'_>,
+    graph: &FrameGraph,
+    pass: &super::builder::PassDecl,
 ) -> Result<(), GraphError> {
     use super::ImageAccess;
     let attachments: Vec<&ImageDesc> = pass

@@ -17,11 +17,11 @@ fn desc(w: u32) -> ImageDesc {
     }
 }
 
-fn names(g: &FrameGraph<'_>, list: &[usize]) -> Vec<String> {
+fn names(g: &FrameGraph, list: &[usize]) -> Vec<String> {
     list.iter().map(|&p| g.pass_name(p).to_string()).collect()
 }
 
-fn image_barrier(plan: &Plan, g: &FrameGraph<'_>, pass: &str, image: u32) -> Option<Barrier> {
+fn image_barrier(plan: &Plan, g: &FrameGraph, pass: &str, image: u32) -> Option<Barrier> {
     let pos = plan.order.iter().position(|&p| g.pass_name(p) == pass)?;
     plan.barriers[pos]
         .iter()
@@ -29,7 +29,7 @@ fn image_barrier(plan: &Plan, g: &FrameGraph<'_>, pass: &str, image: u32) -> Opt
         .copied()
 }
 
-fn buffer_barrier(plan: &Plan, g: &FrameGraph<'_>, pass: &str, buffer: u32) -> Option<Barrier> {
+fn buffer_barrier(plan: &Plan, g: &FrameGraph, pass: &str, buffer: u32) -> Option<Barrier> {
     let pos = plan.order.iter().position(|&p| g.pass_name(p) == pass)?;
     plan.barriers[pos]
         .iter()

@@ -3,7 +3,7 @@
 //! the path tracer), its GGX distribution as a mixture of SGs
 //! ([`NdfLobes`]), and shading as a sum of SG inner products with the
 //! fitted incident light ([`shade_sg`], mirrored by
-//! `shaders/object/sg_shading.wgsl`).
+//! `shaders/brdf/sg_shading.wgsl`).
 
 pub mod disney;
 mod ndf_lobes;

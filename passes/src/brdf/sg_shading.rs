@@ -1,5 +1,5 @@
 //! Shading as a sum of SG inner products (eq. 5), the f64 definition that
-//! `shaders/object/sg_shading.wgsl` mirrors. For each light lobe k
+//! `shaders/brdf/sg_shading.wgsl` mirrors. For each light lobe k
 //! (attenuated by Γ_k, the self-shadow factor; 1 until shadows exist):
 //! - diffuse: (1 − m)·a/π · ∫ G_k · S_cos(n), S_cos the clamped-cosine SG;
 //! - specular: for each NDF lobe j, warped to the reflection direction

@@ -8,15 +8,23 @@
 //! [`composite_shade_field`] are the CPU mirrors of
 //! `shaders/composite/over.wgsl`.
 
+use crate::frame::meta::{PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
+use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc, Push};
 
+/// The composite pass: its name, Table 1 module and effect switch.
+pub const COMPOSITE_INFO: PassInfo = PassInfo {
+    name: "composite",
+    module: Table1Module::Compositing,
+    switch: Some(crate::march::OCCLUSION_SWITCH),
+};
+
 /// The compositing pass's name in the frame graph (and in timings and
 /// traces).
-pub const COMPOSITE: &str = "composite";
+pub const COMPOSITE: &str = COMPOSITE_INFO.name;
 
 /// Format of the composited image.
 pub const COMPOSITE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -38,7 +46,7 @@ pub fn composite_shade_field(field: [f32; 4], rho: [f32; 3]) -> [f32; 4] {
 }
 
 /// The composited image, the size of `field`, with its width and height.
-fn output_image(graph: &mut FrameGraph<'_>, field: ImageHandle) -> (ImageHandle, u32, u32) {
+fn output_image(graph: &mut FrameGraph, field: ImageHandle) -> (ImageHandle, u32, u32) {
     let (width, height) = graph
         .image_desc(field)
         .map_or((1, 1), |d| (d.width, d.height));
@@ -84,9 +92,9 @@ impl CompositePass {
     /// Adds `composite`: `field` (Ĉ, Ô), its colour multiplied by the
     /// cast-shadow factor image `shadow` when given, over `object` (I_v,
     /// coverage).
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         field: ImageHandle,
         object: ImageHandle,
         shadow: Option<ImageHandle>,
@@ -95,81 +103,51 @@ impl CompositePass {
     }
 
     /// Adds `composite` with the layers in the order `layering` says.
-    pub fn add_layered<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add_layered(
+        &self,
+        graph: &mut FrameGraph,
         field: ImageHandle,
         object: ImageHandle,
         shadow: Option<ImageHandle>,
         layering: Layering,
     ) -> ImageHandle {
-        let (out, width, height) = output_image(graph, field);
-        let mut pass = graph.add_pass(COMPOSITE, PassKind::Compute);
-        pass.image(field, ImageAccess::Sampled);
-        pass.image(object, ImageAccess::Sampled);
-        if let Some(s) = shadow {
-            pass.image(s, ImageAccess::Sampled);
-        }
-        let out = pass.image(out, ImageAccess::StorageWrite);
+        let (mut out, width, height) = output_image(graph, field);
         let push = Push::new()
             .u32(width)
             .u32(height)
             .u32((layering == Layering::ObjectOverField) as u32);
-        let pipeline = if shadow.is_some() {
-            &self.shadowed
-        } else {
-            &self.pipeline
+        let pipeline = match shadow {
+            Some(_) => &self.shadowed,
+            None => &self.pipeline,
         };
-        pass.exec(move |ctx| {
-            let mut bindings = vec![
-                Binding::SampledImage(field),
-                Binding::SampledImage(object),
-                Binding::StorageImage(out),
-            ];
-            if let Some(s) = shadow {
-                bindings.push(Binding::SampledImage(s));
-            }
-            ctx.dispatch(
-                pipeline,
-                &bindings,
-                push.bytes(),
-                pipeline.groups_for([width, height, 1]),
-            )
-        });
+        graph
+            .compute(COMPOSITE, pipeline)
+            .read("field_colour", field)
+            .read("object_colour", object)
+            .read_opt("shadow", shadow)
+            .write("out_colour", &mut out)
+            .push(&push)
+            .threads([width, height, 1]);
         out
     }
 
     /// Adds `composite` for a frame without an object on screen: the
     /// field's colour darkened by `shadow` (an object off screen can still
     /// shadow what is on it).
-    pub fn add_field_shadowed<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add_field_shadowed(
+        &self,
+        graph: &mut FrameGraph,
         field: ImageHandle,
         shadow: ImageHandle,
     ) -> ImageHandle {
-        let (out, width, height) = output_image(graph, field);
-        let mut pass = graph.add_pass(COMPOSITE, PassKind::Compute);
-        pass.image(field, ImageAccess::Sampled);
-        pass.image(shadow, ImageAccess::Sampled);
-        let out = pass.image(out, ImageAccess::StorageWrite);
-        let push = Push::new().u32(width).u32(height).u32(0);
-        let pipeline = &self.field_shadowed;
-        pass.exec(move |ctx| {
-            // Bindings by number: the object image (1) is not used.
-            let table = [
-                Binding::SampledImage(field),
-                Binding::SampledImage(field),
-                Binding::StorageImage(out),
-                Binding::SampledImage(shadow),
-            ];
-            ctx.dispatch_table(
-                pipeline,
-                &table,
-                push.bytes(),
-                pipeline.groups_for([width, height, 1]),
-            )
-        });
+        let (mut out, width, height) = output_image(graph, field);
+        graph
+            .compute(COMPOSITE, &self.field_shadowed)
+            .read("field_colour", field)
+            .read("shadow", shadow)
+            .write("out_colour", &mut out)
+            .push(&Push::new().u32(width).u32(height).u32(0))
+            .threads([width, height, 1]);
         out
     }
 }

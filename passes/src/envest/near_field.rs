@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay_engine::graph::{Binding, BufferAccess, FrameGraph, PassKind};
+use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{
     vk, Buffer, BufferReadback, ComputePipeline, Context, Push, Renderer, SubmitSync,
@@ -170,11 +170,6 @@ impl NearFieldTracer {
             let pts = graph.import_buffer(&points_buf, None);
             let e_buf = graph.create_buffer("near-field irradiance", e_size);
             let o_buf = graph.create_buffer("near-field opacity", o_size);
-            let mut pass = graph.add_pass("near-field", PassKind::Compute);
-            grid.declare_reads(&mut pass);
-            pass.buffer(pts, BufferAccess::StorageRead);
-            let e_buf = pass.buffer(e_buf, BufferAccess::StorageWrite);
-            let o_buf = pass.buffer(o_buf, BufferAccess::StorageWrite);
             let push = Push::new()
                 .f32(step)
                 .f32(self.march.termination as f32)
@@ -184,29 +179,24 @@ impl NearFieldTracer {
                 .u32(map_side)
                 .u32(seed)
                 .u32(0);
-            let (irradiance, opacity) = (&self.irradiance, &self.opacity);
-            pass.exec(move |c| {
-                let table = [
-                    Binding::UniformBuffer(grid.info),
-                    Binding::StorageBuffer(grid.nodes),
-                    Binding::StorageBuffer(grid.occupancy),
-                    Binding::StorageBuffer(pts),
-                    Binding::StorageBuffer(e_buf),
-                    Binding::StorageBuffer(o_buf),
-                ];
-                c.dispatch_table(
-                    irradiance,
-                    &table,
-                    push.bytes(),
-                    [chunks as u32, count as u32, 1],
-                )?;
-                c.dispatch_table(
-                    opacity,
-                    &table,
-                    push.bytes(),
+            let (mut e_buf, mut o_buf) = (e_buf, o_buf);
+            let mut pass = graph.compute_pass("near-field");
+            let kernels = [
+                (&self.irradiance, [chunks as u32, count as u32, 1]),
+                (
+                    &self.opacity,
                     [(texels as u32).div_ceil(64), count as u32, 1],
-                )
-            });
+                ),
+            ];
+            for (kernel, groups) in kernels {
+                grid.bind(pass.dispatch(kernel))
+                    .read("points", pts)
+                    .write("irradiance_out", &mut e_buf)
+                    .write("opacity_out", &mut o_buf)
+                    .push(&push)
+                    .groups(groups);
+            }
+            pass.finish();
             e_readback.add_to_graph(&mut graph, "near-field irradiance readback", e_buf);
             o_readback.add_to_graph(&mut graph, "near-field opacity readback", o_buf);
             renderer.submit(graph, &SubmitSync::none())?;

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph, PassBuilder};
+use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph};
 use inlay_engine::{vk, Buffer, Context, Push};
 
 use super::grid::GridField;
@@ -36,11 +36,13 @@ pub struct GridBindings {
 }
 
 impl GridBindings {
-    /// Declares read access to all three buffers on `pass`.
-    pub fn declare_reads(&self, pass: &mut PassBuilder<'_, '_>) {
-        pass.buffer(self.info, BufferAccess::Uniform);
-        pass.buffer(self.nodes, BufferAccess::StorageRead);
-        pass.buffer(self.occupancy, BufferAccess::StorageRead);
+    /// Binds the three buffers for reading on a dispatch (by their names in
+    /// `shaders/field/grid.wgsl`).
+    pub fn bind<'p, 'g>(&self, dispatch: Dispatch<'p, 'g>) -> Dispatch<'p, 'g> {
+        dispatch
+            .read("grid_info", self.info)
+            .read("grid_nodes", self.nodes)
+            .read("grid_occupancy", self.occupancy)
     }
 }
 
@@ -104,7 +106,7 @@ impl GpuGridField {
     }
 
     /// Imports the buffers into a frame's graph (read-only).
-    pub fn import(&self, graph: &mut FrameGraph<'_>) -> GridBindings {
+    pub fn import(&self, graph: &mut FrameGraph) -> GridBindings {
         GridBindings {
             info: graph.import_buffer(&self.info, None),
             nodes: graph.import_buffer(&self.nodes, None),

@@ -11,18 +11,25 @@
 //! inputs (camera, placements, effects); the program that shows it keeps
 //! them between frames.
 
+pub mod meta;
+
 use std::sync::Arc;
 
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Context};
 
+pub use meta::{
+    effect_switches, table1, Effect, EffectSwitch, PassInfo, Table1Module, FRAME_PASSES,
+};
+
 use crate::camera::CameraFrame;
 use crate::composite::{CompositePass, Layering, COMPOSITE, COMPOSITE_FORMAT};
+use crate::edge_aa::{EdgeAaKnobs, EdgeAaPass, OBJECT_EDGE_AA};
 use crate::field::GpuGridField;
 use crate::gbuffer::{GBufferPass, ObjectDraw, OBJECT_GBUFFER};
-use crate::lighting::{IncidentLight, DIRECT_LIGHT};
-use crate::march::{MarchPass, NERF_MARCH};
+use crate::lighting::IncidentLight;
+use crate::march::MarchPass;
 use crate::object::{GpuObject, PlacedObject};
 use crate::probe::PROBE_TRACE;
 use crate::scene::{Scene as SceneFile, ShadowKnobs};
@@ -51,9 +58,33 @@ pub struct Effects {
     /// The field hides the objects where it is in front of them (eq. 6);
     /// off, the objects are drawn over the unclipped field.
     pub occlusion: bool,
+    /// The objects' outlines anti-aliased ([`crate::edge_aa`]).
+    pub edge_aa: bool,
 }
 
 impl Effects {
+    /// Whether `effect` is drawn.
+    pub fn on(&self, effect: Effect) -> bool {
+        match effect {
+            Effect::Environment => self.environment,
+            Effect::SelfShadow => self.self_shadow,
+            Effect::CastShadow => self.cast_shadow,
+            Effect::Occlusion => self.occlusion,
+            Effect::EdgeAa => self.edge_aa,
+        }
+    }
+
+    /// Switches `effect` on or off.
+    pub fn set(&mut self, effect: Effect, on: bool) {
+        *match effect {
+            Effect::Environment => &mut self.environment,
+            Effect::SelfShadow => &mut self.self_shadow,
+            Effect::CastShadow => &mut self.cast_shadow,
+            Effect::Occlusion => &mut self.occlusion,
+            Effect::EdgeAa => &mut self.edge_aa,
+        } = on;
+    }
+
     /// The effects a scene file asks for.
     pub fn of_scene(shadows: &ShadowKnobs) -> Self {
         Self {
@@ -61,6 +92,7 @@ impl Effects {
             self_shadow: shadows.self_shadow,
             cast_shadow: shadows.cast,
             occlusion: true,
+            edge_aa: true,
         }
     }
 }
@@ -89,20 +121,10 @@ pub struct InsertionFrame {
     gbuffer: GBufferPass,
     shade: ShadePass,
     composite: CompositePass,
+    edge_aa: EdgeAaPass,
     cast: Option<CastShadowPass>,
     fh: Option<GpuFhTable>,
 }
-
-/// The modules of the paper's Table 1, in its order, and the frame's
-/// passes each is made of (the profiler, the HUD and the sweep read it).
-pub const TABLE1: [(&str, &[&str]); 6] = [
-    ("NeRF rendering", &[NERF_MARCH]),
-    ("Lighting", &[PROBE_TRACE, DIRECT_LIGHT]),
-    ("SG updating", &[SG_FIT]),
-    ("Rendering", &[OBJECT_GBUFFER, OBJECT_SHADE]),
-    ("Compositing", &[COMPOSITE]),
-    ("Shadow", &[CAST_SHADOW]),
-];
 
 /// The format of a frame's image.
 pub const FRAME_FORMAT: vk::Format = COMPOSITE_FORMAT;
@@ -164,6 +186,7 @@ impl InsertionFrame {
             gbuffer: GBufferPass::new(ctx, lib)?,
             shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes)?,
             composite: CompositePass::new(ctx, lib)?,
+            edge_aa: EdgeAaPass::new(ctx, lib, EdgeAaKnobs::default())?,
             cast: if shadows {
                 Some(CastShadowPass::new(ctx, lib)?)
             } else {
@@ -188,9 +211,9 @@ impl InsertionFrame {
 
     /// Adds the frame seen through `frame` to `graph`, object i placed as
     /// `placed[i]`, drawing `effects`; returns its image ([`FRAME_FORMAT`]).
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &mut self,
+        graph: &mut FrameGraph,
         frame: &CameraFrame,
         placed: &[PlacedObject],
         effects: Effects,
@@ -239,7 +262,7 @@ impl InsertionFrame {
             graph.note_skipped("environment-term", "environment light off");
         }
         let mut lobes = Vec::with_capacity(self.objects.len());
-        for (i, (o, p)) in self.objects.iter().zip(placed).enumerate() {
+        for (i, (o, p)) in self.objects.iter_mut().zip(placed).enumerate() {
             if !(on_screen[i] || casts[i]) {
                 graph.note_skipped(PROBE_TRACE, "object off screen");
                 graph.note_skipped(SG_FIT, "object off screen");
@@ -275,6 +298,7 @@ impl InsertionFrame {
         if shown.is_empty() {
             graph.note_skipped(OBJECT_GBUFFER, "objects off screen");
             graph.note_skipped(OBJECT_SHADE, "objects off screen");
+            graph.note_skipped(OBJECT_EDGE_AA, "objects off screen");
             let field = self.march.add(graph, &self.field, frame, None);
             let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
             return Ok(match shadow {
@@ -318,9 +342,14 @@ impl InsertionFrame {
         } else {
             Layering::ObjectOverField
         };
-        Ok(self
-            .composite
-            .add_layered(graph, field.colour_opacity, object, shadow, layering))
+        let composite =
+            self.composite
+                .add_layered(graph, field.colour_opacity, object, shadow, layering);
+        if !effects.edge_aa {
+            graph.note_skipped(OBJECT_EDGE_AA, "edge anti-aliasing off");
+            return Ok(composite);
+        }
+        Ok(self.edge_aa.add(graph, composite, g.distance_id))
     }
 }
 
@@ -328,9 +357,9 @@ impl InsertionFrame {
     /// Chains one `cast-shadow` pass per object that `casts`; returns the
     /// product ρ image, or None when no object casts.
     #[allow(clippy::too_many_arguments)]
-    fn cast_shadows<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    fn cast_shadows(
+        &self,
+        graph: &mut FrameGraph,
         frame: &CameraFrame,
         field: &crate::march::MarchOutputs,
         casts: &[bool],

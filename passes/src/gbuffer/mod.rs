@@ -9,20 +9,25 @@ mod projection;
 
 pub use projection::view_projection;
 
-use std::collections::HashMap;
+use crate::frame::meta::{PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{
-    Binding, BufferAccess, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind, SamplerKind,
-};
+use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp, SamplerKind};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
-use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, Image, ImageDesc, Push};
+use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, ImageDesc, Push};
 
 use crate::camera::CameraFrame;
 use crate::object::{GpuObject, PlacedObject};
 
+/// The object-gbuffer pass: its name, Table 1 module and effect switch.
+pub const OBJECT_GBUFFER_INFO: PassInfo = PassInfo {
+    name: "object-gbuffer",
+    module: Table1Module::Rendering,
+    switch: None,
+};
+
 /// The G-buffer pass's name in the frame graph (and in timings).
-pub const OBJECT_GBUFFER: &str = "object-gbuffer";
+pub const OBJECT_GBUFFER: &str = OBJECT_GBUFFER_INFO.name;
 
 /// Format of the normal + roughness target.
 pub const NORMAL_ROUGHNESS_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -36,7 +41,7 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// "no object" distance and index −1.
 pub const EMPTY_DISTANCE_ID: [f32; 4] = [3.0e38, -1.0, 0.0, 0.0];
 
-/// Bytes of one draw record (`Draw` in `shaders/object/gbuffer.wgsl`).
+/// Bytes of one draw record (`Draw` in `shaders/gbuffer/gbuffer.wgsl`).
 const DRAW_BYTES: usize = 128;
 /// Most draws (object parts) in one frame: the draw table is uploaded from
 /// the command buffer, which takes at most 64 KiB.
@@ -65,7 +70,7 @@ pub struct ObjectDraw<'a> {
 
 /// The G-buffer pipeline.
 pub struct GBufferPass {
-    pipeline: GraphicsPipeline,
+    pipeline: Arc<GraphicsPipeline>,
 }
 
 impl GBufferPass {
@@ -73,14 +78,14 @@ impl GBufferPass {
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
         let v = compile(
             lib,
-            "object/gbuffer.wgsl",
+            "gbuffer/gbuffer.wgsl",
             "vs_main",
             ShaderStage::Vertex,
             &[],
         )?;
         let f = compile(
             lib,
-            "object/gbuffer.wgsl",
+            "gbuffer/gbuffer.wgsl",
             "fs_main",
             ShaderStage::Fragment,
             &[],
@@ -99,15 +104,15 @@ impl GBufferPass {
             cull_back: false,
         };
         Ok(Self {
-            pipeline: GraphicsPipeline::new(ctx, &v, &f, &desc)?,
+            pipeline: Arc::new(GraphicsPipeline::new(ctx, &v, &f, &desc)?),
         })
     }
 
     /// Adds the `object-gbuffer` pass drawing `objects` from `camera`
     /// (object index = position in `objects`).
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         camera: &CameraFrame,
         objects: &[ObjectDraw<'_>],
     ) -> anyhow::Result<GBuffer> {
@@ -149,33 +154,7 @@ impl GBufferPass {
         );
         let camera_buffer = graph.upload_buffer("object-camera", camera_bytes);
         let draw_buffer = graph.upload_buffer("object-draws", draw_bytes);
-        let mut imported_buffers = HashMap::new();
-        let mut imported_images: HashMap<*const Image, ImageHandle> = HashMap::new();
-        let mut bound = Vec::with_capacity(draws.len());
-        for (gpu, part, mat) in &draws {
-            let key = Arc::as_ptr(&gpu.vertices);
-            let (vb, ib) = *imported_buffers.entry(key).or_insert_with(|| {
-                (
-                    graph.import_buffer(&gpu.vertices, None),
-                    graph.import_buffer(&gpu.indices, None),
-                )
-            });
-            let mut image = |img: &Arc<Image>, name: &str| {
-                *imported_images
-                    .entry(Arc::as_ptr(img))
-                    .or_insert_with(|| graph.import_image(img, name, None))
-            };
-            let base = image(
-                gpu.texture(mat.base_colour_texture, true),
-                "base-colour texture",
-            );
-            let mr = image(
-                gpu.texture(mat.metallic_roughness_texture, false),
-                "metallic-roughness texture",
-            );
-            bound.push((vb, ib, base, mr, *part));
-        }
-        let target = |graph: &mut FrameGraph<'a>, name: &str, format| {
+        let target = |graph: &mut FrameGraph, name: &str, format| {
             graph.create_image(
                 name,
                 ImageDesc {
@@ -185,47 +164,45 @@ impl GBufferPass {
                 },
             )
         };
-        let nr = target(graph, "gbuffer-normal-roughness", NORMAL_ROUGHNESS_FORMAT);
-        let am = target(graph, "gbuffer-albedo-metallic", ALBEDO_METALLIC_FORMAT);
-        let di = target(graph, "gbuffer-distance-id", DISTANCE_ID_FORMAT);
-        let depth = target(graph, "gbuffer-depth", DEPTH_FORMAT);
-        let mut pass = graph.add_pass(OBJECT_GBUFFER, PassKind::Raster);
-        pass.buffer(camera_buffer, BufferAccess::Uniform);
-        pass.buffer(draw_buffer, BufferAccess::StorageRead);
-        // Each resource is declared once, however many draws use it.
-        for (vb, ib) in imported_buffers.values() {
-            pass.buffer(*vb, BufferAccess::StorageRead);
-            pass.buffer(*ib, BufferAccess::StorageRead);
+        let mut nr = target(graph, "gbuffer-normal-roughness", NORMAL_ROUGHNESS_FORMAT);
+        let mut am = target(graph, "gbuffer-albedo-metallic", ALBEDO_METALLIC_FORMAT);
+        let mut di = target(graph, "gbuffer-distance-id", DISTANCE_ID_FORMAT);
+        let mut depth = target(graph, "gbuffer-depth", DEPTH_FORMAT);
+        // Imports of one buffer or image return one handle, and the pass
+        // declares a resource once however many draws read it.
+        let imports: Vec<_> = draws
+            .iter()
+            .map(|(gpu, part, mat)| {
+                let base = gpu.texture(mat.base_colour_texture, true);
+                let mr = gpu.texture(mat.metallic_roughness_texture, false);
+                (
+                    graph.import_buffer(&gpu.vertices, None),
+                    graph.import_buffer(&gpu.indices, None),
+                    graph.import_image(base, "base-colour texture", None),
+                    graph.import_image(mr, "metallic-roughness texture", None),
+                    *part,
+                )
+            })
+            .collect();
+        let clear = LoadOp::Clear([0.0; 4]);
+        let mut pass = graph.raster_pass(OBJECT_GBUFFER);
+        pass.color(&mut nr, clear)
+            .color(&mut am, clear)
+            .color(&mut di, LoadOp::Clear(EMPTY_DISTANCE_ID))
+            .depth(&mut depth, LoadOp::Clear(1.0));
+        for (i, (vb, ib, base, mr, part)) in imports.into_iter().enumerate() {
+            pass.draw(&self.pipeline)
+                .read("camera", camera_buffer)
+                .read("draws", draw_buffer)
+                .read("vertices", vb)
+                .read("indices", ib)
+                .read("base_colour_texture", base)
+                .read("metallic_roughness_texture", mr)
+                .sampler("material_sampler", SamplerKind::LinearRepeat)
+                .push(&Push::new().u32(i as u32).u32(part.first_index))
+                .vertices(part.index_count, 1);
         }
-        for img in imported_images.values() {
-            pass.image(*img, ImageAccess::Sampled);
-        }
-        let clear = |c: [f32; 4]| ImageAccess::ColorAttachment(LoadOp::Clear(c));
-        let nr = pass.image(nr, clear([0.0, 0.0, 0.0, 0.0]));
-        let am = pass.image(am, clear([0.0, 0.0, 0.0, 0.0]));
-        let di = pass.image(di, clear(EMPTY_DISTANCE_ID));
-        pass.image(depth, ImageAccess::DepthAttachment(LoadOp::Clear(1.0)));
-        pass.exec(move |ctx| {
-            for (i, (vb, ib, base, mr, part)) in bound.iter().enumerate() {
-                let push = Push::new().u32(i as u32).u32(part.first_index);
-                ctx.draw(
-                    &self.pipeline,
-                    &[
-                        Binding::UniformBuffer(camera_buffer),
-                        Binding::StorageBuffer(draw_buffer),
-                        Binding::StorageBuffer(*vb),
-                        Binding::StorageBuffer(*ib),
-                        Binding::SampledImage(*base),
-                        Binding::SampledImage(*mr),
-                        Binding::Sampler(SamplerKind::LinearRepeat),
-                    ],
-                    push.bytes(),
-                    part.index_count,
-                    1,
-                )?;
-            }
-            Ok(())
-        });
+        pass.finish();
         Ok(GBuffer {
             normal_roughness: nr,
             albedo_metallic: am,

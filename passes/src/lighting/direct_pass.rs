@@ -1,14 +1,15 @@
 //! The direct-light pass on the GPU (`direct-light`,
-//! `shaders/probe/direct.wgsl`): after the fit, the object's shading lobes
+//! `shaders/lighting/direct.wgsl`): after the fit, the object's shading lobes
 //! are assembled in one persistent buffer — the M fitted lobes, then each
 //! sharp lobe of L_env ([`super::sharp`]) scaled by the field's
 //! transmittance towards it. Built only when L_env has sharp lobes; the
 //! CPU mirror is [`super::direct_reference::direct_lights`].
 
+use crate::frame::meta::{PassInfo, Table1Module};
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay_engine::graph::{Binding, BufferAccess, BufferHandle, FrameGraph, PassKind};
+use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
 
@@ -18,8 +19,15 @@ use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::{Sg32, Sg64};
 
+/// The direct-light pass: its name, Table 1 module and effect switch.
+pub const DIRECT_LIGHT_INFO: PassInfo = PassInfo {
+    name: "direct-light",
+    module: Table1Module::Lighting,
+    switch: Some(crate::probe::ENVIRONMENT_SWITCH),
+};
+
 /// The direct-light pass's name in the frame graph (and in timings).
-pub const DIRECT_LIGHT: &str = "direct-light";
+pub const DIRECT_LIGHT: &str = DIRECT_LIGHT_INFO.name;
 
 /// Bytes of one packed lobe ((p, λ), (μ, 0)).
 const LOBE_BYTES: u64 = 32;
@@ -55,7 +63,7 @@ impl DirectLightPass {
         let side = side.max(1);
         let pipeline = lib.compute_pipeline(
             ctx,
-            "probe/direct.wgsl",
+            "lighting/direct.wgsl",
             "main",
             &[Define::Bool("SKIP_EMPTY", march.skip_empty)],
         )?;
@@ -97,7 +105,7 @@ impl DirectLightPass {
     }
 
     /// The lobes as the last run left them (for frames that reuse them).
-    pub fn reused(&self, graph: &mut FrameGraph<'_>) -> LightLobes {
+    pub fn reused(&self, graph: &mut FrameGraph) -> LightLobes {
         let buffer = self.import(graph);
         let rays = graph.import_buffer(&self.rays, None);
         self.light_lobes(buffer, rays)
@@ -116,16 +124,16 @@ impl DirectLightPass {
     }
 
     /// Imports the assembled buffer as the last run left it.
-    fn import(&self, graph: &mut FrameGraph<'_>) -> BufferHandle {
+    fn import(&self, graph: &mut FrameGraph) -> BufferHandle {
         graph.import_buffer(&self.lights, None)
     }
 
     /// Adds `direct-light`: copies the fit's current lobes from `fitted`
     /// (the fit's buffer, as written this frame) and attenuates the sharp
     /// lobes by `field` seen from `origin`; returns the assembled lobes.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         field: &GpuGridField,
         origin: DVec3,
         fitted: BufferHandle,
@@ -144,38 +152,20 @@ impl DirectLightPass {
             .u32(self.fitted)
             .u32(self.count - self.fitted)
             .u32(self.side * self.side);
-        let mut pass = graph.add_pass(DIRECT_LIGHT, PassKind::Compute);
-        grid.declare_reads(&mut pass);
-        let fitted = pass.buffer(fitted, BufferAccess::StorageRead);
-        let sharp = pass.buffer(sharp, BufferAccess::StorageRead);
-        let rays = pass.buffer(rays, BufferAccess::StorageRead);
-        let lights = pass.buffer(lights, BufferAccess::StorageWrite);
-        let pipeline = &self.pipeline;
-        let count = self.count;
-        let rays_read = rays;
-        pass.exec(move |ctx| {
-            let bindings = [
-                Binding::UniformBuffer(grid.info),
-                Binding::StorageBuffer(grid.nodes),
-                Binding::StorageBuffer(grid.occupancy),
-                Binding::StorageBuffer(fitted),
-                Binding::StorageBuffer(sharp),
-                Binding::StorageBuffer(rays),
-                Binding::StorageBuffer(lights),
-            ];
-            ctx.dispatch(
-                pipeline,
-                &bindings,
-                push.bytes(),
-                pipeline.groups_for([count, 1, 1]),
-            )
-        });
-        self.light_lobes(lights, rays_read)
+        let mut lights = lights;
+        grid.bind(graph.compute(DIRECT_LIGHT, &self.pipeline))
+            .read("fitted_lobes", fitted)
+            .read("sharp_lobes", sharp)
+            .read("sharp_rays", rays)
+            .write("lights", &mut lights)
+            .push(&push)
+            .threads([self.count, 1, 1]);
+        self.light_lobes(lights, rays)
     }
 
     /// Adds a transfer pass copying the assembled lobes to the host;
     /// [`Self::read`] reads them once the frame has finished.
-    pub fn add_readback(&self, graph: &mut FrameGraph<'_>) {
+    pub fn add_readback(&self, graph: &mut FrameGraph) {
         let lights = self.import(graph);
         self.readback
             .add_to_graph(graph, "light-lobes-readback", lights);

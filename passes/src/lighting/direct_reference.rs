@@ -1,5 +1,5 @@
 //! The CPU reference (f64) of the direct-light pass
-//! (`shaders/probe/direct.wgsl`): the object's shading lobes are the M
+//! (`shaders/lighting/direct.wgsl`): the object's shading lobes are the M
 //! fitted lobes followed by each sharp lobe of L_env scaled by the field's
 //! mean transmittance 1 − Ô along its rays ([`super::sharp::lobe_rays`]),
 //! marched from the object's centre with the probe's quadrature.

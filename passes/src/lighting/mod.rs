@@ -8,7 +8,7 @@ mod direct_pass;
 pub mod direct_reference;
 pub mod sharp;
 
-pub use direct_pass::{DirectLightPass, DIRECT_LIGHT};
+pub use direct_pass::{DirectLightPass, DIRECT_LIGHT, DIRECT_LIGHT_INFO};
 pub use direct_reference::direct_lights;
 pub use sharp::{lobe_rays, split_environment, SplitEnvironment};
 
@@ -74,7 +74,8 @@ pub struct IncidentLight {
     /// The sharp lobes of L_env, shaded directly (None when there are
     /// none: the fit's lobes are the whole light).
     pub direct: Option<DirectLightPass>,
-    last: std::sync::Mutex<Option<([u64; 3], u64)>>,
+    /// The object's centre and the lighting version of the last fit.
+    last: Option<([u64; 3], u64)>,
 }
 
 impl IncidentLight {
@@ -112,13 +113,11 @@ impl IncidentLight {
 
     /// Decides this frame's work for an object centred at `centre` in a
     /// field whose lighting is at `version` (bump it whenever the field or
-    /// the environment light changes), and remembers them (interior
-    /// mutability, so a view that builds frames through `&self` can plan).
-    pub fn plan(&self, centre: DVec3, version: u64) -> LightingWork {
+    /// the environment light changes), and remembers them.
+    pub fn plan(&mut self, centre: DVec3, version: u64) -> LightingWork {
         let key = (centre.to_array().map(f64::to_bits), version);
         let knobs = *self.fit.knobs();
-        let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
-        let work = match *last {
+        let work = match self.last {
             None => LightingWork::Update {
                 start: FitStart::Cold,
                 iterations: knobs.cold_iterations,
@@ -129,21 +128,21 @@ impl IncidentLight {
             },
             Some(_) => LightingWork::Reuse,
         };
-        *last = Some(key);
+        self.last = Some(key);
         work
     }
 
     /// Forgets the last fit: the next frame starts cold.
-    pub fn reset(&self) {
-        *self.last.lock().unwrap_or_else(|p| p.into_inner()) = None;
+    pub fn reset(&mut self) {
+        self.last = None;
     }
 
     /// Adds the probe trace (with L_env) and the fit when `work` asks for
     /// them, then the direct light; returns the shading lobes (as written
     /// this frame, or as the last run left them).
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         field: &GpuGridField,
         centre: DVec3,
         work: LightingWork,
@@ -155,9 +154,9 @@ impl IncidentLight {
     /// sharp lobes) when `environment` is false (fold that switch into the
     /// `version` given to [`Self::plan`]). A frame that reuses the fit
     /// notes its passes as skipped.
-    pub fn add_with<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add_with(
+        &self,
+        graph: &mut FrameGraph,
         field: &GpuGridField,
         centre: DVec3,
         work: LightingWork,
@@ -201,7 +200,7 @@ impl IncidentLight {
 
     /// Adds readbacks of the fit and of the direct light;
     /// [`Self::read_lights`] reads them once the frame has finished.
-    pub fn add_readback(&self, graph: &mut FrameGraph<'_>) {
+    pub fn add_readback(&self, graph: &mut FrameGraph) {
         self.fit.add_readback(graph);
         if let Some(d) = &self.direct {
             d.add_readback(graph);

@@ -7,5 +7,8 @@ mod pass;
 mod reference;
 
 pub use knobs::MarchKnobs;
-pub use pass::{MarchOutputs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT, NERF_MARCH};
+pub use pass::{
+    MarchOutputs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT, NERF_MARCH, NERF_MARCH_INFO,
+    OCCLUSION_SWITCH,
+};
 pub use reference::{march_image, march_ray, MarchResult};

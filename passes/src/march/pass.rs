@@ -1,8 +1,9 @@
-//! The NeRF ray-march pass on the GPU (`shaders/nerf/march.wgsl`).
+//! The NeRF ray-march pass on the GPU (`shaders/march/march.wgsl`).
 
+use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
+use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
@@ -10,8 +11,23 @@ use super::knobs::MarchKnobs;
 use crate::camera::CameraFrame;
 use crate::field::GpuGridField;
 
+/// The nerf-march pass: its name, Table 1 module and effect switch.
+pub const NERF_MARCH_INFO: PassInfo = PassInfo {
+    name: "nerf-march",
+    module: Table1Module::NerfRendering,
+    switch: Some(OCCLUSION_SWITCH),
+};
+
 /// The march pass's name in the frame graph (and in timings and traces).
-pub const NERF_MARCH: &str = "nerf-march";
+pub const NERF_MARCH: &str = NERF_MARCH_INFO.name;
+
+/// The switch that draws the objects over the field instead of clipping
+/// the march at them (eq. 6); the compositing pass shares it.
+pub const OCCLUSION_SWITCH: EffectSwitch = EffectSwitch {
+    effect: Effect::Occlusion,
+    name: "occlusion",
+    key: "F4",
+};
 
 /// Format of the (Ĉ, Ô) image.
 pub const MARCH_COLOUR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -42,7 +58,7 @@ impl MarchPass {
             .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
         let defines = [Define::Bool("SKIP_EMPTY", knobs.skip_empty)];
         let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
-            Ok(lib.compute_pipeline(ctx, "nerf/march.wgsl", entry, &defines)?)
+            Ok(lib.compute_pipeline(ctx, "march/march.wgsl", entry, &defines)?)
         };
         Ok(Self {
             unclipped: build("main_unclipped")?,
@@ -59,9 +75,9 @@ impl MarchPass {
     /// Adds the `nerf-march` pass rendering `field` from `camera`; with
     /// `object_depth` (an R32F image of distances along each pixel's ray),
     /// every ray is cut where the object begins.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         field: &GpuGridField,
         camera: &CameraFrame,
         object_depth: Option<ImageHandle>,
@@ -87,35 +103,17 @@ impl MarchPass {
         let step = self.knobs.step(field.diagonal) as f32;
         let termination = self.knobs.termination as f32;
         let push = camera.push_prefix(step).f32(termination);
-        let mut pass = graph.add_pass(NERF_MARCH, PassKind::Compute);
-        grid.declare_reads(&mut pass);
-        let colour = pass.image(colour, ImageAccess::StorageWrite);
-        let depth = pass.image(depth, ImageAccess::StorageWrite);
-        if let Some(d) = object_depth {
-            pass.image(d, ImageAccess::Sampled);
-        }
         let pipeline = match object_depth {
             Some(_) => &self.clipped,
             None => &self.unclipped,
         };
-        pass.exec(move |ctx| {
-            let mut bindings = vec![
-                Binding::UniformBuffer(grid.info),
-                Binding::StorageBuffer(grid.nodes),
-                Binding::StorageBuffer(grid.occupancy),
-                Binding::StorageImage(colour),
-                Binding::StorageImage(depth),
-            ];
-            if let Some(d) = object_depth {
-                bindings.push(Binding::SampledImage(d));
-            }
-            ctx.dispatch(
-                pipeline,
-                &bindings,
-                push.bytes(),
-                pipeline.groups_for([width, height, 1]),
-            )
-        });
+        let (mut colour, mut depth) = (colour, depth);
+        grid.bind(graph.compute(NERF_MARCH, pipeline))
+            .write("out_colour", &mut colour)
+            .write("out_depth", &mut depth)
+            .read_opt("object_depth", object_depth)
+            .push(&push)
+            .threads([width, height, 1]);
         MarchOutputs {
             colour_opacity: colour,
             depth,

@@ -1,5 +1,5 @@
 //! The CPU reference of the march (f64): the same quadrature as
-//! `shaders/nerf/volume_march.wgsl`, over any [`RadianceField`].
+//! `shaders/march/volume_march.wgsl`, over any [`RadianceField`].
 
 use glam::DVec3;
 use rayon::prelude::*;

@@ -16,6 +16,6 @@ pub use direction_map::{
 };
 pub use irradiance::{lobes_irradiance, probe_irradiance, AXES};
 pub use knobs::ProbeKnobs;
-pub use pass::{ProbePass, PROBE_FORMAT, PROBE_TRACE};
+pub use pass::{ProbePass, ENVIRONMENT_SWITCH, PROBE_FORMAT, PROBE_TRACE, PROBE_TRACE_INFO};
 pub use reference::trace_probe;
 pub use texel_filter::{environment_kernel, texel_environment, BLUR_PER_SUBSAMPLE};

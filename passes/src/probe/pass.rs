@@ -1,10 +1,11 @@
 //! The probe-trace pass on the GPU (`shaders/probe/trace.wgsl`), writing a
 //! persistent probe image that the SG fit reads.
 
+use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay_engine::graph::{Binding, FrameGraph, ImageAccess, ImageHandle, PassKind};
+use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, Push};
 
@@ -15,8 +16,23 @@ use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::Sg64;
 
+/// The probe-trace pass: its name, Table 1 module and effect switch.
+pub const PROBE_TRACE_INFO: PassInfo = PassInfo {
+    name: "probe-trace",
+    module: Table1Module::Lighting,
+    switch: Some(ENVIRONMENT_SWITCH),
+};
+
 /// The probe trace's name in the frame graph (and in timings).
-pub const PROBE_TRACE: &str = "probe-trace";
+pub const PROBE_TRACE: &str = PROBE_TRACE_INFO.name;
+
+/// The switch that leaves the distant light L_env out of the probe and the
+/// direct lobes (declared here; [`crate::lighting`]'s direct pass shares it).
+pub const ENVIRONMENT_SWITCH: EffectSwitch = EffectSwitch {
+    effect: Effect::Environment,
+    name: "env",
+    key: "F1",
+};
 
 /// Format of the probe image: L_i in rgb, Ô in alpha.
 pub const PROBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -120,7 +136,7 @@ impl ProbePass {
     }
 
     /// Imports the probe image without tracing (for frames that reuse it).
-    pub fn import(&self, graph: &mut FrameGraph<'_>) -> ImageHandle {
+    pub fn import(&self, graph: &mut FrameGraph) -> ImageHandle {
         graph.import_image(&self.image, "probe", None)
     }
 
@@ -132,20 +148,15 @@ impl ProbePass {
 
     /// Adds the `probe-trace` pass tracing `field` from `origin`, with the
     /// L_env term; returns the written probe image.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
-        field: &GpuGridField,
-        origin: DVec3,
-    ) -> ImageHandle {
+    pub fn add(&self, graph: &mut FrameGraph, field: &GpuGridField, origin: DVec3) -> ImageHandle {
         self.add_with(graph, field, origin, true)
     }
 
     /// Adds the `probe-trace` pass; `environment = false` leaves the L_env
     /// term out (the field-only entry point runs, the lobes are not bound).
-    pub fn add_with<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add_with(
+        &self,
+        graph: &mut FrameGraph,
         field: &GpuGridField,
         origin: DVec3,
         environment: bool,
@@ -169,30 +180,13 @@ impl ProbePass {
             .u32(0)
             .u32(0)
             .u32(0);
-        let mut pass = graph.add_pass(PROBE_TRACE, PassKind::Compute);
-        grid.declare_reads(&mut pass);
-        let probe = pass.image(probe, ImageAccess::StorageWrite);
-        if let Some((b, _)) = env {
-            pass.buffer(b, inlay_engine::graph::BufferAccess::StorageRead);
-        }
+        let mut probe = probe;
         let pipeline = chosen.map_or(&self.field_only, |e| &e.pipeline);
-        pass.exec(move |ctx| {
-            let mut bindings = vec![
-                Binding::UniformBuffer(grid.info),
-                Binding::StorageBuffer(grid.nodes),
-                Binding::StorageBuffer(grid.occupancy),
-                Binding::StorageImage(probe),
-            ];
-            if let Some((b, _)) = env {
-                bindings.push(Binding::StorageBuffer(b));
-            }
-            ctx.dispatch(
-                pipeline,
-                &bindings,
-                push.bytes(),
-                pipeline.groups_for([w, h, 1]),
-            )
-        });
+        grid.bind(graph.compute(PROBE_TRACE, pipeline))
+            .write("probe", &mut probe)
+            .read_opt("env_lobes", env.map(|(b, _)| b))
+            .push(&push)
+            .threads([w, h, 1]);
         probe
     }
 }

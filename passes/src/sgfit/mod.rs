@@ -16,7 +16,7 @@ mod tests;
 pub use energy::conserve_energy;
 pub use knobs::{FitKnobs, MAX_ITERATIONS, MAX_LOBES};
 pub use model::{fibonacci_axis, texel_valid, ProbeSamples};
-pub use pass::{FitReport, FitStart, SgFitPass, SG_FIT};
+pub use pass::{FitReport, FitStart, SgFitPass, SG_FIT, SG_FIT_INFO};
 pub use reference::{
     fit_reference, relative_residual, FitOutcome, Start, DAMPING_DOWN, DAMPING_LIMIT, DAMPING_UP,
 };

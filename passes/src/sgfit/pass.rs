@@ -4,11 +4,10 @@
 //! state (cost, damping, residual log) persist across frames for the warm
 //! start; the Jacobian, normal matrix and solver workspace are transient.
 
+use crate::frame::meta::{PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{
-    Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
-};
+use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
 
@@ -18,8 +17,15 @@ use super::reference::relative_residual;
 use crate::probe::{DirectionMap, MapKind};
 use crate::sg::Sg32;
 
+/// The sg-fit pass: its name, Table 1 module and effect switch.
+pub const SG_FIT_INFO: PassInfo = PassInfo {
+    name: "sg-fit",
+    module: Table1Module::SgUpdating,
+    switch: None,
+};
+
 /// The SG fit's name in the frame graph (and in timings and traces).
-pub const SG_FIT: &str = "sg-fit";
+pub const SG_FIT: &str = SG_FIT_INFO.name;
 
 /// Where a GPU fit starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -272,9 +278,9 @@ impl SgFitPass {
     /// Adds the `sg-fit` pass fitting the lobes to `probe` (an image laid
     /// out by this pass's direction map) from `start` for `iterations`
     /// iterations; returns the lobe buffer as written.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         probe: ImageHandle,
         start: FitStart,
         iterations: u32,
@@ -297,62 +303,48 @@ impl SgFitPass {
         // The transients are written before they are read within the pass
         // (StorageWrite: no previous content); the lobes and the state
         // carry over from the previous fit.
-        let mut pass = graph.add_pass(SG_FIT, PassKind::Compute);
-        pass.image(probe, ImageAccess::Sampled);
-        let lobes = pass.buffer(lobes, BufferAccess::StorageReadWrite);
-        let state = pass.buffer(state, BufferAccess::StorageReadWrite);
-        let partials = pass.buffer(partials, BufferAccess::StorageWrite);
-        let jacobian = pass.buffer(jacobian, BufferAccess::StorageWrite);
-        let normal = pass.buffer(normal, BufferAccess::StorageWrite);
-        let work = pass.buffer(work, BufferAccess::StorageWrite);
-        let fitted = pass.buffer(fitted, BufferAccess::StorageWrite);
-        let filter_offsets = pass.buffer(graph_offsets, BufferAccess::StorageRead);
-        let filter_entries = pass.buffer(graph_entries, BufferAccess::StorageRead);
-        let table = [
-            Binding::SampledImage(probe),
-            Binding::StorageBuffer(lobes),
-            Binding::StorageBuffer(state),
-            Binding::StorageBuffer(partials),
-            Binding::StorageBuffer(jacobian),
-            Binding::StorageBuffer(normal),
-            Binding::StorageBuffer(work),
-            Binding::StorageBuffer(fitted),
-            Binding::StorageBuffer(filter_offsets),
-            Binding::StorageBuffer(filter_entries),
-        ];
+        let mut pass = graph.compute_pass(SG_FIT);
+        pass.image_at("probe", probe, ImageAccess::Sampled);
+        let lobes = pass.buffer_at("lobes", lobes, BufferAccess::StorageReadWrite);
+        pass.buffer_at("state", state, BufferAccess::StorageReadWrite);
+        pass.buffer_at("partials", partials, BufferAccess::StorageWrite);
+        pass.buffer_at("jac", jacobian, BufferAccess::StorageWrite);
+        pass.buffer_at("normal", normal, BufferAccess::StorageWrite);
+        pass.buffer_at("work", work, BufferAccess::StorageWrite);
+        pass.buffer_at("fitted", fitted, BufferAccess::StorageWrite);
+        pass.buffer_at("filter_offsets", graph_offsets, BufferAccess::StorageRead);
+        pass.buffer_at("filter_entries", graph_entries, BufferAccess::StorageRead);
         let warm = start == FitStart::Warm;
         let candidate = self.push(1, warm);
         let current = self.push(0, warm);
         let k = &self.kernels;
         let tiles = s.cols / 16;
-        pass.exec(move |ctx| {
-            let mut run = |p: &ComputePipeline, push: &Push, groups: [u32; 3]| {
-                ctx.dispatch_table(p, &table, push.bytes(), groups)
-            };
-            run(&k.filter_probe, &candidate, [s.groups, 1, 1])?;
-            run(&k.init_cold, &candidate, [self.knobs.lobes, 1, 1])?;
-            run(&k.cost, &candidate, [s.groups, 1, 1])?;
-            if warm {
-                run(&k.cost, &current, [s.groups, 1, 1])?;
-            }
-            run(&k.select_start, &candidate, [1, 1, 1])?;
-            for _ in 0..iterations {
-                run(&k.jacobian, &candidate, [s.groups, 1, 1])?;
-                run(&k.normal_tile, &candidate, [tiles, tiles, 1])?;
-                run(&k.solve, &candidate, [1, 1, 1])?;
-                run(&k.cost, &candidate, [s.groups, 1, 1])?;
-                run(&k.decide, &candidate, [1, 1, 1])?;
-            }
-            run(&k.conserve_energy, &candidate, [self.knobs.lobes, 1, 1])?;
-            run(&k.finish_energy, &candidate, [1, 1, 1])?;
-            Ok(())
-        });
+        let mut run = |p: &Arc<ComputePipeline>, push: &Push, groups: [u32; 3]| {
+            pass.dispatch(p).push(push).groups(groups)
+        };
+        run(&k.filter_probe, &candidate, [s.groups, 1, 1]);
+        run(&k.init_cold, &candidate, [self.knobs.lobes, 1, 1]);
+        run(&k.cost, &candidate, [s.groups, 1, 1]);
+        if warm {
+            run(&k.cost, &current, [s.groups, 1, 1]);
+        }
+        run(&k.select_start, &candidate, [1, 1, 1]);
+        for _ in 0..iterations {
+            run(&k.jacobian, &candidate, [s.groups, 1, 1]);
+            run(&k.normal_tile, &candidate, [tiles, tiles, 1]);
+            run(&k.solve, &candidate, [1, 1, 1]);
+            run(&k.cost, &candidate, [s.groups, 1, 1]);
+            run(&k.decide, &candidate, [1, 1, 1]);
+        }
+        run(&k.conserve_energy, &candidate, [self.knobs.lobes, 1, 1]);
+        run(&k.finish_energy, &candidate, [1, 1, 1]);
+        pass.finish();
         Ok(lobes)
     }
 
     /// Adds transfer passes copying the lobes and the state to the host;
     /// [`Self::read_report`] reads them once the frame has finished.
-    pub fn add_readback(&self, graph: &mut FrameGraph<'_>) {
+    pub fn add_readback(&self, graph: &mut FrameGraph) {
         let lobes = graph.import_buffer(&self.lobes, None);
         let state = graph.import_buffer(&self.state, None);
         self.lobes_readback

@@ -8,11 +8,10 @@ mod reference;
 
 pub use reference::{shade_probe_reference, shade_reference_with};
 
+use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{
-    Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
-};
+use inlay_engine::graph::{BufferHandle, FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
@@ -22,8 +21,22 @@ use crate::gbuffer::GBuffer;
 use crate::lighting::LightLobes;
 use crate::shadow::{shadow_defines, SsdfBindings};
 
+/// The object-shade pass: its name, Table 1 module and effect switch.
+pub const OBJECT_SHADE_INFO: PassInfo = PassInfo {
+    name: "object-shade",
+    module: Table1Module::Rendering,
+    switch: Some(SELF_SHADOW_SWITCH),
+};
+
 /// The shading pass's name in the frame graph (and in timings).
-pub const OBJECT_SHADE: &str = "object-shade";
+pub const OBJECT_SHADE: &str = OBJECT_SHADE_INFO.name;
+
+/// The switch that leaves the objects' self-shadows out (eq. 9).
+pub const SELF_SHADOW_SWITCH: EffectSwitch = EffectSwitch {
+    effect: Effect::SelfShadow,
+    name: "self-shadow",
+    key: "F2",
+};
 
 /// Format of the object radiance image.
 pub const OBJECT_COLOUR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -56,9 +69,9 @@ impl ShadePass {
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
         let shadowed = |file: &str| lib.compute_pipeline(ctx, file, "main", &shadow_defines());
         Ok(Self {
-            pipeline: lib.compute_pipeline(ctx, "object/shade.wgsl", "main", &[])?,
-            self_shadowed: shadowed("object/shade_self_shadow.wgsl")?,
-            self_shadowed_direct: shadowed("object/shade_self_shadow_direct.wgsl")?,
+            pipeline: lib.compute_pipeline(ctx, "shade/shade.wgsl", "main", &[])?,
+            self_shadowed: shadowed("shade/shade_self_shadow.wgsl")?,
+            self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl")?,
             ndf: Arc::new(Buffer::with_data(
                 ctx,
                 "ndf lobes",
@@ -77,9 +90,9 @@ impl ShadePass {
     /// Adds `object-shade`: object i's pixels (index i in the G-buffer) are
     /// shaded with `lobes[i]` (an SG fit's lobe buffer), self-shadowed
     /// (eq. 9) where `self_shadow[i]` is given.
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         camera: &CameraFrame,
         gbuffer: &GBuffer,
         lobes: &[LightLobes],
@@ -95,88 +108,44 @@ impl ShadePass {
             },
         );
         let ndf = graph.import_buffer(&self.ndf, None);
-        let mut pass = graph.add_pass(OBJECT_SHADE, PassKind::Compute);
-        for img in [
-            gbuffer.normal_roughness,
-            gbuffer.albedo_metallic,
-            gbuffer.distance_id,
-        ] {
-            pass.image(img, ImageAccess::Sampled);
+        let mut out = out;
+        let mut pass = graph.compute_pass(OBJECT_SHADE);
+        for (i, l) in lobes.iter().enumerate() {
+            let push = camera
+                .push_prefix(i as f32)
+                .u32((i == 0) as u32)
+                .u32(l.count)
+                .u32(l.direct.map_or(0, |d| d.lobes))
+                .u32(l.direct.map_or(0, |d| d.rays_per_lobe))
+                .u32(0);
+            let shadow = self_shadow.get(i).copied().flatten();
+            let pipeline = match (shadow, l.direct) {
+                (Some(_), Some(_)) => &self.self_shadowed_direct,
+                (Some(_), None) => &self.self_shadowed,
+                (None, _) => &self.pipeline,
+            };
+            let mut d = pass
+                .dispatch(pipeline)
+                .read("normal_roughness", gbuffer.normal_roughness)
+                .read("albedo_metallic", gbuffer.albedo_metallic)
+                .read("distance_id", gbuffer.distance_id)
+                .read("light_lobes", l.buffer)
+                .read("ndf_lobes", ndf)
+                .write("out_object", &mut out)
+                .push(&push);
+            if let Some(s) = shadow {
+                d = d
+                    .read("fh_table", s.fh_table)
+                    .read("ssdf", s.ssdf.object)
+                    .read("ssdf_rows", s.ssdf.rows)
+                    .read("ssdf_coefs", s.ssdf.coefs)
+                    .read("bvh_nodes", s.ssdf.bvh_nodes)
+                    .read("bvh_triangles", s.ssdf.bvh_triangles);
+            }
+            d.read_opt("sharp_rays", l.direct.map(|r| r.rays))
+                .threads([width, height, 1]);
         }
-        let mut declared = Vec::new();
-        for l in lobes {
-            if !declared.contains(&l.buffer) {
-                pass.buffer(l.buffer, BufferAccess::StorageRead);
-                declared.push(l.buffer);
-            }
-        }
-        pass.buffer(ndf, BufferAccess::StorageRead);
-        for (i, s) in self_shadow.iter().enumerate() {
-            let Some(s) = s else { continue };
-            let mut reads = vec![s.fh_table, s.ssdf.object, s.ssdf.rows, s.ssdf.coefs];
-            if let Some(d) = lobes.get(i).and_then(|l| l.direct) {
-                reads.extend([s.ssdf.bvh_nodes, s.ssdf.bvh_triangles, d.rays]);
-            }
-            for b in reads {
-                if !declared.contains(&b) {
-                    pass.buffer(b, BufferAccess::StorageRead);
-                    declared.push(b);
-                }
-            }
-        }
-        let out = pass.image(out, ImageAccess::StorageWrite);
-        let shadows = self_shadow.to_vec();
-        let g = *gbuffer;
-        let lobes = lobes.to_vec();
-        let cam = *camera;
-        pass.exec(move |ctx| {
-            for (i, l) in lobes.iter().enumerate() {
-                let push = cam
-                    .push_prefix(i as f32)
-                    .u32((i == 0) as u32)
-                    .u32(l.count)
-                    .u32(l.direct.map_or(0, |d| d.lobes))
-                    .u32(l.direct.map_or(0, |d| d.rays_per_lobe))
-                    .u32(0);
-                let mut bindings = vec![
-                    Binding::SampledImage(g.normal_roughness),
-                    Binding::SampledImage(g.albedo_metallic),
-                    Binding::SampledImage(g.distance_id),
-                    Binding::StorageBuffer(l.buffer),
-                    Binding::StorageBuffer(ndf),
-                    Binding::StorageImage(out),
-                ];
-                let pipeline = match shadows.get(i).copied().flatten() {
-                    Some(s) => {
-                        bindings.extend([
-                            Binding::StorageBuffer(s.fh_table),
-                            Binding::StorageBuffer(s.ssdf.object),
-                            Binding::StorageBuffer(s.ssdf.rows),
-                            Binding::StorageBuffer(s.ssdf.coefs),
-                        ]);
-                        match l.direct {
-                            Some(d) => {
-                                bindings.extend([
-                                    Binding::StorageBuffer(s.ssdf.bvh_nodes),
-                                    Binding::StorageBuffer(s.ssdf.bvh_triangles),
-                                    Binding::StorageBuffer(d.rays),
-                                ]);
-                                &self.self_shadowed_direct
-                            }
-                            None => &self.self_shadowed,
-                        }
-                    }
-                    None => &self.pipeline,
-                };
-                ctx.dispatch(
-                    pipeline,
-                    &bindings,
-                    push.bytes(),
-                    pipeline.groups_for([width, height, 1]),
-                )?;
-            }
-            Ok(())
-        });
+        pass.finish();
         out
     }
 }

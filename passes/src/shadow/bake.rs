@@ -14,8 +14,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec3;
-use inlay_engine::graph::{Binding, BufferAccess, FrameGraph, PassKind};
+use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
+use inlay_engine::Push;
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
 use super::grid::SsdfGrid;
@@ -269,31 +270,21 @@ impl SsdfBaker {
             let target = graph.create_buffer("ssdf batch", size);
             let bound = [&points_buf, &edges_buf, &nodes_buf, &tris_buf]
                 .map(|b| graph.import_buffer(b, None));
-            let mut pass = graph.add_pass("ssdf-bake", PassKind::Compute);
-            for b in bound {
-                pass.buffer(b, BufferAccess::StorageRead);
-            }
-            let written = pass.buffer(target, BufferAccess::StorageWrite);
-            let push: Vec<u8> = [start as u32, directions, edge_count, count as u32]
-                .iter()
-                .flat_map(|x| x.to_le_bytes())
-                .collect();
-            let pipeline = &self.pipeline;
-            let groups = [(texels as u32).div_ceil(64), count as u32, 1];
-            pass.exec(move |c| {
-                c.dispatch(
-                    pipeline,
-                    &[
-                        Binding::StorageBuffer(bound[0]),
-                        Binding::StorageBuffer(bound[1]),
-                        Binding::StorageBuffer(bound[2]),
-                        Binding::StorageBuffer(bound[3]),
-                        Binding::StorageBuffer(written),
-                    ],
-                    &push,
-                    groups,
-                )
-            });
+            let push = Push::new()
+                .u32(start as u32)
+                .u32(directions)
+                .u32(edge_count)
+                .u32(count as u32);
+            let mut written = target;
+            graph
+                .compute("ssdf-bake", &self.pipeline)
+                .read("points", bound[0])
+                .read("edges", bound[1])
+                .read("bvh_nodes", bound[2])
+                .read("bvh_triangles", bound[3])
+                .write("out_ssdf", &mut written)
+                .push(&push)
+                .groups([(texels as u32).div_ceil(64), count as u32, 1]);
             readback.add_to_graph(&mut graph, "ssdf readback", written);
             renderer.submit(graph, &SubmitSync::none())?;
             renderer.finish()?;

@@ -6,11 +6,10 @@
 //! in direct lobes (too sharp for the fit), `shaders/shadow/cast_direct.wgsl`
 //! ray-casts their shadows against the object's mesh ([`super::direct`]).
 
+use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{
-    Binding, BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle, PassKind,
-};
+use inlay_engine::graph::{BufferHandle, FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
@@ -20,8 +19,22 @@ use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::MarchOutputs;
 
+/// The cast-shadow pass: its name, Table 1 module and effect switch.
+pub const CAST_SHADOW_INFO: PassInfo = PassInfo {
+    name: "cast-shadow",
+    module: Table1Module::Shadow,
+    switch: Some(CAST_SHADOW_SWITCH),
+};
+
 /// The cast-shadow pass's name in the frame graph (and in timings).
-pub const CAST_SHADOW: &str = "cast-shadow";
+pub const CAST_SHADOW: &str = CAST_SHADOW_INFO.name;
+
+/// The switch that leaves the shadows cast onto the field out (eq. 7-8).
+pub const CAST_SHADOW_SWITCH: EffectSwitch = EffectSwitch {
+    effect: Effect::CastShadow,
+    name: "cast",
+    key: "F3",
+};
 
 /// Format of the ρ image (rgb: per-channel factor).
 pub const SHADOW_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -52,9 +65,9 @@ impl CastShadowPass {
     /// Adds `cast-shadow` for one object lit by `lobes`, multiplying
     /// `previous` (another object's ρ) when given; returns the ρ image.
     #[allow(clippy::too_many_arguments)]
-    pub fn add<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    pub fn add(
+        &self,
+        graph: &mut FrameGraph,
         field: &GpuGridField,
         camera: &CameraFrame,
         march: &MarchOutputs,
@@ -82,63 +95,28 @@ impl CastShadowPass {
             .u32(direct.map_or(0, |d| d.rays_per_lobe))
             .u32(0)
             .u32(0);
-        let mut pass = graph.add_pass(CAST_SHADOW, PassKind::Compute);
-        // The occupancy grid is not read (binding 2 is compiled out).
-        pass.buffer(grid.info, BufferAccess::Uniform);
-        pass.buffer(grid.nodes, BufferAccess::StorageRead);
-        pass.image(march.colour_opacity, ImageAccess::Sampled);
-        pass.image(march.depth, ImageAccess::Sampled);
-        pass.buffer(lobes.buffer, BufferAccess::StorageRead);
-        pass.buffer(fh_table, BufferAccess::StorageRead);
-        pass.buffer(ssdf.object, BufferAccess::StorageRead);
-        pass.buffer(ssdf.rows, BufferAccess::StorageRead);
-        pass.buffer(ssdf.coefs, BufferAccess::StorageRead);
-        if let Some(p) = previous {
-            pass.image(p, ImageAccess::Sampled);
-        }
-        if let Some(d) = direct {
-            for b in [ssdf.bvh_nodes, ssdf.bvh_triangles, d.rays] {
-                pass.buffer(b, BufferAccess::StorageRead);
-            }
-        }
-        let out = pass.image(out, ImageAccess::StorageWrite);
-        let m = *march;
         let pipeline = match (previous.is_some(), direct.is_some()) {
             (false, false) => &self.first,
             (true, false) => &self.chained,
             (false, true) => &self.first_direct,
             (true, true) => &self.chained_direct,
         };
-        pass.exec(move |ctx| {
-            let mut bindings = vec![
-                Binding::UniformBuffer(grid.info),
-                Binding::StorageBuffer(grid.nodes),
-                Binding::SampledImage(m.colour_opacity),
-                Binding::SampledImage(m.depth),
-                Binding::StorageBuffer(lobes.buffer),
-                Binding::StorageBuffer(fh_table),
-                Binding::StorageBuffer(ssdf.object),
-                Binding::StorageBuffer(ssdf.rows),
-                Binding::StorageBuffer(ssdf.coefs),
-            ];
-            if let Some(p) = previous {
-                bindings.push(Binding::SampledImage(p));
-            }
-            bindings.push(Binding::StorageImage(out));
-            if let Some(d) = direct {
-                bindings.extend([
-                    Binding::StorageBuffer(ssdf.bvh_nodes),
-                    Binding::StorageBuffer(ssdf.bvh_triangles),
-                    Binding::StorageBuffer(d.rays),
-                ]);
-            }
-            ctx.dispatch(
-                pipeline,
-                &bindings,
-                push.bytes(),
-                pipeline.groups_for([width, height, 1]),
-            )
-        });
+        let mut out = out;
+        grid.bind(graph.compute(CAST_SHADOW, pipeline))
+            .read("field_colour", march.colour_opacity)
+            .read("field_depth", march.depth)
+            .read("light_lobes", lobes.buffer)
+            .read("fh_table", fh_table)
+            .read("ssdf", ssdf.object)
+            .read("ssdf_rows", ssdf.rows)
+            .read("ssdf_coefs", ssdf.coefs)
+            .read_opt("previous", previous)
+            .read("bvh_nodes", ssdf.bvh_nodes)
+            .read("bvh_triangles", ssdf.bvh_triangles)
+            .read_opt("sharp_rays", direct.map(|d| d.rays))
+            .write("out_shadow", &mut out)
+            .push(&push)
+            .threads([width, height, 1]);
         out
     }
 }

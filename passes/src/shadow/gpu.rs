@@ -52,7 +52,7 @@ impl GpuFhTable {
     }
 
     /// The buffer in `graph`.
-    pub fn import(&self, graph: &mut FrameGraph<'_>) -> BufferHandle {
+    pub fn import(&self, graph: &mut FrameGraph) -> BufferHandle {
         graph.import_buffer(&self.buffer, None)
     }
 }
@@ -122,7 +122,7 @@ impl GpuSsdf {
     /// Imports the field and uploads this frame's block for `placed`.
     pub fn import(
         &self,
-        graph: &mut FrameGraph<'_>,
+        graph: &mut FrameGraph,
         placed: &PlacedObject,
         mode: OutsideMode,
     ) -> SsdfBindings {

@@ -17,7 +17,7 @@ pub use bake::{
     bake_reference, grid_for, lookup_points, object_scene, SsdfBaker, SsdfKnobs, SsdfSamples,
 };
 pub use bounce::{bounce_irradiance, ObjectReflectance};
-pub use cast::{CastShadowPass, CAST_SHADOW, SHADOW_FORMAT};
+pub use cast::{CastShadowPass, CAST_SHADOW, CAST_SHADOW_INFO, CAST_SHADOW_SWITCH, SHADOW_FORMAT};
 pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};
 pub use field::{OutsideMode, SsdfField};

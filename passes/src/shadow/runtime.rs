@@ -1,5 +1,5 @@
 //! The per-frame shadow factors on the CPU, mirroring the shaders:
-//! the self-shadow factors Γ_k (eq. 9; `shaders/object/shade.wgsl`) and the
+//! the self-shadow factors Γ_k (eq. 9; `shaders/shade/shade.wgsl`) and the
 //! cast-shadow factor ρ (eq. 7–8; `shaders/shadow/cast.wgsl`).
 //!
 //! **ρ's denominator.** Eq. 8 approximates the numerator by

@@ -41,7 +41,7 @@ pub fn run(ctx: &Arc<Context>, args: &BakeSsdfArgs) -> anyhow::Result<()> {
         anyhow::bail!("--{k}: {m}");
     }
     let mesh = Arc::new(load_gltf(&args.object)?);
-    let lib = crate::shaders::embedded_library();
+    let lib = inlay_passes::shaders::embedded_library();
     let (field, _) = bake_ssdf_with_progress(ctx, &lib, &mesh, &knobs)?;
     let out = args.out.clone().unwrap_or_else(|| {
         let stem = args

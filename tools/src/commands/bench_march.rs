@@ -54,7 +54,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let spec = scene.camera(&args.camera)?.clone();
     let field = scene_field(&scene, args.field.as_deref(), true)?;
-    let library = crate::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let knobs = scene.march;
     println!(
@@ -86,7 +86,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
     )?;
     for size in &args.sizes {
         let (w, h) = parse_size(size)?;
-        let run = run_headless(ctx, &view, w, h, args.frames.max(2), 0.0)?;
+        let run = run_headless(ctx, &mut view, w, h, args.frames.max(2), 0.0)?;
         let mut ms: Vec<f64> = run
             .timings
             .iter()
@@ -121,7 +121,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
         ..knobs
     };
     view.frame.march = MarchPass::new(ctx, &library, fine_knobs)?;
-    let fine = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
+    let fine = run_headless(ctx, &mut view, w, h, 1, 0.0)?.image;
     let reference = scene.recipe().map(|recipe| {
         render_reference(
             recipe,
@@ -150,7 +150,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
             ..knobs
         };
         view.frame.march = MarchPass::new(ctx, &library, k)?;
-        let img = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
+        let img = run_headless(ctx, &mut view, w, h, 1, 0.0)?.image;
         println!(
             "| {n} | {:.4} | {:.4} | {} |",
             k.step(field.bounds.diagonal()),

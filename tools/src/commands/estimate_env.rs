@@ -156,7 +156,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             p.noise, p.floaters, p.see_through, p.seed
         );
     }
-    let lib = crate::shaders::embedded_library();
+    let lib = inlay_passes::shaders::embedded_library();
     let bars = [
         progress_bar("views", knobs.views as u64),
         progress_bar("near field", knobs.points() as u64),
@@ -368,9 +368,9 @@ fn render_with(
         lobes,
         lights,
     });
-    let library = crate::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     let camera = scene.camera(&args.camera)?.clone();
-    let view = InsertionView::new(
+    let mut view = InsertionView::new(
         ctx,
         &library,
         &scene,
@@ -379,7 +379,15 @@ fn render_with(
         camera,
         !args.no_cache,
     )?;
-    Ok(run_headless(ctx, &view, args.compare_width, args.compare_height, 1, 0.0)?.image)
+    Ok(run_headless(
+        ctx,
+        &mut view,
+        args.compare_width,
+        args.compare_height,
+        1,
+        0.0,
+    )?
+    .image)
 }
 
 /// Writes true | estimated | |difference| and prints how far apart they are.

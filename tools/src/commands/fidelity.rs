@@ -124,7 +124,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     let mut md = String::new();
     writeln!(md, "## {}\n", scene.name)?;
     let field = scene_field(&scene, None, true)?;
-    let library = crate::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     // Probe irradiance per object.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     writeln!(md, "Irradiance at each object's centre (luminance; Cycles: a 1 mm white sensor per axis, two seeds):\n")?;
@@ -295,7 +295,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         }
         let mut view_scene = scene.clone();
         view_scene.objects.clear();
-        let bare_view = view_over_field(
+        let mut bare_view = view_over_field(
             ctx,
             &library,
             &view_scene,
@@ -304,12 +304,12 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
             camera.clone(),
             true,
         )?;
-        let field_image = Rgb::of(&run_headless(ctx, &bare_view, w, h, 1, 0.0)?.image);
+        let field_image = Rgb::of(&run_headless(ctx, &mut bare_view, w, h, 1, 0.0)?.image);
         row(&mut md, "field, bare", &field_image, &bare, &field_px)?;
         let Some(with) = with else {
             continue;
         };
-        let view = view_over_field(
+        let mut view = view_over_field(
             ctx,
             &library,
             &scene,
@@ -318,7 +318,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
             camera.clone(),
             true,
         )?;
-        let inserted = Rgb::of(&run_headless(ctx, &view, w, h, 1, 0.0)?.image);
+        let inserted = Rgb::of(&run_headless(ctx, &mut view, w, h, 1, 0.0)?.image);
         row(&mut md, "insertion", &inserted, &with, &|i| {
             field_px(i) || object_px(i)
         })?;

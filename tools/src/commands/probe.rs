@@ -227,7 +227,7 @@ pub fn trace_and_fit(
     march: MarchKnobs,
     env: &[Sg64],
 ) -> anyhow::Result<TracedProbe> {
-    let library = crate::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     let light = IncidentLight::new(ctx, &library, probe_knobs, fit_knobs, march, env)?;
     let map = light.probe.map();
     let readback = Readback::new(

@@ -91,7 +91,7 @@ pub struct ProfileRun {
 /// keeping every frame's timings.
 pub fn profile_view(
     ctx: &Arc<Context>,
-    view: &InsertionView,
+    view: &mut InsertionView,
     width: u32,
     height: u32,
     frames: u32,
@@ -160,8 +160,8 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
     }
     let mut knobs = scene.march;
     knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
-    let library = crate::shaders::library()?;
-    let view = open_view(
+    let library = inlay_passes::shaders::library()?;
+    let mut view = open_view(
         ctx,
         &library,
         &scene,
@@ -172,7 +172,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
     )?;
     let run = profile_view(
         ctx,
-        &view,
+        &mut view,
         args.width,
         args.height,
         args.frames,

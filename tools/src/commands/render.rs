@@ -70,6 +70,9 @@ pub struct RenderArgs {
     /// Draw no shadow cast onto the field.
     #[arg(long)]
     pub no_cast_shadow: bool,
+    /// Leave the objects' outlines single-sampled (no `object-edge-aa`).
+    #[arg(long)]
+    pub no_edge_aa: bool,
     /// How the SSDF is read outside its grid: correct, clamp or infinity (overrides `[shadows] outside`).
     #[arg(long, value_parser = parse_outside)]
     pub shadow_outside: Option<OutsideMode>,
@@ -129,8 +132,8 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
     knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
     knobs.termination = args.termination.unwrap_or(knobs.termination);
     knobs.skip_empty &= !args.no_skip;
-    let library = crate::shaders::library()?;
-    let view = open_view(
+    let library = inlay_passes::shaders::library()?;
+    let mut view = open_view(
         ctx,
         &library,
         &scene,
@@ -139,7 +142,19 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         &args.camera,
         !args.no_cache,
     )?;
-    let run = run_headless(ctx, &view, args.width, args.height, args.frames.max(1), 0.0)?;
+    if args.no_edge_aa {
+        let mut effects = view.effects();
+        effects.edge_aa = false;
+        view.set_effects(effects);
+    }
+    let run = run_headless(
+        ctx,
+        &mut view,
+        args.width,
+        args.height,
+        args.frames.max(1),
+        0.0,
+    )?;
     let bad = run.image.non_finite_count();
     anyhow::ensure!(bad == 0, "the frame has {bad} non-finite pixels");
     run.report(ctx, &args.out, args.exposure)

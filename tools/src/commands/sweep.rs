@@ -27,7 +27,7 @@ use crate::scene_view::view_over_gpu_field;
 use crate::sweep::grid::{configurations, GridMode, KnobValues, Knobs};
 use crate::sweep::pareto::pareto_front;
 use crate::sweep::plot::{svg, PlotPoint};
-use crate::table1::{summarise, MODULES};
+use crate::table1::{modules, summarise};
 use crate::timings_table::quantile;
 
 /// Options of `sweep`.
@@ -178,7 +178,7 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
     let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
     // One upload serves every configuration.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
-    let library = crate::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     eprintln!(
         "sweep: {} configurations ({:?} grid) of {} on {}",
         configs.len(),
@@ -234,7 +234,7 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
                 }
             }
         }
-        let run = profile_view(ctx, &view, w, h, args.frames, Motion::Drag)?;
+        let run = profile_view(ctx, &mut view, w, h, args.frames, Motion::Drag)?;
         // SG updating over frames 2.. (the dragged ones; the first, cold,
         // apart), the other modules over the dragged frames too.
         let whole = summarise(&run.frames, &[]);
@@ -245,10 +245,10 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
         let totals: Vec<f64> = dragged.iter().map(|f| f.gpu_total_ms).collect();
         // The error of a still frame: the object where the scene puts it,
         // lit by a cold fit with this configuration's iterations.
-        for o in view.objects() {
+        for o in view.objects_mut() {
             o.light.reset();
         }
-        let still: HdrImage = run_headless(ctx, &view, w, h, 1, 0.0)?.image;
+        let still: HdrImage = run_headless(ctx, &mut view, w, h, 1, 0.0)?.image;
         let error = relative_error(&still, reference);
         let row = SweepRow {
             knobs: *knobs,
@@ -353,12 +353,12 @@ fn format_markdown(
         args.reference_samples
     );
     let _ = write!(s, "| configuration | frame ms |");
-    for (m, _) in MODULES {
+    for (m, _) in modules() {
         let _ = write!(s, " {m} |");
     }
     let _ = writeln!(s, " first fit ms | error | Pareto |");
     let _ = write!(s, "| --- | --- |");
-    for _ in MODULES {
+    for _ in modules() {
         let _ = write!(s, " --- |");
     }
     let _ = writeln!(s, " --- | --- | --- |");

@@ -7,9 +7,7 @@ pub mod pattern;
 
 use std::sync::Arc;
 
-use inlay_engine::graph::{
-    Binding, BufferAccess, FrameGraph, ImageAccess, ImageHandle, LoadOp, PassKind, SamplerKind,
-};
+use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp, SamplerKind};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, ComputePipeline, Context, GraphicsDesc, GraphicsPipeline, ImageDesc};
 
@@ -28,27 +26,28 @@ pub struct DemoPipelines {
     sky: Arc<ComputePipeline>,
     quads: Arc<ComputePipeline>,
     heatmap: Arc<ComputePipeline>,
-    background: GraphicsPipeline,
-    quad: GraphicsPipeline,
+    background: Arc<GraphicsPipeline>,
+    quad: Arc<GraphicsPipeline>,
 }
 
 impl DemoPipelines {
     /// Compiles the demo's shaders and builds its pipelines.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
         let cs = |file: &str| lib.compute_pipeline(ctx, file, "main", &[]);
-        let raster = |vs: &str, fs: &str, depth_test: bool| -> anyhow::Result<GraphicsPipeline> {
-            let v = compile(lib, "demo/scene.wgsl", vs, ShaderStage::Vertex, &[])?;
-            let f = compile(lib, "demo/scene.wgsl", fs, ShaderStage::Fragment, &[])?;
-            let desc = GraphicsDesc {
-                color_formats: vec![HDR_FORMAT],
-                depth_format: Some(DEPTH_FORMAT),
-                depth_test,
-                depth_write: depth_test,
-                blend: false,
-                cull_back: false,
+        let raster =
+            |vs: &str, fs: &str, depth_test: bool| -> anyhow::Result<Arc<GraphicsPipeline>> {
+                let v = compile(lib, "demo/scene.wgsl", vs, ShaderStage::Vertex, &[])?;
+                let f = compile(lib, "demo/scene.wgsl", fs, ShaderStage::Fragment, &[])?;
+                let desc = GraphicsDesc {
+                    color_formats: vec![HDR_FORMAT],
+                    depth_format: Some(DEPTH_FORMAT),
+                    depth_test,
+                    depth_write: depth_test,
+                    blend: false,
+                    cull_back: false,
+                };
+                Ok(Arc::new(GraphicsPipeline::new(ctx, &v, &f, &desc)?))
             };
-            Ok(GraphicsPipeline::new(ctx, &v, &f, &desc)?)
-        };
         Ok(Self {
             sky: cs("demo/sky.wgsl")?,
             quads: cs("demo/quads.wgsl")?,
@@ -69,9 +68,9 @@ pub struct DemoOutputs {
 }
 
 /// Adds the demo's passes for a `width`×`height` frame at time `time` (s).
-pub fn add_demo_passes<'a>(
-    graph: &mut FrameGraph<'a>,
-    p: &'a DemoPipelines,
+pub fn add_demo_passes(
+    graph: &mut FrameGraph,
+    p: &DemoPipelines,
     width: u32,
     height: u32,
     time: f32,
@@ -94,58 +93,35 @@ pub fn add_demo_passes<'a>(
     );
     let heat = graph.create_image("heatmap", hdr_desc);
 
-    let mut pass = graph.add_pass("sky", PassKind::Compute);
-    let sky = pass.image(sky, ImageAccess::StorageWrite);
-    pass.exec(move |ctx| {
-        let push = Push::new().u32(width).u32(height).f32(time).f32(0.0);
-        ctx.dispatch(
-            &p.sky,
-            &[Binding::StorageImage(sky)],
-            push.bytes(),
-            p.sky.groups_for([width, height, 1]),
-        )
-    });
-
-    let mut pass = graph.add_pass("quads", PassKind::Compute);
-    let vertices = pass.buffer(vertices, BufferAccess::StorageWrite);
-    pass.exec(move |ctx| {
-        let push = Push::new().f32(time).f32(width as f32 / height as f32);
-        ctx.dispatch(
-            &p.quads,
-            &[Binding::StorageBuffer(vertices)],
-            push.bytes(),
-            [1, 1, 1],
-        )
-    });
-
-    let mut pass = graph.add_pass("scene", PassKind::Raster);
-    pass.image(sky, ImageAccess::Sampled);
-    pass.buffer(vertices, BufferAccess::StorageRead);
-    let hdr = pass.image(color, ImageAccess::ColorAttachment(LoadOp::DontCare));
-    pass.image(depth, ImageAccess::DepthAttachment(LoadOp::Clear(1.0)));
-    pass.exec(move |ctx| {
-        let bindings = [
-            Binding::SampledImage(sky),
-            Binding::Sampler(SamplerKind::NearestClamp),
-            Binding::StorageBuffer(vertices),
-        ];
-        ctx.draw(&p.background, &bindings[..2], &[], 3, 1)?;
-        ctx.draw(&p.quad, &bindings[2..], &[], QUAD_VERTICES, 1)
-    });
-
-    let mut pass = graph.add_pass("heatmap", PassKind::Compute);
-    pass.image(sky, ImageAccess::Sampled);
-    let heatmap = pass.image(heat, ImageAccess::StorageWrite);
-    pass.exec(move |ctx| {
-        let push = Push::new().u32(width).u32(height);
-        ctx.dispatch(
-            &p.heatmap,
-            &[Binding::SampledImage(sky), Binding::StorageImage(heatmap)],
-            push.bytes(),
-            p.heatmap.groups_for([width, height, 1]),
-        )
-    });
-
+    let (mut sky, mut vertices, mut hdr, mut depth, mut heatmap) =
+        (sky, vertices, color, depth, heat);
+    graph
+        .compute("sky", &p.sky)
+        .write("sky", &mut sky)
+        .push(&Push::new().u32(width).u32(height).f32(time).f32(0.0))
+        .threads([width, height, 1]);
+    graph
+        .compute("quads", &p.quads)
+        .write("vertices", &mut vertices)
+        .push(&Push::new().f32(time).f32(width as f32 / height as f32))
+        .groups([1, 1, 1]);
+    let mut pass = graph.raster_pass("scene");
+    pass.color(&mut hdr, LoadOp::DontCare)
+        .depth(&mut depth, LoadOp::Clear(1.0));
+    pass.draw(&p.background)
+        .read("sky", sky)
+        .sampler("sky_sampler", SamplerKind::NearestClamp)
+        .vertices(3, 1);
+    pass.draw(&p.quad)
+        .read("vertices", vertices)
+        .vertices(QUAD_VERTICES, 1);
+    pass.finish();
+    graph
+        .compute("heatmap", &p.heatmap)
+        .read("sky", sky)
+        .write("heat", &mut heatmap)
+        .push(&Push::new().u32(width).u32(height))
+        .threads([width, height, 1]);
     DemoOutputs { hdr, heatmap }
 }
 
@@ -159,9 +135,9 @@ pub struct DemoScene {
 }
 
 impl crate::headless::Scene for DemoScene {
-    fn build<'a>(
-        &'a self,
-        graph: &mut FrameGraph<'a>,
+    fn build(
+        &mut self,
+        graph: &mut FrameGraph,
         width: u32,
         height: u32,
         time: f32,

@@ -1,9 +1,7 @@
 //! The viewer's input: mouse and keys turned into camera moves, object
 //! drags and edits, effect switches and preset changes, applied to the
 //! [`InsertionView`] between frames. Key bindings are listed in
-//! [`HELP`].
-
-use std::cell::Cell;
+//! [`help`].
 
 use glam::DVec3;
 use inlay_passes::march::MarchKnobs;
@@ -16,16 +14,44 @@ use super::orbit::OrbitCamera;
 use super::picking::{field_surface, pick_visible, rest_on};
 use crate::insertion_view::InsertionView;
 use crate::window_app::Response;
+use inlay_passes::frame::effect_switches;
 
-/// The key bindings, as the overlay's help shows them.
-pub const HELP: [&str; 6] = [
-    "drag object: move on field  L-drag: orbit/look",
-    "R-drag: pan  wheel: zoom  Tab: orbit/fly  WASD",
-    "Q/E rotate  +/- or Shift+wheel: scale",
-    "[ ] roughness  ; ' metallic  C colour  X reset",
-    "F1 env  F2 self-shadow  F3 cast  F4 occlusion",
-    "F5 quality preset  O overlay  H help  Esc quit",
-];
+/// The key bindings, as the overlay's help shows them: the effect
+/// switches as the frame's passes declare them ([`effect_switches`]).
+pub fn help() -> Vec<String> {
+    let effects: Vec<String> = effect_switches()
+        .iter()
+        .map(|s| format!("{} {}", s.key, s.name))
+        .collect();
+    vec![
+        "drag object: move on field  L-drag: orbit/look".into(),
+        "R-drag: pan  wheel: zoom  Tab: orbit/fly  WASD".into(),
+        "Q/E rotate  +/- or Shift+wheel: scale".into(),
+        "[ ] roughness  ; ' metallic  C colour  X reset".into(),
+        effects.join("  "),
+        "F5 quality preset  O overlay  H help  Esc quit".into(),
+    ]
+}
+
+/// The function key a label such as `F3` names.
+fn function_key(label: &str) -> Option<KeyCode> {
+    const KEYS: [KeyCode; 12] = [
+        KeyCode::F1,
+        KeyCode::F2,
+        KeyCode::F3,
+        KeyCode::F4,
+        KeyCode::F5,
+        KeyCode::F6,
+        KeyCode::F7,
+        KeyCode::F8,
+        KeyCode::F9,
+        KeyCode::F10,
+        KeyCode::F11,
+        KeyCode::F12,
+    ];
+    let n: usize = label.strip_prefix('F')?.parse().ok()?;
+    KEYS.get(n.checked_sub(1)?).copied()
+}
 
 /// Base colours `C` cycles through (linear RGB).
 const PALETTE: [[f64; 3]; 5] = [
@@ -64,11 +90,11 @@ pub struct Controls {
     pub edits: u64,
     /// Edits included in the frame being built (set by the overlay call
     /// that precedes each frame's build).
-    pub built_edits: Cell<u64>,
+    pub built_edits: u64,
     /// Edits already reported as shown.
     pub announced_edits: u64,
     /// The drawable size seen last.
-    pub extent: Cell<(u32, u32)>,
+    pub extent: (u32, u32),
     drag: Drag,
     cursor: (f64, f64),
     shift: bool,
@@ -88,9 +114,9 @@ impl Controls {
             help: false,
             overlay,
             edits: 0,
-            built_edits: Cell::new(0),
+            built_edits: 0,
             announced_edits: 0,
-            extent: Cell::new((1, 1)),
+            extent: (1, 1),
             drag: Drag::None,
             cursor: (0.0, 0.0),
             shift: false,
@@ -110,10 +136,10 @@ impl Controls {
         &mut self,
         event: &WindowEvent,
         extent: (u32, u32),
-        view: &InsertionView,
+        view: &mut InsertionView,
         field: &inlay_passes::field::GridField,
     ) -> Response {
-        self.extent.set(extent);
+        self.extent = extent;
         match event {
             WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
             WindowEvent::CursorMoved { position, .. } => {
@@ -147,7 +173,7 @@ impl Controls {
         Response::Continue
     }
 
-    fn update_camera(&self, view: &InsertionView) {
+    fn update_camera(&self, view: &mut InsertionView) {
         view.set_camera(self.camera.spec());
     }
 
@@ -156,7 +182,7 @@ impl Controls {
         state: ElementState,
         button: MouseButton,
         extent: (u32, u32),
-        view: &InsertionView,
+        view: &mut InsertionView,
         field: &inlay_passes::field::GridField,
     ) {
         if state == ElementState::Released {
@@ -191,7 +217,7 @@ impl Controls {
         dx: f64,
         dy: f64,
         extent: (u32, u32),
-        view: &InsertionView,
+        view: &mut InsertionView,
         field: &inlay_passes::field::GridField,
     ) {
         let per_pixel = self.camera.fov_y.to_radians() / extent.1.max(1) as f64;
@@ -243,7 +269,7 @@ impl Controls {
         }
     }
 
-    fn edit_selected(&mut self, view: &InsertionView, f: impl FnOnce(&mut PlacedObject)) {
+    fn edit_selected(&mut self, view: &mut InsertionView, f: impl FnOnce(&mut PlacedObject)) {
         if let Some(mut p) = self.selected.and_then(|i| view.placed(i)) {
             let before = p.clone();
             f(&mut p);
@@ -256,7 +282,7 @@ impl Controls {
         }
     }
 
-    fn scale_selected(&mut self, view: &InsertionView, factor: f64) {
+    fn scale_selected(&mut self, view: &mut InsertionView, factor: f64) {
         self.edit_selected(view, |p| {
             p.pose.scale = match p.pose.scale {
                 Scale::Uniform(s) => Scale::Uniform(s * factor),
@@ -265,7 +291,7 @@ impl Controls {
         });
     }
 
-    fn key(&mut self, code: KeyCode, view: &InsertionView) -> Response {
+    fn key(&mut self, code: KeyCode, view: &mut InsertionView) -> Response {
         let step = 0.05 * self.camera.distance;
         let mut effects = view.effects();
         match code {
@@ -302,10 +328,16 @@ impl Controls {
                     self.edit_selected(view, |p| p.material = a.material);
                 }
             }
-            KeyCode::F1 => effects.environment = !effects.environment,
-            KeyCode::F2 => effects.self_shadow = !effects.self_shadow,
-            KeyCode::F3 => effects.cast_shadow = !effects.cast_shadow,
-            KeyCode::F4 => effects.occlusion = !effects.occlusion,
+            code if effect_switches()
+                .iter()
+                .any(|s| function_key(s.key) == Some(code)) =>
+            {
+                for s in effect_switches() {
+                    if function_key(s.key) == Some(code) {
+                        effects.set(s.effect, !effects.on(s.effect));
+                    }
+                }
+            }
             _ => {}
         }
         view.set_effects(effects);
@@ -315,11 +347,37 @@ impl Controls {
 
     /// Moves the selected object's roughness and metallic by the deltas,
     /// starting from its first material's values, clamped to [0, 1].
-    fn nudge(&mut self, view: &InsertionView, roughness: f64, metallic: f64) {
+    fn nudge(&mut self, view: &mut InsertionView, roughness: f64, metallic: f64) {
         self.edit_selected(view, |p| {
             let m = p.material_of(0);
             p.material.roughness = Some((m.roughness + roughness).clamp(0.0, 1.0));
             p.material.metallic = Some((m.metallic + metallic).clamp(0.0, 1.0));
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every effect switch the passes declare has a key the viewer binds,
+    /// and the help lists it.
+    #[test]
+    fn every_effect_switch_has_a_bound_key_and_a_help_entry() {
+        let help = help().join("\n");
+        for s in effect_switches() {
+            let key = function_key(s.key);
+            assert!(
+                key.is_some(),
+                "{}: key {} is not a function key",
+                s.name,
+                s.key
+            );
+            assert_ne!(key, Some(KeyCode::F5), "F5 switches the preset");
+            assert!(help.contains(&format!("{} {}", s.key, s.name)), "{help}");
+        }
+        assert_eq!(function_key("F12"), Some(KeyCode::F12));
+        assert_eq!(function_key("F0"), None);
+        assert_eq!(function_key("G1"), None);
     }
 }

@@ -3,9 +3,10 @@
 //! (or why it was skipped) over the recent frames, and the key help.
 
 use crate::insertion_view::Effects;
-use crate::table1::{module_ms, MODULES};
+use crate::table1::{module_ms, modules};
 use crate::timings_table::quantile;
 use crate::window_app::HudStats;
+use inlay_passes::frame::effect_switches;
 use inlay_passes::object::PlacedObject;
 
 /// How much the overlay shows.
@@ -41,7 +42,7 @@ pub struct HudState<'a> {
     /// The selected object, if any.
     pub selected: Option<PlacedObject>,
     /// Help lines to append (empty: help hidden).
-    pub help: &'a [&'a str],
+    pub help: Vec<String>,
 }
 
 fn on_off(b: bool) -> &'static str {
@@ -75,13 +76,11 @@ pub fn hud_lines(stats: &HudStats<'_>, state: &HudState<'_>, mode: Overlay) -> V
             state.preset,
             if state.fly { "fly" } else { "orbit" }
         ),
-        format!(
-            "env {} self-shadow {} cast {} occlusion {}",
-            on_off(state.effects.environment),
-            on_off(state.effects.self_shadow),
-            on_off(state.effects.cast_shadow),
-            on_off(state.effects.occlusion)
-        ),
+        effect_switches()
+            .iter()
+            .map(|s| format!("{} {}", s.name, on_off(state.effects.on(s.effect))))
+            .collect::<Vec<_>>()
+            .join(" "),
     ];
     if let Some(p) = &state.selected {
         let m = p.material_of(0);
@@ -92,11 +91,11 @@ pub fn hud_lines(stats: &HudStats<'_>, state: &HudState<'_>, mode: Overlay) -> V
         ));
     }
     lines.push("GPU ms (median of recent frames):".into());
-    for (module, passes) in MODULES {
+    for (module, passes) in modules() {
         let times: Vec<f64> = stats
             .recent
             .iter()
-            .filter_map(|f| module_ms(f, passes))
+            .filter_map(|f| module_ms(f, &passes))
             .collect();
         let skipped = stats.recent.last().and_then(|f| {
             f.skipped
@@ -113,6 +112,6 @@ pub fn hud_lines(stats: &HudStats<'_>, state: &HudState<'_>, mode: Overlay) -> V
     if !totals.is_empty() {
         lines.push(format!("  {:<15} {:8.2}", "frame", quantile(&totals, 0.5)));
     }
-    lines.extend(state.help.iter().map(|s| s.to_string()));
+    lines.extend(state.help.iter().cloned());
     lines
 }

@@ -109,7 +109,7 @@ impl Viewer {
         let field = scene_field(&authored, None, !args.no_cache)?;
         let gpu_field = GpuGridField::upload(ctx, &field)?;
         let scene = preset.apply(&authored);
-        let view = view_over_gpu_field(
+        let mut view = view_over_gpu_field(
             ctx,
             lib,
             &scene,
@@ -140,7 +140,7 @@ impl Viewer {
     fn rebuild_view(&mut self, ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<()> {
         let scene = self.preset.apply(&self.authored);
         let camera = self.controls.camera.spec();
-        let view = view_over_gpu_field(
+        let mut view = view_over_gpu_field(
             ctx,
             lib,
             &scene,
@@ -161,8 +161,8 @@ impl Viewer {
 }
 
 impl crate::window_app::WindowScene for Viewer {
-    fn scene(&self) -> &dyn crate::headless::Scene {
-        &self.view
+    fn scene(&mut self) -> &mut dyn crate::headless::Scene {
+        &mut self.view
     }
 
     fn input(
@@ -170,7 +170,8 @@ impl crate::window_app::WindowScene for Viewer {
         event: &winit::event::WindowEvent,
         extent: (u32, u32),
     ) -> crate::window_app::Response {
-        self.controls.handle(event, extent, &self.view, &self.field)
+        self.controls
+            .handle(event, extent, &mut self.view, &self.field)
     }
 
     fn rebuild(&mut self, ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<()> {
@@ -180,25 +181,25 @@ impl crate::window_app::WindowScene for Viewer {
         Ok(())
     }
 
-    fn hud(&self, stats: &crate::window_app::HudStats<'_>) -> Vec<String> {
-        self.controls.extent.set(stats.extent);
-        self.controls.built_edits.set(self.controls.edits);
+    fn hud(&mut self, stats: &crate::window_app::HudStats<'_>) -> Vec<String> {
+        self.controls.extent = stats.extent;
+        self.controls.built_edits = self.controls.edits;
         let state = hud::HudState {
             preset: self.preset.name(),
             fly: self.controls.fly,
             effects: self.view.effects(),
             selected: self.controls.selected.and_then(|i| self.view.placed(i)),
             help: if self.controls.help {
-                &controls::HELP
+                controls::help()
             } else {
-                &[]
+                Vec::new()
             },
         };
         hud::hud_lines(stats, &state, self.controls.overlay)
     }
 
     fn presented(&mut self, frame: u64) {
-        let (w, h) = self.controls.extent.get();
+        let (w, h) = self.controls.extent;
         if frame == 0 {
             let cam = self.view.frame(w.max(1), h.max(1));
             for i in 0..self.view.objects().len() {
@@ -212,7 +213,7 @@ impl crate::window_app::WindowScene for Viewer {
                 }
             }
         }
-        let built = self.controls.built_edits.get();
+        let built = self.controls.built_edits;
         if built > self.controls.announced_edits && !self.controls.dragging() {
             self.controls.announced_edits = built;
             println!("view: frame {frame} shows {built} edit(s)");
@@ -227,7 +228,7 @@ pub fn run(options: &ContextOptions, args: &ViewArgs) -> anyhow::Result<()> {
         "--exposure must be a positive number, got {}",
         args.exposure
     );
-    let library = crate::shaders::library()?;
+    let library = inlay_passes::shaders::library()?;
     let window = WindowOptions {
         context: options.clone(),
         title: format!("inlay view {}", args.scene.display()),
@@ -262,10 +263,16 @@ pub fn run(options: &ContextOptions, args: &ViewArgs) -> anyhow::Result<()> {
     }
     let ctx = Context::new(options, None)?;
     let preset = args.preset.unwrap_or(default_preset(&ctx));
-    let viewer = Viewer::open(&ctx, &library, args, preset)?;
+    let mut viewer = Viewer::open(&ctx, &library, args, preset)?;
     let frames = args.frames.unwrap_or(1).clamp(1, 1000) as u32;
-    let run =
-        crate::headless::run_headless(&ctx, viewer.view(), args.width, args.height, frames, 0.0)?;
+    let run = crate::headless::run_headless(
+        &ctx,
+        &mut viewer.view,
+        args.width,
+        args.height,
+        frames,
+        0.0,
+    )?;
     let bad = run.image.non_finite_count();
     anyhow::ensure!(bad == 0, "the frame has {bad} non-finite pixels");
     run.report(&ctx, std::slice::from_ref(&args.out), args.exposure)

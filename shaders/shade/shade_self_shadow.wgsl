@@ -1,7 +1,7 @@
 // The object's SG shading pass (eq. 5) with self-shadows (eq. 9) from the
-// SSDF for every lobe (object/self_shadow_ssdf.wgsl).
-#include "object/shade_body.wgsl"
-#include "object/self_shadow_ssdf.wgsl"
+// SSDF for every lobe (shade/self_shadow_ssdf.wgsl).
+#include "shade/shade_body.wgsl"
+#include "shade/self_shadow_ssdf.wgsl"
 
 fn shading_attenuation(k: u32) -> f32 {
     return ssdf_attenuation(k);

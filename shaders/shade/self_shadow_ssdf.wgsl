@@ -1,11 +1,11 @@
 // Self-shadows (eq. 9) from the SSDF, for the self-shadowed shading
-// passes (object/shade_self_shadow.wgsl, object/shade_self_shadow_direct.wgsl):
+// passes (shade/shade_self_shadow.wgsl, shade/shade_self_shadow_direct.wgsl):
 // Γ_k = clamp(q(S(p'; x), λ') / q(asin(n·p'), λ'), 0, 1) for the lobe's
 // cosine-weighted light L_k ⊗ cosine = (p', λ'): the visible fraction behind
 // the half-space at the SSDF's angle relative to the tangent plane's own,
 // x the pixel's surface point, n its normal. Mirrors
 // passes/src/shadow/runtime.rs self_shadow_factors (which says why).
-// Needs: object/shade_body.wgsl before it; the shadow defines
+// Needs: shade/shade_body.wgsl before it; the shadow defines
 // (passes/src/shadow/gpu.rs).
 
 @group(0) @binding(6) var<storage, read> fh_table: array<f32>;

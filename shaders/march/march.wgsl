@@ -5,7 +5,7 @@
 #include "common/camera.wgsl"
 #include "common/ray_box.wgsl"
 #include "field/grid.wgsl"
-#include "nerf/volume_march.wgsl"
+#include "march/volume_march.wgsl"
 
 struct MarchPush {
     origin: vec3<f32>,

@@ -1,5 +1,5 @@
 // The object's SG shading pass (eq. 5) without self-shadows (Γ_k = 1).
-#include "object/shade_body.wgsl"
+#include "shade/shade_body.wgsl"
 
 fn shading_attenuation(k: u32) -> f32 {
     return 1.0;

@@ -2,12 +2,12 @@
 // dispatch per object, shading the pixels holding that object with its
 // fitted lobes; the first dispatch also writes zero where no object is.
 // Output: the object's radiance I_v with coverage in alpha. The including
-// shader (object/shade.wgsl, object/shade_self_shadow.wgsl) defines the
+// shader (shade/shade.wgsl, shade/shade_self_shadow.wgsl) defines the
 // entry point, calling shade_pixel, and the hooks
 //   shading_attenuation(k) -> f32 (Γ_k) and shading_prepare(x, n) (called
 //   with the pixel's world-space surface point and normal before shading).
 #include "common/camera.wgsl"
-#include "object/sg_shading.wgsl"
+#include "brdf/sg_shading.wgsl"
 
 struct ShadePush {
     origin: vec3<f32>,

@@ -1,5 +1,6 @@
-//! Embeds every WGSL file under shaders/ into the `inlay` binary, so the
-//! program runs from anywhere; `INLAY_SHADER_DIR` overrides it at run time.
+//! Embeds every WGSL file under the repository's shaders/ into this crate
+//! (and so into every program and test built on it), so they run from
+//! anywhere; `INLAY_SHADER_DIR` overrides it at run time.
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -21,6 +22,7 @@ fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
 fn main() {
     let root =
         PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"))
+            .join("..")
             .join("shaders");
     println!("cargo:rerun-if-changed={}", root.display());
     let mut files = Vec::new();

@@ -4,8 +4,8 @@
 // cast against the object's mesh from DIRECT_RAY_OFFSET radii off it
 // (shadow/direct_rays.wgsl); the others Γ from the SSDF. Mirrors
 // passes/src/shadow/runtime.rs self_shadow_factors.
-#include "object/shade_body.wgsl"
-#include "object/self_shadow_ssdf.wgsl"
+#include "shade/shade_body.wgsl"
+#include "shade/self_shadow_ssdf.wgsl"
 
 @group(0) @binding(10) var<storage, read> bvh_nodes: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> bvh_triangles: array<vec4<f32>>;

@@ -7,7 +7,7 @@
 // passes/src/lighting/direct_reference.rs.
 #include "common/ray_box.wgsl"
 #include "field/grid.wgsl"
-#include "nerf/volume_march.wgsl"
+#include "march/volume_march.wgsl"
 
 struct DirectPush {
     origin: vec3<f32>,
