@@ -468,7 +468,7 @@ fn bake_ssdf_writes_a_field_scenes_can_use() {
     for what in ["bake", "raw", "compressed", "% of raw", "PCA error"] {
         assert!(t.contains(what), "{what} missing: {t}");
     }
-    let field = inlay_passes::shadow::load_ssdf(&out).unwrap();
+    let field = inlay_passes::ssdf::load_ssdf(&out).unwrap();
     assert_eq!(
         (field.grid.nodes, field.directions, field.components),
         (4, 8, 4)

@@ -3,7 +3,7 @@
 //! probe and fit included) are rendered in one process, and its resident memory after the warm-up must stay flat.
 //! It caught Mesa 22.3's lavapipe recompiling the cast-shadow shader at
 //! every bind and keeping each compile (~1.2 MB and a JIT per frame) while
-//! the SSDF block was a uniform buffer (see shaders/shadow/ssdf.wgsl).
+//! the SSDF block was a uniform buffer (see shaders/ssdf/ssdf.wgsl).
 //! In its own test binary so no other test's allocations are counted.
 
 mod common;

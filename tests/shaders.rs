@@ -11,6 +11,35 @@ use inlay_engine::Push;
 use inlay_engine::{vk, ComputePipeline, ImageDesc};
 use inlay_passes::shaders::embedded_library;
 
+/// Knob constants some shaders expect from the pass that builds them
+/// (unused ones are harmless).
+fn knob_defines() -> Vec<Define> {
+    let mut defines = vec![
+        Define::Bool("SKIP_EMPTY", true),
+        Define::Bool("OCTAHEDRAL", true),
+        Define::F32("FIT_MAX_SHARPNESS", 1024.0),
+        Define::U32("ARC_PIECES", 4),
+        Define::F32("OUTSIDE_OFFSET", 2e-3),
+        Define::U32(
+            "NF_RAYS_PER_INVOCATION",
+            inlay_passes::envest::near_field::RAYS_PER_INVOCATION,
+        ),
+    ];
+    defines.extend(inlay_passes::shadow::shadow_defines());
+    defines
+}
+
+/// Every host struct whose bytes go to the GPU (push constants, uniform
+/// blocks, per-object and per-draw records) has the size and member
+/// offsets naga gives the WGSL struct it mirrors.
+#[test]
+fn gpu_structs_match_their_shaders() {
+    let lib = embedded_library();
+    let mut errors = inlay_passes::shaders::gpu_layout_errors(&lib, &knob_defines());
+    errors.extend(inlay::gpu_layouts::gpu_layout_errors(&lib));
+    assert!(errors.is_empty(), "{}", errors.join("\n"));
+}
+
 /// Every entry point of every shipped shader file compiles and validates.
 #[test]
 fn every_shipped_shader_compiles() {
@@ -31,21 +60,7 @@ fn every_shipped_shader_compiles() {
                 .find(|l| l.trim_start().starts_with("fn "))
                 .unwrap();
             let name = decl.trim_start()[3..].split('(').next().unwrap().trim();
-            // Knob constants some shaders expect from the pass that builds
-            // them (unused ones are harmless).
-            let mut defines = vec![
-                Define::Bool("SKIP_EMPTY", true),
-                Define::Bool("OCTAHEDRAL", true),
-                Define::F32("FIT_MAX_SHARPNESS", 1024.0),
-                Define::U32("ARC_PIECES", 4),
-                Define::F32("OUTSIDE_OFFSET", 2e-3),
-                Define::U32(
-                    "NF_RAYS_PER_INVOCATION",
-                    inlay_passes::envest::near_field::RAYS_PER_INVOCATION,
-                ),
-            ];
-            defines.extend(inlay_passes::shadow::shadow_defines());
-            compile(&lib, path, name, stage, &defines).unwrap_or_else(|e| panic!("{e}"));
+            compile(&lib, path, name, stage, &knob_defines()).unwrap_or_else(|e| panic!("{e}"));
             compiled += 1;
         }
     }

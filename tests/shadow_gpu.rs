@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use inlay_passes::object::ObjectMesh;
 use inlay_passes::shaders::embedded_library;
-use inlay_passes::shadow::{bake_reference, grid_for, lookup_points, object_scene, SsdfBaker};
+use inlay_passes::ssdf::{bake_reference, grid_for, lookup_points, object_scene, SsdfBaker};
 
 use common::bundled_object as bundled;
 
@@ -52,20 +52,21 @@ fn bake_kernel_matches_cpu_mirror() {
 
 use glam::DVec3;
 use inlay_engine::{vk, Buffer, ImageDesc, Readback};
-use inlay_passes::bake::MeshScene;
 use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::field::GpuGridField;
+use inlay_passes::geometry::MeshScene;
 use inlay_passes::geometry::Ray;
 use inlay_passes::lighting::{lobe_rays, DirectRays, LightLobes};
 use inlay_passes::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
 use inlay_passes::object::PlacedObject;
 use inlay_passes::rng::Pcg32;
 use inlay_passes::sg::Sg64;
-use inlay_passes::shadow::reference::{hits, ssdf_by_ray_casting};
 use inlay_passes::shadow::{
     cast_shadow_factor, field_normal, hemisphere_integral, self_shadow_factors, CastShadowPass,
-    DirectOcclusion, GpuFhTable, GpuSsdf, OutsideMode, SsdfField, SsdfKnobs, SHADOW_FORMAT,
+    DirectOcclusion, GpuFhTable, GpuSsdf, SHADOW_FORMAT,
 };
+use inlay_passes::ssdf::reference::{hits, ssdf_by_ray_casting};
+use inlay_passes::ssdf::{OutsideMode, SsdfField, SsdfKnobs};
 use std::f64::consts::PI;
 
 /// An SSDF field baked on the GPU at test size.
@@ -284,7 +285,7 @@ fn compare_cast_shadow(lobes: &[Sg64], direct: usize) -> CastComparison {
         .map(|g| lobe_rays(g, 6))
         .collect();
     let ray_buf = ray_buffer(&ctx, &rays);
-    let object_scene = inlay_passes::shadow::object_scene(&placed.mesh);
+    let object_scene = inlay_passes::ssdf::object_scene(&placed.mesh);
     let occlusion = DirectOcclusion {
         scene: &object_scene,
         rays: &rays,
@@ -512,7 +513,7 @@ fn self_shadow_factors_match_brute_force() {
     let mut direct_lobes = lobes.clone();
     direct_lobes.rotate_left(1);
     let rays = vec![lobe_rays(&lobes[0], 6)];
-    let object_scene = inlay_passes::shadow::object_scene(&mesh);
+    let object_scene = inlay_passes::ssdf::object_scene(&mesh);
     let occlusion = DirectOcclusion {
         scene: &object_scene,
         rays: &rays,
@@ -657,7 +658,7 @@ fn self_shadowed_shading_matches_its_mirror() {
     let lobe_buf = lobe_buffer(&ctx, &lobes);
     let rays = vec![lobe_rays(lobes.last().unwrap(), 6)];
     let ray_buf = ray_buffer(&ctx, &rays);
-    let object_scene = inlay_passes::shadow::object_scene(&mesh);
+    let object_scene = inlay_passes::ssdf::object_scene(&mesh);
     let occlusion = DirectOcclusion {
         scene: &object_scene,
         rays: &rays,

@@ -30,7 +30,7 @@ pub use error::{EngineError, Result};
 pub use image_io::HdrImage;
 pub use memory::{is_depth_format, Buffer, BufferLocation, Image, ImageDesc};
 pub use pipeline::{ComputePipeline, GraphicsDesc, GraphicsPipeline};
-pub use push::Push;
+pub use push::{Push, PushConstants};
 pub use readback::{BufferReadback, Readback};
 pub use renderer::{FrameReport, FrameToken, Renderer, SubmitSync, DEFAULT_FRAMES_IN_FLIGHT};
 pub use validation::ValidationLog;

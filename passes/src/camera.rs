@@ -148,33 +148,36 @@ impl CameraFrame {
         })
     }
 
-    /// The push-constant prefix the camera shaders share (`MarchPush`,
-    /// `ShadePush`): origin, width, right, height, up, `after_up`, forward;
-    /// the caller appends the block's last word.
-    pub fn push_prefix(&self, after_up: f32) -> inlay_engine::Push {
-        let (o, r, u, f) = (
-            self.origin.as_vec3(),
-            self.right.as_vec3(),
-            self.up.as_vec3(),
-            self.forward.as_vec3(),
-        );
-        inlay_engine::Push::new()
-            .f32(o.x)
-            .f32(o.y)
-            .f32(o.z)
-            .u32(self.width)
-            .f32(r.x)
-            .f32(r.y)
-            .f32(r.z)
-            .u32(self.height)
-            .f32(u.x)
-            .f32(u.y)
-            .f32(u.z)
-            .f32(after_up)
-            .f32(f.x)
-            .f32(f.y)
-            .f32(f.z)
+    /// The camera as the march, shading and cast-shadow push blocks hold
+    /// it (f32, with the image size).
+    pub fn basis(&self) -> CameraBasis {
+        CameraBasis {
+            origin: self.origin.as_vec3().to_array(),
+            right: self.right.as_vec3().to_array(),
+            up: self.up.as_vec3().to_array(),
+            forward: self.forward.as_vec3().to_array(),
+            width: self.width,
+            height: self.height,
+        }
     }
+}
+
+/// A camera frame in f32, as the shaders' push blocks (`MarchPush`,
+/// `ShadePush`, `CastPush`) take it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraBasis {
+    /// The eye.
+    pub origin: [f32; 3],
+    /// Right, scaled to the half-width at unit distance.
+    pub right: [f32; 3],
+    /// Up, scaled to the half-height at unit distance.
+    pub up: [f32; 3],
+    /// Forward (unit).
+    pub forward: [f32; 3],
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
 }
 
 #[cfg(test)]

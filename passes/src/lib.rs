@@ -35,3 +35,4 @@ pub mod sgfit;
 pub mod shade;
 pub mod shaders;
 pub mod shadow;
+pub mod ssdf;

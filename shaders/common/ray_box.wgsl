@@ -1,6 +1,6 @@
 // Entry and exit of the ray origin + t·dir through an axis-aligned box,
 // clamped to t ≥ 0: returns (t_near, t_far), with t_near > t_far on a miss.
-// Mirrors `ray_box` in passes/src/geometry.rs; zero direction components are
+// Mirrors `ray_box` in passes/src/geometry/mod.rs; zero direction components are
 // replaced by ±1e-30 (division by zero is undefined in Vulkan), which gives
 // the same result as the CPU's IEEE infinities for boxes of sane size.
 fn ray_box(origin: vec3<f32>, dir: vec3<f32>, box_min: vec3<f32>, box_max: vec3<f32>) -> vec2<f32> {

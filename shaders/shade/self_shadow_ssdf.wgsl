@@ -14,7 +14,7 @@
 @group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
 
 #include "shadow/fh.wgsl"
-#include "shadow/ssdf.wgsl"
+#include "ssdf/ssdf.wgsl"
 
 const SELF_SHADOW_HORIZON_FLOOR: f32 = 1e-6;
 

@@ -11,7 +11,7 @@
 @group(0) @binding(11) var<storage, read> bvh_triangles: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read> sharp_rays: array<vec4<f32>>;
 
-#include "shadow/mesh_bvh.wgsl"
+#include "geometry/mesh_bvh.wgsl"
 #include "shadow/direct_rays.wgsl"
 
 fn shading_attenuation(k: u32) -> f32 {

@@ -4,7 +4,7 @@
 // a Lambertian face turned towards x lit by the object's lobes (their
 // irradiance on the normal towards x, through the clamped-cosine SG; the
 // part from below x's plane at x's own shadow ratio). Needs: common/sg.wgsl,
-// shadow/ssdf.wgsl's `ssdf` block, the lobes `light_lobes` and `pc.light_count`.
+// ssdf/ssdf.wgsl's `ssdf` block, the lobes `light_lobes` and `pc.light_count`.
 
 // The share of SG `p`'s energy from below the plane of normal `n`
 // (bounce.rs below_share): Φ(−(p·n)√λ) by the logistic.

@@ -50,7 +50,7 @@ var<immediate> pc: CastPush;
 @group(0) @binding(11) var out_shadow: texture_storage_2d<rgba32float, write>;
 
 #include "shadow/fh.wgsl"
-#include "shadow/ssdf.wgsl"
+#include "ssdf/ssdf.wgsl"
 #include "shadow/bounce.wgsl"
 
 const CAST_HALF_PI: f32 = 1.57079632679490;

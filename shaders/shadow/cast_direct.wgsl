@@ -8,7 +8,7 @@
 @group(0) @binding(13) var<storage, read> bvh_triangles: array<vec4<f32>>;
 @group(0) @binding(14) var<storage, read> sharp_rays: array<vec4<f32>>;
 
-#include "shadow/mesh_bvh.wgsl"
+#include "geometry/mesh_bvh.wgsl"
 #include "shadow/direct_rays.wgsl"
 
 fn cast_direct_visibility(x: vec3<f32>, lobe: u32, rays: u32) -> f32 {

@@ -2,8 +2,8 @@
 // shaded as they are): the share of a lobe's rays that the object's mesh
 // leaves clear, cast in the object's frame through its bounding-volume
 // hierarchy. Mirrors passes/src/shadow/direct.rs DirectOcclusion.
-// Needs: shadow/ssdf.wgsl (the `ssdf` block: world → object),
-// shadow/mesh_bvh.wgsl with its `bvh_nodes` and `bvh_triangles`, and a
+// Needs: ssdf/ssdf.wgsl (the `ssdf` block: world → object),
+// geometry/mesh_bvh.wgsl with its `bvh_nodes` and `bvh_triangles`, and a
 // read-only storage buffer `sharp_rays: array<vec4<f32>>` (per direct
 // lobe, `rays` world directions; passes/src/lighting/sharp.rs lobe_rays).
 

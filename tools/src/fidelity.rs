@@ -5,9 +5,10 @@
 
 use glam::DVec3;
 use inlay_engine::HdrImage;
-use inlay_passes::bake::{MeshScene, PathTracer};
+use inlay_passes::bake::PathTracer;
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::geometry::ray_box;
+use inlay_passes::geometry::MeshScene;
 use inlay_passes::object::PlacedObject;
 use inlay_passes::scene::{Environment, Recipe};
 use rayon::prelude::*;

@@ -8,6 +8,7 @@ pub mod commands;
 pub mod demo;
 pub mod fidelity;
 pub mod field_source;
+pub mod gpu_layouts;
 pub mod headless;
 pub mod insertion_view;
 pub mod measure;

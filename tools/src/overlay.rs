@@ -6,7 +6,23 @@ use std::sync::Arc;
 
 use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
-use inlay_engine::{vk, Buffer, Context, GraphicsDesc, GraphicsPipeline, Push};
+use inlay_engine::{vk, Buffer, Context, GraphicsDesc, GraphicsPipeline};
+
+inlay_engine::gpu_struct! {
+    /// `OverlayPush` of `shaders/overlay.wgsl`.
+    pub struct OverlayPush = "overlay.wgsl" : "OverlayPush" {
+        /// Text columns.
+        pub cols: u32,
+        /// Text rows.
+        pub rows: u32,
+        /// Glyph magnification.
+        pub scale: u32,
+        /// Left edge of the text (pixels).
+        pub origin_x: u32,
+        /// Top edge of the text (pixels).
+        pub origin_y: u32,
+    }
+}
 
 /// The glyphs as the shader reads them: two little-endian words per glyph.
 pub fn font_words() -> Vec<u32> {
@@ -168,12 +184,13 @@ impl OverlayPass {
             grid.iter().flat_map(|c| c.to_le_bytes()).collect(),
         );
         let font = graph.import_buffer(&self.font, None);
-        let push = Push::new()
-            .u32(cols)
-            .u32(rows)
-            .u32(scale)
-            .u32(ORIGIN)
-            .u32(ORIGIN);
+        let push = OverlayPush {
+            cols,
+            rows,
+            scale,
+            origin_x: ORIGIN,
+            origin_y: ORIGIN,
+        };
         let mut out = target;
         let mut pass = graph.raster_pass("overlay");
         pass.color(&mut out, LoadOp::Load);

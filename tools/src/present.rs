@@ -6,7 +6,15 @@ use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline};
 
-use inlay_engine::Push;
+inlay_engine::gpu_struct! {
+    /// `Params` of `shaders/present.wgsl`.
+    pub struct PresentPush = "present.wgsl" : "Params" {
+        /// Exposure multiplier.
+        pub exposure: f32,
+        /// 1: the shader encodes sRGB (the swapchain format does not).
+        pub encode_srgb: u32,
+    }
+}
 
 /// The tonemapping pipeline for one swapchain format.
 pub struct PresentPipeline {
@@ -54,7 +62,10 @@ impl PresentPipeline {
         target: ImageHandle,
         exposure: f32,
     ) -> ImageHandle {
-        let push = Push::new().f32(exposure).u32(self.encode_srgb as u32);
+        let push = PresentPush {
+            exposure,
+            encode_srgb: self.encode_srgb as u32,
+        };
         let mut out = target;
         let mut pass = graph.raster_pass("present");
         pass.color(&mut out, LoadOp::DontCare);

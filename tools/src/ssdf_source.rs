@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::Context;
 use inlay_passes::object::ObjectMesh;
-use inlay_passes::shadow::{load_ssdf, save_ssdf, SsdfBaker, SsdfField, SsdfKnobs, SSDF_VERSION};
+use inlay_passes::ssdf::{load_ssdf, save_ssdf, SsdfBaker, SsdfField, SsdfKnobs, SSDF_VERSION};
 
 use crate::field_source::{cache_dir, fnv1a, progress_bar};
 

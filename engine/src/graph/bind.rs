@@ -26,7 +26,7 @@ use super::builder::{BufferHandle, FrameGraph, ImageHandle, PassBuilder};
 use super::execute::{Binding, SamplerKind};
 use super::{BufferAccess, GraphError, ImageAccess, LoadOp, PassKind};
 use crate::pipeline::{ComputePipeline, GraphicsPipeline};
-use crate::push::Push;
+use crate::push::PushConstants;
 use crate::shader::{DescriptorKind, ReflectedBinding};
 
 /// A shader binding, by its WGSL variable name or its `@binding` number.
@@ -564,8 +564,8 @@ impl<'p, 'g, P: BoundPipeline> Call<'p, 'g, P> {
 
     /// The push constants: their first bytes, as many as the shader takes
     /// (so one block can serve several entry points).
-    pub fn push(mut self, push: &Push) -> Self {
-        self.push = push.bytes().to_vec();
+    pub fn push(mut self, push: &impl PushConstants) -> Self {
+        self.push = push.push_bytes().to_vec();
         self
     }
 

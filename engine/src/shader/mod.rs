@@ -4,11 +4,13 @@
 
 mod compile;
 mod compose;
+mod layout;
 mod library;
 mod pipeline_cache;
 
 pub use compile::{compile, CompiledShader, DescriptorKind, ReflectedBinding, ShaderStage};
 pub use compose::{compose, Composed, Define};
+pub use layout::{check_layout, compare_layout, struct_layouts, GpuStruct, StructLayout};
 pub use library::ShaderLibrary;
 
 /// A shader that failed to compose, parse or validate, located in its

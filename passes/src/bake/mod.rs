@@ -6,7 +6,6 @@ mod emitter_power;
 mod grid_bake;
 mod knobs;
 mod light_sample;
-mod mesh_bvh;
 mod path_tracer;
 mod reference_image;
 
@@ -14,6 +13,5 @@ pub use emitter_power::{calibrate_emitters, field_power};
 pub use grid_bake::{bake_grid, edge_profile, grid_resolution, BAKE_REVISION};
 pub use knobs::BakeKnobs;
 pub use light_sample::{emitter_cone, sample_emitter, LightSample};
-pub use mesh_bvh::{MeshHit, MeshScene, MeshSurface};
 pub use path_tracer::{Event, PathTracer, Scatter};
 pub use reference_image::{render_reference, ReferenceOptions};

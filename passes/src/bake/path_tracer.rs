@@ -16,9 +16,9 @@ use std::f64::consts::PI;
 use glam::DVec3;
 
 use super::light_sample::sample_emitter;
-use super::mesh_bvh::{MeshScene, MeshSurface};
 use crate::brdf::{disney, SurfaceMaterial};
 use crate::geometry::Ray;
+use crate::geometry::{MeshScene, MeshSurface};
 use crate::rng::Pcg32;
 use crate::scene::{Environment, Recipe};
 
@@ -365,8 +365,8 @@ impl<'a> PathTracer<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::MeshScene;
     use crate::geometry::Aabb;
+    use crate::geometry::MeshScene;
     use crate::scene::{EquirectMap, Primitive, Shape};
 
     fn floor(albedo: f64) -> Primitive {

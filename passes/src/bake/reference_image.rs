@@ -11,10 +11,10 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::mesh_bvh::MeshScene;
 use super::path_tracer::{Event, PathTracer};
 use crate::camera::CameraFrame;
 use crate::geometry::ray_box;
+use crate::geometry::MeshScene;
 use crate::object::PlacedObject;
 use crate::rng::Pcg32;
 use crate::scene::{Environment, Recipe};

@@ -13,7 +13,19 @@ use std::sync::Arc;
 
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
-use inlay_engine::{vk, ComputePipeline, Context, ImageDesc, Push};
+use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
+
+inlay_engine::gpu_struct! {
+    /// `CompositePush` of `shaders/composite/composite.wgsl`.
+    pub struct CompositePush = "composite/composite.wgsl" : "CompositePush" {
+        /// Image width.
+        pub width: u32,
+        /// Image height.
+        pub height: u32,
+        /// 1: the object over the unclipped field (occlusion off).
+        pub object_front: u32,
+    }
+}
 
 /// The composite pass: its name, Table 1 module and effect switch.
 pub const COMPOSITE_INFO: PassInfo = PassInfo {
@@ -112,10 +124,11 @@ impl CompositePass {
         layering: Layering,
     ) -> ImageHandle {
         let (mut out, width, height) = output_image(graph, field);
-        let push = Push::new()
-            .u32(width)
-            .u32(height)
-            .u32((layering == Layering::ObjectOverField) as u32);
+        let push = CompositePush {
+            width,
+            height,
+            object_front: (layering == Layering::ObjectOverField) as u32,
+        };
         let pipeline = match shadow {
             Some(_) => &self.shadowed,
             None => &self.pipeline,
@@ -146,7 +159,11 @@ impl CompositePass {
             .read("field_colour", field)
             .read("shadow", shadow)
             .write("out_colour", &mut out)
-            .push(&Push::new().u32(width).u32(height).u32(0))
+            .push(&CompositePush {
+                width,
+                height,
+                object_front: 0,
+            })
             .threads([width, height, 1]);
         out
     }

@@ -18,10 +18,26 @@ use std::sync::Arc;
 
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
-use inlay_engine::{ComputePipeline, Context, ImageDesc, Push};
+use inlay_engine::{ComputePipeline, Context, ImageDesc};
 
 use crate::composite::COMPOSITE_FORMAT;
 use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
+
+inlay_engine::gpu_struct! {
+    /// `EdgeAaPush` of `shaders/edge_aa/edge_aa.wgsl`.
+    pub struct EdgeAaPush = "edge_aa/edge_aa.wgsl" : "EdgeAaPush" {
+        /// Image width.
+        pub width: u32,
+        /// Image height.
+        pub height: u32,
+        /// [`EdgeAaKnobs::subpixel`].
+        pub subpixel: f32,
+        /// [`EdgeAaKnobs::threshold`].
+        pub threshold: f32,
+        /// [`EdgeAaKnobs::threshold_min`].
+        pub threshold_min: f32,
+    }
+}
 
 /// The edge anti-aliasing pass: its name, Table 1 module and switch.
 pub const OBJECT_EDGE_AA_INFO: PassInfo = PassInfo {
@@ -166,12 +182,13 @@ impl EdgeAaPass {
         };
         let mut out = graph.create_image("edge-aa", desc);
         let k = &self.knobs;
-        let push = Push::new()
-            .u32(width)
-            .u32(height)
-            .f32(k.subpixel as f32)
-            .f32(k.threshold as f32)
-            .f32(k.threshold_min as f32);
+        let push = EdgeAaPush {
+            width,
+            height,
+            subpixel: k.subpixel as f32,
+            threshold: k.threshold as f32,
+            threshold_min: k.threshold_min as f32,
+        };
         graph
             .compute(OBJECT_EDGE_AA, &self.pipeline)
             .read("colour", colour)

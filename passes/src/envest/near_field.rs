@@ -11,14 +11,34 @@ use std::sync::Arc;
 use glam::DVec3;
 use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::{
-    vk, Buffer, BufferReadback, ComputePipeline, Context, Push, Renderer, SubmitSync,
-};
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
 use super::surface::SurfacePoint;
 use crate::field::{GpuGridField, GridField};
 use crate::march::MarchKnobs;
 use crate::probe::octahedral_bilinear;
+
+inlay_engine::gpu_struct! {
+    /// `NearFieldPush` of `shaders/envest/near_field.wgsl`.
+    pub struct NearFieldPush = "envest/near_field.wgsl" : "NearFieldPush" {
+        /// March step (world units).
+        pub step: f32,
+        /// Early-termination transmittance.
+        pub termination: f32,
+        /// Rays per point.
+        pub rays: u32,
+        /// The batch's first point.
+        pub first_point: u32,
+        /// Points in the batch.
+        pub count: u32,
+        /// Opacity map side.
+        pub map_side: u32,
+        /// Ray seed.
+        pub seed: u32,
+        /// Padding.
+        pub pad: u32,
+    }
+}
 
 /// A point's rays leave the surface point itself but start marching
 /// where they have risen this many node spacings above it: the expected
@@ -170,15 +190,16 @@ impl NearFieldTracer {
             let pts = graph.import_buffer(&points_buf, None);
             let e_buf = graph.create_buffer("near-field irradiance", e_size);
             let o_buf = graph.create_buffer("near-field opacity", o_size);
-            let push = Push::new()
-                .f32(step)
-                .f32(self.march.termination as f32)
-                .u32(rays)
-                .u32(start as u32)
-                .u32(count as u32)
-                .u32(map_side)
-                .u32(seed)
-                .u32(0);
+            let push = NearFieldPush {
+                step,
+                termination: self.march.termination as f32,
+                rays,
+                first_point: start as u32,
+                count: count as u32,
+                map_side,
+                seed,
+                pad: 0,
+            };
             let (mut e_buf, mut o_buf) = (e_buf, o_buf);
             let mut pass = graph.compute_pass("near-field");
             let kernels = [

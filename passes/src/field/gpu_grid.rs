@@ -5,9 +5,31 @@
 use std::sync::Arc;
 
 use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph};
-use inlay_engine::{vk, Buffer, Context, Push};
+use inlay_engine::{vk, Buffer, Context};
 
 use super::grid::GridField;
+
+inlay_engine::gpu_struct! {
+    /// `GridInfo` of `shaders/field/grid.wgsl` (the uniform block).
+    pub struct GridInfo = "field/grid.wgsl" : "GridInfo" {
+        /// The bounds' smallest corner.
+        pub bounds_min: [f32; 3],
+        /// Nodes per occupancy cell side.
+        pub occupancy_block: u32,
+        /// The bounds' largest corner.
+        pub bounds_max: [f32; 3],
+        /// Padding.
+        pub _pad0: u32,
+        /// Nodes per axis.
+        pub resolution: [u32; 3],
+        /// Padding.
+        pub _pad1: u32,
+        /// Occupancy cells per axis.
+        pub occupancy_dims: [u32; 3],
+        /// Padding.
+        pub _pad2: u32,
+    }
+}
 
 /// Device copies of a grid field's data (bindings 0, 1, 2 of set 0).
 /// Clones share the device buffers (several views of one upload).
@@ -65,23 +87,16 @@ impl GpuGridField {
         }
         let b = field.bounds;
         let occ = &field.occupancy;
-        let info = Push::new()
-            .f32(b.min.x as f32)
-            .f32(b.min.y as f32)
-            .f32(b.min.z as f32)
-            .u32(occ.block)
-            .f32(b.max.x as f32)
-            .f32(b.max.y as f32)
-            .f32(b.max.z as f32)
-            .u32(0)
-            .u32(field.resolution.x)
-            .u32(field.resolution.y)
-            .u32(field.resolution.z)
-            .u32(0)
-            .u32(occ.dims.x)
-            .u32(occ.dims.y)
-            .u32(occ.dims.z)
-            .u32(0);
+        let info = GridInfo {
+            bounds_min: b.min.as_vec3().to_array(),
+            occupancy_block: occ.block,
+            bounds_max: b.max.as_vec3().to_array(),
+            _pad0: 0,
+            resolution: field.resolution.to_array(),
+            _pad1: 0,
+            occupancy_dims: occ.dims.to_array(),
+            _pad2: 0,
+        };
         let nodes: Vec<u8> = field
             .nodes
             .iter()
@@ -94,7 +109,7 @@ impl GpuGridField {
             info: Arc::new(Buffer::with_data(
                 ctx,
                 "grid-info",
-                info.bytes(),
+                bytemuck::bytes_of(&info),
                 vk::BufferUsageFlags::UNIFORM_BUFFER,
             )?),
             nodes: Arc::new(Buffer::with_data(ctx, "grid-nodes", &nodes, storage)?),

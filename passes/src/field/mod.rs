@@ -6,7 +6,7 @@
 //! later kinds behind the same trait.
 
 mod format;
-mod gpu_grid;
+pub(crate) mod gpu_grid;
 mod grid;
 mod occupancy;
 mod perturb;

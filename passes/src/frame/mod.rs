@@ -35,7 +35,8 @@ use crate::probe::PROBE_TRACE;
 use crate::scene::{Scene as SceneFile, ShadowKnobs};
 use crate::sgfit::SG_FIT;
 use crate::shade::{SelfShadow, ShadePass, OBJECT_SHADE};
-use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, SsdfField, CAST_SHADOW};
+use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, CAST_SHADOW};
+use crate::ssdf::SsdfField;
 
 /// How far, in bounding-sphere radii from the object's centre, its cast
 /// shadow is drawn when the object itself is off screen: beyond 8 radii
@@ -117,7 +118,7 @@ pub struct InsertionFrame {
     /// The objects (may be empty), in the scene's order.
     pub objects: Vec<FrameObject>,
     /// How the SSDF is read outside its grid.
-    pub shadow_outside: crate::shadow::OutsideMode,
+    pub shadow_outside: crate::ssdf::OutsideMode,
     gbuffer: GBufferPass,
     shade: ShadePass,
     composite: CompositePass,

@@ -14,10 +14,44 @@ use std::sync::Arc;
 
 use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp, SamplerKind};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
-use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, ImageDesc, Push};
+use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, ImageDesc};
 
 use crate::camera::CameraFrame;
 use crate::object::{GpuObject, PlacedObject};
+
+inlay_engine::gpu_struct! {
+    /// `Camera` of `shaders/gbuffer/gbuffer.wgsl` (uniform).
+    pub struct GBufferCamera = "gbuffer/gbuffer.wgsl" : "Camera" {
+        /// View-projection, column-major.
+        pub view_proj: [f32; 16],
+        /// The eye (w = 1).
+        pub origin: [f32; 4],
+    }
+}
+
+inlay_engine::gpu_struct! {
+    /// `Draw` of `shaders/gbuffer/gbuffer.wgsl`: one mesh part's record.
+    pub struct DrawRecord = "gbuffer/gbuffer.wgsl" : "Draw" {
+        /// The first three rows of the object → world matrix.
+        pub model: [[f32; 4]; 3],
+        /// The normal matrix's rows (w unused).
+        pub normal: [[f32; 4]; 3],
+        /// Base colour factor (RGBA).
+        pub base_colour: [f32; 4],
+        /// Roughness, metallic, object index, unused.
+        pub params: [f32; 4],
+    }
+}
+
+inlay_engine::gpu_struct! {
+    /// `DrawPush` of `shaders/gbuffer/gbuffer.wgsl`.
+    pub struct DrawPush = "gbuffer/gbuffer.wgsl" : "DrawPush" {
+        /// Index of the draw's record.
+        pub draw: u32,
+        /// First index of its part in the index buffer.
+        pub first_index: u32,
+    }
+}
 
 /// The object-gbuffer pass: its name, Table 1 module and effect switch.
 pub const OBJECT_GBUFFER_INFO: PassInfo = PassInfo {
@@ -42,7 +76,7 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const EMPTY_DISTANCE_ID: [f32; 4] = [3.0e38, -1.0, 0.0, 0.0];
 
 /// Bytes of one draw record (`Draw` in `shaders/gbuffer/gbuffer.wgsl`).
-const DRAW_BYTES: usize = 128;
+const DRAW_BYTES: usize = std::mem::size_of::<DrawRecord>();
 /// Most draws (object parts) in one frame: the draw table is uploaded from
 /// the command buffer, which takes at most 64 KiB.
 pub const MAX_DRAWS: usize = 65536 / DRAW_BYTES;
@@ -119,31 +153,24 @@ impl GBufferPass {
         let (width, height) = (camera.width, camera.height);
         let spheres: Vec<_> = objects.iter().map(|o| o.placed.sphere()).collect();
         let view_proj = view_projection(camera, &spheres);
-        let mut camera_bytes = Vec::with_capacity(80);
-        for v in view_proj.to_cols_array() {
-            camera_bytes.extend_from_slice(&(v as f32).to_le_bytes());
-        }
-        for v in camera.origin.extend(1.0).to_array() {
-            camera_bytes.extend_from_slice(&(v as f32).to_le_bytes());
-        }
+        let camera_record = GBufferCamera {
+            view_proj: view_proj.as_mat4().to_cols_array(),
+            origin: camera.origin.extend(1.0).as_vec4().to_array(),
+        };
         // One draw per mesh part, in object order.
-        let mut draw_bytes = Vec::new();
+        let mut records = Vec::new();
         let mut draws = Vec::new();
         for (index, o) in objects.iter().enumerate() {
             let m = o.placed.pose.matrix();
             let nm = o.placed.pose.normal_matrix();
             for (p, part) in o.placed.mesh.parts.iter().enumerate() {
                 let mat = o.placed.material_of(p);
-                let mut rec: Vec<f32> = Vec::with_capacity(32);
-                for r in 0..3 {
-                    rec.extend(m.row(r).to_array().map(|x| x as f32));
-                }
-                for r in 0..3 {
-                    rec.extend(nm.row(r).extend(0.0).to_array().map(|x| x as f32));
-                }
-                rec.extend(mat.base_colour.to_array().map(|x| x as f32));
-                rec.extend([mat.roughness as f32, mat.metallic as f32, index as f32, 0.0]);
-                draw_bytes.extend(rec.iter().flat_map(|x| x.to_le_bytes()));
+                records.push(DrawRecord {
+                    model: std::array::from_fn(|r| m.row(r).as_vec4().to_array()),
+                    normal: std::array::from_fn(|r| nm.row(r).extend(0.0).as_vec4().to_array()),
+                    base_colour: mat.base_colour.as_vec4().to_array(),
+                    params: [mat.roughness as f32, mat.metallic as f32, index as f32, 0.0],
+                });
                 draws.push((o.gpu, *part, mat));
             }
         }
@@ -152,8 +179,10 @@ impl GBufferPass {
             "{} object parts in one frame; the G-buffer draws at most {MAX_DRAWS}",
             draws.len()
         );
-        let camera_buffer = graph.upload_buffer("object-camera", camera_bytes);
-        let draw_buffer = graph.upload_buffer("object-draws", draw_bytes);
+        let camera_buffer =
+            graph.upload_buffer("object-camera", bytemuck::bytes_of(&camera_record).to_vec());
+        let draw_buffer =
+            graph.upload_buffer("object-draws", bytemuck::cast_slice(&records).to_vec());
         let target = |graph: &mut FrameGraph, name: &str, format| {
             graph.create_image(
                 name,
@@ -199,7 +228,10 @@ impl GBufferPass {
                 .read("base_colour_texture", base)
                 .read("metallic_roughness_texture", mr)
                 .sampler("material_sampler", SamplerKind::LinearRepeat)
-                .push(&Push::new().u32(i as u32).u32(part.first_index))
+                .push(&DrawPush {
+                    draw: i as u32,
+                    first_index: part.first_index,
+                })
                 .vertices(part.index_count, 1);
         }
         pass.finish();

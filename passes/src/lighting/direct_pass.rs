@@ -11,13 +11,31 @@ use std::sync::Arc;
 use glam::DVec3;
 use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context};
 
 use super::sharp::lobe_rays;
 use super::{DirectRays, LightLobes};
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::{Sg32, Sg64};
+
+inlay_engine::gpu_struct! {
+    /// `DirectPush` of `shaders/lighting/direct.wgsl`.
+    pub struct DirectPush = "lighting/direct.wgsl" : "DirectPush" {
+        /// The object's centre (world).
+        pub origin: [f32; 3],
+        /// March step (world units).
+        pub step: f32,
+        /// Early-termination transmittance.
+        pub termination: f32,
+        /// Fitted lobes copied first.
+        pub fitted: u32,
+        /// Sharp lobes after them.
+        pub sharp: u32,
+        /// Rays per sharp lobe.
+        pub rays: u32,
+    }
+}
 
 /// The direct-light pass: its name, Table 1 module and effect switch.
 pub const DIRECT_LIGHT_INFO: PassInfo = PassInfo {
@@ -142,16 +160,14 @@ impl DirectLightPass {
         let sharp = graph.import_buffer(&self.sharp, None);
         let rays = graph.import_buffer(&self.rays, None);
         let lights = self.import(graph);
-        let o = origin.as_vec3();
-        let push = Push::new()
-            .f32(o.x)
-            .f32(o.y)
-            .f32(o.z)
-            .f32(self.march.step(field.diagonal) as f32)
-            .f32(self.march.termination as f32)
-            .u32(self.fitted)
-            .u32(self.count - self.fitted)
-            .u32(self.side * self.side);
+        let push = DirectPush {
+            origin: origin.as_vec3().to_array(),
+            step: self.march.step(field.diagonal) as f32,
+            termination: self.march.termination as f32,
+            fitted: self.fitted,
+            sharp: self.count - self.fitted,
+            rays: self.side * self.side,
+        };
         let mut lights = lights;
         grid.bind(graph.compute(DIRECT_LIGHT, &self.pipeline))
             .read("fitted_lobes", fitted)

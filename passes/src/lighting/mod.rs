@@ -4,7 +4,7 @@
 //! where L_env has lobes sharper than the fit can hold, those lobes shaded
 //! directly with the field's transmittance towards them ([`sharp`]).
 
-mod direct_pass;
+pub(crate) mod direct_pass;
 pub mod direct_reference;
 pub mod sharp;
 

@@ -3,7 +3,7 @@
 //! pass and its f64 CPU reference compute the same quadrature.
 
 mod knobs;
-mod pass;
+pub(crate) mod pass;
 mod reference;
 
 pub use knobs::MarchKnobs;

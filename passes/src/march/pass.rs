@@ -11,6 +11,28 @@ use super::knobs::MarchKnobs;
 use crate::camera::CameraFrame;
 use crate::field::GpuGridField;
 
+inlay_engine::gpu_struct! {
+    /// `MarchPush` of `shaders/march/march.wgsl`.
+    pub struct MarchPush = "march/march.wgsl" : "MarchPush" {
+        /// The eye.
+        pub origin: [f32; 3],
+        /// Image width.
+        pub width: u32,
+        /// Right (half-width at unit distance).
+        pub right: [f32; 3],
+        /// Image height.
+        pub height: u32,
+        /// Up (half-height at unit distance).
+        pub up: [f32; 3],
+        /// March step (world units).
+        pub step: f32,
+        /// Forward.
+        pub forward: [f32; 3],
+        /// Early-termination transmittance.
+        pub termination: f32,
+    }
+}
+
 /// The nerf-march pass: its name, Table 1 module and effect switch.
 pub const NERF_MARCH_INFO: PassInfo = PassInfo {
     name: "nerf-march",
@@ -102,7 +124,17 @@ impl MarchPass {
         );
         let step = self.knobs.step(field.diagonal) as f32;
         let termination = self.knobs.termination as f32;
-        let push = camera.push_prefix(step).f32(termination);
+        let c = camera.basis();
+        let push = MarchPush {
+            origin: c.origin,
+            width: c.width,
+            right: c.right,
+            height: c.height,
+            up: c.up,
+            step,
+            forward: c.forward,
+            termination,
+        };
         let pipeline = match object_depth {
             Some(_) => &self.clipped,
             None => &self.unclipped,

@@ -7,7 +7,7 @@
 mod direction_map;
 mod irradiance;
 mod knobs;
-mod pass;
+pub(crate) mod pass;
 mod reference;
 mod texel_filter;
 

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, Push};
+use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc};
 
 use super::direction_map::{DirectionMap, MapKind};
 use super::knobs::ProbeKnobs;
@@ -15,6 +15,32 @@ use super::texel_filter::texel_environment;
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::Sg64;
+
+inlay_engine::gpu_struct! {
+    /// `ProbePush` of `shaders/probe/trace.wgsl`.
+    pub struct ProbePush = "probe/trace.wgsl" : "ProbePush" {
+        /// Where the probe is (world).
+        pub origin: [f32; 3],
+        /// March step (world units).
+        pub step: f32,
+        /// Probe texels across.
+        pub width: u32,
+        /// Probe texels down.
+        pub height: u32,
+        /// Early-termination transmittance.
+        pub termination: f32,
+        /// Lobes of L_env (0: the field alone).
+        pub env_lobe_count: u32,
+        /// Rays per texel side.
+        pub side: u32,
+        /// Padding to the struct's 16-byte alignment.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
+    }
+}
 
 /// The probe-trace pass: its name, Table 1 module and effect switch.
 pub const PROBE_TRACE_INFO: PassInfo = PassInfo {
@@ -166,20 +192,18 @@ impl ProbePass {
         let chosen = self.environment.as_ref().filter(|_| environment);
         let env = chosen.map(|e| (graph.import_buffer(&e.lobes, None), e.count));
         let (w, h) = (self.map.width, self.map.height);
-        let o = origin.as_vec3();
-        let push = Push::new()
-            .f32(o.x)
-            .f32(o.y)
-            .f32(o.z)
-            .f32(self.march.step(field.diagonal) as f32)
-            .u32(w)
-            .u32(h)
-            .f32(self.march.termination as f32)
-            .u32(env.map_or(0, |(_, n)| n))
-            .u32(self.supersampling)
-            .u32(0)
-            .u32(0)
-            .u32(0);
+        let push = ProbePush {
+            origin: origin.as_vec3().to_array(),
+            step: self.march.step(field.diagonal) as f32,
+            width: w,
+            height: h,
+            termination: self.march.termination as f32,
+            env_lobe_count: env.map_or(0, |(_, n)| n),
+            side: self.supersampling,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        };
         let mut probe = probe;
         let pipeline = chosen.map_or(&self.field_only, |e| &e.pipeline);
         grid.bind(graph.compute(PROBE_TRACE, pipeline))

@@ -178,9 +178,9 @@ pub struct ShadowKnobs {
     /// Shadows cast onto the field (eq. 7–8).
     pub cast: bool,
     /// How the SSDF is read outside its grid.
-    pub outside: crate::shadow::OutsideMode,
+    pub outside: crate::ssdf::OutsideMode,
     /// Knobs of the SSDF bakes this scene triggers.
-    pub bake: crate::shadow::SsdfKnobs,
+    pub bake: crate::ssdf::SsdfKnobs,
 }
 
 impl Default for ShadowKnobs {
@@ -188,8 +188,8 @@ impl Default for ShadowKnobs {
         Self {
             self_shadow: true,
             cast: true,
-            outside: crate::shadow::OutsideMode::Correct,
-            bake: crate::shadow::SsdfKnobs::default(),
+            outside: crate::ssdf::OutsideMode::Correct,
+            bake: crate::ssdf::SsdfKnobs::default(),
         }
     }
 }
@@ -449,7 +449,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     let shadows = {
         let d = ShadowKnobs::default();
         let sp = spec.shadows.as_ref();
-        let bake = crate::shadow::SsdfKnobs {
+        let bake = crate::ssdf::SsdfKnobs {
             grid: sp.and_then(|s| s.grid).unwrap_or(d.bake.grid),
             directions: sp.and_then(|s| s.directions).unwrap_or(d.bake.directions),
             components: sp.and_then(|s| s.components).unwrap_or(d.bake.components),

@@ -43,7 +43,7 @@ pub(crate) struct ShadowsSpec {
     #[serde(rename = "self")]
     pub self_shadow: Option<bool>,
     pub cast: Option<bool>,
-    pub outside: Option<crate::shadow::OutsideMode>,
+    pub outside: Option<crate::ssdf::OutsideMode>,
     pub grid: Option<u32>,
     pub directions: Option<u32>,
     pub components: Option<u32>,

@@ -6,7 +6,7 @@
 mod energy;
 mod knobs;
 pub mod model;
-mod pass;
+pub(crate) mod pass;
 pub mod probe_filter;
 mod reference;
 pub mod solve;

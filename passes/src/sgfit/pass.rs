@@ -9,13 +9,43 @@ use std::sync::Arc;
 
 use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph, ImageAccess, ImageHandle};
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Push};
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context};
 
 use super::knobs::{FitKnobs, MAX_ITERATIONS};
 use super::model;
 use super::reference::relative_residual;
 use crate::probe::{DirectionMap, MapKind};
 use crate::sg::Sg32;
+
+inlay_engine::gpu_struct! {
+    /// `FitPush` of `shaders/sgfit/fit.wgsl`.
+    pub struct FitPush = "sgfit/fit.wgsl" : "FitPush" {
+        /// Probe texels across.
+        pub width: u32,
+        /// Probe texels down.
+        pub height: u32,
+        /// Lobes M.
+        pub lobe_count: u32,
+        /// Jacobian and normal-matrix columns (6M + 1 rounded up to 16).
+        pub cols: u32,
+        /// Jacobian rows (3 × texels rounded up to 16).
+        pub rows: u32,
+        /// Which lobe slot a kernel works on (0: current, 1: candidate).
+        pub slot: u32,
+        /// Warm start (1) or cold (0).
+        pub warm: u32,
+        /// Cost-partial workgroups.
+        pub groups: u32,
+        /// Initial LM damping.
+        pub damping: f32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
+    }
+}
 
 /// The sg-fit pass: its name, Table 1 module and effect switch.
 pub const SG_FIT_INFO: PassInfo = PassInfo {
@@ -259,20 +289,21 @@ impl SgFitPass {
         Ok(())
     }
 
-    fn push(&self, slot: u32, warm: bool) -> Push {
-        Push::new()
-            .u32(self.map.width)
-            .u32(self.map.height)
-            .u32(self.knobs.lobes)
-            .u32(self.shape.cols)
-            .u32(self.shape.rows)
-            .u32(slot)
-            .u32(warm as u32)
-            .u32(self.shape.groups)
-            .f32(self.knobs.damping as f32)
-            .u32(0)
-            .u32(0)
-            .u32(0)
+    fn push(&self, slot: u32, warm: bool) -> FitPush {
+        FitPush {
+            width: self.map.width,
+            height: self.map.height,
+            lobe_count: self.knobs.lobes,
+            cols: self.shape.cols,
+            rows: self.shape.rows,
+            slot,
+            warm: warm as u32,
+            groups: self.shape.groups,
+            damping: self.knobs.damping as f32,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        }
     }
 
     /// Adds the `sg-fit` pass fitting the lobes to `probe` (an image laid
@@ -319,7 +350,7 @@ impl SgFitPass {
         let current = self.push(0, warm);
         let k = &self.kernels;
         let tiles = s.cols / 16;
-        let mut run = |p: &Arc<ComputePipeline>, push: &Push, groups: [u32; 3]| {
+        let mut run = |p: &Arc<ComputePipeline>, push: &FitPush, groups: [u32; 3]| {
             pass.dispatch(p).push(push).groups(groups)
         };
         run(&k.filter_probe, &candidate, [s.groups, 1, 1]);

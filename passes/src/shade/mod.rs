@@ -21,6 +21,36 @@ use crate::gbuffer::GBuffer;
 use crate::lighting::LightLobes;
 use crate::shadow::{shadow_defines, SsdfBindings};
 
+inlay_engine::gpu_struct! {
+    /// `ShadePush` of `shaders/shade/shade_body.wgsl`.
+    pub struct ShadePush = "shade/shade.wgsl" : "ShadePush" {
+        /// The eye.
+        pub origin: [f32; 3],
+        /// Image width.
+        pub width: u32,
+        /// Right (half-width at unit distance).
+        pub right: [f32; 3],
+        /// Image height.
+        pub height: u32,
+        /// Up (half-height at unit distance).
+        pub up: [f32; 3],
+        /// The object shaded by this dispatch (its G-buffer index).
+        pub object_index: f32,
+        /// Forward.
+        pub forward: [f32; 3],
+        /// Whether this dispatch clears the pixels no object covers.
+        pub write_empty: u32,
+        /// Lobes that light the object.
+        pub light_count: u32,
+        /// Direct lobes at the end of those.
+        pub direct_lobes: u32,
+        /// Rays per direct lobe.
+        pub direct_rays: u32,
+        /// Padding.
+        pub pad0: u32,
+    }
+}
+
 /// The object-shade pass: its name, Table 1 module and effect switch.
 pub const OBJECT_SHADE_INFO: PassInfo = PassInfo {
     name: "object-shade",
@@ -111,13 +141,21 @@ impl ShadePass {
         let mut out = out;
         let mut pass = graph.compute_pass(OBJECT_SHADE);
         for (i, l) in lobes.iter().enumerate() {
-            let push = camera
-                .push_prefix(i as f32)
-                .u32((i == 0) as u32)
-                .u32(l.count)
-                .u32(l.direct.map_or(0, |d| d.lobes))
-                .u32(l.direct.map_or(0, |d| d.rays_per_lobe))
-                .u32(0);
+            let c = camera.basis();
+            let push = ShadePush {
+                origin: c.origin,
+                width: c.width,
+                right: c.right,
+                height: c.height,
+                up: c.up,
+                object_index: i as f32,
+                forward: c.forward,
+                write_empty: (i == 0) as u32,
+                light_count: l.count,
+                direct_lobes: l.direct.map_or(0, |d| d.lobes),
+                direct_rays: l.direct.map_or(0, |d| d.rays_per_lobe),
+                pad0: 0,
+            };
             let shadow = self_shadow.get(i).copied().flatten();
             let pipeline = match (shadow, l.direct) {
                 (Some(_), Some(_)) => &self.self_shadowed_direct,

@@ -58,7 +58,7 @@ impl ObjectReflectance {
     /// Measures `mesh` by casting parallel rays across its bounding
     /// sphere's disc from 64 directions (`FILL_DIRECTIONS`).
     pub fn measure(mesh: &Arc<ObjectMesh>) -> Self {
-        let scene = super::object_scene(mesh);
+        let scene = crate::ssdf::object_scene(mesh);
         let (c, r) = mesh.bounding_sphere();
         let (mut disc, mut hits, mut albedo) = (0u64, 0u64, DVec3::ZERO);
         for k in 0..FILL_DIRECTIONS {
@@ -162,7 +162,7 @@ mod tests {
     /// override replaces it.
     #[test]
     fn a_sphere_fills_its_bounding_disc() {
-        let mesh = crate::shadow::tests::bundled_mesh("metal-sphere.gltf");
+        let mesh = crate::ssdf::tests::bundled_mesh("metal-sphere.gltf");
         let m = ObjectReflectance::measure(&mesh);
         // The tessellation's silhouette is inscribed in the circle.
         assert!((0.97..=1.0).contains(&m.fill), "fill {}", m.fill);

@@ -19,6 +19,36 @@ use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::MarchOutputs;
 
+inlay_engine::gpu_struct! {
+    /// `CastPush` of `shaders/shadow/cast_body.wgsl`.
+    pub struct CastPush = "shadow/cast.wgsl" : "CastPush" {
+        /// The eye.
+        pub origin: [f32; 3],
+        /// Image width.
+        pub width: u32,
+        /// Right (half-width at unit distance).
+        pub right: [f32; 3],
+        /// Image height.
+        pub height: u32,
+        /// Up (half-height at unit distance).
+        pub up: [f32; 3],
+        /// Step of the field's density-gradient normal (world units).
+        pub normal_step: f32,
+        /// Forward.
+        pub forward: [f32; 3],
+        /// Lobes that light the object.
+        pub light_count: u32,
+        /// Direct lobes at the end of those.
+        pub direct_lobes: u32,
+        /// Rays per direct lobe.
+        pub direct_rays: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+    }
+}
+
 /// The cast-shadow pass: its name, Table 1 module and effect switch.
 pub const CAST_SHADOW_INFO: PassInfo = PassInfo {
     name: "cast-shadow",
@@ -88,13 +118,21 @@ impl CastShadowPass {
         );
         let step = (field.bounds.size() / (field.resolution.as_dvec3() - 1.0)).min_element() as f32;
         let direct = lobes.direct;
-        let push = camera
-            .push_prefix(step)
-            .u32(lobes.count)
-            .u32(direct.map_or(0, |d| d.lobes))
-            .u32(direct.map_or(0, |d| d.rays_per_lobe))
-            .u32(0)
-            .u32(0);
+        let c = camera.basis();
+        let push = CastPush {
+            origin: c.origin,
+            width: c.width,
+            right: c.right,
+            height: c.height,
+            up: c.up,
+            normal_step: step,
+            forward: c.forward,
+            light_count: lobes.count,
+            direct_lobes: direct.map_or(0, |d| d.lobes),
+            direct_rays: direct.map_or(0, |d| d.rays_per_lobe),
+            pad0: 0,
+            pad1: 0,
+        };
         let pipeline = match (previous.is_some(), direct.is_some()) {
             (false, false) => &self.first,
             (true, false) => &self.chained,

@@ -11,7 +11,7 @@
 use glam::DVec3;
 
 use super::gpu::world_to_object;
-use crate::bake::MeshScene;
+use crate::geometry::MeshScene;
 use crate::geometry::Ray;
 use crate::object::PlacedObject;
 
@@ -21,7 +21,7 @@ use crate::object::PlacedObject;
 pub const DIRECT_RAY_OFFSET: f64 = 1e-3;
 
 /// What the direct lobes' shadows are cast from: the object's mesh in its
-/// own frame ([`super::object_scene`]) and each direct lobe's rays.
+/// own frame ([`crate::ssdf::object_scene`]) and each direct lobe's rays.
 #[derive(Clone, Copy)]
 pub struct DirectOcclusion<'a> {
     /// The object in its own frame.

@@ -1,6 +1,6 @@
 //! Shadow data on the GPU: an object's compressed SSDF field, the f_h
 //! table, the per-frame object block (`SsdfObject` in
-//! `shaders/shadow/ssdf.wgsl`) and the defines every shadow shader needs.
+//! `shaders/ssdf/ssdf.wgsl`) and the defines every shadow shader needs.
 
 use std::sync::Arc;
 
@@ -9,12 +9,31 @@ use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::Define;
 use inlay_engine::{vk, Buffer, Context};
 
-use super::bake::MAX_SSDF_COMPONENTS;
 use super::fh::{FhTable, FH_COLUMNS, FH_ROWS, FH_SHARPNESS_RANGE};
-use super::field::{OutsideMode, SsdfField};
+use super::ObjectReflectance;
 use crate::object::{ObjectMesh, PlacedObject};
+use crate::ssdf::bake::MAX_SSDF_COMPONENTS;
+use crate::ssdf::field::{OutsideMode, SsdfField};
 
-/// The defines of `shadow/fh.wgsl` and `shadow/ssdf.wgsl`.
+inlay_engine::gpu_struct! {
+    /// `SsdfObject` of `shaders/ssdf/ssdf.wgsl` (checked through the cast
+    /// shadow, which binds it): an object's SSDF as one
+    /// frame reads it.
+    pub struct SsdfObject = "shadow/cast.wgsl" : "SsdfObject" {
+        /// Rows of the affine world → object map.
+        pub to_object: [[f32; 4]; 3],
+        /// Grid centre (object space) and bounding-sphere radius.
+        pub grid: [f32; 4],
+        /// World-space bounding sphere (centre, radius).
+        pub world_sphere: [f32; 4],
+        /// Nodes per axis, direction map side, components, outside mode.
+        pub dims: [u32; 4],
+        /// Silhouette fill times albedo (rgb) and the fill alone (w).
+        pub reflectance: [f32; 4],
+    }
+}
+
+/// The defines of `shadow/fh.wgsl` and `ssdf/ssdf.wgsl`.
 pub fn shadow_defines() -> Vec<Define> {
     vec![
         Define::U32("FH_COLUMNS", FH_COLUMNS),
@@ -76,13 +95,13 @@ pub struct GpuSsdf {
 #[derive(Debug, Clone, Copy)]
 pub struct SsdfBindings {
     /// The per-frame `SsdfObject` block (read-only storage; see
-    /// shaders/shadow/ssdf.wgsl for why not uniform).
+    /// shaders/ssdf/ssdf.wgsl for why not uniform).
     pub object: BufferHandle,
     /// Per texel: mean and basis.
     pub rows: BufferHandle,
     /// Per node: coefficients.
     pub coefs: BufferHandle,
-    /// The mesh's hierarchy: nodes (`shaders/shadow/mesh_bvh.wgsl`).
+    /// The mesh's hierarchy: nodes (`shaders/geometry/mesh_bvh.wgsl`).
     pub bvh_nodes: BufferHandle,
     /// The mesh's hierarchy: triangles.
     pub bvh_triangles: BufferHandle,
@@ -97,7 +116,7 @@ impl GpuSsdf {
         field: Arc<SsdfField>,
         mesh: &Arc<ObjectMesh>,
     ) -> anyhow::Result<Self> {
-        let (nodes, triangles) = super::object_scene(mesh).packed();
+        let (nodes, triangles) = crate::ssdf::object_scene(mesh).packed();
         let limit = ctx.info().max_storage_buffer_range as u64;
         let bytes = triangles.len() as u64 * 4;
         anyhow::ensure!(
@@ -129,7 +148,8 @@ impl GpuSsdf {
         SsdfBindings {
             object: graph.upload_buffer(
                 "ssdf object",
-                object_block(&self.field, placed, mode, &self.reflectance),
+                bytemuck::bytes_of(&object_block(&self.field, placed, mode, &self.reflectance))
+                    .to_vec(),
             ),
             rows: graph.import_buffer(&self.rows, None),
             coefs: graph.import_buffer(&self.coefs, None),
@@ -145,29 +165,22 @@ pub fn world_to_object(placed: &PlacedObject) -> DMat4 {
 }
 
 /// The `SsdfObject` block: world → object rows, grid, world sphere, dims,
-/// the object's silhouette reflectance ([`super::ObjectReflectance::of`])
-/// and fill.
+/// the object's silhouette reflectance ([`ObjectReflectance::of`]) and
+/// fill.
 pub fn object_block(
     field: &SsdfField,
     placed: &PlacedObject,
     mode: OutsideMode,
-    object: &super::ObjectReflectance,
-) -> Vec<u8> {
+    object: &ObjectReflectance,
+) -> SsdfObject {
     let m = world_to_object(placed);
-    let mut f: Vec<f32> = Vec::with_capacity(20);
-    for r in 0..3 {
-        f.extend(m.row(r).to_array().map(|x| x as f32));
-    }
     let g = &field.grid;
-    f.extend([g.centre.x, g.centre.y, g.centre.z, g.radius].map(|x| x as f32));
     let (c, r) = placed.sphere();
-    f.extend([c.x, c.y, c.z, r].map(|x| x as f32));
-    let mut bytes: Vec<u8> = f.iter().flat_map(|v| v.to_le_bytes()).collect();
-    for u in [g.nodes, field.directions, field.components, mode.index()] {
-        bytes.extend(u.to_le_bytes());
+    SsdfObject {
+        to_object: std::array::from_fn(|i| m.row(i).as_vec4().to_array()),
+        grid: g.centre.extend(g.radius).as_vec4().to_array(),
+        world_sphere: c.extend(r).as_vec4().to_array(),
+        dims: [g.nodes, field.directions, field.components, mode.index()],
+        reflectance: object.of(placed).extend(object.fill).as_vec4().to_array(),
     }
-    for v in object.of(placed).extend(object.fill).to_array() {
-        bytes.extend((v as f32).to_le_bytes());
-    }
-    bytes
 }

@@ -28,10 +28,10 @@ use glam::DVec3;
 
 use super::direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 use super::fh::{hemisphere_integral, FhTable};
-use super::field::{OutsideMode, SsdfField};
 use super::gpu::world_to_object;
 use crate::object::PlacedObject;
 use crate::sg::Sg64;
+use crate::ssdf::field::{OutsideMode, SsdfField};
 
 /// S(d; x) for world-space `x` and unit `d` of the placed object.
 pub fn world_ssdf(
@@ -129,7 +129,7 @@ pub fn sphere_share(x: DVec3, p: &Sg64, c: DVec3, r: f64, fill: f64) -> f64 {
     }
     let sin2 = (r / dist).powi(2);
     let beta = (r / dist).asin();
-    let gamma = super::silhouette::angle_between(p.direction, to / dist);
+    let gamma = crate::ssdf::silhouette::angle_between(p.direction, to / dist);
     let peak = (p.sharpness * ((gamma - beta).max(0.0).cos() - 1.0)).exp();
     let solid = 4.0 * std::f64::consts::PI * (0.5 * beta).sin().powi(2);
     let covered = fill + (1.0 - fill) * sin2;
@@ -145,7 +145,7 @@ pub fn sphere_clear_of(x: DVec3, dir: DVec3, c: DVec3, r: f64) -> bool {
         return false;
     }
     let cone = (r / dist).asin();
-    super::silhouette::angle_between(dir, to / dist) - cone >= std::f64::consts::FRAC_PI_2
+    crate::ssdf::silhouette::angle_between(dir, to / dist) - cone >= std::f64::consts::FRAC_PI_2
 }
 
 /// ρ (per channel) at world point `x` with unit normal `n` under `lobes`,

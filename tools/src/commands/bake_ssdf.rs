@@ -7,7 +7,7 @@ use std::sync::Arc;
 use clap::Args;
 use inlay_engine::Context;
 use inlay_passes::object::load_gltf;
-use inlay_passes::shadow::{save_ssdf, SsdfKnobs};
+use inlay_passes::ssdf::{save_ssdf, SsdfKnobs};
 
 use crate::ssdf_source::bake_ssdf_with_progress;
 

@@ -9,7 +9,7 @@ use clap::Args;
 use inlay_engine::Context;
 use inlay_passes::envest::load_environment_file;
 use inlay_passes::scene::{load_scene, ObjectEnvironment};
-use inlay_passes::shadow::OutsideMode;
+use inlay_passes::ssdf::OutsideMode;
 
 use crate::headless::run_headless;
 use crate::scene_view::open_view;

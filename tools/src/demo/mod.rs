@@ -11,7 +11,27 @@ use inlay_engine::graph::{FrameGraph, ImageHandle, LoadOp, SamplerKind};
 use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, ComputePipeline, Context, GraphicsDesc, GraphicsPipeline, ImageDesc};
 
-use inlay_engine::Push;
+inlay_engine::gpu_struct! {
+    /// `Params` of `shaders/demo/sky.wgsl`.
+    pub struct SkyPush = "demo/sky.wgsl" : "Params" {
+        /// Image size.
+        pub size: [u32; 2],
+        /// Seconds.
+        pub time: f32,
+        /// Padding.
+        pub _pad: f32,
+    }
+}
+
+inlay_engine::gpu_struct! {
+    /// `Params` of `shaders/demo/quads.wgsl`.
+    pub struct QuadsPush = "demo/quads.wgsl" : "Params" {
+        /// Seconds.
+        pub time: f32,
+        /// Width over height.
+        pub aspect: f32,
+    }
+}
 
 /// Format of the demo's HDR colour target.
 pub const HDR_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -98,12 +118,19 @@ pub fn add_demo_passes(
     graph
         .compute("sky", &p.sky)
         .write("sky", &mut sky)
-        .push(&Push::new().u32(width).u32(height).f32(time).f32(0.0))
+        .push(&SkyPush {
+            size: [width, height],
+            time,
+            _pad: 0.0,
+        })
         .threads([width, height, 1]);
     graph
         .compute("quads", &p.quads)
         .write("vertices", &mut vertices)
-        .push(&Push::new().f32(time).f32(width as f32 / height as f32))
+        .push(&QuadsPush {
+            time,
+            aspect: width as f32 / height as f32,
+        })
         .groups([1, 1, 1]);
     let mut pass = graph.raster_pass("scene");
     pass.color(&mut hdr, LoadOp::DontCare)
@@ -120,7 +147,7 @@ pub fn add_demo_passes(
         .compute("heatmap", &p.heatmap)
         .read("sky", sky)
         .write("heat", &mut heatmap)
-        .push(&Push::new().u32(width).u32(height))
+        .push(&[width, height])
         .threads([width, height, 1]);
     DemoOutputs { hdr, heatmap }
 }

@@ -4,8 +4,8 @@
 //! stands when dragged onto such a point.
 
 use glam::DVec3;
-use inlay_passes::bake::MeshScene;
 use inlay_passes::field::GridField;
+use inlay_passes::geometry::MeshScene;
 use inlay_passes::geometry::Ray;
 use inlay_passes::march::{march_ray, MarchKnobs};
 use inlay_passes::object::PlacedObject;

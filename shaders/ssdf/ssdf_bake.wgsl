@@ -1,6 +1,6 @@
 // The SSDF bake (METHOD.md "SSDF field"): S(d; x) at every direction texel
 // of an octahedral map for a batch of grid nodes, mirroring
-// passes/src/shadow/silhouette.rs. One workgroup per (node, 64 directions):
+// passes/src/ssdf/silhouette.rs. One workgroup per (node, 64 directions):
 // the workgroup walks the edges 64 at a time, keeps the silhouette ones
 // seen from the node (cut into ARC_PIECES pieces, each marked outer when a
 // ray just outside its middle misses) in shared memory, and every thread
@@ -8,7 +8,7 @@
 // ray misses, outer arcs where it hits.
 // Needs: u32 define ARC_PIECES, f32 define OUTSIDE_OFFSET, bool OCTAHEDRAL.
 #include "common/direction_map.wgsl"
-#include "shadow/angles.wgsl"
+#include "ssdf/angles.wgsl"
 
 struct BakePush {
     node_offset: u32,
@@ -28,7 +28,7 @@ var<immediate> pc: BakePush;
 // S per (node of the batch, direction texel), row-major by node.
 @group(0) @binding(4) var<storage, read_write> out_ssdf: array<f32>;
 
-#include "shadow/mesh_bvh.wgsl"
+#include "geometry/mesh_bvh.wgsl"
 
 const GROUP: u32 = 64u;
 

@@ -1,5 +1,5 @@
 // Any-hit ray casts against a triangle mesh in a bounding-volume hierarchy,
-// the f32 mirror of MeshScene::occluded (passes/src/bake/mesh_bvh.rs), in
+// the f32 mirror of MeshScene::occluded (passes/src/geometry/mesh_bvh.rs), in
 // the layout of MeshScene::packed: nodes as two vec4s (min, first as bits),
 // (max, count as bits), count 0 for inner nodes whose children are first
 // and first + 1; triangles as three vec4s (corners).

@@ -1,6 +1,10 @@
 //! Rays and axis-aligned boxes: the geometry every pass shares. Mirrored in
 //! `shaders/common/ray_box.wgsl`.
 
+mod mesh_bvh;
+
+pub use mesh_bvh::{MeshHit, MeshScene, MeshSurface};
+
 use glam::DVec3;
 use serde::Deserialize;
 

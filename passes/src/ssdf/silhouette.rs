@@ -2,7 +2,7 @@
 //! "SSDF field"): the angle from direction d to the object's silhouette as
 //! seen from x, positive where the ray from x along d misses the object,
 //! negative where it hits. The f64 CPU reference of the bake kernel
-//! (`shaders/shadow/ssdf_bake.wgsl`), which computes it the same way:
+//! (`shaders/ssdf/ssdf_bake.wgsl`), which computes it the same way:
 //!
 //! - the sign is a ray cast (through the bounding-volume hierarchy);
 //! - the angle is the smallest angle from d to the great-circle arcs of the
@@ -188,7 +188,7 @@ pub fn angle_between(u: DVec3, v: DVec3) -> f64 {
 /// The smallest angle from unit `d` to the shorter great-circle arc from
 /// unit `a` to unit `b`: to the great circle where d's projection falls
 /// within the arc, else to the nearer end. Mirrored by `ssdf_angle_to_arc`
-/// in `shaders/shadow/ssdf_bake.wgsl`.
+/// in `shaders/ssdf/ssdf_bake.wgsl`.
 pub fn angle_to_arc(d: DVec3, a: DVec3, b: DVec3) -> f64 {
     let ends = angle_between(d, a).min(angle_between(d, b));
     let n = a.cross(b);

@@ -1,6 +1,6 @@
 //! Baking an object's SSDF field (METHOD.md "SSDF field"): S(d; x) at every
 //! direction texel of an octahedral map, at every node of the grid, on the
-//! GPU (`shaders/shadow/ssdf_bake.wgsl`, batches of nodes per submission so
+//! GPU (`shaders/ssdf/ssdf_bake.wgsl`, batches of nodes per submission so
 //! progress can be shown), with [`bake_reference`] its f64 CPU mirror.
 //!
 //! **Nodes inside the object** see it in every direction (S = −π
@@ -16,14 +16,27 @@ use std::time::Instant;
 use glam::DVec3;
 use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::Push;
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
 use super::grid::SsdfGrid;
 use super::silhouette::{SilhouetteMesh, ARC_PIECES, OUTSIDE_OFFSET};
-use crate::bake::MeshScene;
+use crate::geometry::MeshScene;
 use crate::object::{ObjectMesh, PlacedObject, Pose};
 use crate::probe::{DirectionMap, MapKind};
+
+inlay_engine::gpu_struct! {
+    /// `BakePush` of `shaders/ssdf/ssdf_bake.wgsl`.
+    pub struct BakePush = "ssdf/ssdf_bake.wgsl" : "BakePush" {
+        /// The batch's first node.
+        pub node_offset: u32,
+        /// Direction map side.
+        pub map_size: u32,
+        /// Silhouette edges.
+        pub edge_count: u32,
+        /// Nodes in the batch.
+        pub node_count: u32,
+    }
+}
 
 /// The knobs of an SSDF bake.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -178,7 +191,7 @@ impl SsdfBaker {
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
         let pipeline = lib.compute_pipeline(
             ctx,
-            "shadow/ssdf_bake.wgsl",
+            "ssdf/ssdf_bake.wgsl",
             "main",
             &[
                 Define::U32("ARC_PIECES", ARC_PIECES),
@@ -270,11 +283,12 @@ impl SsdfBaker {
             let target = graph.create_buffer("ssdf batch", size);
             let bound = [&points_buf, &edges_buf, &nodes_buf, &tris_buf]
                 .map(|b| graph.import_buffer(b, None));
-            let push = Push::new()
-                .u32(start as u32)
-                .u32(directions)
-                .u32(edge_count)
-                .u32(count as u32);
+            let push = BakePush {
+                node_offset: start as u32,
+                map_size: directions,
+                edge_count,
+                node_count: count as u32,
+            };
             let mut written = target;
             graph
                 .compute("ssdf-bake", &self.pipeline)

@@ -1,5 +1,5 @@
 // S(d; x) from an object's compressed SSDF field, mirroring SsdfField::sample
-// (passes/src/shadow/field.rs): per pixel, ssdf_prepare(x) blends the
+// (passes/src/ssdf/field.rs): per pixel, ssdf_prepare(x) blends the
 // coefficients of the 8 nodes around x (inside the grid) or takes the
 // nearest node's (outside); then ssdf_value(d) reads the direction map
 // bilinearly and, outside, applies the mode: 0 clamp, 1 infinity (π),
@@ -11,7 +11,7 @@
 // at every bind when branches and loop bounds depend on uniform values
 // alone and inlining them halves the shader — this one did, ~1.2 MB and a
 // JIT compile per frame.
-#include "shadow/angles.wgsl"
+#include "ssdf/angles.wgsl"
 #include "common/octahedral_wrap.wgsl"
 
 struct SsdfObject {

@@ -1,5 +1,5 @@
 // Angles between unit vectors for the SSDF shaders, mirroring
-// passes/src/shadow/silhouette.rs (angle_between, angle_to_arc).
+// passes/src/ssdf/silhouette.rs (angle_between, angle_to_arc).
 
 const SSDF_PI: f32 = 3.14159265358979;
 

@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
-use crate::bake::MeshScene;
+use crate::geometry::MeshScene;
 use crate::geometry::Ray;
 
 /// Whether the ray from `x` along `d` hits the scene.

@@ -1,7 +1,7 @@
 //! An object's SSDF field (METHOD.md "SSDF field"): the PCA-compressed S
 //! at the nodes of its grid, and S(d; x) anywhere — trilinear inside the
 //! grid, and outside it one of three [`OutsideMode`]s (the paper's Fig. 7).
-//! [`SsdfField::sample`] is the CPU mirror of `shaders/shadow/ssdf.wgsl`.
+//! [`SsdfField::sample`] is the CPU mirror of `shaders/ssdf/ssdf.wgsl`.
 //!
 //! Layout (also the GPU's): per direction texel a row of 1 + k values (the
 //! mean, then the k basis values), and per node k coefficients, so

@@ -235,7 +235,7 @@ impl MeshScene {
         self.traverse(ray, t_min, t_max, true).is_some()
     }
 
-    /// The hierarchy in f32 for `shaders/shadow/mesh_bvh.wgsl`: nodes as
+    /// The hierarchy in f32 for `shaders/geometry/mesh_bvh.wgsl`: nodes as
     /// two vec4s (min, first as bits), (max, count as bits), boxes widened
     /// by 10⁻⁶ of their size so f32 rounding loses no hit; triangles as
     /// three vec4s (corners, w unused).
