@@ -150,34 +150,42 @@ impl CameraFrame {
 
     /// The camera as the march, shading and cast-shadow push blocks hold
     /// it (f32, with the image size).
-    pub fn basis(&self) -> CameraBasis {
-        CameraBasis {
+    pub fn rays(&self) -> CameraRays {
+        CameraRays {
             origin: self.origin.as_vec3().to_array(),
-            right: self.right.as_vec3().to_array(),
-            up: self.up.as_vec3().to_array(),
-            forward: self.forward.as_vec3().to_array(),
             width: self.width,
+            right: self.right.as_vec3().to_array(),
             height: self.height,
+            up: self.up.as_vec3().to_array(),
+            _pad0: 0,
+            forward: self.forward.as_vec3().to_array(),
+            _pad1: 0,
         }
     }
 }
 
-/// A camera frame in f32, as the shaders' push blocks (`MarchPush`,
-/// `ShadePush`, `CastPush`) take it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CameraBasis {
-    /// The eye.
-    pub origin: [f32; 3],
-    /// Right, scaled to the half-width at unit distance.
-    pub right: [f32; 3],
-    /// Up, scaled to the half-height at unit distance.
-    pub up: [f32; 3],
-    /// Forward (unit).
-    pub forward: [f32; 3],
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
+inlay_engine::gpu_struct! {
+    /// A camera frame in f32 as the per-pixel passes' push blocks
+    /// (`MarchPush`, `ShadePush`, `CastPush`) carry it: `CameraRays` of
+    /// `shaders/common/camera.wgsl`.
+    pub struct CameraRays = "common/camera.wgsl" : "CameraRays" {
+        /// The eye.
+        pub origin: [f32; 3],
+        /// Image width.
+        pub width: u32,
+        /// Right, scaled to the half-width at unit distance.
+        pub right: [f32; 3],
+        /// Image height.
+        pub height: u32,
+        /// Up, scaled to the half-height at unit distance.
+        pub up: [f32; 3],
+        /// Padding (WGSL aligns the next vec3 to 16 bytes).
+        pub _pad0: u32,
+        /// Forward (unit).
+        pub forward: [f32; 3],
+        /// Padding (the struct's size rounds up to 16 bytes).
+        pub _pad1: u32,
+    }
 }
 
 #[cfg(test)]

@@ -8,13 +8,8 @@
 #include "march/volume_march.wgsl"
 
 struct MarchPush {
-    origin: vec3<f32>,
-    width: u32,
-    right: vec3<f32>,
-    height: u32,
-    up: vec3<f32>,
+    camera: CameraRays,
     step: f32,
-    forward: vec3<f32>,
     termination: f32,
 }
 
@@ -28,16 +23,15 @@ var<immediate> pc: MarchPush;
 const NO_OBJECT: f32 = 3.0e38;
 
 fn march_pixel(pixel: vec2<u32>, t_object: f32) {
-    let size = vec2<f32>(f32(pc.width), f32(pc.height));
-    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(pixel) + vec2<f32>(0.5));
-    let r = march_ray(pc.origin, dir, t_object, pc.step, pc.termination);
+    let dir = camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5));
+    let r = march_ray(pc.camera.origin, dir, t_object, pc.step, pc.termination);
     textureStore(out_colour, pixel, vec4<f32>(r.colour, r.opacity));
     textureStore(out_depth, pixel, vec4<f32>(r.depth, 0.0, 0.0, 0.0));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_unclipped(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if camera_outside(pc.camera, id.xy) {
         return;
     }
     march_pixel(id.xy, NO_OBJECT);
@@ -45,7 +39,7 @@ fn main_unclipped(@builtin(global_invocation_id) id: vec3<u32>) {
 
 @compute @workgroup_size(8, 8, 1)
 fn main_clipped(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if camera_outside(pc.camera, id.xy) {
         return;
     }
     march_pixel(id.xy, textureLoad(object_depth, id.xy, 0).r);

@@ -10,13 +10,9 @@
 #include "brdf/sg_shading.wgsl"
 
 struct ShadePush {
-    origin: vec3<f32>,
-    width: u32,
-    right: vec3<f32>,
-    height: u32,
-    up: vec3<f32>,
+    camera: CameraRays,
+    // The object's index as the G-buffer's distance_id holds it.
     object_index: f32,
-    forward: vec3<f32>,
     write_empty: u32,
     // Lobes of `light_lobes` that light the object (from its start).
     light_count: u32,
@@ -24,7 +20,6 @@ struct ShadePush {
     // fit), and rays per lobe (read by shade_self_shadow_direct.wgsl).
     direct_lobes: u32,
     direct_rays: u32,
-    pad0: u32,
 }
 
 var<immediate> pc: ShadePush;
@@ -56,7 +51,7 @@ fn shading_ndf(j: u32) -> vec2<f32> {
 }
 
 fn shade_pixel(id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if camera_outside(pc.camera, id.xy) {
         return;
     }
     let pixel = vec2<i32>(id.xy);
@@ -70,10 +65,9 @@ fn shade_pixel(id: vec3<u32>) {
     }
     let nr = textureLoad(normal_roughness, pixel, 0);
     let am = textureLoad(albedo_metallic, pixel, 0);
-    let size = vec2<f32>(f32(pc.width), f32(pc.height));
-    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(id.xy) + vec2<f32>(0.5));
+    let dir = camera_ray_dir(pc.camera, vec2<f32>(id.xy) + vec2<f32>(0.5));
     let n = normalize(nr.xyz);
-    shading_prepare(pc.origin + dir * hit.r, n);
+    shading_prepare(pc.camera.origin + dir * hit.r, n);
     let radiance = shade_sg(n, -dir, am.rgb, nr.w, am.a);
     textureStore(out_object, pixel, vec4<f32>(max(radiance, vec3<f32>(0.0)), 1.0));
 }

@@ -22,20 +22,14 @@
 #include "common/sg.wgsl"
 
 struct CastPush {
-    origin: vec3<f32>,
-    width: u32,
-    right: vec3<f32>,
-    height: u32,
-    up: vec3<f32>,
+    camera: CameraRays,
+    // The step of the central differences that take the field's normal.
     normal_step: f32,
-    forward: vec3<f32>,
     // Lobes of `light_lobes` that light the object (from its start).
     light_count: u32,
     // How many of them, at the end, are direct lobes, and rays per lobe.
     direct_lobes: u32,
     direct_rays: u32,
-    pad0: u32,
-    pad1: u32,
 }
 
 var<immediate> pc: CastPush;
@@ -140,9 +134,8 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
     if opacity <= 1e-4 {
         return vec3<f32>(1.0);
     }
-    let size = vec2<f32>(f32(pc.width), f32(pc.height));
-    let dir = camera_ray_dir(pc.right, pc.up, pc.forward, size, vec2<f32>(pixel) + vec2<f32>(0.5));
-    let x = pc.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
+    let dir = camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5));
+    let x = pc.camera.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
     let h = pc.normal_step;
     let g = vec3<f32>(
         density(x + vec3<f32>(h, 0.0, 0.0)) - density(x - vec3<f32>(h, 0.0, 0.0)),
@@ -157,7 +150,7 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
 
 // The including shader's `main` calls this: ρ alone.
 fn cast_main(id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if camera_outside(pc.camera, id.xy) {
         return;
     }
     let pixel = vec2<i32>(id.xy);
@@ -167,7 +160,7 @@ fn cast_main(id: vec3<u32>) {
 // The including shader's `main_chained` calls this: ρ times the previous
 // object's.
 fn cast_main_chained(id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if camera_outside(pc.camera, id.xy) {
         return;
     }
     let pixel = vec2<i32>(id.xy);

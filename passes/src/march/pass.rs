@@ -8,28 +8,20 @@ use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::knobs::MarchKnobs;
-use crate::camera::CameraFrame;
+use crate::camera::{CameraFrame, CameraRays};
 use crate::field::GpuGridField;
 
 inlay_engine::gpu_struct! {
     /// `MarchPush` of `shaders/march/march.wgsl`.
     pub struct MarchPush = "march/march.wgsl" : "MarchPush" {
-        /// The eye.
-        pub origin: [f32; 3],
-        /// Image width.
-        pub width: u32,
-        /// Right (half-width at unit distance).
-        pub right: [f32; 3],
-        /// Image height.
-        pub height: u32,
-        /// Up (half-height at unit distance).
-        pub up: [f32; 3],
+        /// The camera.
+        pub camera: CameraRays,
         /// March step (world units).
         pub step: f32,
-        /// Forward.
-        pub forward: [f32; 3],
         /// Early-termination transmittance.
         pub termination: f32,
+        /// Padding (the struct's size rounds up to 16 bytes).
+        pub _pad: [u32; 2],
     }
 }
 
@@ -124,16 +116,11 @@ impl MarchPass {
         );
         let step = self.knobs.step(field.diagonal) as f32;
         let termination = self.knobs.termination as f32;
-        let c = camera.basis();
         let push = MarchPush {
-            origin: c.origin,
-            width: c.width,
-            right: c.right,
-            height: c.height,
-            up: c.up,
+            camera: camera.rays(),
             step,
-            forward: c.forward,
             termination,
+            _pad: [0; 2],
         };
         let pipeline = match object_depth {
             Some(_) => &self.clipped,

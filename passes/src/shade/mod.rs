@@ -16,7 +16,7 @@ use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
 use crate::brdf::NdfLobes;
-use crate::camera::CameraFrame;
+use crate::camera::{CameraFrame, CameraRays};
 use crate::gbuffer::GBuffer;
 use crate::lighting::LightLobes;
 use crate::shadow::{shadow_defines, SsdfBindings};
@@ -24,20 +24,10 @@ use crate::shadow::{shadow_defines, SsdfBindings};
 inlay_engine::gpu_struct! {
     /// `ShadePush` of `shaders/shade/shade_body.wgsl`.
     pub struct ShadePush = "shade/shade.wgsl" : "ShadePush" {
-        /// The eye.
-        pub origin: [f32; 3],
-        /// Image width.
-        pub width: u32,
-        /// Right (half-width at unit distance).
-        pub right: [f32; 3],
-        /// Image height.
-        pub height: u32,
-        /// Up (half-height at unit distance).
-        pub up: [f32; 3],
+        /// The camera.
+        pub camera: CameraRays,
         /// The object shaded by this dispatch (its G-buffer index).
         pub object_index: f32,
-        /// Forward.
-        pub forward: [f32; 3],
         /// Whether this dispatch clears the pixels no object covers.
         pub write_empty: u32,
         /// Lobes that light the object.
@@ -46,8 +36,8 @@ inlay_engine::gpu_struct! {
         pub direct_lobes: u32,
         /// Rays per direct lobe.
         pub direct_rays: u32,
-        /// Padding.
-        pub pad0: u32,
+        /// Padding (the struct's size rounds up to 16 bytes).
+        pub _pad: [u32; 3],
     }
 }
 
@@ -141,20 +131,14 @@ impl ShadePass {
         let mut out = out;
         let mut pass = graph.compute_pass(OBJECT_SHADE);
         for (i, l) in lobes.iter().enumerate() {
-            let c = camera.basis();
             let push = ShadePush {
-                origin: c.origin,
-                width: c.width,
-                right: c.right,
-                height: c.height,
-                up: c.up,
+                camera: camera.rays(),
                 object_index: i as f32,
-                forward: c.forward,
                 write_empty: (i == 0) as u32,
                 light_count: l.count,
                 direct_lobes: l.direct.map_or(0, |d| d.lobes),
                 direct_rays: l.direct.map_or(0, |d| d.rays_per_lobe),
-                pad0: 0,
+                _pad: [0; 3],
             };
             let shadow = self_shadow.get(i).copied().flatten();
             let pipeline = match (shadow, l.direct) {

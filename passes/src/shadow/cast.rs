@@ -14,7 +14,7 @@ use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::gpu::{shadow_defines, SsdfBindings};
-use crate::camera::CameraFrame;
+use crate::camera::{CameraFrame, CameraRays};
 use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::MarchOutputs;
@@ -22,30 +22,16 @@ use crate::march::MarchOutputs;
 inlay_engine::gpu_struct! {
     /// `CastPush` of `shaders/shadow/cast_body.wgsl`.
     pub struct CastPush = "shadow/cast.wgsl" : "CastPush" {
-        /// The eye.
-        pub origin: [f32; 3],
-        /// Image width.
-        pub width: u32,
-        /// Right (half-width at unit distance).
-        pub right: [f32; 3],
-        /// Image height.
-        pub height: u32,
-        /// Up (half-height at unit distance).
-        pub up: [f32; 3],
+        /// The camera.
+        pub camera: CameraRays,
         /// Step of the field's density-gradient normal (world units).
         pub normal_step: f32,
-        /// Forward.
-        pub forward: [f32; 3],
         /// Lobes that light the object.
         pub light_count: u32,
         /// Direct lobes at the end of those.
         pub direct_lobes: u32,
         /// Rays per direct lobe.
         pub direct_rays: u32,
-        /// Padding.
-        pub pad0: u32,
-        /// Padding.
-        pub pad1: u32,
     }
 }
 
@@ -118,20 +104,12 @@ impl CastShadowPass {
         );
         let step = (field.bounds.size() / (field.resolution.as_dvec3() - 1.0)).min_element() as f32;
         let direct = lobes.direct;
-        let c = camera.basis();
         let push = CastPush {
-            origin: c.origin,
-            width: c.width,
-            right: c.right,
-            height: c.height,
-            up: c.up,
+            camera: camera.rays(),
             normal_step: step,
-            forward: c.forward,
             light_count: lobes.count,
             direct_lobes: direct.map_or(0, |d| d.lobes),
             direct_rays: direct.map_or(0, |d| d.rays_per_lobe),
-            pad0: 0,
-            pad1: 0,
         };
         let pipeline = match (previous.is_some(), direct.is_some()) {
             (false, false) => &self.first,
