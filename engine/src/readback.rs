@@ -156,6 +156,22 @@ impl BufferReadback {
         p.exec(move |ctx| ctx.copy_buffer(source, buffer));
     }
 
+    /// The buffer's first `size_of::<T>()` bytes as a `T` (a
+    /// [`gpu_struct!`](crate::gpu_struct) mirror, say). Call after the
+    /// frame that filled it has finished.
+    pub fn read_pod<T: bytemuck::Pod>(&self) -> Result<T> {
+        let bytes = self.buffer.mapped().ok_or_else(|| EngineError::Pass {
+            pass: "readback".into(),
+            message: "readback buffer is not host-visible".into(),
+        })?;
+        let size = std::mem::size_of::<T>();
+        let bytes = bytes.get(..size).ok_or_else(|| EngineError::Pass {
+            pass: "readback".into(),
+            message: format!("{} bytes read back, {size} wanted", bytes.len()),
+        })?;
+        Ok(bytemuck::pod_read_unaligned(bytes))
+    }
+
     /// The buffer's content as little-endian f32s. Call after the frame
     /// that filled it has finished.
     pub fn read_f32(&self) -> Result<Vec<f32>> {

@@ -36,6 +36,7 @@ pub fn gpu_layout_errors(lib: &ShaderLibrary, defines: &[Define]) -> Vec<String>
         check::<crate::envest::near_field::NearFieldPush>(lib, defines),
         check::<crate::edge_aa::EdgeAaPush>(lib, defines),
         check::<crate::sgfit::pass::FitPush>(lib, defines),
+        check::<crate::sgfit::pass::FitState>(lib, defines),
         check::<crate::camera::CameraRays>(lib, defines),
         check::<crate::march::pass::MarchPush>(lib, defines),
         check::<crate::shade::ShadePush>(lib, defines),

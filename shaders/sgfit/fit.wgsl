@@ -40,7 +40,7 @@ var<immediate> pc: FitPush;
 
 @group(0) @binding(0) var probe: texture_2d<f32>;
 @group(0) @binding(1) var<storage, read_write> lobes: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> state: array<f32>;
+@group(0) @binding(2) var<storage, read_write> state: FitState;
 @group(0) @binding(3) var<storage, read_write> partials: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> jac: array<f32>;
 @group(0) @binding(5) var<storage, read_write> normal: array<f32>;
@@ -51,19 +51,26 @@ var<immediate> pc: FitPush;
 @group(0) @binding(8) var<storage, read> filter_offsets: array<u32>;
 @group(0) @binding(9) var<storage, read> filter_entries: array<vec2<u32>>;
 
-// `state` layout (mirrored by passes/src/sgfit/pass.rs).
-const S_COST: u32 = 0u;
-const S_DAMPING: u32 = 1u;
-const S_NORMAL_VALID: u32 = 2u;
-const S_ENERGY: u32 = 3u;
-const S_INVALID: u32 = 4u;
-const S_STARTED_COLD: u32 = 5u;
-const S_ITERATIONS: u32 = 6u;
-const S_ACCEPTED: u32 = 7u;
-const S_COLD_COST: u32 = 8u;
-const S_WARM_COST: u32 = 9u;
-const S_CANDIDATE_OK: u32 = 10u;
-const S_LOG: u32 = 16u;
+// The fit's scalars and its cost log, kept across frames for the warm
+// start and read back by the host (`FitState` in passes/src/sgfit/pass.rs,
+// checked against this layout).
+struct FitState {
+    cost: f32,
+    damping: f32,
+    // Whether the normal equations of the current lobes are still valid
+    // (the last candidate was rejected), as 0 or 1.
+    normal_valid: f32,
+    energy: f32,
+    invalid: f32,
+    started_cold: f32,
+    iterations: f32,
+    accepted: f32,
+    cold_cost: f32,
+    warm_cost: f32,
+    candidate_ok: f32,
+    // The cost at the start and after each iteration: MAX_ITERATIONS + 1.
+    log: array<f32, 257>,
+}
 
 const DAMPING_DOWN: f32 = 0.333333333;
 const DAMPING_UP: f32 = 4.0;
@@ -363,18 +370,18 @@ fn select_start() {
         copy_candidate_to_current();
     }
     let c = select(cold.x, warm_cost, use_warm);
-    state[S_COST] = c;
-    state[S_DAMPING] = pc.damping;
-    state[S_NORMAL_VALID] = 0.0;
-    state[S_ENERGY] = cold.y;
-    state[S_INVALID] = cold.z;
-    state[S_STARTED_COLD] = select(1.0, 0.0, use_warm);
-    state[S_ITERATIONS] = 0.0;
-    state[S_ACCEPTED] = 0.0;
-    state[S_COLD_COST] = cold.x;
-    state[S_WARM_COST] = warm_cost;
-    state[S_CANDIDATE_OK] = 0.0;
-    state[S_LOG] = c;
+    state.cost = c;
+    state.damping = pc.damping;
+    state.normal_valid = 0.0;
+    state.energy = cold.y;
+    state.invalid = cold.z;
+    state.started_cold = select(1.0, 0.0, use_warm);
+    state.iterations = 0.0;
+    state.accepted = 0.0;
+    state.cold_cost = cold.x;
+    state.warm_cost = warm_cost;
+    state.candidate_ok = 0.0;
+    state.log[0] = c;
 }
 
 // ---- one iteration --------------------------------------------------------
@@ -384,7 +391,7 @@ fn select_start() {
 @compute @workgroup_size(64, 1, 1)
 fn jacobian(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = id.x;
-    if t >= texel_count() || state[S_NORMAL_VALID] != 0.0 {
+    if t >= texel_count() || state.normal_valid != 0.0 {
         return;
     }
     let m = pc.lobe_count;
@@ -436,7 +443,7 @@ var<workgroup> wg_flag: u32;
 @compute @workgroup_size(16, 16, 1)
 fn normal_tile(@builtin(local_invocation_id) l: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
     if l.x == 0u && l.y == 0u {
-        wg_flag = u32(state[S_NORMAL_VALID] != 0.0);
+        wg_flag = u32(state.normal_valid != 0.0);
     }
     let skip = workgroupUniformLoad(&wg_flag);
     if skip != 0u || wg.y > wg.x {
@@ -495,7 +502,7 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
         workgroupBarrier();
     }
     let diag_floor = max(RELATIVE_DIAGONAL_FLOOR * red_max[0], ABSOLUTE_DIAGONAL_FLOOR);
-    let eta = state[S_DAMPING];
+    let eta = state.damping;
     for (var i = lid; i < n; i += 256u) {
         let d = sqrt(max(normal[i * cols + i], diag_floor));
         work[d_at + i] = d;
@@ -541,7 +548,7 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
     }
     if workgroupUniformLoad(&wg_fail) != 0u {
         if lid == 0u {
-            state[S_CANDIDATE_OK] = 0.0;
+            state.candidate_ok = 0.0;
         }
         return;
     }
@@ -590,7 +597,7 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
         }
     }
     if lid == 0u {
-        state[S_CANDIDATE_OK] = select(1.0, 0.0, failed != 0u);
+        state.candidate_ok = select(1.0, 0.0, failed != 0u);
     }
 }
 
@@ -599,19 +606,19 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
 @compute @workgroup_size(1, 1, 1)
 fn decide() {
     let c = sum_partials(1u).x;
-    let current = state[S_COST];
-    let eta = state[S_DAMPING];
-    if state[S_CANDIDATE_OK] != 0.0 && fit_finite(c) && c < current {
+    let current = state.cost;
+    let eta = state.damping;
+    if state.candidate_ok != 0.0 && fit_finite(c) && c < current {
         copy_candidate_to_current();
-        state[S_COST] = c;
-        state[S_DAMPING] = max(eta * DAMPING_DOWN, DAMPING_LIMIT);
-        state[S_NORMAL_VALID] = 0.0;
-        state[S_ACCEPTED] += 1.0;
+        state.cost = c;
+        state.damping = max(eta * DAMPING_DOWN, DAMPING_LIMIT);
+        state.normal_valid = 0.0;
+        state.accepted += 1.0;
     } else {
-        state[S_DAMPING] = min(eta * DAMPING_UP, 1.0 / DAMPING_LIMIT);
-        state[S_NORMAL_VALID] = 1.0;
+        state.damping = min(eta * DAMPING_UP, 1.0 / DAMPING_LIMIT);
+        state.normal_valid = 1.0;
     }
-    let it = u32(state[S_ITERATIONS]) + 1u;
-    state[S_ITERATIONS] = f32(it);
-    state[S_LOG + it] = state[S_COST];
+    let it = u32(state.iterations) + 1u;
+    state.iterations = f32(it);
+    state.log[it] = state.cost;
 }

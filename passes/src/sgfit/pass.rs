@@ -66,18 +66,39 @@ pub enum FitStart {
     Warm,
 }
 
-/// Indices into the fit's state buffer (mirrors the `S_*` constants of
-/// `shaders/sgfit/fit.wgsl`).
-mod slot {
-    pub const DAMPING: usize = 1;
-    pub const ENERGY: usize = 3;
-    pub const INVALID: usize = 4;
-    pub const STARTED_COLD: usize = 5;
-    pub const ITERATIONS: usize = 6;
-    pub const ACCEPTED: usize = 7;
-    pub const LOG: usize = 16;
+/// Entries of the fit's cost log: the start and every iteration.
+const LOG_LENGTH: usize = MAX_ITERATIONS as usize + 1;
+
+inlay_engine::gpu_struct! {
+    /// The fit's state buffer, `FitState` of `shaders/sgfit/fit.wgsl`: its
+    /// scalars (kept across frames for the warm start) and its cost log.
+    pub struct FitState = "sgfit/fit.wgsl" : "FitState" {
+        /// The current lobes' cost.
+        pub cost: f32,
+        /// The Levenberg–Marquardt damping.
+        pub damping: f32,
+        /// Whether the current lobes' normal equations are still valid (0/1).
+        pub normal_valid: f32,
+        /// The probe's energy.
+        pub energy: f32,
+        /// Texels with a non-finite value, left out of the fit.
+        pub invalid: f32,
+        /// Whether the fit started from the cold start (0/1).
+        pub started_cold: f32,
+        /// Iterations run.
+        pub iterations: f32,
+        /// Candidates accepted.
+        pub accepted: f32,
+        /// The cold start's cost.
+        pub cold_cost: f32,
+        /// The warm start's cost (−1 when cold).
+        pub warm_cost: f32,
+        /// Whether the last candidate solved (0/1).
+        pub candidate_ok: f32,
+        /// The cost at the start and after each iteration.
+        pub log: [f32; LOG_LENGTH],
+    }
 }
-const STATE_FLOATS: usize = slot::LOG + MAX_ITERATIONS as usize + 1;
 
 /// What the last GPU fit reported (read back after its frame).
 #[derive(Debug, Clone)]
@@ -243,9 +264,13 @@ impl SgFitPass {
         let read_only = vk::BufferUsageFlags::STORAGE_BUFFER;
         let filter_offsets = Buffer::with_data(ctx, "sg-fit-filter-offsets", &offsets, read_only)?;
         let filter_entries = Buffer::with_data(ctx, "sg-fit-filter-entries", &entries, read_only)?;
-        let state_bytes = (STATE_FLOATS * 4) as u64;
-        let state =
-            Buffer::with_data(ctx, "sg-fit-state", &vec![0u8; state_bytes as usize], usage)?;
+        let state_bytes = std::mem::size_of::<FitState>() as u64;
+        let state = Buffer::with_data(
+            ctx,
+            "sg-fit-state",
+            bytemuck::bytes_of(&<FitState as bytemuck::Zeroable>::zeroed()),
+            usage,
+        )?;
         Ok(Self {
             kernels,
             knobs,
@@ -387,21 +412,18 @@ impl SgFitPass {
     /// The report of the fit whose frame carried [`Self::add_readback`].
     pub fn read_report(&self) -> anyhow::Result<FitReport> {
         let l = self.lobes_readback.read_f32()?;
-        let st = self.state_readback.read_f32()?;
+        let st: FitState = self.state_readback.read_pod()?;
         let m = self.knobs.lobes as usize;
         let lobes = (0..m).map(|k| Sg32::unpack(&l[8 * k..8 * k + 8])).collect();
-        let iterations = (st[slot::ITERATIONS] as usize).min(MAX_ITERATIONS as usize);
+        let iterations = (st.iterations as usize).min(MAX_ITERATIONS as usize);
         Ok(FitReport {
             lobes,
-            costs: st[slot::LOG..=slot::LOG + iterations]
-                .iter()
-                .map(|&c| c as f64)
-                .collect(),
-            energy: st[slot::ENERGY] as f64,
-            started_cold: st[slot::STARTED_COLD] != 0.0,
-            accepted: st[slot::ACCEPTED] as u32,
-            invalid: st[slot::INVALID] as u32,
-            damping: st[slot::DAMPING] as f64,
+            costs: st.log[..=iterations].iter().map(|&c| c as f64).collect(),
+            energy: st.energy as f64,
+            started_cold: st.started_cold != 0.0,
+            accepted: st.accepted as u32,
+            invalid: st.invalid as u32,
+            damping: st.damping as f64,
         })
     }
 }
