@@ -99,7 +99,7 @@ fn recipes_hidden_lights_are_distant() {
 /// above the field, as the issue asks): its distant form seen from the
 /// field's centre misses the bulb's own irradiance at the validation points
 /// by more than 15 %, so ROOM really tests what a distant model cannot do;
-/// seen from the object instead (how `Scene::object_light_lobes` lights
+/// seen from the object instead (how `lighting::object_light_lobes` lights
 /// it), the lobes deliver the bulb's irradiance at the object within 2 %.
 #[test]
 fn rooms_bulb_is_near() {
@@ -113,7 +113,7 @@ fn rooms_bulb_is_near() {
     let error = Validation::new(&s, recipe, &lobes, 512, 3).hidden_error();
     assert!(error > 0.15, "ROOM's bulb looks distant: {error:.3}");
     let at = s.objects[0].sphere().0;
-    let object_lobes = s.object_light_lobes(at);
+    let object_lobes = inlay_passes::lighting::object_light_lobes(&s, at);
     let ours = lobes_irradiance(recipe, &object_lobes, at, DVec3::Y, 4096, 5, true);
     let truth = light_irradiance(
         recipe,

@@ -22,8 +22,9 @@
 
 use std::sync::Arc;
 
-use super::builder::{BufferHandle, FrameGraph, ImageHandle, PassBuilder};
-use super::execute::{Binding, SamplerKind};
+use super::builder::{FrameGraph, PassBuilder};
+use super::context::{Binding, SamplerKind};
+use super::decl::{BufferHandle, ImageHandle};
 use super::{BufferAccess, GraphError, ImageAccess, LoadOp, PassKind};
 use crate::pipeline::{ComputePipeline, GraphicsPipeline};
 use crate::push::PushConstants;

@@ -6,24 +6,11 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::access::{BufferAccess, ImageAccess, PassKind, SyncState};
-use super::execute::PassContext;
+use super::context::PassContext;
+use super::decl::{BufferHandle, BufferUse, ImageHandle, ImageUse};
 use super::GraphError;
 use crate::error::Result;
 use crate::memory::{Buffer, Image, ImageDesc};
-
-/// A version of an image in a [`FrameGraph`]. Writing returns a new handle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct ImageHandle {
-    pub(crate) id: u32,
-    pub(crate) version: u32,
-}
-
-/// A version of a buffer in a [`FrameGraph`]. Writing returns a new handle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct BufferHandle {
-    pub(crate) id: u32,
-    pub(crate) version: u32,
-}
 
 /// Where an imported image's memory comes from.
 pub(crate) enum ImageBacking {
@@ -68,21 +55,6 @@ pub(crate) struct BufferDecl {
 pub(crate) struct VersionInfo {
     pub writer: Option<usize>,
     pub readers: Vec<usize>,
-}
-
-#[derive(Clone, Copy)]
-pub(crate) struct ImageUse {
-    pub id: u32,
-    /// The version read (for writes: the version overwritten).
-    pub version: u32,
-    pub access: ImageAccess,
-}
-
-#[derive(Clone, Copy)]
-pub(crate) struct BufferUse {
-    pub id: u32,
-    pub version: u32,
-    pub access: BufferAccess,
 }
 
 /// A pass's recording callback.

@@ -14,6 +14,8 @@
 mod access;
 mod bind;
 mod builder;
+mod context;
+mod decl;
 mod execute;
 mod plan;
 #[cfg(test)]
@@ -24,10 +26,12 @@ pub use access::{BufferAccess, ImageAccess, LoadOp, PassKind, SyncState};
 pub use bind::Resource;
 pub use bind::{find_binding, BoundPass, BoundPipeline, Call, Dispatch, Draw, GraphResource, Slot};
 pub(crate) use builder::{BufferBacking, ImageBacking};
-pub use builder::{BufferHandle, FrameGraph, ImageHandle, PassBuilder, SkippedPass};
-pub(crate) use execute::texel_bytes;
-pub(crate) use execute::{record_graph, RecordEnv, Resolved, ResolvedBuffer, ResolvedImage};
-pub use execute::{Binding, PassContext, SamplerKind};
+pub use builder::{FrameGraph, PassBuilder, SkippedPass};
+pub(crate) use context::texel_bytes;
+pub use context::{Binding, PassContext, SamplerKind};
+pub(crate) use context::{Resolved, ResolvedBuffer, ResolvedImage};
+pub use decl::{BufferHandle, ImageHandle};
+pub(crate) use execute::{record_graph, RecordEnv};
 pub use plan::{Barrier, BarrierResource, Plan, SlotDesc, Target};
 
 /// A frame graph declared inconsistently. Each variant names the pass and

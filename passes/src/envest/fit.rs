@@ -17,14 +17,13 @@ use rayon::prelude::*;
 
 use super::adam::Adam;
 use super::env_model::{env_term, initial_params, lobes, project, EnvSampler};
+use super::fit_data::mean_luminance;
+pub use super::fit_data::FitData;
 use super::knobs::EnvEstimateKnobs;
 use super::mlp::AlbedoMlp;
-use super::near_field::NearField;
 use super::near_lights::{self, near_term, PointLight};
 use super::prune::prune_unseen;
 use super::share_prior::SharePrior;
-use super::surface::SurfacePoint;
-use crate::geometry::Aabb;
 use crate::rng::Pcg32;
 use crate::sg::Sg64;
 use crate::sgfit::model::{luminance, LUMINANCE_WEIGHTS};
@@ -35,16 +34,6 @@ pub const ANNEAL_FRACTION: f64 = 0.5;
 
 /// Points per chunk of a batch (the unit of parallel work).
 const CHUNK: usize = 32;
-
-/// What the fit needs per point.
-pub struct FitData<'a> {
-    /// The surface points.
-    pub points: &'a [SurfacePoint],
-    /// Their near-field light.
-    pub near: &'a NearField,
-    /// The field's box (normalises the MLP's input).
-    pub bounds: Aabb,
-}
 
 /// The fitted environment and how the fit went.
 #[derive(Debug, Clone)]
@@ -144,20 +133,6 @@ struct PointGrads<'a> {
     diagonal: f64,
     /// The point's weight in the batch.
     scale: f64,
-}
-
-/// The mean radiance luminance of `points` (sets the starting environment
-/// and the share prior's weight).
-pub(super) fn mean_luminance(points: &[SurfacePoint]) -> f64 {
-    let sum: f64 = points.iter().map(|p| luminance(p.radiance)).sum();
-    sum / points.len().max(1) as f64
-}
-
-/// The mean near-field irradiance luminance over the points of `data`
-/// (the scale of the field's own light at them).
-pub(super) fn mean_near_luminance(data: &FitData) -> f64 {
-    let sum: f64 = data.near.irradiance.iter().map(|e| luminance(*e)).sum();
-    sum / data.points.len().max(1) as f64
 }
 
 /// Runs the fit from the starting environment

@@ -14,6 +14,7 @@ pub mod env_model;
 pub mod estimate;
 pub mod file;
 pub mod fit;
+pub mod fit_data;
 pub mod hemisphere;
 pub mod knobs;
 pub mod mlp;

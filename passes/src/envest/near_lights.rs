@@ -206,10 +206,10 @@ pub const MIN_LIGHT_SHARE: f64 = 0.01;
 
 /// `lights` without those the points of `data` barely see
 /// ([`MIN_LIGHT_SHARE`]).
-pub fn prune_dim(data: &super::fit::FitData, lights: Vec<PointLight>) -> Vec<PointLight> {
+pub fn prune_dim(data: &super::fit_data::FitData, lights: Vec<PointLight>) -> Vec<PointLight> {
     use crate::sgfit::model::luminance;
     let n = data.points.len().max(1) as f64;
-    let reference = super::fit::mean_near_luminance(data);
+    let reference = super::fit_data::mean_near_luminance(data);
     lights
         .into_iter()
         .filter(|l| {

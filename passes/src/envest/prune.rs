@@ -6,7 +6,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::env_model::{env_term, lobes, EnvSampler, PARAMS_PER_LOBE};
-use super::fit::FitData;
+use super::fit_data::FitData;
 use crate::rng::Pcg32;
 use crate::sg::Sg64;
 use crate::sgfit::model::luminance;

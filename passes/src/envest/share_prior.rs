@@ -2,7 +2,7 @@
 //! only the model's misfit asks for (not in the paper): a charge on the
 //! environment's share of each surface point's irradiance.
 
-use super::fit::{mean_luminance, mean_near_luminance, FitData};
+use super::fit_data::{mean_luminance, mean_near_luminance, FitData};
 
 /// The prior that keeps out of the environment light which only the
 /// model's misfit asks for: the loss gains `weight`·s̄, the mean over

@@ -175,7 +175,7 @@ impl InsertionFrame {
                     scene.lighting.probe,
                     scene.lighting.fit,
                     *march.knobs(),
-                    &scene.object_light_lobes(centre),
+                    &crate::lighting::object_light_lobes(scene, centre),
                 )?,
                 ssdf: match ssdf {
                     Some(f) => Some(GpuSsdf::upload(ctx, f, &placed.mesh)?),

@@ -22,6 +22,7 @@ use inlay_engine::Context;
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::probe::{ProbeKnobs, ProbePass, PROBE_TRACE};
+use crate::scene::Scene;
 use crate::sg::Sg64;
 use crate::sgfit::{FitKnobs, FitStart, SgFitPass, SG_FIT};
 
@@ -221,6 +222,38 @@ impl IncidentLight {
 /// of `knobs`: the fit's largest ([`crate::sgfit::model::max_sharpness`]).
 pub fn sharp_limit(knobs: &ProbeKnobs) -> f64 {
     crate::sgfit::model::max_sharpness(knobs.direction_map().texels())
+}
+
+/// The distant light L_env an object at `at` is lit with, as SG lobes:
+/// the environment file's if the scene names one (its near point
+/// lights as lobes seen from `at`); otherwise, for a
+/// recipe, the whole light from outside the field — the declared
+/// environment and every emitter outside the bounds as a lobe seen
+/// from `at` ([`crate::envest::hidden_light_lobes`]), since an object in
+/// the recipe's world is lit by those lights as the field is (seen from
+/// the field's centre instead, ROOM's bulb 2.7 m above its monkey lit
+/// it 1.33× too brightly); for a field file, the declared environment
+/// ([`environment_lobes`]).
+pub fn object_light_lobes(scene: &Scene, at: DVec3) -> Vec<Sg64> {
+    match (&scene.object_environment, scene.recipe()) {
+        (Some(o), _) => o
+            .lobes
+            .iter()
+            .copied()
+            .chain(
+                o.lights
+                    .iter()
+                    .map(|l| l.lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)),
+            )
+            .collect(),
+        (None, Some(r)) => crate::envest::hidden_light_lobes(
+            r,
+            &scene.environment,
+            at,
+            crate::sgfit::model::MAX_SHARPNESS,
+        ),
+        (None, None) => environment_lobes(&scene.environment),
+    }
 }
 
 /// The distant light L_env as M SG lobes from a scene's declared

@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
 use super::material::Material;
-use super::mesh::{MeshPart, MeshVertex, ObjectMesh, Texture};
+use super::mesh::{MeshPart, MeshVertex, ObjectMesh};
+use super::texture::Texture;
 
 /// Why an object file could not be used.
 #[derive(Debug, thiserror::Error)]

@@ -9,7 +9,8 @@ use std::sync::Arc;
 
 use inlay_engine::{vk, Buffer, Context, Image, ImageDesc};
 
-use super::mesh::{ObjectMesh, Texture};
+use super::mesh::ObjectMesh;
+use super::texture::Texture;
 
 /// A mesh uploaded for drawing.
 pub struct GpuObject {

@@ -5,7 +5,7 @@
 use glam::{DVec3, DVec4};
 use serde::Deserialize;
 
-use super::mesh::Texture;
+use super::texture::Texture;
 use crate::brdf::SurfaceMaterial;
 
 /// A glTF 2.0 metallic-roughness material.

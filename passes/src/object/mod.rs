@@ -7,12 +7,14 @@ mod gpu;
 mod material;
 mod mesh;
 mod pose;
+mod texture;
 
 pub use gltf_load::{load_gltf, ObjectError};
 pub use gpu::GpuObject;
 pub use material::{srgb_to_linear, Material, MaterialOverride};
-pub use mesh::{MeshPart, MeshVertex, ObjectMesh, Texture};
+pub use mesh::{MeshPart, MeshVertex, ObjectMesh};
 pub use pose::{Pose, Scale, SCALE_RANGE};
+pub use texture::Texture;
 
 use std::sync::Arc;
 

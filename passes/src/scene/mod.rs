@@ -294,38 +294,6 @@ impl Scene {
         })
     }
 
-    /// The distant light L_env an object at `at` is lit with, as SG lobes:
-    /// the environment file's if the scene names one (its near point
-    /// lights as lobes seen from `at`); otherwise, for a
-    /// recipe, the whole light from outside the field — the declared
-    /// environment and every emitter outside the bounds as a lobe seen
-    /// from `at` ([`crate::envest::hidden_light_lobes`]), since an object in
-    /// the recipe's world is lit by those lights as the field is (seen from
-    /// the field's centre instead, ROOM's bulb 2.7 m above its monkey lit
-    /// it 1.33× too brightly); for a field file, the declared environment
-    /// ([`crate::lighting::environment_lobes`]).
-    pub fn object_light_lobes(&self, at: DVec3) -> Vec<crate::sg::Sg64> {
-        match (&self.object_environment, self.recipe()) {
-            (Some(o), _) => o
-                .lobes
-                .iter()
-                .copied()
-                .chain(
-                    o.lights
-                        .iter()
-                        .map(|l| l.lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)),
-                )
-                .collect(),
-            (None, Some(r)) => crate::envest::hidden_light_lobes(
-                r,
-                &self.environment,
-                at,
-                crate::sgfit::model::MAX_SHARPNESS,
-            ),
-            (None, None) => crate::lighting::environment_lobes(&self.environment),
-        }
-    }
-
     /// The recipe, if the field is baked from one.
     pub fn recipe(&self) -> Option<&Recipe> {
         match &self.field {

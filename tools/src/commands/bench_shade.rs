@@ -51,7 +51,7 @@ pub fn run(args: &BenchShadeArgs) -> anyhow::Result<()> {
         ..scene.lighting.probe
     };
     let map = probe_knobs.direction_map();
-    let env = scene.object_light_lobes(at);
+    let env = inlay_passes::lighting::object_light_lobes(&scene, at);
     let texels = trace_probe(&field, at, &probe_knobs, &scene.march, &env);
     let samples = ProbeSamples::new(&map, &texels);
     let classes = [

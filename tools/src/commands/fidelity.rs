@@ -141,7 +141,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         let (centre, _) = object.sphere();
-        let env = scene.object_light_lobes(centre);
+        let env = inlay_passes::lighting::object_light_lobes(&scene, centre);
         let traced = crate::commands::probe::trace_and_fit(
             ctx,
             &gpu_field,

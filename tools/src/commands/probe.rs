@@ -147,7 +147,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     let iterations = fit_knobs.cold_iterations;
     let mut march = scene.march;
     march.samples_per_ray = args.samples_per_ray.unwrap_or(march.samples_per_ray);
-    let env = scene.object_light_lobes(at);
+    let env = inlay_passes::lighting::object_light_lobes(&scene, at);
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let traced = trace_and_fit(ctx, &gpu_field, at, probe_knobs, fit_knobs, march, &env)?;
     let map = probe_knobs.direction_map();
