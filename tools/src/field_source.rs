@@ -7,11 +7,11 @@ use std::time::Instant;
 use anyhow::Context as _;
 use indicatif::{ProgressBar, ProgressStyle};
 use inlay_passes::bake::{bake_grid, BakeKnobs};
-use inlay_passes::field::{load_field, save_field, GridField, FIELD_VERSION};
+use inlay_passes::field::{field_bytes, load_field, GridField, FIELD_VERSION};
 use inlay_passes::scene::{FieldSource, Scene};
 
-/// Environment variable naming the directory baked fields are cached in.
-pub const CACHE_ENV: &str = "INLAY_CACHE_DIR";
+pub use crate::cache::CACHE_ENV;
+use crate::cache::{entry_path, load_or_make, CacheKey};
 
 /// A progress bar on stderr for `total` steps of `what` (hidden when stderr
 /// is not a terminal).
@@ -59,42 +59,19 @@ pub fn bake_with_progress(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Gr
     Ok(field)
 }
 
-/// The directory baked fields are cached in, if one can be used.
-pub(crate) fn cache_dir() -> Option<PathBuf> {
-    if let Some(d) = std::env::var_os(CACHE_ENV) {
-        return Some(PathBuf::from(d));
-    }
-    if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
-        return Some(PathBuf::from(d).join("inlay"));
-    }
-    std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache").join("inlay"))
-}
-
-/// FNV-1a: a stable hash for cache keys.
-pub(crate) fn fnv1a(bytes: &[u8], mut h: u64) -> u64 {
-    for b in bytes {
-        h ^= *b as u64;
-        h = h.wrapping_mul(0x100000001b3);
-    }
-    h
-}
-
-fn cache_path(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBuf>> {
-    let Some(dir) = cache_dir() else {
-        return Ok(None);
-    };
-    let text = std::fs::read(&scene.path)
-        .with_context(|| format!("{}: cannot read", scene.path.display()))?;
-    let mut h = fnv1a(&text, 0xcbf29ce484222325);
-    let key = format!(
-        "{knobs:?} v{FIELD_VERSION} r{} {}",
-        inlay_passes::bake::BAKE_REVISION,
-        env!("CARGO_PKG_VERSION")
-    );
-    h = fnv1a(key.as_bytes(), h);
-    Ok(Some(
-        dir.join(format!("{}-{h:016x}.inlayfield", scene.name)),
-    ))
+/// The cache entry of `scene`'s recipe baked with `knobs`: its key hashes
+/// the scene file's text, the equirect environment it reads, the knobs, the
+/// field format's version and the bake's revision.
+fn cache_entry(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBuf>> {
+    let key = CacheKey::new("field")
+        .file(&scene.path)?
+        .files(&scene.environment_file)?
+        .text("knobs", &format!("{knobs:?}"))
+        .text(
+            "revision",
+            &format!("v{FIELD_VERSION} r{}", inlay_passes::bake::BAKE_REVISION),
+        );
+    Ok(entry_path(&scene.name, key, "inlayfield"))
 }
 
 /// The scene's field: `override_file` when given, else its field file, else
@@ -111,32 +88,64 @@ pub fn scene_field(
     match &scene.field {
         FieldSource::File(f) => Ok(load_field(f)?),
         FieldSource::Recipe(_) => {
-            let cached = if use_cache {
-                cache_path(scene, &scene.bake)?
+            let entry = if use_cache {
+                cache_entry(scene, &scene.bake)?
             } else {
                 None
             };
-            if let Some(path) = &cached {
-                if path.exists() {
-                    match load_field(path) {
-                        Ok(f) => {
-                            log::info!("loaded the baked field from {}", path.display());
-                            return Ok(f);
-                        }
-                        Err(e) => log::warn!("ignoring a bad cached field: {e}"),
-                    }
-                }
-            }
-            let field = bake_with_progress(scene, &scene.bake)?;
-            if let Some(path) = &cached {
-                let saved = std::fs::create_dir_all(path.parent().unwrap_or(Path::new(".")))
-                    .map_err(anyhow::Error::from)
-                    .and_then(|_| Ok(save_field(path, &field)?));
-                if let Err(e) = saved {
-                    log::warn!("could not cache the baked field: {e:#}");
-                }
-            }
-            Ok(field)
+            load_or_make(
+                entry.as_deref(),
+                "baked field",
+                |p| Ok(load_field(p)?),
+                || bake_with_progress(scene, &scene.bake),
+                field_bytes,
+            )
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inlay_engine::HdrImage;
+
+    /// An edit to the equirect EXR a recipe's environment reads changes
+    /// the baked field's cache entry, so the stale field is not loaded.
+    #[test]
+    fn editing_the_environment_exr_misses_the_cache() {
+        let dir = std::env::temp_dir().join(format!("inlay-field-key-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let sky = |v: f32| HdrImage {
+            width: 8,
+            height: 4,
+            pixels: vec![[v, v, v, 1.0]; 32],
+        };
+        sky(1.0).save(&dir.join("sky.exr"), 1.0).unwrap();
+        let text = r#"
+name = "keyed"
+[recipe]
+bounds = { min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 1.0] }
+[[recipe.primitives]]
+name = "ball"
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 0.5
+albedo = [0.5, 0.5, 0.5]
+[environment]
+equirect = "sky.exr"
+[[cameras]]
+position = [0.0, 0.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+"#;
+        std::fs::write(dir.join("keyed.toml"), text).unwrap();
+        let load = || inlay_passes::scene::load_scene(&dir.join("keyed.toml")).unwrap();
+        let scene = load();
+        assert_eq!(scene.environment_file, Some(dir.join("sky.exr")));
+        let before = cache_entry(&scene, &scene.bake).unwrap();
+        assert!(before.is_some());
+        assert_eq!(before, cache_entry(&load(), &scene.bake).unwrap());
+        sky(2.0).save(&dir.join("sky.exr"), 1.0).unwrap();
+        assert_ne!(before, cache_entry(&load(), &scene.bake).unwrap());
     }
 }

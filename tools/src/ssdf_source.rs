@@ -5,13 +5,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use anyhow::Context as _;
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::Context;
-use inlay_passes::object::ObjectMesh;
-use inlay_passes::ssdf::{load_ssdf, save_ssdf, SsdfBaker, SsdfField, SsdfKnobs, SSDF_VERSION};
+use inlay_passes::object::{gltf_files, ObjectMesh};
+use inlay_passes::ssdf::{load_ssdf, ssdf_bytes, SsdfBaker, SsdfField, SsdfKnobs, SSDF_VERSION};
 
-use crate::field_source::{cache_dir, fnv1a, progress_bar};
+use crate::cache::{entry_path, load_or_make, CacheKey};
+use crate::field_source::progress_bar;
 
 /// What a bake measured.
 #[derive(Debug, Clone, Copy)]
@@ -82,29 +82,26 @@ pub fn bake_ssdf_with_progress(
     Ok((field, report))
 }
 
-fn cache_path(object_file: &Path, knobs: &SsdfKnobs) -> anyhow::Result<Option<PathBuf>> {
-    let Some(dir) = cache_dir() else {
-        return Ok(None);
-    };
-    let bytes = std::fs::read(object_file)
-        .with_context(|| format!("{}: cannot read", object_file.display()))?;
-    let mut h = fnv1a(&bytes, 0xcbf29ce484222325);
-    let key = format!(
-        "{knobs:?} ssdf v{SSDF_VERSION} {}",
-        env!("CARGO_PKG_VERSION")
-    );
-    h = fnv1a(key.as_bytes(), h);
+/// The cache entry of the SSDF baked from `object_file` with `knobs`: its
+/// key hashes the object file and every buffer and image it refers to, the
+/// knobs and the SSDF format's version.
+fn cache_entry(object_file: &Path, knobs: &SsdfKnobs) -> anyhow::Result<Option<PathBuf>> {
+    let files = gltf_files(object_file)?;
+    let key = CacheKey::new("ssdf")
+        .files(&files)?
+        .text("knobs", &format!("{knobs:?}"))
+        .text("revision", &format!("v{SSDF_VERSION}"));
     let stem = object_file
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    Ok(Some(dir.join(format!("{stem}-{h:016x}.inlayssdf"))))
+    Ok(entry_path(&stem, key, "inlayssdf"))
 }
 
 /// An object's SSDF field: `file` when the scene names one, else baked
 /// from `mesh` (loaded from `object_file`) with `knobs`, through the cache
-/// when `use_cache`. The cache key hashes the object file's bytes, so an
-/// edited object is baked again.
+/// when `use_cache` ([`cache_entry`]: an edited object, its `.bin` or its
+/// textures included, is baked again).
 pub fn object_ssdf(
     ctx: &Arc<Context>,
     lib: &ShaderLibrary,
@@ -117,30 +114,58 @@ pub fn object_ssdf(
     if let Some(f) = file {
         return Ok(load_ssdf(f)?);
     }
-    let cached = if use_cache {
-        cache_path(object_file, knobs)?
+    let entry = if use_cache {
+        cache_entry(object_file, knobs)?
     } else {
         None
     };
-    if let Some(path) = &cached {
-        if path.exists() {
-            match load_ssdf(path) {
-                Ok(f) => {
-                    log::info!("loaded the SSDF field from {}", path.display());
-                    return Ok(f);
-                }
-                Err(e) => log::warn!("ignoring a bad cached SSDF field: {e}"),
-            }
+    load_or_make(
+        entry.as_deref(),
+        "SSDF field",
+        |p| Ok(load_ssdf(p)?),
+        || Ok(bake_ssdf_with_progress(ctx, lib, mesh, knobs)?.0),
+        ssdf_bytes,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An edit to a glTF's `.bin` (or a texture) changes the SSDF's cache
+    /// entry, so the stale SSDF is not loaded.
+    #[test]
+    fn editing_the_buffer_file_misses_the_cache() {
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects");
+        let dir = std::env::temp_dir().join(format!("inlay-ssdf-key-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for f in [
+            "checker-cube.gltf",
+            "checker-cube.bin",
+            "checker.png",
+            "checker-mr.png",
+        ] {
+            std::fs::copy(src.join(f), dir.join(f)).unwrap();
         }
+        let gltf = dir.join("checker-cube.gltf");
+        let files = gltf_files(&gltf).unwrap();
+        assert_eq!(files.len(), 4, "{files:?}");
+        let knobs = SsdfKnobs::default();
+        let before = cache_entry(&gltf, &knobs).unwrap();
+        let mut bin = std::fs::read(dir.join("checker-cube.bin")).unwrap();
+        bin[0] ^= 1;
+        std::fs::write(dir.join("checker-cube.bin"), &bin).unwrap();
+        let after = cache_entry(&gltf, &knobs).unwrap();
+        assert!(before.is_some());
+        assert_ne!(before, after);
+        std::fs::write(dir.join("checker.png"), b"edited").unwrap();
+        assert_ne!(after, cache_entry(&gltf, &knobs).unwrap());
+        std::fs::remove_file(dir.join("checker-cube.bin")).unwrap();
+        let missing = cache_entry(&gltf, &knobs).unwrap_err();
+        assert!(
+            format!("{missing:#}").contains("checker-cube.bin"),
+            "{missing:#}"
+        );
     }
-    let (field, _) = bake_ssdf_with_progress(ctx, lib, mesh, knobs)?;
-    if let Some(path) = &cached {
-        let saved = std::fs::create_dir_all(path.parent().unwrap_or(Path::new(".")))
-            .map_err(anyhow::Error::from)
-            .and_then(|_| Ok(save_ssdf(&field, path)?));
-        if let Err(e) = saved {
-            log::warn!("could not cache the SSDF field: {e:#}");
-        }
-    }
-    Ok(field)
 }

@@ -26,6 +26,31 @@ pub struct ObjectError {
     pub message: String,
 }
 
+/// The files loading `path` reads: the .gltf or .glb itself, then every
+/// buffer and image it refers to by a (non-`data:`) URI, in document order.
+/// A cache of what is baked from the object hashes all of them.
+pub fn gltf_files(path: &Path) -> Result<Vec<PathBuf>, ObjectError> {
+    let gltf = gltf::Gltf::open(path).map_err(|e| ObjectError {
+        path: path.to_owned(),
+        field: "file".into(),
+        message: e.to_string(),
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let external = |uri: &str| (!uri.starts_with("data:")).then(|| base.join(uri));
+    let buffers = gltf.document.buffers().filter_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(uri) => external(uri),
+        gltf::buffer::Source::Bin => None,
+    });
+    let images = gltf.document.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => external(uri),
+        gltf::image::Source::View { .. } => None,
+    });
+    Ok(std::iter::once(path.to_owned())
+        .chain(buffers)
+        .chain(images)
+        .collect())
+}
+
 /// Loads a .gltf or .glb file.
 pub fn load_gltf(path: &Path) -> Result<ObjectMesh, ObjectError> {
     let err = |field: &str, message: String| ObjectError {

@@ -9,7 +9,7 @@ mod mesh;
 mod pose;
 mod texture;
 
-pub use gltf_load::{load_gltf, ObjectError};
+pub use gltf_load::{gltf_files, load_gltf, ObjectError};
 pub use gpu::GpuObject;
 pub use material::{srgb_to_linear, Material, MaterialOverride};
 pub use mesh::{MeshPart, MeshVertex, ObjectMesh};

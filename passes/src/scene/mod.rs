@@ -128,6 +128,9 @@ pub struct Scene {
     pub field: FieldSource,
     /// The distant light (outside the field).
     pub environment: Environment,
+    /// The file the environment was read from, if it is an equirect map
+    /// (what a baked field depends on besides the scene's own text).
+    pub environment_file: Option<PathBuf>,
     /// Cameras (at least one).
     pub cameras: Vec<CameraSpec>,
     /// Bake knobs (recipes).
@@ -338,6 +341,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             ))
         }
     };
+    let mut environment_file = None;
     let environment = match spec.environment {
         None => Environment::Black,
         Some(env) => {
@@ -360,10 +364,13 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
                         "give `lobes` or `equirect`, not both".into(),
                     ))
                 }
-                (Some(file), true) => Environment::Map(
-                    EquirectMap::load(&dir.join(&file), scale)
-                        .map_err(|m| e("environment.equirect", m))?,
-                ),
+                (Some(file), true) => {
+                    let path = dir.join(&file);
+                    let map = EquirectMap::load(&path, scale)
+                        .map_err(|m| e("environment.equirect", m))?;
+                    environment_file = Some(path);
+                    Environment::Map(map)
+                }
                 (None, _) => Environment::from_lobes(
                     env.lobes
                         .into_iter()
@@ -490,6 +497,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         description: spec.description.unwrap_or_default(),
         field,
         environment,
+        environment_file,
         cameras: spec.cameras,
         bake,
         march,
