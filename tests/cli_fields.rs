@@ -203,6 +203,54 @@ fn bad_inputs_get_errors_naming_the_file_and_field() {
         );
         assert!(!t.contains("panicked"), "{t}");
     }
+    // Names that must pick one camera or object, and a frame count of 0:
+    // errors, not the first of two or a silent 1.
+    let recipe = "[recipe]\nbounds = { min = [-1, -1, -1], max = [1, 1, 1] }\n\
+                  [[recipe.primitives]]\nname = \"ball\"\ntype = \"sphere\"\n\
+                  center = [0, 0, 0]\nradius = 0.5\n";
+    let camera = |name: &str| {
+        format!("[[cameras]]\nname = \"{name}\"\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n")
+    };
+    let two_cameras = dir.join("two-cameras.toml");
+    std::fs::write(
+        &two_cameras,
+        format!("{recipe}{}{}", camera("a"), camera("a")),
+    )
+    .unwrap();
+    let cube = common::objects_dir().join("checker-cube.gltf");
+    let object = format!("[[objects]]\nfile = {:?}\nposition = [0, 0, 0]\n", s(&cube));
+    let two_objects = dir.join("two-objects.toml");
+    std::fs::write(
+        &two_objects,
+        format!("{recipe}{}{object}{object}", camera("a")),
+    )
+    .unwrap();
+    for (args, expect) in [
+        (
+            vec!["render", s(&two_cameras)],
+            "cameras[1].name: duplicate name `a`",
+        ),
+        (
+            vec!["render", s(&two_objects)],
+            "objects[1].name: duplicate name `checker-cube`",
+        ),
+        (
+            vec!["render", &scene_path("cups.toml"), "--frames", "0"],
+            "--frames",
+        ),
+        (
+            vec!["profile", &scene_path("cups.toml"), "--frames", "0"],
+            "--frames",
+        ),
+    ] {
+        let o = inlay(&args, &dir);
+        let t = common::output_text(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            t.contains(expect),
+            "{args:?}: `{t}` should mention `{expect}`"
+        );
+    }
     // A scene whose field is a file has no ground truth to trace.
     let scene = dir.join("file-scene.toml");
     std::fs::write(

@@ -393,6 +393,18 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         if let Some(p) = c.problem() {
             return Err(e(&format!("cameras[{i}]"), p));
         }
+        // `--camera NAME` must find one camera, not the first of several.
+        if let Some(n) = &c.name {
+            if let Some(j) = spec.cameras[..i]
+                .iter()
+                .position(|d| d.name.as_ref() == Some(n))
+            {
+                return Err(e(
+                    &format!("cameras[{i}].name"),
+                    format!("duplicate name `{n}` (cameras[{j}] has it)"),
+                ));
+            }
+        }
     }
     let bake =
         BakeKnobs::from_spec(spec.bake.as_ref()).map_err(|(f, m)| e(&format!("bake.{f}"), m))?;
@@ -469,6 +481,15 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default()
         });
+        if let Some(j) = objects.iter().position(|q: &PlacedObject| q.name == name) {
+            return Err(e(
+                &f("name"),
+                format!(
+                    "duplicate name `{name}` (objects[{j}] has it; an object without a \
+                     `name` takes its file's stem): give each object its own `name`"
+                ),
+            ));
+        }
         objects.push(PlacedObject {
             name,
             mesh,

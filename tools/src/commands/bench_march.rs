@@ -36,7 +36,7 @@ pub struct BenchMarchArgs {
     #[arg(long, value_delimiter = ',', default_values = ["320x180", "1280x720"])]
     pub sizes: Vec<String>,
     /// Frames per timing (the first is dropped).
-    #[arg(long, default_value_t = 9)]
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: u32,
     /// samples_per_ray values for the error table.
     #[arg(long, value_delimiter = ',', default_values = ["32", "64", "128", "256", "512", "1024", "2048"])]

@@ -43,7 +43,7 @@ pub struct BenchSgArgs {
     #[arg(long, default_value_t = 40)]
     pub fit_iterations: u32,
     /// Timed frames per measurement (median reported).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: u32,
     /// Use this field file instead of the scene's field or recipe.
     #[arg(long)]

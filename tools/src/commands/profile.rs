@@ -51,7 +51,7 @@ pub struct ProfileArgs {
     #[arg(long, default_value_t = 720)]
     pub height: u32,
     /// Frames to run (the first is reported apart for the SG update).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: u32,
     /// How the first object moves.
     #[arg(long, value_enum, default_value_t = Motion::Drag)]

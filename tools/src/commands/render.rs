@@ -47,7 +47,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub no_skip: bool,
     /// Frames to render (timings are taken over all of them).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: u32,
     /// Exposure multiplier for PNG output.
     #[arg(long, default_value_t = 1.0)]
@@ -147,14 +147,7 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         effects.edge_aa = false;
         view.set_effects(effects);
     }
-    let run = run_headless(
-        ctx,
-        &mut view,
-        args.width,
-        args.height,
-        args.frames.max(1),
-        0.0,
-    )?;
+    let run = run_headless(ctx, &mut view, args.width, args.height, args.frames, 0.0)?;
     let bad = run.image.non_finite_count();
     anyhow::ensure!(bad == 0, "the frame has {bad} non-finite pixels");
     run.report(ctx, &args.out, args.exposure)
