@@ -9,7 +9,9 @@ use glam::DVec3;
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback};
 use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::gbuffer::{GBufferPass, ObjectDraw, DISTANCE_ID_FORMAT, NORMAL_ROUGHNESS_FORMAT};
-use inlay_passes::object::{load_gltf, GpuObject, MaterialOverride, PlacedObject, Pose, Scale};
+use inlay_passes::object::{
+    load_gltf, GpuObject, MaterialOverride, ObjectRecords, PlacedObject, Pose, Scale,
+};
 use inlay_passes::shaders::embedded_library;
 
 use common::objects_dir;
@@ -68,6 +70,7 @@ fn gbuffer_matches_ray_casting_a_sphere() {
     let rb_d = readback(&ctx, w, h, DISTANCE_ID_FORMAT);
     let rb_n = readback(&ctx, w, h, NORMAL_ROUGHNESS_FORMAT);
     common::run_frame(&ctx, |graph| {
+        let records = ObjectRecords::upload(graph, [&placed]);
         let g = pass
             .add(
                 graph,
@@ -75,7 +78,9 @@ fn gbuffer_matches_ray_casting_a_sphere() {
                 &[ObjectDraw {
                     placed: &placed,
                     gpu: &gpu,
+                    record: 0,
                 }],
+                records,
             )
             .unwrap();
         rb_d.add_to_graph(graph, g.distance_id);
@@ -264,9 +269,15 @@ fn shading_kernel_matches_its_f64_mirror() {
         let draws: Vec<_> = placed
             .iter()
             .zip(&gpus)
-            .map(|(p, g)| ObjectDraw { placed: p, gpu: g })
+            .enumerate()
+            .map(|(i, (p, g))| ObjectDraw {
+                placed: p,
+                gpu: g,
+                record: i as u32,
+            })
             .collect();
-        let g = gbuffer.add(graph, &cam, &draws).unwrap();
+        let records = ObjectRecords::upload(graph, &placed);
+        let g = gbuffer.add(graph, &cam, &draws, records).unwrap();
         let lobes: Vec<_> = buffers
             .iter()
             .zip(&lights)
@@ -392,6 +403,7 @@ fn sg_shading_matches_brute_force_against_the_probe() {
                 rb_probe.add_to_graph(graph, p);
                 light.add_readback(graph);
             }
+            let records = ObjectRecords::upload(graph, [&placed]);
             let g = gbuffer
                 .add(
                     graph,
@@ -399,7 +411,9 @@ fn sg_shading_matches_brute_force_against_the_probe() {
                     &[ObjectDraw {
                         placed: &placed,
                         gpu: &gpu,
+                        record: 0,
                     }],
+                    records,
                 )
                 .unwrap();
             let c = shade.add(graph, &cam, &g, &[lobes], &[]);
@@ -528,9 +542,13 @@ fn composite_hides_the_object_partly_behind_foliage() {
     common::run_frame(&ctx, |graph| {
         let work = light.plan(centre, 0);
         let lobes = light.add(graph, &gpu_field, centre, work).unwrap();
-        let g = gbuffer
-            .add(graph, &cam, &[ObjectDraw { placed, gpu: &gpu }])
-            .unwrap();
+        let records = ObjectRecords::upload(graph, [placed]);
+        let draw = ObjectDraw {
+            placed,
+            gpu: &gpu,
+            record: 0,
+        };
+        let g = gbuffer.add(graph, &cam, &[draw], records).unwrap();
         let bare = march.add(graph, &gpu_field, &cam, None);
         let clipped = march.add(graph, &gpu_field, &cam, Some(g.distance_id));
         let object = shade.add(graph, &cam, &g, &[lobes], &[]);

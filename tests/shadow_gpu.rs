@@ -58,7 +58,7 @@ use inlay_passes::geometry::MeshScene;
 use inlay_passes::geometry::Ray;
 use inlay_passes::lighting::{lobe_rays, DirectRays, LightLobes};
 use inlay_passes::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
-use inlay_passes::object::PlacedObject;
+use inlay_passes::object::{ObjectRecords, PlacedObject};
 use inlay_passes::rng::Pcg32;
 use inlay_passes::sg::Sg64;
 use inlay_passes::shadow::{
@@ -332,7 +332,8 @@ fn compare_cast_shadow(lobes: &[Sg64], direct: usize) -> CastComparison {
             }),
         };
         let table = fh.import(graph);
-        let s = ssdf.import(graph, &placed, OutsideMode::Correct);
+        let records = ObjectRecords::upload(graph, [&placed]);
+        let s = ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct);
         let rho = cast.add(graph, &gpu_field, &cam, &m, light, table, s, None);
         rb[0].add_to_graph(graph, m.colour_opacity);
         rb[1].add_to_graph(graph, m.depth);
@@ -677,6 +678,7 @@ fn self_shadowed_shading_matches_its_mirror() {
         ]
         .map(|f| Readback::new(&ctx, desc(f)).unwrap());
         common::run_frame(&ctx, |graph| {
+            let records = ObjectRecords::upload(graph, [&placed]);
             let g = gbuffer
                 .add(
                     graph,
@@ -684,7 +686,9 @@ fn self_shadowed_shading_matches_its_mirror() {
                     &[ObjectDraw {
                         placed: &placed,
                         gpu: &gpu_object,
+                        record: 0,
                     }],
+                    records,
                 )
                 .unwrap();
             let light = LightLobes {
@@ -698,7 +702,7 @@ fn self_shadowed_shading_matches_its_mirror() {
             };
             let self_shadow = SelfShadow {
                 fh_table: fh.import(graph),
-                ssdf: ssdf.import(graph, &placed, OutsideMode::Correct),
+                ssdf: ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct),
             };
             let out = shade.add(graph, &cam, &g, &[light], &[Some(self_shadow)]);
             rb[0].add_to_graph(graph, g.normal_roughness);

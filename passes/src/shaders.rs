@@ -48,6 +48,7 @@ pub fn gpu_layout_errors(lib: &ShaderLibrary, defines: &[Define]) -> Vec<String>
         check::<crate::gbuffer::DrawPush>(lib, defines),
         check::<crate::ssdf::bake::BakePush>(lib, defines),
         check::<crate::shadow::gpu::SsdfObject>(lib, defines),
+        check::<crate::object::ObjectRecord>(lib, defines),
     ]
     .into_iter()
     .filter_map(Result::err)

@@ -12,6 +12,7 @@
 @group(0) @binding(7) var<storage, read> ssdf: SsdfObject;
 @group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
 @group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
+@group(0) @binding(13) var<storage, read> objects: array<ObjectRecord>;
 
 #include "shadow/fh.wgsl"
 #include "ssdf/ssdf.wgsl"

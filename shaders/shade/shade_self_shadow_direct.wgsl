@@ -19,7 +19,7 @@ fn shading_attenuation(k: u32) -> f32 {
     if k < first {
         return ssdf_attenuation(k);
     }
-    let lifted = shade_point + shade_normal * (DIRECT_RAY_OFFSET * ssdf.world_sphere.w);
+    let lifted = shade_point + shade_normal * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
     return direct_clear_fraction(lifted, k - first, pc.direct_rays, shade_normal, true);
 }
 

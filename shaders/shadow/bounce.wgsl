@@ -16,9 +16,9 @@ fn bounce_below_share(p: Sg, n: vec3<f32>) -> f32 {
 // `below`: x's own shadow ratio, at which the lobes' light from below x's
 // plane (the field around x, shadowed by the object too) counts.
 fn cast_bounce(x: vec3<f32>, n: vec3<f32>, below: vec3<f32>) -> vec3<f32> {
-    let to = ssdf.world_sphere.xyz - x;
+    let to = ssdf_world_sphere().xyz - x;
     let dist = length(to);
-    let r = ssdf.world_sphere.w;
+    let r = ssdf_world_sphere().w;
     if dist <= 0.0 {
         return vec3<f32>(0.0);
     }

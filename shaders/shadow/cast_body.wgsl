@@ -42,6 +42,7 @@ var<immediate> pc: CastPush;
 @group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
 @group(0) @binding(10) var previous: texture_2d<f32>;
 @group(0) @binding(11) var out_shadow: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(15) var<storage, read> objects: array<ObjectRecord>;
 
 #include "shadow/fh.wgsl"
 #include "ssdf/ssdf.wgsl"
@@ -54,9 +55,9 @@ fn density(x: vec3<f32>) -> f32 {
 }
 
 fn clears_sphere(x: vec3<f32>, dir: vec3<f32>) -> bool {
-    let to = ssdf.world_sphere.xyz - x;
+    let to = ssdf_world_sphere().xyz - x;
     let dist = length(to);
-    let r = ssdf.world_sphere.w;
+    let r = ssdf_world_sphere().w;
     if dist <= r {
         return false;
     }
@@ -72,9 +73,9 @@ const CAST_SKIP_SHARE: f32 = 1e-3;
 // solid angle, covered to the mesh's fill far away and wholly at the
 // sphere, over p's hemisphere integral (runtime.rs sphere_share).
 fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
-    let to = ssdf.world_sphere.xyz - x;
+    let to = ssdf_world_sphere().xyz - x;
     let dist = length(to);
-    let r = ssdf.world_sphere.w;
+    let r = ssdf_world_sphere().w;
     if dist <= r {
         return 1.0;
     }

@@ -6,27 +6,27 @@
 // 2 correct (turn towards the centre and shrink by the angular radii).
 // Needs: read-only storage buffers `ssdf: SsdfObject`, `ssdf_rows` (per
 // texel: mean, k basis values) and `ssdf_coefs` (per node: k values), both
-// array<f32>; define SSDF_MAX_COMPONENTS (u32). The block is storage, not
+// array<f32>, and the frame's `objects: array<ObjectRecord>` (the object's
+// pose, record `ssdf.object`); define SSDF_MAX_COMPONENTS (u32). The block is storage, not
 // uniform, on purpose: Mesa 22.3's lavapipe recompiles (and leaks) a shader
 // at every bind when branches and loop bounds depend on uniform values
 // alone and inlining them halves the shader — this one did, ~1.2 MB and a
 // JIT compile per frame.
 #include "ssdf/angles.wgsl"
 #include "common/octahedral_wrap.wgsl"
+#include "object/record.wgsl"
 
 struct SsdfObject {
-    // Rows of the affine world → object map (directions use .xyz).
-    to_object: array<vec4<f32>, 3>,
     // Grid centre (object space) and bounding-sphere radius.
     grid: vec4<f32>,
-    // World-space bounding sphere (centre, radius), for culling.
-    world_sphere: vec4<f32>,
     // Nodes per axis, direction map side, components, outside mode.
     dims: vec4<u32>,
     // The share of the sphere's silhouette the mesh fills times its albedo
     // (rgb; the cast shadow's bounce, shadow/bounce.wgsl), and the share
     // alone (w; the cast shadow's sphere_share).
     reflectance: vec4<f32>,
+    // The object's record in `objects` (its pose).
+    object: u32,
 }
 
 var<private> ssdf_coef: array<f32, SSDF_MAX_COMPONENTS>;
@@ -35,13 +35,20 @@ var<private> ssdf_state: u32;
 var<private> ssdf_x: vec3<f32>;
 var<private> ssdf_xb: vec3<f32>;
 
+// The object's world-space bounding sphere (centre, radius).
+fn ssdf_world_sphere() -> vec4<f32> {
+    return objects[ssdf.object].sphere;
+}
+
 fn ssdf_to_object_point(x: vec3<f32>) -> vec3<f32> {
     let p = vec4<f32>(x, 1.0);
-    return vec3<f32>(dot(ssdf.to_object[0], p), dot(ssdf.to_object[1], p), dot(ssdf.to_object[2], p));
+    let m = objects[ssdf.object].to_object;
+    return vec3<f32>(dot(m[0], p), dot(m[1], p), dot(m[2], p));
 }
 
 fn ssdf_to_object_dir(d: vec3<f32>) -> vec3<f32> {
-    let v = vec3<f32>(dot(ssdf.to_object[0].xyz, d), dot(ssdf.to_object[1].xyz, d), dot(ssdf.to_object[2].xyz, d));
+    let m = objects[ssdf.object].to_object;
+    let v = vec3<f32>(dot(m[0].xyz, d), dot(m[1].xyz, d), dot(m[2].xyz, d));
     return normalize(v);
 }
 

@@ -100,7 +100,7 @@ fn cache_entry(object_file: &Path, knobs: &SsdfKnobs) -> anyhow::Result<Option<P
 
 /// An object's SSDF field: `file` when the scene names one, else baked
 /// from `mesh` (loaded from `object_file`) with `knobs`, through the cache
-/// when `use_cache` ([`cache_entry`]: an edited object, its `.bin` or its
+/// when `use_cache` (keyed by content: an edited object, its `.bin` or its
 /// textures included, is baked again).
 pub fn object_ssdf(
     ctx: &Arc<Context>,

@@ -30,7 +30,7 @@ use crate::field::GpuGridField;
 use crate::gbuffer::{GBufferPass, ObjectDraw, OBJECT_GBUFFER};
 use crate::lighting::IncidentLight;
 use crate::march::MarchPass;
-use crate::object::{GpuObject, PlacedObject};
+use crate::object::{GpuObject, ObjectRecords, PlacedObject};
 use crate::probe::PROBE_TRACE;
 use crate::scene::{Scene as SceneFile, ShadowKnobs};
 use crate::sgfit::SG_FIT;
@@ -282,6 +282,8 @@ impl InsertionFrame {
         }
         let shown: Vec<usize> = (0..placed.len()).filter(|&i| on_screen[i]).collect();
         let fh = self.fh.as_ref().map(|t| t.import(graph));
+        // Every object's pose, once for the frame: record i is object i.
+        let records = ObjectRecords::upload(graph, placed);
         // Each object's SSDF bindings this frame, where a shadow needs them.
         let ssdf: Vec<_> = self
             .objects
@@ -291,7 +293,9 @@ impl InsertionFrame {
             .map(|(i, (o, p))| {
                 let needed = casts[i] || (on_screen[i] && effects.self_shadow);
                 match (&o.ssdf, fh) {
-                    (Some(s), Some(_)) if needed => Some(s.import(graph, p, self.shadow_outside)),
+                    (Some(s), Some(_)) if needed => {
+                        Some(s.import(graph, p, (records, i as u32), self.shadow_outside))
+                    }
                     _ => None,
                 }
             })
@@ -317,9 +321,10 @@ impl InsertionFrame {
             .map(|&i| ObjectDraw {
                 placed: &placed[i],
                 gpu: &self.objects[i].gpu,
+                record: i as u32,
             })
             .collect();
-        let g = self.gbuffer.add(graph, frame, &draws)?;
+        let g = self.gbuffer.add(graph, frame, &draws, records)?;
         let clip = effects.occlusion.then_some(g.distance_id);
         let field = self.march.add(graph, &self.field, frame, clip);
         let shown_lobes: Vec<_> = shown.iter().filter_map(|&i| lobes[i]).collect();

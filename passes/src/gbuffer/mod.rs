@@ -17,7 +17,7 @@ use inlay_engine::shader::{compile, ShaderLibrary, ShaderStage};
 use inlay_engine::{vk, Context, GraphicsDesc, GraphicsPipeline, ImageDesc};
 
 use crate::camera::CameraFrame;
-use crate::object::{GpuObject, PlacedObject};
+use crate::object::{GpuObject, ObjectRecords, PlacedObject};
 
 inlay_engine::gpu_struct! {
     /// `Camera` of `shaders/gbuffer/gbuffer.wgsl` (uniform).
@@ -32,14 +32,16 @@ inlay_engine::gpu_struct! {
 inlay_engine::gpu_struct! {
     /// `Draw` of `shaders/gbuffer/gbuffer.wgsl`: one mesh part's record.
     pub struct DrawRecord = "gbuffer/gbuffer.wgsl" : "Draw" {
-        /// The first three rows of the object → world matrix.
-        pub model: [[f32; 4]; 3],
-        /// The normal matrix's rows (w unused).
-        pub normal: [[f32; 4]; 3],
         /// Base colour factor (RGBA).
         pub base_colour: [f32; 4],
-        /// Roughness, metallic, object index, unused.
-        pub params: [f32; 4],
+        /// Roughness factor.
+        pub roughness: f32,
+        /// Metallic factor.
+        pub metallic: f32,
+        /// The index the part's object writes to the G-buffer.
+        pub object_index: f32,
+        /// The object's record in the frame's [`ObjectRecords`] (its pose).
+        pub record: u32,
     }
 }
 
@@ -100,6 +102,8 @@ pub struct ObjectDraw<'a> {
     pub placed: &'a PlacedObject,
     /// Buffers and textures.
     pub gpu: &'a GpuObject,
+    /// Its pose's record in the frame's [`ObjectRecords`].
+    pub record: u32,
 }
 
 /// The G-buffer pipeline.
@@ -143,12 +147,14 @@ impl GBufferPass {
     }
 
     /// Adds the `object-gbuffer` pass drawing `objects` from `camera`
-    /// (object index = position in `objects`).
+    /// (object index = position in `objects`), their poses read from
+    /// `records`.
     pub fn add(
         &self,
         graph: &mut FrameGraph,
         camera: &CameraFrame,
         objects: &[ObjectDraw<'_>],
+        records: ObjectRecords,
     ) -> anyhow::Result<GBuffer> {
         let (width, height) = (camera.width, camera.height);
         let spheres: Vec<_> = objects.iter().map(|o| o.placed.sphere()).collect();
@@ -158,18 +164,17 @@ impl GBufferPass {
             origin: camera.origin.extend(1.0).as_vec4().to_array(),
         };
         // One draw per mesh part, in object order.
-        let mut records = Vec::new();
+        let mut draw_records = Vec::new();
         let mut draws = Vec::new();
         for (index, o) in objects.iter().enumerate() {
-            let m = o.placed.pose.matrix();
-            let nm = o.placed.pose.normal_matrix();
             for (p, part) in o.placed.mesh.parts.iter().enumerate() {
                 let mat = o.placed.material_of(p);
-                records.push(DrawRecord {
-                    model: std::array::from_fn(|r| m.row(r).as_vec4().to_array()),
-                    normal: std::array::from_fn(|r| nm.row(r).extend(0.0).as_vec4().to_array()),
+                draw_records.push(DrawRecord {
                     base_colour: mat.base_colour.as_vec4().to_array(),
-                    params: [mat.roughness as f32, mat.metallic as f32, index as f32, 0.0],
+                    roughness: mat.roughness as f32,
+                    metallic: mat.metallic as f32,
+                    object_index: index as f32,
+                    record: o.record,
                 });
                 draws.push((o.gpu, *part, mat));
             }
@@ -182,7 +187,7 @@ impl GBufferPass {
         let camera_buffer =
             graph.upload_buffer("object-camera", bytemuck::bytes_of(&camera_record).to_vec());
         let draw_buffer =
-            graph.upload_buffer("object-draws", bytemuck::cast_slice(&records).to_vec());
+            graph.upload_buffer("object-draws", bytemuck::cast_slice(&draw_records).to_vec());
         let target = |graph: &mut FrameGraph, name: &str, format| {
             graph.create_image(
                 name,
@@ -223,6 +228,7 @@ impl GBufferPass {
             pass.draw(&self.pipeline)
                 .read("camera", camera_buffer)
                 .read("draws", draw_buffer)
+                .read("objects", records.buffer)
                 .read("vertices", vb)
                 .read("indices", ib)
                 .read("base_colour_texture", base)

@@ -7,6 +7,7 @@ mod gpu;
 mod material;
 mod mesh;
 mod pose;
+mod record;
 mod texture;
 
 pub use gltf_load::{gltf_files, load_gltf, ObjectError};
@@ -14,6 +15,7 @@ pub use gpu::GpuObject;
 pub use material::{srgb_to_linear, Material, MaterialOverride};
 pub use mesh::{MeshPart, MeshVertex, ObjectMesh};
 pub use pose::{Pose, Scale, SCALE_RANGE};
+pub use record::{ObjectRecord, ObjectRecords};
 pub use texture::Texture;
 
 use std::sync::Arc;
@@ -35,6 +37,11 @@ pub struct PlacedObject {
 }
 
 impl PlacedObject {
+    /// The world → object map (the inverse of its pose).
+    pub fn world_to_object(&self) -> glam::DMat4 {
+        self.pose.matrix().inverse()
+    }
+
     /// The world-space bounding sphere; its centre is x_o, where the probe
     /// is traced.
     pub fn sphere(&self) -> (DVec3, f64) {

@@ -159,6 +159,7 @@ impl ShadePass {
                 d = d
                     .read("fh_table", s.fh_table)
                     .read("ssdf", s.ssdf.object)
+                    .read("objects", s.ssdf.records)
                     .read("ssdf_rows", s.ssdf.rows)
                     .read("ssdf_coefs", s.ssdf.coefs)
                     .read("bvh_nodes", s.ssdf.bvh_nodes)

@@ -124,6 +124,7 @@ impl CastShadowPass {
             .read("light_lobes", lobes.buffer)
             .read("fh_table", fh_table)
             .read("ssdf", ssdf.object)
+            .read("objects", ssdf.records)
             .read("ssdf_rows", ssdf.rows)
             .read("ssdf_coefs", ssdf.coefs)
             .read_opt("previous", previous)

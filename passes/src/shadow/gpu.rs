@@ -11,7 +11,7 @@ use inlay_engine::{vk, Buffer, Context};
 
 use super::fh::{FhTable, FH_COLUMNS, FH_ROWS, FH_SHARPNESS_RANGE};
 use super::ObjectReflectance;
-use crate::object::{ObjectMesh, PlacedObject};
+use crate::object::{ObjectMesh, ObjectRecords, PlacedObject};
 use crate::ssdf::bake::MAX_SSDF_COMPONENTS;
 use crate::ssdf::field::{OutsideMode, SsdfField};
 
@@ -20,16 +20,16 @@ inlay_engine::gpu_struct! {
     /// shadow, which binds it): an object's SSDF as one
     /// frame reads it.
     pub struct SsdfObject = "shadow/cast.wgsl" : "SsdfObject" {
-        /// Rows of the affine world → object map.
-        pub to_object: [[f32; 4]; 3],
         /// Grid centre (object space) and bounding-sphere radius.
         pub grid: [f32; 4],
-        /// World-space bounding sphere (centre, radius).
-        pub world_sphere: [f32; 4],
         /// Nodes per axis, direction map side, components, outside mode.
         pub dims: [u32; 4],
         /// Silhouette fill times albedo (rgb) and the fill alone (w).
         pub reflectance: [f32; 4],
+        /// The object's record in the frame's [`ObjectRecords`] (its pose).
+        pub object: u32,
+        /// Padding (the struct's size rounds up to 16 bytes).
+        pub _pad: [u32; 3],
     }
 }
 
@@ -97,6 +97,8 @@ pub struct SsdfBindings {
     /// The per-frame `SsdfObject` block (read-only storage; see
     /// shaders/ssdf/ssdf.wgsl for why not uniform).
     pub object: BufferHandle,
+    /// The frame's object records (the object's pose is one of them).
+    pub records: BufferHandle,
     /// Per texel: mean and basis.
     pub rows: BufferHandle,
     /// Per node: coefficients.
@@ -138,19 +140,19 @@ impl GpuSsdf {
         })
     }
 
-    /// Imports the field and uploads this frame's block for `placed`.
+    /// Imports the field and uploads this frame's block for `placed`,
+    /// whose pose is record `record` of `records`.
     pub fn import(
         &self,
         graph: &mut FrameGraph,
         placed: &PlacedObject,
+        (records, record): (ObjectRecords, u32),
         mode: OutsideMode,
     ) -> SsdfBindings {
+        let block = object_block(&self.field, placed, record, mode, &self.reflectance);
         SsdfBindings {
-            object: graph.upload_buffer(
-                "ssdf object",
-                bytemuck::bytes_of(&object_block(&self.field, placed, mode, &self.reflectance))
-                    .to_vec(),
-            ),
+            object: graph.upload_buffer("ssdf object", bytemuck::bytes_of(&block).to_vec()),
+            records: records.buffer,
             rows: graph.import_buffer(&self.rows, None),
             coefs: graph.import_buffer(&self.coefs, None),
             bvh_nodes: graph.import_buffer(&self.bvh_nodes, None),
@@ -161,26 +163,25 @@ impl GpuSsdf {
 
 /// The world → object map of `placed`.
 pub fn world_to_object(placed: &PlacedObject) -> DMat4 {
-    placed.pose.matrix().inverse()
+    placed.world_to_object()
 }
 
-/// The `SsdfObject` block: world → object rows, grid, world sphere, dims,
-/// the object's silhouette reflectance ([`ObjectReflectance::of`]) and
-/// fill.
+/// The `SsdfObject` block: grid, dims, the object's silhouette reflectance
+/// ([`ObjectReflectance::of`]) and fill, and the index of its pose in the
+/// frame's object records.
 pub fn object_block(
     field: &SsdfField,
     placed: &PlacedObject,
+    record: u32,
     mode: OutsideMode,
     object: &ObjectReflectance,
 ) -> SsdfObject {
-    let m = world_to_object(placed);
     let g = &field.grid;
-    let (c, r) = placed.sphere();
     SsdfObject {
-        to_object: std::array::from_fn(|i| m.row(i).as_vec4().to_array()),
         grid: g.centre.extend(g.radius).as_vec4().to_array(),
-        world_sphere: c.extend(r).as_vec4().to_array(),
         dims: [g.nodes, field.directions, field.components, mode.index()],
         reflectance: object.of(placed).extend(object.fill).as_vec4().to_array(),
+        object: record,
+        _pad: [0; 3],
     }
 }
