@@ -225,7 +225,18 @@ fn bad_inputs_get_errors_naming_the_file_and_field() {
         format!("{recipe}{}{object}{object}", camera("a")),
     )
     .unwrap();
+    // A vector of four numbers where three are expected, not truncated.
+    let four = dir.join("four.toml");
+    std::fs::write(
+        &four,
+        format!("{recipe}[[cameras]]\nposition = [0, 0, 3, 5]\nlook_at = [0, 0, 0]\n"),
+    )
+    .unwrap();
     for (args, expect) in [
+        (
+            vec!["render", s(&four)],
+            "invalid length 4, expected an array of 3 numbers",
+        ),
         (
             vec!["render", s(&two_cameras)],
             "cameras[1].name: duplicate name `a`",

@@ -14,11 +14,14 @@ pub struct CameraSpec {
     #[serde(default)]
     pub name: Option<String>,
     /// Eye position.
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub position: DVec3,
     /// Point the camera looks at.
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub look_at: DVec3,
     /// Approximate up direction (default +Y).
     #[serde(default = "default_up")]
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub up: DVec3,
     /// Vertical field of view in degrees (default 50).
     #[serde(default = "default_fov")]

@@ -34,9 +34,11 @@ pub const MAX_DISTANCE: f64 = 4.0;
 #[serde(deny_unknown_fields)]
 pub struct PointLight {
     /// Where it is.
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub position: DVec3,
     /// Radiant intensity per channel (irradiance at unit distance, facing
     /// it).
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub intensity: DVec3,
 }
 

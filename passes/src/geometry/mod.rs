@@ -13,8 +13,10 @@ use serde::Deserialize;
 #[serde(deny_unknown_fields)]
 pub struct Aabb {
     /// Smallest corner.
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub min: DVec3,
     /// Largest corner.
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub max: DVec3,
 }
 

@@ -45,6 +45,7 @@ impl Default for Material {
 #[serde(deny_unknown_fields)]
 pub struct MaterialOverride {
     /// Base colour (linear RGB in [0, 1]).
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub base_color: Option<DVec3>,
     /// Roughness in [0, 1].
     pub roughness: Option<f64>,

@@ -12,7 +12,7 @@ pub enum Scale {
     /// One factor for all axes.
     Uniform(f64),
     /// One factor per axis.
-    PerAxis(DVec3),
+    PerAxis(#[serde(deserialize_with = "crate::scene::vec3::exact")] DVec3),
 }
 
 impl Default for Scale {
@@ -40,10 +40,10 @@ pub const SCALE_RANGE: (f64, f64) = (1e-4, 1e4);
 #[serde(deny_unknown_fields)]
 pub struct Pose {
     /// Where the object's origin goes.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact")]
     pub position: DVec3,
     /// Rotation in degrees about X, then Y, then Z.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact")]
     pub rotation: DVec3,
     /// Scale.
     #[serde(default)]

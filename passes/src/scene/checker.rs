@@ -13,6 +13,7 @@ pub struct Checker {
     /// Edge of one cube (scene units).
     pub size: f64,
     /// The second colour.
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     pub albedo: DVec3,
 }
 

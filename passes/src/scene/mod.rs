@@ -8,6 +8,7 @@ mod face;
 mod primitive;
 mod shape;
 pub(crate) mod spec;
+pub mod vec3;
 
 pub use checker::Checker;
 pub use environment::{Environment, EquirectMap};

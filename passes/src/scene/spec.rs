@@ -61,9 +61,9 @@ pub(crate) struct ObjectSpec {
     pub name: Option<String>,
     /// A .gltf or .glb file, relative to the scene file.
     pub file: String,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact")]
     pub position: DVec3,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact")]
     pub rotation: DVec3,
     #[serde(default)]
     pub scale: crate::object::Scale,
@@ -86,19 +86,28 @@ pub(crate) struct PrimitiveSpec {
     pub name: String,
     #[serde(rename = "type")]
     pub kind: String,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub point: Option<DVec3>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub normal: Option<DVec3>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub center: Option<DVec3>,
     pub radius: Option<f64>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub size: Option<DVec3>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub axis: Option<DVec3>,
     pub height: Option<f64>,
     pub width: Option<f64>,
     pub thickness: Option<f64>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub up: Option<DVec3>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub rotation: Option<DVec3>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub albedo: Option<DVec3>,
     pub checker: Option<super::Checker>,
+    #[serde(default, deserialize_with = "crate::scene::vec3::exact_opt")]
     pub emission: Option<DVec3>,
     pub density: Option<f64>,
     pub in_field: Option<bool>,

@@ -27,10 +27,12 @@ macro_rules! sg_math {
         #[serde(deny_unknown_fields)]
         pub struct $name {
             /// Lobe axis p, a unit vector (normalise before use).
+            #[serde(deserialize_with = "crate::scene::vec3::exact")]
             pub direction: $v,
             /// Sharpness λ ≥ 0 (0 is the constant lobe).
             pub sharpness: $t,
             /// RGB amplitude μ ≥ 0 (the value on the axis).
+            #[serde(deserialize_with = "crate::scene::vec3::exact")]
             pub amplitude: $v,
         }
 
