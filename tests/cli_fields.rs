@@ -232,7 +232,28 @@ fn bad_inputs_get_errors_naming_the_file_and_field() {
         format!("{recipe}[[cameras]]\nposition = [0, 0, 3, 5]\nlook_at = [0, 0, 0]\n"),
     )
     .unwrap();
+    // Radiance beyond what the fit stays finite for, refused up front.
+    let bright = dir.join("bright.toml");
+    std::fs::write(
+        &bright,
+        format!("{}emission = [1e7, 1e7, 1e7]\n{}", recipe, camera("a")),
+    )
+    .unwrap();
+    let bright_sky = dir.join("bright-sky.toml");
+    std::fs::write(
+        &bright_sky,
+        format!(
+            "{recipe}{}[environment]\nlobes = [{{ direction = [0, 1, 0], sharpness = 2, amplitude = [1e21, 1, 1] }}]\n",
+            camera("a")
+        ),
+    )
+    .unwrap();
     for (args, expect) in [
+        (vec!["render", s(&bright)], "above the radiance limit"),
+        (
+            vec!["render", s(&bright_sky)],
+            "environment.lobes[0]: amplitude",
+        ),
         (
             vec!["render", s(&four)],
             "invalid length 4, expected an array of 3 numbers",

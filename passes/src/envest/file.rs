@@ -79,6 +79,13 @@ pub fn lobe_problem(l: &Sg64) -> Option<String> {
     if !(l.amplitude.is_finite() && l.amplitude.min_element() >= 0.0) {
         return Some("amplitude must be finite and ≥ 0".into());
     }
+    if l.amplitude.max_element() > crate::scene::RADIANCE_LIMIT {
+        return Some(format!(
+            "amplitude {} is above the radiance limit {:e}",
+            l.amplitude,
+            crate::scene::RADIANCE_LIMIT
+        ));
+    }
     None
 }
 

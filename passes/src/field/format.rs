@@ -158,7 +158,8 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
     for (n, chunk) in bytes[HEADER_BYTES..].chunks_exact(16).enumerate() {
         let v: [f32; 4] = std::array::from_fn(|c| f32_at(chunk, 4 * c));
         for (c, name) in ["r", "g", "b", "density"].iter().enumerate() {
-            if !v[c].is_finite() || v[c] < 0.0 {
+            let too_bright = c < 3 && v[c] as f64 > crate::scene::RADIANCE_LIMIT;
+            if !v[c].is_finite() || v[c] < 0.0 || too_bright {
                 let (i, j, k) = (
                     n as u32 % res.x,
                     (n as u32 / res.x) % res.y,
@@ -167,7 +168,15 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
                 return Err(err(
                     path,
                     &format!("node ({i}, {j}, {k}).{name}"),
-                    format!("{} is not a finite, non-negative number", v[c]),
+                    if too_bright {
+                        format!(
+                            "{} is above the radiance limit {:e}",
+                            v[c],
+                            crate::scene::RADIANCE_LIMIT
+                        )
+                    } else {
+                        format!("{} is not a finite, non-negative number", v[c])
+                    },
                 ));
             }
         }
@@ -302,5 +311,38 @@ mod tests {
             assert!(e.contains(expect), "`{e}` should mention `{expect}`");
             assert!(e.starts_with("t.inlayfield: "), "{e}");
         }
+    }
+}
+
+#[cfg(test)]
+mod radiance_tests {
+    use super::*;
+    use crate::geometry::Aabb;
+    use glam::{DVec3, UVec3};
+
+    /// A colour above the radiance limit is refused with the node and
+    /// channel; a density that large is fine (it is not radiance).
+    #[test]
+    fn colours_above_the_radiance_limit_are_refused() {
+        let field = |node: [f32; 4]| {
+            let mut nodes = vec![[0.5, 0.5, 0.5, 1.0]; 8];
+            nodes[3] = node;
+            GridField::new(
+                UVec3::splat(2),
+                Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+                nodes,
+                8,
+            )
+        };
+        let path = Path::new("t.inlayfield");
+        let e = parse_field(path, &field_bytes(&field([1.0, 1e20, 1.0, 1.0])))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("node (1, 1, 0).g") && e.contains("radiance limit"),
+            "{e}"
+        );
+        assert!(parse_field(path, &field_bytes(&field([1.0, 1.0, 1.0, 1e20]))).is_ok());
+        assert!(parse_field(path, &field_bytes(&field([1e6, 1.0, 1.0, 1.0]))).is_ok());
     }
 }

@@ -131,6 +131,18 @@ impl EquirectMap {
             }
         }
         let texels: Vec<DVec3> = texels.into_iter().map(|t| t * scale).collect();
+        if let Some(i) = texels
+            .iter()
+            .position(|t| t.max_element() > super::RADIANCE_LIMIT)
+        {
+            return Err(format!(
+                "pixel ({}, {}) is {} after the scale: above the radiance limit {:e} (lower `scale`)",
+                i % width,
+                i / width,
+                texels[i],
+                super::RADIANCE_LIMIT
+            ));
+        }
         let mut weight = vec![0.0; width * height];
         for y in 0..height {
             let sin = (PI * (y as f64 + 0.5) / height as f64).sin();

@@ -18,6 +18,14 @@ pub(crate) use primitive::parse as parse_primitive;
 pub use primitive::QUAD_THICKNESS;
 pub use shape::Shape;
 
+/// The largest radiance inlay accepts anywhere it is given one (an
+/// emitter's `emission`, an environment lobe's amplitude or map texel
+/// after `scale`, a field's colour): the SG fit and shading are tested
+/// stable to it; beyond it (radiance near 10²⁰ and above) the fit's
+/// residuals overflow f32 and would come out NaN, so such input is refused
+/// with the key that holds it.
+pub const RADIANCE_LIMIT: f64 = 1e6;
+
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -356,6 +364,14 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             for (i, l) in env.lobes.iter().enumerate() {
                 if let Some(m) = crate::envest::file::lobe_problem(l) {
                     return Err(e(&format!("environment.lobes[{i}]"), m));
+                }
+                if l.amplitude.max_element() * scale > RADIANCE_LIMIT {
+                    return Err(e(
+                        "environment.scale",
+                        format!(
+                            "{scale} takes lobes[{i}]'s amplitude above the radiance limit {RADIANCE_LIMIT:e}"
+                        ),
+                    ));
                 }
             }
             match (env.equirect, env.lobes.is_empty()) {

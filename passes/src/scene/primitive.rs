@@ -186,6 +186,12 @@ pub(crate) fn parse(p: PrimitiveSpec, bounds: &Aabb) -> Result<Primitive, String
     if !(emission.is_finite() && emission.min_element() >= 0.0) {
         return Err(format!("`emission` = {emission} must be finite and ≥ 0"));
     }
+    if emission.max_element() > super::RADIANCE_LIMIT {
+        return Err(format!(
+            "`emission` = {emission} is above the radiance limit {:e}",
+            super::RADIANCE_LIMIT
+        ));
+    }
     let medium_density = match p.density {
         None => None,
         Some(d) => {
