@@ -10,7 +10,6 @@
 
 use glam::DVec3;
 
-use super::gpu::world_to_object;
 use crate::geometry::MeshScene;
 use crate::geometry::Ray;
 use crate::object::PlacedObject;
@@ -47,7 +46,7 @@ impl DirectOcclusion<'_> {
         k: usize,
         above: Option<DVec3>,
     ) -> f64 {
-        let m = world_to_object(placed);
+        let m = placed.world_to_object();
         let origin = m.transform_point3(x);
         let (mut clear, mut counted) = (0u32, 0u32);
         for &d in &self.rays[k] {

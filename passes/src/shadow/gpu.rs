@@ -4,7 +4,6 @@
 
 use std::sync::Arc;
 
-use glam::DMat4;
 use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::Define;
 use inlay_engine::{vk, Buffer, Context};
@@ -159,11 +158,6 @@ impl GpuSsdf {
             bvh_triangles: graph.import_buffer(&self.bvh_triangles, None),
         }
     }
-}
-
-/// The world → object map of `placed`.
-pub fn world_to_object(placed: &PlacedObject) -> DMat4 {
-    placed.world_to_object()
 }
 
 /// The `SsdfObject` block: grid, dims, the object's silhouette reflectance

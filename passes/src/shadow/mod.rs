@@ -16,7 +16,7 @@ pub use bounce::{bounce_irradiance, ObjectReflectance};
 pub use cast::{CastShadowPass, CAST_SHADOW, CAST_SHADOW_INFO, CAST_SHADOW_SWITCH, SHADOW_FORMAT};
 pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};
-pub use gpu::{object_block, shadow_defines, world_to_object, GpuFhTable, GpuSsdf, SsdfBindings};
+pub use gpu::{object_block, shadow_defines, GpuFhTable, GpuSsdf, SsdfBindings};
 pub use runtime::{
     cast_shadow_factor, field_normal, self_shadow_factors, sphere_clear_of, sphere_share,
     world_ssdf, CAST_SKIP_SHARE, HORIZON_FLOOR,

@@ -28,7 +28,6 @@ use glam::DVec3;
 
 use super::direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 use super::fh::{hemisphere_integral, FhTable};
-use super::gpu::world_to_object;
 use crate::object::PlacedObject;
 use crate::sg::Sg64;
 use crate::ssdf::field::{OutsideMode, SsdfField};
@@ -41,7 +40,7 @@ pub fn world_ssdf(
     d: DVec3,
     mode: OutsideMode,
 ) -> f64 {
-    let m = world_to_object(placed);
+    let m = placed.world_to_object();
     field.sample(
         m.transform_point3(x),
         m.transform_vector3(d).normalize(),
