@@ -4,30 +4,15 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use inlay_engine::HdrImage;
 
-fn inlay(args: &[&str], cache: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_inlay"))
-        .args(args)
-        .env("INLAY_CACHE_DIR", cache)
-        .output()
-        .expect("the inlay binary runs")
-}
+use common::{inlay_cached as inlay, s, scene_path};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("inlay-fields-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-fn scene_path(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(name)
-        .display()
-        .to_string()
 }
 
 /// `inlay bake-scene` of PLANTS at test size into `dir`: the field file and
@@ -76,10 +61,6 @@ fn bake_scene_at_test_size(dir: &Path, name: &str) -> (String, PathBuf) {
     );
     assert!(o.status.success(), "{}", common::output_text(&o));
     (scene, field)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]

@@ -29,7 +29,7 @@ fn validate(name: &str, rays_per_point: u32) -> Validation {
     let scene = common::bundled_scene(name);
     let ctx = common::gpu();
     let lib = inlay_passes::shaders::embedded_library();
-    let field = inlay::field_source::scene_field(&scene, None, false).unwrap();
+    let field = inlay::field_source::scene_field(&scene, None, false, None).unwrap();
     let knobs = EnvEstimateKnobs {
         views: 30,
         rays_per_point,

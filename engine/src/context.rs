@@ -29,6 +29,17 @@ pub struct ContextOptions {
     pub device: Option<String>,
 }
 
+/// GPU memory held through the engine's allocator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MemoryUsage {
+    /// Live allocations.
+    pub allocations: usize,
+    /// Bytes they use.
+    pub allocated_bytes: u64,
+    /// Bytes of the memory blocks holding them.
+    pub block_bytes: u64,
+}
+
 /// Native handles of a window to present to (from winit's raw-window-handle).
 #[derive(Debug, Clone, Copy)]
 pub struct WindowHandles {
@@ -51,6 +62,10 @@ pub struct DeviceInfo {
     pub max_push_constants: u32,
     /// Largest storage-buffer binding in bytes.
     pub max_storage_buffer_range: u32,
+    /// Largest width or height of a 2D image (render targets, textures).
+    pub max_image_dimension_2d: u32,
+    /// Size of the largest device-local memory heap in bytes.
+    pub device_heap_bytes: u64,
 }
 
 /// A surface and its loader, present when the context was made for a window.
@@ -165,6 +180,18 @@ impl Context {
     /// Whether the validation layer is on.
     pub fn validating(&self) -> bool {
         self.debug.is_some()
+    }
+
+    /// What the engine holds in GPU memory now: live allocations, their
+    /// bytes, and the bytes of the memory blocks they live in (for soak
+    /// tests: all three stay flat frame after frame).
+    pub fn memory_usage(&self) -> MemoryUsage {
+        let report = self.allocator().generate_report();
+        MemoryUsage {
+            allocations: report.allocations.len(),
+            allocated_bytes: report.total_allocated_bytes,
+            block_bytes: report.total_capacity_bytes,
+        }
     }
 
     /// The messages the validation layer reported so far.
@@ -355,8 +382,25 @@ fn pick_physical(
         timestamp_period_ns: props.limits.timestamp_period as f64,
         max_push_constants: props.limits.max_push_constants_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
+        max_image_dimension_2d: props.limits.max_image_dimension2_d,
+        device_heap_bytes: largest_device_heap(instance, pd),
     };
     Ok((pd, family.unwrap_or(0), info))
+}
+
+/// The size of the largest device-local heap (on a CPU device, its only
+/// heap).
+fn largest_device_heap(instance: &ash::Instance, pd: vk::PhysicalDevice) -> u64 {
+    // SAFETY: `pd` was enumerated from `instance`, which is alive.
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let heaps = &memory.memory_heaps[..memory.memory_heap_count as usize];
+    heaps
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .or_else(|| heaps.iter().map(|h| h.size).max())
+        .unwrap_or(0)
 }
 
 /// Returns the queue family to use and, if the device is unusable, why.

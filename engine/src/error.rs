@@ -67,6 +67,17 @@ pub enum EngineError {
     Window(String),
 }
 
+impl EngineError {
+    /// The message without the file's name, for callers whose own errors
+    /// name the file (and the field) themselves.
+    pub fn detail(&self) -> String {
+        match self {
+            EngineError::File { message, .. } => message.clone(),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// Result alias used throughout the engine.
 pub type Result<T> = std::result::Result<T, EngineError>;
 

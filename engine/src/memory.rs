@@ -42,6 +42,20 @@ impl Buffer {
         location: BufferLocation,
     ) -> Result<Self> {
         let size = size.max(4);
+        let limit = ctx.info().max_storage_buffer_range as u64;
+        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && size > limit {
+            // Bound whole, it would exceed the binding limit: the shader
+            // would read garbage past it, and the layer may not say so.
+            return Err(EngineError::Allocation {
+                what: format!("storage buffer `{name}`"),
+                message: format!(
+                    "{} MiB is more than {}'s largest storage binding ({} MiB)",
+                    size >> 20,
+                    ctx.info().name,
+                    limit >> 20
+                ),
+            });
+        }
         let info = vk::BufferCreateInfo::default()
             .size(size)
             .usage(usage)

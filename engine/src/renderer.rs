@@ -9,7 +9,7 @@ use ash::vk;
 
 use crate::context::Context;
 use crate::descriptors::{DescriptorArena, Samplers};
-use crate::error::{EngineError, Result, VkContext};
+use crate::error::{Result, VkContext};
 use crate::graph::{record_graph, BufferBacking, FrameGraph, ImageBacking, Plan, Target};
 use crate::graph::{RecordEnv, Resolved, ResolvedBuffer, ResolvedImage};
 use crate::memory::{Buffer, Image};
@@ -199,17 +199,8 @@ impl Renderer {
         self.begun = None;
         self.next_frame += 1;
         let plan = Plan::new(&graph)?;
-        if plan.order.len() as u32 > crate::timing::MAX_TIMED_PASSES {
-            return Err(EngineError::Pass {
-                pass: "(graph)".into(),
-                message: format!(
-                    "{} passes exceed the {} the timer supports",
-                    plan.order.len(),
-                    crate::timing::MAX_TIMED_PASSES
-                ),
-            });
-        }
         let slot = &mut self.slots[token.slot];
+        slot.queries.ensure_capacity(plan.order.len() as u32)?;
         let physical = slot.transients.acquire(&plan.slots, token.frame)?;
         let mut keep_images = Vec::new();
         let mut keep_buffers = Vec::new();

@@ -9,8 +9,9 @@ use ash::vk;
 use crate::context::Context;
 use crate::error::{Result, VkContext};
 
-/// The most passes one frame can time.
-pub const MAX_TIMED_PASSES: u32 = 128;
+/// Passes a frame slot's query pool times before it grows (it grows to
+/// fit any frame's graph, so no graph is refused for its size).
+pub const INITIAL_TIMED_PASSES: u32 = 128;
 
 /// One pass's cost in one frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,15 +57,23 @@ impl FrameTimings {
 pub(crate) struct PassQueries {
     ctx: Arc<Context>,
     pool: vk::QueryPool,
+    /// Passes the pool has queries for.
+    capacity: u32,
     valid_mask: u64,
+}
+
+fn create_pool(ctx: &Context, passes: u32) -> Result<vk::QueryPool> {
+    let info = vk::QueryPoolCreateInfo::default()
+        .query_type(vk::QueryType::TIMESTAMP)
+        .query_count(2 * passes);
+    // SAFETY: a valid create info on the context's live device.
+    unsafe { ctx.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")
 }
 
 impl PassQueries {
     pub(crate) fn new(ctx: &Arc<Context>) -> Result<Self> {
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(2 * MAX_TIMED_PASSES);
-        let pool = unsafe { ctx.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        let capacity = INITIAL_TIMED_PASSES;
+        let pool = create_pool(ctx, capacity)?;
         let bits = unsafe {
             ctx.instance
                 .get_physical_device_queue_family_properties(ctx.physical)
@@ -80,8 +89,25 @@ impl PassQueries {
         Ok(Self {
             ctx: ctx.clone(),
             pool,
+            capacity,
             valid_mask,
         })
+    }
+
+    /// Makes room for a frame of `passes` passes, replacing the pool with a
+    /// larger one when needed. Call only while the slot is idle (its fence
+    /// waited on and its last frame's timestamps read).
+    pub(crate) fn ensure_capacity(&mut self, passes: u32) -> Result<()> {
+        if passes <= self.capacity {
+            return Ok(());
+        }
+        let capacity = passes.next_power_of_two();
+        let pool = create_pool(&self.ctx, capacity)?;
+        // SAFETY: the slot is idle, so no command buffer uses the old pool.
+        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+        self.pool = pool;
+        self.capacity = capacity;
+        Ok(())
     }
 
     /// Resets the queries the frame will write (recorded in the frame's command buffer).
@@ -91,7 +117,7 @@ impl PassQueries {
                 cmd,
                 self.pool,
                 0,
-                2 * passes.clamp(1, MAX_TIMED_PASSES),
+                2 * passes.clamp(1, self.capacity),
             )
         };
     }
@@ -99,7 +125,7 @@ impl PassQueries {
     /// Writes pass `index`'s start (`end = false`) or end timestamp once all
     /// earlier commands have completed.
     pub(crate) fn write(&self, cmd: vk::CommandBuffer, index: u32, end: bool) {
-        if index < MAX_TIMED_PASSES {
+        if index < self.capacity {
             unsafe {
                 self.ctx.device.cmd_write_timestamp2(
                     cmd,
@@ -114,7 +140,7 @@ impl PassQueries {
     /// Reads the timestamps of `passes` passes; call only after the frame's
     /// fence has signalled (never waits). Returns (start, end) in ms.
     pub(crate) fn read(&self, passes: u32) -> Result<Vec<(f64, f64)>> {
-        let n = passes.min(MAX_TIMED_PASSES);
+        let n = passes.min(self.capacity);
         if n == 0 {
             return Ok(Vec::new());
         }

@@ -43,11 +43,16 @@ impl CameraSpec {
             return Some("position, look_at and up must be finite".into());
         }
         let f = self.look_at - self.position;
+        if !f.is_finite() {
+            return Some("look_at − position overflows: bring them closer to the origin".into());
+        }
         if f.length() < 1e-9 {
             return Some("look_at equals position".into());
         }
-        if f.normalize().cross(self.up).length() < 1e-6 {
-            return Some("up is parallel to the viewing direction".into());
+        let unit = crate::scene::vec3::unit;
+        let across = unit(f).zip(unit(self.up)).map(|(f, u)| f.cross(u).length());
+        if across.is_none_or(|a| a < 1e-6) {
+            return Some("up is zero or parallel to the viewing direction".into());
         }
         if !(self.fov_y > 0.0 && self.fov_y < 179.0) {
             return Some(format!(
@@ -81,8 +86,11 @@ impl CameraFrame {
     /// The frame of `spec` for a `width`×`height` image (the spec must have
     /// no [`CameraSpec::problem`]).
     pub fn new(spec: &CameraSpec, width: u32, height: u32) -> Self {
-        let forward = (spec.look_at - spec.position).normalize();
-        let right = forward.cross(spec.up).normalize();
+        // As `normalize()` for every camera `problem()` accepts; a default
+        // frame, never NaN, for one it refuses.
+        let unit = crate::scene::vec3::unit;
+        let forward = unit(spec.look_at - spec.position).unwrap_or(DVec3::NEG_Z);
+        let right = unit(forward.cross(unit(spec.up).unwrap_or(DVec3::Y))).unwrap_or(DVec3::X);
         let up = right.cross(forward);
         let tan = (spec.fov_y.to_radians() * 0.5).tan();
         let aspect = width as f64 / height as f64;

@@ -33,6 +33,29 @@ pub fn output_text(o: &Output) -> String {
     )
 }
 
+/// Runs the `inlay` program with `args`, its bake cache in `cache`.
+pub fn inlay_cached(args: &[&str], cache: &std::path::Path) -> Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .args(args)
+        .env("INLAY_CACHE_DIR", cache)
+        .output()
+        .expect("the inlay binary runs")
+}
+
+/// The path of bundled scene file `name` (e.g. `dog.toml`), as text.
+pub fn scene_path(name: &str) -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// A path as text (test paths are UTF-8).
+pub fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
 /// The bundled objects' directory, `scenes/objects/`.
 pub fn objects_dir() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects")

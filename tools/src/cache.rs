@@ -84,25 +84,6 @@ pub fn entry_path(stem: &str, key: CacheKey, extension: &str) -> Option<PathBuf>
     cache_dir().map(|d| d.join(format!("{stem}-{}.{extension}", key.hex())))
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory
-/// that is renamed into place once complete.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.partial", std::process::id()));
-    let written = std::fs::write(&tmp, bytes)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .with_context(|| format!("{}: cannot write", path.display()));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written
-}
-
 /// The result cached at `entry` if it loads, else `make()`'s result, saved
 /// there (as `encode` gives its bytes) for the next run. With no entry
 /// (no cache, or caching turned off) it is `make()`. A failure to save is
@@ -127,7 +108,16 @@ pub fn load_or_make<T>(
         }
     }
     let value = make()?;
-    if let Err(e) = write_atomically(path, &encode(&value)) {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let written = std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))
+        .and_then(|_| {
+            Ok(inlay_engine::output::write_atomically(
+                path,
+                &encode(&value),
+            )?)
+        });
+    if let Err(e) = written {
         log::warn!("could not cache the {what}: {e:#}");
     }
     Ok(value)

@@ -6,8 +6,11 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use indicatif::{ProgressBar, ProgressStyle};
+use inlay_engine::DeviceInfo;
 use inlay_passes::bake::{bake_grid, BakeKnobs};
-use inlay_passes::field::{field_bytes, load_field, GridField, FIELD_VERSION};
+use inlay_passes::field::{
+    check_field_fits, field_bytes, load_field, read_field_header, GridField, FIELD_VERSION,
+};
 use inlay_passes::scene::{FieldSource, Scene};
 
 pub use crate::cache::CACHE_ENV;
@@ -74,20 +77,47 @@ fn cache_entry(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBu
     Ok(entry_path(&scene.name, key, "inlayfield"))
 }
 
+/// Fails unless the field file at `path` fits `device` (read from its
+/// header, before the nodes are).
+fn check_file_fits(path: &Path, device: Option<&DeviceInfo>) -> anyhow::Result<()> {
+    let header = read_field_header(path)?;
+    if let Some(info) = device {
+        check_field_fits(info, header.resolution)
+            .with_context(|| format!("{}: resolution", path.display()))?;
+    }
+    Ok(())
+}
+
 /// The scene's field: `override_file` when given, else its field file, else
 /// its recipe baked with the scene's knobs (from the cache unless
-/// `use_cache` is false).
+/// `use_cache` is false). With `device` given, a field too large for it is
+/// refused before the file is read or the recipe baked.
 pub fn scene_field(
     scene: &Scene,
     override_file: Option<&Path>,
     use_cache: bool,
+    device: Option<&DeviceInfo>,
 ) -> anyhow::Result<GridField> {
     if let Some(f) = override_file {
+        check_file_fits(f, device)?;
         return Ok(load_field(f)?);
     }
     match &scene.field {
-        FieldSource::File(f) => Ok(load_field(f)?),
-        FieldSource::Recipe(_) => {
+        FieldSource::File(f) => {
+            check_file_fits(f, device)?;
+            Ok(load_field(f)?)
+        }
+        FieldSource::Recipe(recipe) => {
+            if let Some(info) = device {
+                let res = inlay_passes::bake::grid_resolution(recipe, scene.bake.resolution);
+                check_field_fits(info, res).with_context(|| {
+                    format!(
+                        "{}: [bake] resolution {}",
+                        scene.path.display(),
+                        scene.bake.resolution
+                    )
+                })?;
+            }
             let entry = if use_cache {
                 cache_entry(scene, &scene.bake)?
             } else {

@@ -6,8 +6,11 @@ use std::sync::Arc;
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::timing::FrameTimings;
 use inlay_engine::{
-    vk, Context, HdrImage, ImageDesc, Readback, Renderer, SubmitSync, DEFAULT_FRAMES_IN_FLIGHT,
+    vk, Context, DeviceInfo, HdrImage, ImageDesc, Readback, Renderer, SubmitSync,
+    DEFAULT_FRAMES_IN_FLIGHT,
 };
+
+use crate::outputs::Outputs;
 
 /// Something that renders an HDR image through a frame graph (object-safe:
 /// the targets take `&mut dyn Scene`).
@@ -42,6 +45,19 @@ pub struct HeadlessRun {
     pub transients_created: u64,
 }
 
+/// Fails, before any work, unless `info`'s device can render a `width` ×
+/// `height` frame (each side 1 up to its largest 2D image).
+pub fn check_frame_size(info: &DeviceInfo, width: u32, height: u32) -> anyhow::Result<()> {
+    let max = info.max_image_dimension_2d;
+    anyhow::ensure!(
+        width > 0 && height > 0 && width <= max && height <= max,
+        "image size {width}x{height} is out of range: {} renders 1..={max} pixels a side \
+         (--width, --height)",
+        info.name
+    );
+    Ok(())
+}
+
 /// Renders `frames` frames (at least 1) of `scene` offscreen with frames in
 /// flight, at times `time + i/60`, and reads the last one back.
 pub fn run_headless(
@@ -52,10 +68,7 @@ pub fn run_headless(
     frames: u32,
     time: f32,
 ) -> anyhow::Result<HeadlessRun> {
-    anyhow::ensure!(
-        width > 0 && height > 0 && width <= 16384 && height <= 16384,
-        "image size {width}x{height} is out of range (1..=16384 per side)"
-    );
+    check_frame_size(ctx.info(), width, height)?;
     let mut renderer = Renderer::new(ctx, DEFAULT_FRAMES_IN_FLIGHT)?;
     let readback = Readback::new(
         ctx,
@@ -93,10 +106,11 @@ impl HeadlessRun {
         outs: &[std::path::PathBuf],
         exposure: f32,
     ) -> anyhow::Result<()> {
+        let mut outputs = Outputs::new();
         for out in outs {
-            self.image.save(out, exposure)?;
-            println!("wrote {}", out.display());
+            outputs.image(out, &self.image, exposure)?;
         }
+        outputs.commit(Some(ctx))?;
         print!(
             "{}",
             crate::timings_table::format_table(

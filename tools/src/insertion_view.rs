@@ -46,6 +46,13 @@ impl InsertionView {
         use_cache: bool,
     ) -> anyhow::Result<Self> {
         let shadows = scene.shadows.any() && !scene.objects.is_empty();
+        // Every object's limits before any SSDF is baked.
+        for (placed, source) in scene.objects.iter().zip(&scene.object_sources) {
+            inlay_passes::object::check_mesh_fits(ctx.info(), &placed.mesh)?;
+            if shadows && source.ssdf.is_none() {
+                inlay_passes::ssdf::check_bake_fits(ctx.info(), &placed.mesh)?;
+            }
+        }
         let ssdfs = scene
             .objects
             .iter()

@@ -13,6 +13,7 @@ pub mod gpu_layouts;
 pub mod headless;
 pub mod insertion_view;
 pub mod measure;
+pub mod outputs;
 pub mod overlay;
 pub mod present;
 pub mod scene_view;

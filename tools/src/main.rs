@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use inlay::commands::on_device;
 use inlay::demo::{DemoPipelines, DemoScene};
 use inlay::headless::run_headless;
 use inlay::timings_table::format_table;
@@ -121,35 +122,37 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Demo(args) => demo(&cli.gpu, args),
         Command::View(args) => inlay::view::run(&cli.gpu.options(), args),
-        Command::BakeScene(args) => inlay::commands::bake_scene::run(args),
-        Command::BakeSsdf(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::bake_ssdf::run(&ctx, args)),
-        Command::EstimateEnv(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::estimate_env::run(&ctx, args)),
-        Command::Render(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::render::run(&ctx, args)),
-        Command::Profile(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::profile::run(&ctx, args)),
+        Command::BakeScene(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::bake_scene::run(ctx.info(), args)
+        }),
+        Command::BakeSsdf(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::bake_ssdf::run(ctx, args)
+        }),
+        Command::EstimateEnv(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::estimate_env::run(ctx, args)
+        }),
+        Command::Render(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::render::run(ctx, args)
+        }),
+        Command::Profile(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::profile::run(ctx, args)
+        }),
         Command::Reference(args) => inlay::commands::reference::run(args),
-        Command::Sweep(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::sweep::run(&ctx, args)),
-        Command::BenchMarch(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::bench_march::run(&ctx, args)),
-        Command::Fidelity(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::fidelity::run(&ctx, args)),
-        Command::Probe(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::probe::run(&ctx, args)),
-        Command::BenchSg(args) => Context::new(&cli.gpu.options(), None)
-            .map_err(anyhow::Error::from)
-            .and_then(|ctx| inlay::commands::bench_sg::run(&ctx, args)),
+        Command::Sweep(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::sweep::run(ctx, args)
+        }),
+        Command::BenchMarch(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::bench_march::run(ctx, args)
+        }),
+        Command::Fidelity(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::fidelity::run(ctx, args)
+        }),
+        Command::Probe(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::probe::run(ctx, args)
+        }),
+        Command::BenchSg(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::bench_sg::run(ctx, args)
+        }),
         Command::BenchShade(args) => inlay::commands::bench_shade::run(args),
     };
     match result {
@@ -167,6 +170,11 @@ fn demo(gpu: &GpuArgs, args: &DemoArgs) -> anyhow::Result<()> {
         "--exposure must be a positive number, got {}",
         args.exposure
     );
+    if args.headless {
+        for out in &args.out {
+            inlay::outputs::check_image_output("--out", out)?;
+        }
+    }
     let library = inlay_passes::shaders::library()?;
     if !args.headless {
         let options = WindowOptions {

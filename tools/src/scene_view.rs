@@ -28,7 +28,10 @@ pub fn open_view(
     use_cache: bool,
 ) -> anyhow::Result<InsertionView> {
     let camera = scene.camera(camera)?.clone();
-    let field = scene_field(scene, field_file, use_cache)?;
+    knobs
+        .check()
+        .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
+    let field = scene_field(scene, field_file, use_cache, Some(ctx.info()))?;
     view_over_field(ctx, lib, scene, knobs, &field, camera, use_cache)
 }
 

@@ -8,7 +8,9 @@ use std::sync::Arc;
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::Context;
 use inlay_passes::object::{gltf_files, ObjectMesh};
-use inlay_passes::ssdf::{load_ssdf, ssdf_bytes, SsdfBaker, SsdfField, SsdfKnobs, SSDF_VERSION};
+use inlay_passes::ssdf::{
+    check_ssdf_object, load_ssdf, ssdf_bytes, SsdfBaker, SsdfField, SsdfKnobs, SSDF_VERSION,
+};
 
 use crate::cache::{entry_path, load_or_make, CacheKey};
 use crate::field_source::progress_bar;
@@ -111,8 +113,13 @@ pub fn object_ssdf(
     knobs: &SsdfKnobs,
     use_cache: bool,
 ) -> anyhow::Result<SsdfField> {
+    let load_for_mesh = |path: &Path| -> anyhow::Result<SsdfField> {
+        let field = load_ssdf(path)?;
+        check_ssdf_object(&field, path, mesh)?;
+        Ok(field)
+    };
     if let Some(f) = file {
-        return Ok(load_ssdf(f)?);
+        return load_for_mesh(f);
     }
     let entry = if use_cache {
         cache_entry(object_file, knobs)?
@@ -122,7 +129,7 @@ pub fn object_ssdf(
     load_or_make(
         entry.as_deref(),
         "SSDF field",
-        |p| Ok(load_ssdf(p)?),
+        load_for_mesh,
         || Ok(bake_ssdf_with_progress(ctx, lib, mesh, knobs)?.0),
         ssdf_bytes,
     )

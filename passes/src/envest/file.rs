@@ -70,7 +70,7 @@ struct EnvFileSpec {
 
 /// Why one lobe cannot be used, if it cannot (shared with scene files).
 pub fn lobe_problem(l: &Sg64) -> Option<String> {
-    if !(l.direction.is_finite() && l.direction.length() > 1e-9) {
+    if crate::scene::vec3::unit(l.direction).is_none() {
         return Some("direction must be a finite non-zero vector".into());
     }
     if !(l.sharpness.is_finite() && l.sharpness > 0.0 && l.sharpness <= 1e4) {
@@ -133,7 +133,7 @@ pub fn parse_environment_file(path: &Path, text: &str) -> Result<EstimatedLight,
         if let Some(m) = lobe_problem(l) {
             return Err(e(&format!("lobes[{i}]"), m));
         }
-        l.direction = l.direction.normalize();
+        l.direction = crate::scene::vec3::unit(l.direction).expect("checked above");
     }
     for (i, l) in spec.lights.iter().enumerate() {
         if !l.position.is_finite() {
@@ -186,21 +186,4 @@ pub fn environment_file_text(
         );
     }
     s
-}
-
-/// Writes [`environment_file_text`] to `path`.
-pub fn save_environment_file(
-    path: &Path,
-    lobes: &[Sg64],
-    lights: &[PointLight],
-    source: &str,
-    estimate: &[(String, String)],
-) -> Result<(), EnvFileError> {
-    std::fs::write(path, environment_file_text(lobes, lights, source, estimate)).map_err(|x| {
-        EnvFileError {
-            path: path.to_owned(),
-            field: "file".into(),
-            message: x.to_string(),
-        }
-    })
 }

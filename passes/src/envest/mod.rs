@@ -36,8 +36,8 @@ pub use estimate::{
     estimate_environment, sample_surface, EnvEstimate, Progress, Stage, SurfaceSample,
 };
 pub use file::{
-    environment_file_text, load_environment_file, parse_environment_file, save_environment_file,
-    EnvFileError, EstimatedLight, ENV_FILE_VERSION,
+    environment_file_text, load_environment_file, parse_environment_file, EnvFileError,
+    EstimatedLight, ENV_FILE_VERSION,
 };
 pub use fit::{fit_environment, fit_from, params_of, FitData, FitResult};
 pub use knobs::EnvEstimateKnobs;

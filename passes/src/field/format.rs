@@ -58,14 +58,51 @@ fn f32_at(bytes: &[u8], at: usize) -> f32 {
     f32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
 }
 
-/// Reads a grid field from `path`.
+/// What a field file's header says, read without its nodes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldHeader {
+    /// Nodes per axis.
+    pub resolution: UVec3,
+    /// The grid's bounds.
+    pub bounds: Aabb,
+}
+
+impl FieldHeader {
+    /// Bytes of the node array (what the GPU binds).
+    pub fn node_bytes(&self) -> u64 {
+        16 * self.resolution.as_u64vec3().element_product()
+    }
+}
+
+/// Reads and checks a field file's header, and that the file's size
+/// matches it, without reading the nodes: a caller can refuse a field too
+/// large for its device before spending memory and time on it.
+pub fn read_field_header(path: &Path) -> Result<FieldHeader, FieldFormatError> {
+    use std::io::Read as _;
+    let mut file = std::fs::File::open(path).map_err(|e| err(path, "file", e.to_string()))?;
+    let len = file
+        .metadata()
+        .map_err(|e| err(path, "file", e.to_string()))?
+        .len();
+    let mut head = Vec::with_capacity(HEADER_BYTES);
+    file.by_ref()
+        .take(HEADER_BYTES as u64)
+        .read_to_end(&mut head)
+        .map_err(|e| err(path, "file", e.to_string()))?;
+    parse_header(path, &head, len)
+}
+
+/// Reads a grid field from `path`; the file's size is checked against its
+/// header before the nodes are read.
 pub fn load_field(path: &Path) -> Result<GridField, FieldFormatError> {
+    read_field_header(path)?;
     let bytes = std::fs::read(path).map_err(|e| err(path, "file", e.to_string()))?;
     parse_field(path, &bytes)
 }
 
-/// Parses the bytes of a field file (`path` is only used in messages).
-pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatError> {
+/// Checks the header at the start of `bytes` (at least its 56 bytes, or
+/// the whole file when shorter) against a file of `len` bytes.
+fn parse_header(path: &Path, bytes: &[u8], len: u64) -> Result<FieldHeader, FieldFormatError> {
     if bytes.len() < 8 || &bytes[..8] != FIELD_MAGIC {
         return Err(err(
             path,
@@ -77,10 +114,7 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
         return Err(err(
             path,
             "header",
-            format!(
-                "truncated: {} bytes, the header needs {HEADER_BYTES}",
-                bytes.len()
-            ),
+            format!("truncated: {len} bytes, the header needs {HEADER_BYTES}"),
         ));
     }
     let version = u32_at(bytes, 8);
@@ -133,20 +167,23 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
     if flags != 0 {
         return Err(err(path, "flags", format!("{flags:#x}; must be 0")));
     }
-    let count = (res.x as usize) * (res.y as usize) * (res.z as usize);
-    let expected = HEADER_BYTES + 16 * count;
-    if bytes.len() != expected {
+    let header = FieldHeader {
+        resolution: res,
+        bounds,
+    };
+    let expected = HEADER_BYTES as u64 + header.node_bytes();
+    if len != expected {
         return Err(err(
             path,
             "nodes",
             format!(
                 "{} bytes of node data for {}x{}x{} nodes, expected {} ({})",
-                bytes.len() - HEADER_BYTES,
+                len - HEADER_BYTES as u64,
                 res.x,
                 res.y,
                 res.z,
-                16 * count,
-                if bytes.len() < expected {
+                header.node_bytes(),
+                if len < expected {
                     "truncated"
                 } else {
                     "trailing bytes"
@@ -154,6 +191,14 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
             ),
         ));
     }
+    Ok(header)
+}
+
+/// Parses the bytes of a field file (`path` is only used in messages).
+pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatError> {
+    let header = parse_header(path, bytes, bytes.len() as u64)?;
+    let res = header.resolution;
+    let count = (res.x as usize) * (res.y as usize) * (res.z as usize);
     let mut nodes = Vec::with_capacity(count);
     for (n, chunk) in bytes[HEADER_BYTES..].chunks_exact(16).enumerate() {
         let v: [f32; 4] = std::array::from_fn(|c| f32_at(chunk, 4 * c));
@@ -182,7 +227,12 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
         }
         nodes.push(v);
     }
-    Ok(GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK))
+    Ok(GridField::new(
+        res,
+        header.bounds,
+        nodes,
+        DEFAULT_OCCUPANCY_BLOCK,
+    ))
 }
 
 /// The bytes of `field` in the file format.
@@ -212,9 +262,10 @@ pub fn field_bytes(field: &GridField) -> Vec<u8> {
     out
 }
 
-/// Writes `field` to `path`.
+/// Writes `field` to `path` (through a temporary file renamed into place).
 pub fn save_field(path: &Path, field: &GridField) -> Result<(), FieldFormatError> {
-    std::fs::write(path, field_bytes(field)).map_err(|e| err(path, "file", e.to_string()))
+    inlay_engine::output::write_atomically(path, &field_bytes(field))
+        .map_err(|e| err(path, "file", e.detail()))
 }
 
 #[cfg(test)]

@@ -4,8 +4,9 @@
 
 use std::sync::Arc;
 
+use glam::UVec3;
 use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph};
-use inlay_engine::{vk, Buffer, Context};
+use inlay_engine::{vk, Buffer, Context, DeviceInfo};
 
 use super::grid::GridField;
 
@@ -68,23 +69,40 @@ impl GridBindings {
     }
 }
 
-impl GpuGridField {
-    /// Uploads `field`. Fails with a clear message when the node array is
-    /// larger than the device's largest storage binding.
-    pub fn upload(ctx: &Arc<Context>, field: &GridField) -> anyhow::Result<Self> {
-        let node_bytes = 16 * field.nodes.len() as u64;
-        let limit = ctx.info().max_storage_buffer_range as u64;
+/// Fails, naming the limit and what to change, unless a field of
+/// `resolution` nodes fits the device: its node array (16 bytes a node) in
+/// one storage binding and in the largest device heap. For checks before a
+/// bake or a file is read.
+pub fn check_field_fits(info: &DeviceInfo, resolution: UVec3) -> anyhow::Result<()> {
+    let node_bytes = 16 * resolution.as_u64vec3().element_product();
+    let (limit, what) = (
+        info.max_storage_buffer_range as u64,
+        "largest storage binding",
+    );
+    let (heap, heap_what) = (info.device_heap_bytes, "largest memory heap");
+    for (limit, what) in [(limit, what), (heap, heap_what)] {
         if node_bytes > limit {
             anyhow::bail!(
-                "the field's {}x{}x{} nodes take {} MiB, more than this device's largest storage \
-                 binding ({} MiB); bake it at a lower resolution",
-                field.resolution.x,
-                field.resolution.y,
-                field.resolution.z,
+                "the field's {}x{}x{} nodes take {} MiB, more than {}'s {what} ({} MiB); \
+                 use a field of at most {} nodes",
+                resolution.x,
+                resolution.y,
+                resolution.z,
                 node_bytes >> 20,
-                limit >> 20
+                info.name,
+                limit >> 20,
+                limit / 16
             );
         }
+    }
+    Ok(())
+}
+
+impl GpuGridField {
+    /// Uploads `field`. Fails with a clear message when the node array is
+    /// larger than the device can bind ([`check_field_fits`]).
+    pub fn upload(ctx: &Arc<Context>, field: &GridField) -> anyhow::Result<Self> {
+        check_field_fits(ctx.info(), field.resolution)?;
         let b = field.bounds;
         let occ = &field.occupancy;
         let info = GridInfo {

@@ -12,9 +12,10 @@ mod occupancy;
 mod perturb;
 
 pub use format::{
-    field_bytes, load_field, parse_field, save_field, FieldFormatError, FIELD_MAGIC, FIELD_VERSION,
+    field_bytes, load_field, parse_field, read_field_header, save_field, FieldFormatError,
+    FieldHeader, FIELD_MAGIC, FIELD_VERSION,
 };
-pub use gpu_grid::{GpuGridField, GridBindings};
+pub use gpu_grid::{check_field_fits, GpuGridField, GridBindings};
 pub use grid::GridField;
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
 pub use perturb::{perturb, Perturbation};

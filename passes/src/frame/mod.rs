@@ -144,10 +144,11 @@ impl InsertionFrame {
         ssdfs: Vec<Option<Arc<SsdfField>>>,
     ) -> anyhow::Result<Self> {
         anyhow::ensure!(
-            scene.objects.len() <= 64,
-            "{}: {} objects; at most 64 are inserted at once",
+            scene.objects.len() <= crate::scene::MAX_OBJECTS,
+            "{}: {} objects; at most {} are inserted at once",
             scene.path.display(),
-            scene.objects.len()
+            scene.objects.len(),
+            crate::scene::MAX_OBJECTS
         );
         anyhow::ensure!(
             ssdfs.len() == scene.objects.len(),

@@ -26,15 +26,50 @@ pub struct ObjectError {
     pub message: String,
 }
 
+/// The message for a file the glTF crate panicked on.
+fn malformed(panic: Box<dyn std::any::Any + Send>) -> String {
+    let why = panic
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| panic.downcast_ref::<&str>().copied())
+        .unwrap_or("no message");
+    format!("malformed: the glTF reader failed on it ({why})")
+}
+
+/// Opens and validates `path` as glTF, and checks what the crate's own
+/// validation lets through but its importer would panic on: an image with
+/// neither a URI nor a buffer view, or a buffer view without a MIME type.
+fn open_gltf(path: &Path) -> Result<gltf::Gltf, ObjectError> {
+    let err = |field: String, message: String| ObjectError {
+        path: path.to_owned(),
+        field,
+        message,
+    };
+    // Read whole (the file's real size), not through the crate's reader,
+    // which allocates whatever length a .glb header claims before reading.
+    let bytes = std::fs::read(path).map_err(|e| err("file".into(), e.to_string()))?;
+    let gltf = match std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes)) {
+        Ok(parsed) => parsed.map_err(|e| err("file".into(), e.to_string()))?,
+        Err(panic) => return Err(err("file".into(), malformed(panic))),
+    };
+    for (i, image) in gltf.document.as_json().images.iter().enumerate() {
+        let problem = match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (None, None, _) => Some("has neither a `uri` nor a `bufferView`"),
+            (_, Some(_), None) => Some("has a `bufferView` but no `mimeType`"),
+            _ => None,
+        };
+        if let Some(m) = problem {
+            return Err(err(format!("images[{i}]"), m.into()));
+        }
+    }
+    Ok(gltf)
+}
+
 /// The files loading `path` reads: the .gltf or .glb itself, then every
 /// buffer and image it refers to by a (non-`data:`) URI, in document order.
 /// A cache of what is baked from the object hashes all of them.
 pub fn gltf_files(path: &Path) -> Result<Vec<PathBuf>, ObjectError> {
-    let gltf = gltf::Gltf::open(path).map_err(|e| ObjectError {
-        path: path.to_owned(),
-        field: "file".into(),
-        message: e.to_string(),
-    })?;
+    let gltf = open_gltf(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let external = |uri: &str| (!uri.starts_with("data:")).then(|| base.join(uri));
     let buffers = gltf.document.buffers().filter_map(|b| match b.source() {
@@ -51,8 +86,19 @@ pub fn gltf_files(path: &Path) -> Result<Vec<PathBuf>, ObjectError> {
         .collect())
 }
 
-/// Loads a .gltf or .glb file.
+/// Loads a .gltf or .glb file. A file the glTF crate panics on (it does
+/// on some malformed ones) is an error naming the file, like any other.
 pub fn load_gltf(path: &Path) -> Result<ObjectMesh, ObjectError> {
+    std::panic::catch_unwind(|| load_gltf_unguarded(path)).unwrap_or_else(|panic| {
+        Err(ObjectError {
+            path: path.to_owned(),
+            field: "file".into(),
+            message: malformed(panic),
+        })
+    })
+}
+
+fn load_gltf_unguarded(path: &Path) -> Result<ObjectMesh, ObjectError> {
     let err = |field: &str, message: String| ObjectError {
         path: path.to_owned(),
         field: field.to_owned(),
@@ -60,7 +106,7 @@ pub fn load_gltf(path: &Path) -> Result<ObjectMesh, ObjectError> {
     };
     // The crate's validation refuses required extensions it does not
     // implement (Draco, meshopt, KTX2 …), naming them.
-    let gltf = gltf::Gltf::open(path).map_err(|e| err("file", e.to_string()))?;
+    let gltf = open_gltf(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let gltf::Gltf { document, blob } = gltf;
     let buffers = gltf::import_buffers(&document, Some(base), blob).map_err(|e| {

@@ -7,9 +7,9 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use inlay_engine::{vk, Buffer, Context, Image, ImageDesc};
+use inlay_engine::{vk, Buffer, Context, DeviceInfo, Image, ImageDesc};
 
-use super::mesh::ObjectMesh;
+use super::mesh::{MeshVertex, ObjectMesh};
 use super::texture::Texture;
 
 /// A mesh uploaded for drawing.
@@ -22,9 +22,36 @@ pub struct GpuObject {
     white: Arc<Image>,
 }
 
+/// Fails, naming the object, the limit and what fits, unless `mesh`'s
+/// vertex and index buffers each fit one storage binding on `info`'s device.
+pub fn check_mesh_fits(info: &DeviceInfo, mesh: &ObjectMesh) -> anyhow::Result<()> {
+    let limit = info.max_storage_buffer_range as u64;
+    for (what, count, bytes) in [
+        (
+            "vertices",
+            mesh.vertices.len() as u64,
+            MeshVertex::BYTES as u64,
+        ),
+        ("indices", mesh.indices.len() as u64, 4),
+    ] {
+        anyhow::ensure!(
+            count * bytes <= limit,
+            "{}: {count} {what} take {} MiB, more than {}'s largest storage binding ({} MiB); \
+             simplify the mesh to at most {} {what}",
+            mesh.name,
+            (count * bytes) >> 20,
+            info.name,
+            limit >> 20,
+            limit / bytes
+        );
+    }
+    Ok(())
+}
+
 impl GpuObject {
-    /// Uploads `mesh`.
+    /// Uploads `mesh` ([`check_mesh_fits`] first).
     pub fn upload(ctx: &Arc<Context>, mesh: &ObjectMesh) -> anyhow::Result<Self> {
+        check_mesh_fits(ctx.info(), mesh)?;
         let vertex_bytes: Vec<u8> = mesh.vertices.iter().flat_map(|v| v.to_bytes()).collect();
         let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;

@@ -20,8 +20,11 @@ pub struct MeshVertex {
 }
 
 impl MeshVertex {
+    /// Bytes of one vertex on the GPU.
+    pub const BYTES: usize = 32;
+
     /// The GPU layout: position, u, normal, v (32 bytes, std430).
-    pub fn to_bytes(&self) -> [u8; 32] {
+    pub fn to_bytes(&self) -> [u8; Self::BYTES] {
         let v = [
             self.position.x,
             self.position.y,
@@ -69,6 +72,26 @@ pub struct ObjectMesh {
 }
 
 impl ObjectMesh {
+    /// A 64-bit key of the mesh's geometry (every vertex position and
+    /// index, FNV-1a): what an SSDF baked from it records, so that an SSDF
+    /// is never used for another object, or for this one edited.
+    pub fn geometry_key(&self) -> u64 {
+        let mut h: u64 = 0xcbf29ce484222325;
+        let mut eat = |word: u32| {
+            for b in word.to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x100000001b3);
+            }
+        };
+        eat(self.vertices.len() as u32);
+        for c in self.vertices.iter().flat_map(|v| v.position.to_array()) {
+            eat(c.to_bits());
+        }
+        eat(self.indices.len() as u32);
+        self.indices.iter().for_each(|&i| eat(i));
+        h
+    }
+
     /// The bounding box of the vertices.
     pub fn bounds(&self) -> Aabb {
         let mut lo = DVec3::splat(f64::INFINITY);

@@ -11,7 +11,7 @@ mod record;
 mod texture;
 
 pub use gltf_load::{gltf_files, load_gltf, ObjectError};
-pub use gpu::GpuObject;
+pub use gpu::{check_mesh_fits, GpuObject};
 pub use material::{srgb_to_linear, Material, MaterialOverride};
 pub use mesh::{MeshPart, MeshVertex, ObjectMesh};
 pub use pose::{Pose, Scale, SCALE_RANGE};

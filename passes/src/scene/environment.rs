@@ -28,13 +28,18 @@ pub enum Environment {
 }
 
 impl Environment {
-    /// An SG environment; lobe directions are normalised.
+    /// An SG environment; lobe directions are normalised (a lobe without
+    /// a direction, which the scene loader refuses, is dropped).
     pub fn from_lobes(mut lobes: Vec<SgLobe>) -> Self {
+        lobes.retain_mut(|l| match super::vec3::unit(l.direction) {
+            Some(d) => {
+                l.direction = d;
+                true
+            }
+            None => false,
+        });
         if lobes.is_empty() {
             return Environment::Black;
-        }
-        for l in &mut lobes {
-            l.direction = l.direction.normalize();
         }
         let energy: Vec<f64> = lobes
             .iter()

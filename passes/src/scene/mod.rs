@@ -26,6 +26,9 @@ pub use shape::Shape;
 /// with the key that holds it.
 pub const RADIANCE_LIMIT: f64 = 1e6;
 
+/// The most objects a scene inserts at once.
+pub const MAX_OBJECTS: usize = 64;
+
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -468,6 +471,15 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             bake,
         }
     };
+    if spec.objects.len() > MAX_OBJECTS {
+        return Err(e(
+            "objects",
+            format!(
+                "{} objects; at most {MAX_OBJECTS} are inserted at once",
+                spec.objects.len()
+            ),
+        ));
+    }
     let mut objects = Vec::with_capacity(spec.objects.len());
     let mut object_sources = Vec::with_capacity(spec.objects.len());
     let mut meshes: std::collections::HashMap<PathBuf, Arc<ObjectMesh>> = Default::default();

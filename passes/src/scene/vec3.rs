@@ -4,8 +4,24 @@
 //! `[0, 0, 3]`; fields read through these functions refuse it, naming the
 //! length (the loader adds the file and line).
 
+use glam::DVec3;
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
+
+/// `d` scaled to unit length, for any finite non-zero `d` (exactly
+/// `normalize()` where that works): a huge vector, whose length overflows
+/// to ∞ and would normalise to zero, or a subnormal one, whose length's
+/// inverse overflows, is divided by its largest component first. `None`
+/// for zero or non-finite.
+pub fn unit(d: DVec3) -> Option<DVec3> {
+    if !d.is_finite() {
+        return None;
+    }
+    d.try_normalize().or_else(|| {
+        let largest = d.abs().max_element();
+        (largest > 0.0).then(|| (d / largest).try_normalize())?
+    })
+}
 
 /// Reads exactly three `T`s into `V` (`DVec3`, `Vec3`).
 pub fn exact<'de, D, T, V>(d: D) -> Result<V, D::Error>
@@ -67,5 +83,24 @@ mod tests {
             let e = toml::from_str::<P>(bad).unwrap_err().to_string();
             assert!(e.contains("expected an array of 3 numbers"), "{bad}: {e}");
         }
+    }
+}
+
+#[cfg(test)]
+mod unit_tests {
+    use super::*;
+
+    #[test]
+    fn unit_keeps_huge_and_tiny_directions() {
+        // Exactly `normalize()` wherever that works.
+        let plain = DVec3::new(3.0, 0.0, 4.0);
+        assert_eq!(unit(plain), Some(plain.normalize()));
+        let huge = unit(DVec3::new(1e308, 1e308, 0.0)).unwrap();
+        assert!((huge - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-15);
+        let tiny = unit(DVec3::new(0.0, 1e-320, 0.0)).unwrap();
+        assert_eq!(tiny, DVec3::Y);
+        assert_eq!(unit(DVec3::ZERO), None);
+        assert_eq!(unit(DVec3::new(f64::NAN, 1.0, 0.0)), None);
+        assert_eq!(unit(DVec3::new(f64::INFINITY, 0.0, 0.0)), None);
     }
 }

@@ -16,7 +16,9 @@ use std::time::Instant;
 use glam::DVec3;
 use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
+use inlay_engine::{
+    vk, Buffer, BufferReadback, ComputePipeline, Context, DeviceInfo, Renderer, SubmitSync,
+};
 
 use super::grid::SsdfGrid;
 use super::silhouette::{SilhouetteMesh, ARC_PIECES, OUTSIDE_OFFSET};
@@ -108,8 +110,36 @@ pub struct SsdfSamples {
     pub directions: u32,
     /// S values, `grid.count()` rows of `directions²`.
     pub values: Vec<f32>,
+    /// The baked mesh's [`ObjectMesh::geometry_key`].
+    pub object: u64,
     /// Seconds the bake took.
     pub seconds: f64,
+}
+
+/// Bytes a triangle takes in the bake's largest storage buffer: a closed
+/// mesh has 1.5 silhouette edges a triangle, 96 bytes each (endpoints, two
+/// face planes, the opposite vertices).
+pub const BAKE_BYTES_PER_TRIANGLE: u64 = 144;
+
+/// Fails, before the silhouette and BVH are built, when `mesh` is too
+/// large for the bake's storage bindings on `info`'s device, naming the
+/// object, the limit and the largest triangle count that fits.
+pub fn check_bake_fits(info: &DeviceInfo, mesh: &ObjectMesh) -> anyhow::Result<()> {
+    let limit = info.max_storage_buffer_range as u64;
+    let need = BAKE_BYTES_PER_TRIANGLE * mesh.triangles() as u64;
+    anyhow::ensure!(
+        need <= limit,
+        "{}: {} triangles: the SSDF bake binds its silhouette edges in one buffer of about \
+         {} MiB, more than {}'s largest storage binding ({} MiB); simplify the mesh to at \
+         most {} triangles",
+        mesh.name,
+        mesh.triangles(),
+        need >> 20,
+        info.name,
+        limit >> 20,
+        limit / BAKE_BYTES_PER_TRIANGLE
+    );
+    Ok(())
 }
 
 /// The object in its own frame as a ray-casting scene.
@@ -219,6 +249,7 @@ impl SsdfBaker {
             "{}: the object has no triangles to cast a shadow",
             mesh.name
         );
+        check_bake_fits(ctx.info(), mesh)?;
         let started = Instant::now();
         let grid = grid_for(mesh, knobs.grid);
         let scene = object_scene(mesh);
@@ -228,6 +259,7 @@ impl SsdfBaker {
             grid,
             directions: knobs.directions,
             values,
+            object: mesh.geometry_key(),
             seconds: started.elapsed().as_secs_f64(),
         })
     }

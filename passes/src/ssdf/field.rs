@@ -76,6 +76,9 @@ pub struct SsdfField {
     pub texel_rows: Vec<f32>,
     /// Per node: k coefficients.
     pub coefficients: Vec<f32>,
+    /// The [`ObjectMesh::geometry_key`](crate::object::ObjectMesh::geometry_key)
+    /// of the mesh it was baked from.
+    pub object: u64,
 }
 
 impl SsdfField {
@@ -96,6 +99,7 @@ impl SsdfField {
             components: k as u32,
             texel_rows,
             coefficients: p.coefficients,
+            object: samples.object,
         }
     }
 
@@ -123,6 +127,7 @@ impl SsdfField {
             components: kept as u32,
             texel_rows,
             coefficients,
+            object: self.object,
         }
     }
 

@@ -1,21 +1,24 @@
-//! The SSDF field file format (`.inlayssdf`), version 1: an object's
+//! The SSDF field file format (`.inlayssdf`), version 2: an object's
 //! visibility, independent of any scene or radiance field. All numbers are
 //! little-endian:
 //!
 //! | offset | size | content |
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `INLAYSDF` |
-//! | 8 | 4 | format version, u32 = 1 |
+//! | 8 | 4 | format version, u32 = 2 |
 //! | 12 | 4 | grid nodes per axis n, u32, 2..=64 |
 //! | 16 | 4 | direction map side m, u32, 4..=128 (octahedral, m² texels) |
 //! | 20 | 4 | PCA components k, u32, 1..=min(64, m², n³) |
 //! | 24 | 12 | grid centre x, y, z (object space), f32 each |
 //! | 36 | 4 | bounding-sphere radius r, f32 > 0 (the grid's side is 3r) |
-//! | 40 | 4(k+1)·m² | per texel (row-major, see the probe's octahedral map): mean S, then the k basis values |
+//! | 40 | 8 | the object's geometry key, u64 (`ObjectMesh::geometry_key` of the mesh baked) |
+//! | 48 | 4(k+1)·m² | per texel (row-major, see the probe's octahedral map): mean S, then the k basis values |
 //! | … | 4k·n³ | per node (x fastest): k coefficients |
 //!
 //! S is in radians. Loading checks every field, rejects NaN/Inf and
-//! trailing or missing bytes, and names the first bad one.
+//! trailing or missing bytes, and names the first bad one; whoever uses a
+//! loaded field for an object checks its key against the object's
+//! ([`check_ssdf_object`]).
 
 use std::path::{Path, PathBuf};
 
@@ -28,8 +31,8 @@ use super::grid::SsdfGrid;
 /// The file's first eight bytes.
 pub const SSDF_MAGIC: &[u8; 8] = b"INLAYSDF";
 /// The version this build reads and writes.
-pub const SSDF_VERSION: u32 = 1;
-const HEADER_BYTES: usize = 40;
+pub const SSDF_VERSION: u32 = 2;
+const HEADER_BYTES: usize = 48;
 
 /// Why an SSDF file could not be read or written.
 #[derive(Debug, thiserror::Error)]
@@ -67,15 +70,17 @@ pub fn ssdf_bytes(field: &SsdfField) -> Vec<u8> {
     for v in [c.x, c.y, c.z, field.grid.radius] {
         out.extend_from_slice(&(v as f32).to_le_bytes());
     }
+    out.extend_from_slice(&field.object.to_le_bytes());
     for v in field.texel_rows.iter().chain(&field.coefficients) {
         out.extend_from_slice(&v.to_le_bytes());
     }
     out
 }
 
-/// Writes `field` to `path`.
+/// Writes `field` to `path` (through a temporary file renamed into place).
 pub fn save_ssdf(field: &SsdfField, path: &Path) -> Result<(), SsdfFormatError> {
-    std::fs::write(path, ssdf_bytes(field)).map_err(|e| err(path, "file", e.to_string()))
+    inlay_engine::output::write_atomically(path, &ssdf_bytes(field))
+        .map_err(|e| err(path, "file", e.detail()))
 }
 
 /// Reads and checks an SSDF file.
@@ -107,7 +112,7 @@ pub fn parse_ssdf(bytes: &[u8], path: &Path) -> Result<SsdfField, SsdfFormatErro
         return Err(err(
             path,
             "version",
-            format!("{version}; this build reads version {SSDF_VERSION}"),
+            format!("{version}; this build reads version {SSDF_VERSION} (bake it again with `inlay bake-ssdf`)"),
         ));
     }
     let (nodes, directions, components) = (u(12), u(16), u(20));
@@ -153,6 +158,7 @@ pub fn parse_ssdf(bytes: &[u8], path: &Path) -> Result<SsdfField, SsdfFormatErro
             format!("{radius} is not a finite positive number"),
         ));
     }
+    let object = u64::from_le_bytes(bytes[40..48].try_into().expect("8 bytes"));
     let k = components as usize;
     let rows = texels * (k + 1);
     let coefs = count * k;
@@ -186,5 +192,29 @@ pub fn parse_ssdf(bytes: &[u8], path: &Path) -> Result<SsdfField, SsdfFormatErro
         components,
         texel_rows,
         coefficients,
+        object,
     })
+}
+
+/// Fails unless `field` (read from `path`) was baked from `mesh`, naming
+/// the file and what to do.
+pub fn check_ssdf_object(
+    field: &SsdfField,
+    path: &Path,
+    mesh: &crate::object::ObjectMesh,
+) -> Result<(), SsdfFormatError> {
+    if field.object == mesh.geometry_key() {
+        return Ok(());
+    }
+    Err(err(
+        path,
+        "object",
+        format!(
+            "baked from another mesh than {} (key {:016x}, the object's is {:016x}): \
+             bake it again with `inlay bake-ssdf`",
+            mesh.name,
+            field.object,
+            mesh.geometry_key()
+        ),
+    ))
 }

@@ -15,10 +15,13 @@ pub mod reference;
 pub mod silhouette;
 
 pub use bake::{
-    bake_reference, grid_for, lookup_points, object_scene, SsdfBaker, SsdfKnobs, SsdfSamples,
+    bake_reference, check_bake_fits, grid_for, lookup_points, object_scene, SsdfBaker, SsdfKnobs,
+    SsdfSamples, BAKE_BYTES_PER_TRIANGLE,
 };
 pub use field::{OutsideMode, SsdfField};
-pub use format::{load_ssdf, parse_ssdf, save_ssdf, ssdf_bytes, SsdfFormatError, SSDF_VERSION};
+pub use format::{
+    check_ssdf_object, load_ssdf, parse_ssdf, save_ssdf, ssdf_bytes, SsdfFormatError, SSDF_VERSION,
+};
 pub use grid::SsdfGrid;
 pub use silhouette::{angle_between, angle_to_arc, SilhouetteEdge, SilhouetteMesh, SilhouetteView};
 

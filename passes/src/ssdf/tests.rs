@@ -117,6 +117,7 @@ fn truncating_components_matches_compressing_to_fewer() {
         grid,
         directions,
         values,
+        object: 7,
         seconds: 0.0,
     };
     let rms = |f: &SsdfField| -> f64 {

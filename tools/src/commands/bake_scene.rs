@@ -2,12 +2,16 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context as _;
 use clap::Args;
 use glam::DVec3;
-use inlay_passes::field::save_field;
+use inlay_engine::DeviceInfo;
+use inlay_passes::bake::grid_resolution;
+use inlay_passes::field::{check_field_fits, field_bytes};
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::bake_with_progress;
+use crate::outputs::{check_output, Outputs};
 
 /// Options of `bake-scene`.
 #[derive(Args, Debug)]
@@ -31,20 +35,28 @@ pub struct BakeSceneArgs {
     pub seed: Option<u64>,
 }
 
-/// Runs `bake-scene`.
-pub fn run(args: &BakeSceneArgs) -> anyhow::Result<()> {
+/// Runs `bake-scene`. The output path, and that `device` can render a
+/// field of the asked resolution, are checked before the bake.
+pub fn run(device: &DeviceInfo, args: &BakeSceneArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let mut knobs = scene.bake;
     knobs.resolution = args.resolution.unwrap_or(knobs.resolution);
     knobs.samples = args.samples.unwrap_or(knobs.samples);
     knobs.bounces = args.bounces.unwrap_or(knobs.bounces);
     knobs.seed = args.seed.unwrap_or(knobs.seed);
-    let field = bake_with_progress(&scene, &knobs)?;
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{}.inlayfield", scene.name)));
-    save_field(&out, &field)?;
+    check_output("--out", &out, &["inlayfield"])?;
+    if let Some(recipe) = scene.recipe() {
+        check_field_fits(device, grid_resolution(recipe, knobs.resolution))
+            .with_context(|| format!("--resolution {}", knobs.resolution))?;
+    }
+    let field = bake_with_progress(&scene, &knobs)?;
+    let mut outputs = Outputs::new();
+    outputs.bytes(&out, &field_bytes(&field))?;
+    outputs.commit(None)?;
     let recipe = scene.recipe().expect("baked from a recipe");
     let (inside, outside) = recipe.lights();
     let names = |v: &[&inlay_passes::scene::Primitive]| {
@@ -70,7 +82,6 @@ pub fn run(args: &BakeSceneArgs) -> anyhow::Result<()> {
         .iter()
         .map(|p| p.emission.max_element())
         .fold(0.0, f64::max);
-    println!("wrote {}", out.display());
     println!(
         "  {}x{}x{} nodes, {} MiB; {:.0}% of occupancy cells empty",
         field.resolution.x,

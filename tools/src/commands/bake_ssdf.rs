@@ -7,8 +7,9 @@ use std::sync::Arc;
 use clap::Args;
 use inlay_engine::Context;
 use inlay_passes::object::load_gltf;
-use inlay_passes::ssdf::{save_ssdf, SsdfKnobs};
+use inlay_passes::ssdf::{ssdf_bytes, SsdfKnobs};
 
+use crate::outputs::{check_output, Outputs};
 use crate::ssdf_source::bake_ssdf_with_progress;
 
 /// Options of `bake-ssdf`.
@@ -40,9 +41,6 @@ pub fn run(ctx: &Arc<Context>, args: &BakeSsdfArgs) -> anyhow::Result<()> {
     if let Some((k, m)) = knobs.problem() {
         anyhow::bail!("--{k}: {m}");
     }
-    let mesh = Arc::new(load_gltf(&args.object)?);
-    let lib = inlay_passes::shaders::embedded_library();
-    let (field, _) = bake_ssdf_with_progress(ctx, &lib, &mesh, &knobs)?;
     let out = args.out.clone().unwrap_or_else(|| {
         let stem = args
             .object
@@ -51,7 +49,12 @@ pub fn run(ctx: &Arc<Context>, args: &BakeSsdfArgs) -> anyhow::Result<()> {
             .unwrap_or_else(|| "object".into());
         PathBuf::from(format!("{stem}.inlayssdf"))
     });
-    save_ssdf(&field, &out)?;
-    println!("wrote {}", out.display());
+    check_output("--out", &out, &["inlayssdf"])?;
+    let mesh = Arc::new(load_gltf(&args.object)?);
+    let lib = inlay_passes::shaders::embedded_library();
+    let (field, _) = bake_ssdf_with_progress(ctx, &lib, &mesh, &knobs)?;
+    let mut outputs = Outputs::new();
+    outputs.bytes(&out, &ssdf_bytes(&field))?;
+    outputs.commit(Some(ctx))?;
     Ok(())
 }

@@ -53,7 +53,7 @@ pub struct BenchMarchArgs {
 pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let spec = scene.camera(&args.camera)?.clone();
-    let field = scene_field(&scene, args.field.as_deref(), true)?;
+    let field = scene_field(&scene, args.field.as_deref(), true, Some(ctx.info()))?;
     let library = inlay_passes::shaders::library()?;
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let knobs = scene.march;

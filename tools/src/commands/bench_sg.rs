@@ -87,7 +87,7 @@ fn measure(
 pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
     let at = args.placement.point()?;
     let scene = load_scene(&args.scene)?;
-    let field = scene_field(&scene, args.field.as_deref(), true)?;
+    let field = scene_field(&scene, args.field.as_deref(), true, Some(ctx.info()))?;
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let env = environment_lobes(&scene.environment);
     let library = inlay_passes::shaders::library()?;

@@ -45,7 +45,7 @@ pub struct BenchShadeArgs {
 pub fn run(args: &BenchShadeArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let at = args.placement.point()?;
-    let field = scene_field(&scene, args.field.as_deref(), true)?;
+    let field = scene_field(&scene, args.field.as_deref(), true, None)?;
     let probe_knobs = ProbeKnobs {
         map: args.placement.map_or(scene.lighting.probe.map),
         ..scene.lighting.probe

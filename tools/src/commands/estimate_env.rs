@@ -15,7 +15,7 @@ use inlay_engine::{Context, HdrImage};
 use inlay_passes::envest::recovery::SEARCH_CONE_DEGREES;
 use inlay_passes::envest::PointLight;
 use inlay_passes::envest::{
-    emitter_recovery, estimate_environment, hidden_light_lobes, save_environment_file,
+    emitter_recovery, environment_file_text, estimate_environment, hidden_light_lobes,
     EnvEstimateKnobs, Stage, Validation,
 };
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
@@ -27,6 +27,7 @@ use inlay_passes::sgfit::model::luminance;
 use crate::field_source::{progress_bar, scene_field};
 use crate::headless::run_headless;
 use crate::insertion_view::InsertionView;
+use crate::outputs::{check_image_output, check_output, Outputs};
 
 /// Options of `estimate-env`.
 #[derive(Args, Debug)]
@@ -148,7 +149,25 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         anyhow::bail!("--{}: {m}", k.replace('_', "-"));
     }
     let scene = load_scene(&args.scene)?;
-    let mut field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}-env.toml", scene.name)));
+    let picture = args
+        .picture
+        .clone()
+        .unwrap_or_else(|| out.with_extension("png"));
+    check_output("--out", &out, &["toml"])?;
+    check_image_output("--picture", &picture)?;
+    if let Some(compare) = &args.compare {
+        check_image_output("--compare", compare)?;
+    }
+    let mut field = scene_field(
+        &scene,
+        args.field.as_deref(),
+        !args.no_cache,
+        Some(ctx.info()),
+    )?;
     if let Some(p) = args.perturb.filter(|p| !p.is_none()) {
         field = perturb(&field, &p);
         println!(
@@ -199,10 +218,6 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         knobs.lobes,
         100.0 * inlay_passes::envest::prune::MIN_LOBE_REACH
     );
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}-env.toml", scene.name)));
     let record = vec![
         ("views".to_string(), s.views_kept.to_string()),
         ("points".to_string(), s.points.len().to_string()),
@@ -222,15 +237,11 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             format!("{:.1}", estimate.seconds.iter().sum::<f64>()),
         ),
     ];
-    save_environment_file(&out, lobes, &estimate.fit.lights, &scene.name, &record)?;
-    println!("wrote {}", out.display());
-    let picture = args
-        .picture
-        .clone()
-        .unwrap_or_else(|| out.with_extension("png"));
+    let mut outputs = Outputs::new();
+    let text = environment_file_text(lobes, &estimate.fit.lights, &scene.name, &record);
+    outputs.bytes(&out, text.as_bytes())?;
     let (image, exposure) = equirect_picture(lobes, 256, 128);
-    image.save(&picture, exposure)?;
-    println!("wrote {}", picture.display());
+    outputs.image(&picture, &image, exposure)?;
     for l in &estimate.fit.lights {
         println!(
             "near light at {:.2} {:.2} {:.2}, intensity {:.4} {:.4} {:.4}",
@@ -311,8 +322,11 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(path) = &args.compare {
-        compare(ctx, args, &scene, &field, lobes, &estimate.fit.lights, path)?;
+        let lights = &estimate.fit.lights;
+        let image = compare(ctx, args, &scene, &field, lobes, lights, path)?;
+        outputs.image(path, &image, 1.0)?;
     }
+    outputs.commit(Some(ctx))?;
     Ok(())
 }
 
@@ -390,7 +404,8 @@ fn render_with(
     .image)
 }
 
-/// Writes true | estimated | |difference| and prints how far apart they are.
+/// The picture true | estimated | |difference| for `path`; prints how far
+/// apart they are.
 fn compare(
     ctx: &Arc<Context>,
     args: &EstimateEnvArgs,
@@ -399,7 +414,7 @@ fn compare(
     lobes: &[Sg64],
     lights: &[PointLight],
     path: &Path,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<HdrImage> {
     let recipe = scene.recipe().ok_or_else(|| {
         anyhow::anyhow!(
             "{}: --compare needs a recipe scene (its hidden lights are the truth)",
@@ -460,17 +475,16 @@ fn compare(
         pixels.extend(rd);
     }
     let n = (3 * w * h) as f64;
-    HdrImage {
+    let image = HdrImage {
         width: 3 * w,
         height: h,
         pixels,
-    }
-    .save(path, 1.0)?;
+    };
     println!(
-        "wrote {} (true hidden light | estimate | |difference|): mean relative difference {:.2} %, rms {:.4e}",
+        "{} (true hidden light | estimate | |difference|): mean relative difference {:.2} %, rms {:.4e}",
         path.display(),
         100.0 * diff / total.max(1e-30),
         (sq / n).sqrt()
     );
-    Ok(())
+    Ok(image)
 }

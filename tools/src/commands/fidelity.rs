@@ -9,6 +9,7 @@
 //! its centre from the probe and from the fitted lobes against Cycles'
 //! irradiance sensors. Writes a markdown report and side-by-side images.
 
+use std::cell::RefCell;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -28,6 +29,7 @@ use crate::fidelity::{
 };
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
+use crate::outputs::{check_output, Outputs};
 use crate::scene_view::view_over_field;
 
 /// Options of `fidelity`.
@@ -118,12 +120,16 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         "--cycles {}: no such directory (render it with tools/cycles/render_cycles.py)",
         args.cycles.display()
     );
+    check_output("--out", &args.out, &["md"])?;
     if let Some(dir) = &args.images {
-        std::fs::create_dir_all(dir)?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow::anyhow!("--images: {}: {e}", dir.display()))?;
+        check_output("--images", &dir.join("x.png"), &[])?;
     }
+    let outputs = RefCell::new(Outputs::new());
     let mut md = String::new();
     writeln!(md, "## {}\n", scene.name)?;
-    let field = scene_field(&scene, None, true)?;
+    let field = scene_field(&scene, None, true, Some(ctx.info()))?;
     let library = inlay_passes::shaders::library()?;
     // Probe irradiance per object.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
@@ -266,9 +272,10 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                     scene.name,
                     what.replace([' ', ','], "-")
                 ));
-                side_by_side(&truth.mean, img)
-                    .to_hdr()
-                    .save(&file, args.exposure as f32)?;
+                let picture = side_by_side(&truth.mean, img).to_hdr();
+                outputs
+                    .borrow_mut()
+                    .image(&file, &picture, args.exposure as f32)?;
             }
             Ok(())
         };
@@ -353,9 +360,8 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                     .collect(),
             };
             let file = dir.join(format!("{}-{name}-shadow-ratio.png", scene.name));
-            side_by_side(&ratio_image(&theirs), &ratio_image(&ours))
-                .to_hdr()
-                .save(&file, 1.0)?;
+            let picture = side_by_side(&ratio_image(&theirs), &ratio_image(&ours)).to_hdr();
+            outputs.borrow_mut().image(&file, &picture, 1.0)?;
         }
         let shadow = shadow_figures(&ours, &theirs, field_only, far_px);
         let traced_median = traced_objects.as_ref().map_or("—".to_string(), |t| {
@@ -394,13 +400,9 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         md.push_str(&insertion);
         writeln!(md)?;
     }
-    // Written whole to a temporary file, then renamed: an interrupted run
-    // leaves an earlier report intact.
-    let partial = args.out.with_extension("md.partial");
-    std::fs::write(&partial, &md).map_err(|e| anyhow::anyhow!("{}: {e}", partial.display()))?;
-    std::fs::rename(&partial, &args.out)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.display()))?;
     print!("{md}");
-    println!("wrote {}", args.out.display());
+    let mut outputs = outputs.into_inner();
+    outputs.bytes(&args.out, md.as_bytes())?;
+    outputs.commit(Some(ctx))?;
     Ok(())
 }

@@ -13,3 +13,22 @@ pub mod profile;
 pub mod reference;
 pub mod render;
 pub mod sweep;
+
+use std::sync::Arc;
+
+use inlay_engine::{Context, ContextOptions};
+
+/// Runs `command` on a device chosen by `options`. Errors the validation
+/// layer (when on) reported fail the run even where the command did not
+/// check; commands that write outputs check before putting them in place
+/// ([`crate::outputs::Outputs::commit`]), so a failing run replaces none.
+pub fn on_device(
+    options: &ContextOptions,
+    command: impl FnOnce(&Arc<Context>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let ctx = Context::new(options, None)?;
+    let result = command(&ctx);
+    let validated = ctx.check_validation();
+    result?;
+    Ok(validated?)
+}

@@ -21,6 +21,7 @@ use inlay_passes::sg::Sg64;
 use inlay_passes::sgfit::{fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, Start};
 
 use crate::field_source::scene_field;
+use crate::outputs::{check_image_output, Outputs};
 
 /// The probe layout on the command line.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -122,16 +123,12 @@ pub struct ProbeArgs {
 
 /// Runs `probe`.
 pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
+    anyhow::ensure!((1..=64).contains(&args.zoom), "--zoom must be in 1..=64");
+    for out in &args.out {
+        check_image_output("--out", out)?;
+    }
     let scene = load_scene(&args.scene)?;
     let at = args.placement.point()?;
-    let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
-    let centre = 0.5 * (field.bounds.min + field.bounds.max);
-    let diagonal = field.bounds.diagonal();
-    anyhow::ensure!(
-        (at - centre).length() <= 1e3 * diagonal,
-        "--at {at} is {:.3e} scene units from the field (diagonal {diagonal:.3}): the probe would see nothing of it",
-        (at - centre).length()
-    );
     let knobs = scene.lighting;
     let probe_knobs = ProbeKnobs {
         map: args.placement.map_or(knobs.probe.map),
@@ -147,6 +144,26 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
     let iterations = fit_knobs.cold_iterations;
     let mut march = scene.march;
     march.samples_per_ray = args.samples_per_ray.unwrap_or(march.samples_per_ray);
+    for (what, checked) in [
+        ("probe", probe_knobs.check()),
+        ("fit", fit_knobs.check()),
+        ("march", march.check()),
+    ] {
+        checked.map_err(|(k, m)| anyhow::anyhow!("{what} knob `{k}`: {m}"))?;
+    }
+    let field = scene_field(
+        &scene,
+        args.field.as_deref(),
+        !args.no_cache,
+        Some(ctx.info()),
+    )?;
+    let centre = 0.5 * (field.bounds.min + field.bounds.max);
+    let diagonal = field.bounds.diagonal();
+    anyhow::ensure!(
+        (at - centre).length() <= 1e3 * diagonal,
+        "--at {at} is {:.3e} scene units from the field (diagonal {diagonal:.3}): the probe would see nothing of it",
+        (at - centre).length()
+    );
     let env = inlay_passes::lighting::object_light_lobes(&scene, at);
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let traced = trace_and_fit(ctx, &gpu_field, at, probe_knobs, fit_knobs, march, &env)?;
@@ -181,15 +198,17 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
             iterations
         );
     }
-    anyhow::ensure!((1..=64).contains(&args.zoom), "--zoom must be in 1..=64");
     let panels = side_by_side(probe_image, &report.lobes, &map, args.zoom);
     anyhow::ensure!(
         panels.non_finite_count() == 0,
         "the fit produced non-finite values"
     );
+    let mut outputs = Outputs::new();
     for out in &args.out {
-        panels.save(out, args.exposure)?;
-        println!("wrote {} (probe | SG fit | |fit − probe|)", out.display());
+        outputs.image(out, &panels, args.exposure)?;
+    }
+    if !outputs.commit(Some(ctx))?.is_empty() {
+        println!("(each image: probe | SG fit | |fit − probe|)");
     }
     Ok(())
 }

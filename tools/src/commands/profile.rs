@@ -20,8 +20,9 @@ use inlay_passes::scene::{load_scene, ObjectEnvironment};
 use serde_json::json;
 
 use crate::chrome_trace::chrome_trace;
-use crate::headless::Scene as _;
+use crate::headless::{check_frame_size, Scene as _};
 use crate::insertion_view::InsertionView;
+use crate::outputs::{check_output, Outputs};
 use crate::scene_view::open_view;
 use crate::table1::summarise;
 
@@ -97,10 +98,7 @@ pub fn profile_view(
     frames: u32,
     motion: Motion,
 ) -> anyhow::Result<ProfileRun> {
-    anyhow::ensure!(
-        (1..=16384).contains(&width) && (1..=16384).contains(&height),
-        "image size {width}x{height} is out of range (1..=16384 per side)"
-    );
+    check_frame_size(ctx.info(), width, height)?;
     let start_pose = view.placed(0);
     let mut renderer = Renderer::new(ctx, DEFAULT_FRAMES_IN_FLIGHT)?;
     let began = Instant::now();
@@ -145,6 +143,9 @@ pub fn profile_view(
 
 /// Runs `profile`.
 pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
+    check_output("--json", &args.json, &["json"])?;
+    check_output("--trace", &args.trace, &["json"])?;
+    check_frame_size(ctx.info(), args.width, args.height)?;
     let mut scene = load_scene(&args.scene)?;
     if let Some(file) = &args.environment {
         let light = load_environment_file(file)?;
@@ -216,16 +217,10 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
         "table": table,
         "frames": per_frame,
     });
-    write_json(&args.json, &report)?;
+    let mut outputs = Outputs::new();
+    outputs.json(&args.json, &report)?;
     let trace = chrome_trace(&run.frames, &run.submitted_ms, &device);
-    write_json(&args.trace, &trace)?;
-    Ok(())
-}
-
-fn write_json(path: &std::path::Path, value: &serde_json::Value) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    std::fs::write(path, text)
-        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
-    println!("wrote {}", path.display());
+    outputs.json(&args.trace, &trace)?;
+    outputs.commit(Some(ctx))?;
     Ok(())
 }

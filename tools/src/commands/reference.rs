@@ -12,6 +12,7 @@ use inlay_passes::camera::CameraFrame;
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::progress_bar;
+use crate::outputs::{check_image_output, Outputs};
 
 /// Options of `reference`.
 #[derive(Args, Debug)]
@@ -59,6 +60,9 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
         args.height
     );
     anyhow::ensure!(args.samples >= 1, "--samples must be at least 1");
+    for out in &args.out {
+        check_image_output("--out", out)?;
+    }
     let scene = load_scene(&args.scene)?;
     let recipe = scene.recipe().ok_or_else(|| {
         anyhow::anyhow!(
@@ -101,9 +105,10 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
         height: args.height,
         pixels,
     };
+    let mut outputs = Outputs::new();
     for out in &args.out {
-        image.save(out, args.exposure)?;
-        println!("wrote {}", out.display());
+        outputs.image(out, &image, args.exposure)?;
     }
+    outputs.commit(None)?;
     Ok(())
 }

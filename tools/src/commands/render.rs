@@ -11,7 +11,8 @@ use inlay_passes::envest::load_environment_file;
 use inlay_passes::scene::{load_scene, ObjectEnvironment};
 use inlay_passes::ssdf::OutsideMode;
 
-use crate::headless::run_headless;
+use crate::headless::{check_frame_size, run_headless};
+use crate::outputs::check_image_output;
 use crate::scene_view::open_view;
 
 /// Options of `render`.
@@ -101,6 +102,10 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         "--exposure must be a positive number, got {}",
         args.exposure
     );
+    for out in &args.out {
+        check_image_output("--out", out)?;
+    }
+    check_frame_size(ctx.info(), args.width, args.height)?;
     let mut scene = load_scene(&args.scene)?;
     if args.no_objects {
         scene.objects.clear();

@@ -23,6 +23,7 @@ use super::profile::{profile_view, Motion};
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
 use crate::measure::{parse_size, relative_error};
+use crate::outputs::{check_output, Outputs};
 use crate::scene_view::view_over_gpu_field;
 use crate::sweep::grid::{configurations, GridMode, KnobValues, Knobs};
 use crate::sweep::pareto::pareto_front;
@@ -128,6 +129,11 @@ pub fn scene_with(scene: &Scene, knobs: &Knobs, bake_components: u32) -> Scene {
 
 /// Runs `sweep`.
 pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
+    std::fs::create_dir_all(&args.out_dir)
+        .map_err(|e| anyhow::anyhow!("--out-dir: {}: {e}", args.out_dir.display()))?;
+    for name in ["sweep.md", "sweep.json", "sweep.svg"] {
+        check_output("--out-dir", &args.out_dir.join(name), &[])?;
+    }
     let scene = load_scene(&args.scene)?;
     let recipe = scene.recipe().ok_or_else(|| {
         anyhow::anyhow!(
@@ -175,7 +181,12 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
         .max()
         .unwrap_or(base.components);
     let spec = scene.camera(&args.camera)?.clone();
-    let field = scene_field(&scene, args.field.as_deref(), !args.no_cache)?;
+    let field = scene_field(
+        &scene,
+        args.field.as_deref(),
+        !args.no_cache,
+        Some(ctx.info()),
+    )?;
     // One upload serves every configuration.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let library = inlay_passes::shaders::library()?;
@@ -281,14 +292,9 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
     let device = format!("{} ({:?})", ctx.info().name, ctx.info().kind);
     let markdown = format_markdown(&rows, &front, &scene, &device, args);
     print!("{markdown}");
-    std::fs::create_dir_all(&args.out_dir)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.out_dir.display()))?;
-    let write = |name: &str, text: &str| -> anyhow::Result<()> {
-        let path = args.out_dir.join(name);
-        std::fs::write(&path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        println!("wrote {}", path.display());
-        Ok(())
-    };
+    let mut outputs = Outputs::new();
+    let mut write =
+        |name: &str, text: &str| outputs.bytes(&args.out_dir.join(name), text.as_bytes());
     write("sweep.md", &markdown)?;
     let report = json!({
         "scene": scene.path.display().to_string(),
@@ -330,6 +336,7 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
             &front,
         ),
     )?;
+    outputs.commit(Some(ctx))?;
     Ok(())
 }
 

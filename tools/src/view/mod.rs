@@ -18,6 +18,7 @@ use clap::Args;
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::window::PresentMode;
 use inlay_engine::{Context, ContextOptions};
+use inlay_passes::camera::CameraSpec;
 use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::scene::{load_scene, Scene};
 
@@ -87,6 +88,10 @@ pub struct Viewer {
     gpu_field: GpuGridField,
     view: InsertionView,
     preset: Preset,
+    /// The views of the other presets built so far, kept so that stepping
+    /// through the presets compiles each pipeline once (a CPU device keeps
+    /// about 1 MiB of every pipeline it compiles, even once destroyed).
+    parked: Vec<(Preset, InsertionView)>,
     use_cache: bool,
     controls: Controls,
 }
@@ -99,14 +104,36 @@ impl Viewer {
         args: &ViewArgs,
         preset: Preset,
     ) -> anyhow::Result<Self> {
-        let mut authored = load_scene(&args.scene)?;
+        let authored = load_scene(&args.scene)?;
+        let camera = authored.camera(&args.camera)?.clone();
+        Self::over_scene(
+            ctx,
+            lib,
+            authored,
+            camera,
+            preset,
+            !args.no_cache,
+            args.overlay,
+        )
+    }
+
+    /// Opens the scene `authored` (as loaded, perhaps edited) from `camera`
+    /// at `preset`; bakes are cached when `use_cache`.
+    pub fn over_scene(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        mut authored: Scene,
+        camera: CameraSpec,
+        preset: Preset,
+        use_cache: bool,
+        overlay: hud::Overlay,
+    ) -> anyhow::Result<Self> {
         let effects = Effects::of_scene(&authored.shadows);
         // Load the SSDF fields even when the scene draws no shadows, so
         // shadows can be switched on.
         authored.shadows.self_shadow = true;
         authored.shadows.cast = true;
-        let camera = authored.camera(&args.camera)?.clone();
-        let field = scene_field(&authored, None, !args.no_cache)?;
+        let field = scene_field(&authored, None, use_cache, Some(ctx.info()))?;
         let gpu_field = GpuGridField::upload(ctx, &field)?;
         let scene = preset.apply(&authored);
         let mut view = view_over_gpu_field(
@@ -116,17 +143,18 @@ impl Viewer {
             scene.march,
             gpu_field.clone(),
             camera.clone(),
-            !args.no_cache,
+            use_cache,
         )?;
         view.set_effects(effects);
         Ok(Self {
-            controls: Controls::new(OrbitCamera::from_spec(&camera), &authored, args.overlay),
+            controls: Controls::new(OrbitCamera::from_spec(&camera), &authored, overlay),
             authored,
             field,
             gpu_field,
             view,
             preset,
-            use_cache: !args.no_cache,
+            parked: Vec::new(),
+            use_cache,
         })
     }
 
@@ -135,27 +163,50 @@ impl Viewer {
         &self.view
     }
 
-    /// Rebuilds the passes at `self.preset`, keeping camera, effects and
-    /// the objects' placements.
-    fn rebuild_view(&mut self, ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<()> {
-        let scene = self.preset.apply(&self.authored);
+    /// The view being drawn, to move objects or switch effects.
+    pub fn view_mut(&mut self) -> &mut InsertionView {
+        &mut self.view
+    }
+
+    /// The quality preset the view is built at.
+    pub fn preset(&self) -> Preset {
+        self.preset
+    }
+
+    /// Switches to the view of `preset` (built on first use, kept after),
+    /// carrying over the camera, the effects and the objects' placements.
+    fn switch_to(
+        &mut self,
+        preset: Preset,
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+    ) -> anyhow::Result<()> {
         let camera = self.controls.camera.spec();
-        let mut view = view_over_gpu_field(
-            ctx,
-            lib,
-            &scene,
-            scene.march,
-            self.gpu_field.clone(),
-            camera,
-            self.use_cache,
-        )?;
+        let mut view = match self.parked.iter().position(|(p, _)| *p == preset) {
+            Some(i) => self.parked.swap_remove(i).1,
+            None => {
+                let scene = preset.apply(&self.authored);
+                view_over_gpu_field(
+                    ctx,
+                    lib,
+                    &scene,
+                    scene.march,
+                    self.gpu_field.clone(),
+                    camera.clone(),
+                    self.use_cache,
+                )?
+            }
+        };
+        view.set_camera(camera);
         view.set_effects(self.view.effects());
         for i in 0..self.view.objects().len() {
             if let Some(p) = self.view.placed(i) {
                 view.set_placed(i, p);
             }
         }
-        self.view = view;
+        let previous = std::mem::replace(&mut self.view, view);
+        self.parked.push((self.preset, previous));
+        self.preset = preset;
         Ok(())
     }
 }
@@ -175,8 +226,7 @@ impl crate::window_app::WindowScene for Viewer {
     }
 
     fn rebuild(&mut self, ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<()> {
-        self.preset = self.preset.next();
-        self.rebuild_view(ctx, lib)?;
+        self.switch_to(self.preset.next(), ctx, lib)?;
         println!("view: quality preset {}", self.preset.name());
         Ok(())
     }
@@ -228,6 +278,7 @@ pub fn run(options: &ContextOptions, args: &ViewArgs) -> anyhow::Result<()> {
         "--exposure must be a positive number, got {}",
         args.exposure
     );
+    crate::outputs::check_image_output("--out", &args.out)?;
     let library = inlay_passes::shaders::library()?;
     let window = WindowOptions {
         context: options.clone(),

@@ -1,0 +1,429 @@
+//! The command line never leaves a result that looks right and is not:
+//! outputs and limits are checked before any work, a run killed while it
+//! writes leaves the previous output whole, and an SSDF is used only for
+//! the object it was baked from.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+use std::time::Instant;
+
+use inlay_engine::HdrImage;
+
+use common::{inlay_cached as inlay, s, scene_path};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("inlay-cli-rel-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Fails unless the run failed with a message containing every one of
+/// `needles`, having done no work (with an empty cache, any work on a
+/// recipe scene starts with a bake, which says so).
+fn refused_before_work(o: &Output, needles: &[&str]) {
+    let t = common::output_text(o);
+    assert!(!o.status.success(), "{t}");
+    for n in needles {
+        assert!(t.contains(n), "`{n}` missing: {t}");
+    }
+    assert!(
+        !t.contains("baked"),
+        "work was done before the refusal: {t}"
+    );
+}
+
+#[test]
+fn outputs_and_device_limits_are_checked_before_any_work() {
+    let dir = scratch("before-work");
+    let dog = scene_path("dog.toml");
+    let missing = dir.join("no-such-dir/out.png");
+    let a_directory = dir.join("d.png");
+    std::fs::create_dir_all(&a_directory).unwrap();
+    let cases: Vec<(Vec<String>, Vec<&str>)> = vec![
+        (
+            vec![
+                "render".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&missing).into(),
+            ],
+            vec!["--out", "no-such-dir", "does not exist"],
+        ),
+        (
+            vec![
+                "render".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("x.jpg")).into(),
+            ],
+            vec!["--out", "x.jpg", ".exr or .png"],
+        ),
+        (
+            vec![
+                "render".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&a_directory).into(),
+            ],
+            vec!["--out", "d.png", "directory"],
+        ),
+        (
+            vec![
+                "render".into(),
+                dog.clone(),
+                "--width".into(),
+                "100000".into(),
+                "--out".into(),
+                s(&dir.join("ok.png")).into(),
+            ],
+            vec!["100000x360", "--width"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.txt")).into(),
+            ],
+            vec!["--out", ".toml"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
+                "--picture".into(),
+                s(&missing).into(),
+            ],
+            vec!["--picture", "does not exist"],
+        ),
+        (
+            vec![
+                "profile".into(),
+                dog.clone(),
+                "--json".into(),
+                s(&missing.with_extension("json")).into(),
+            ],
+            vec!["--json", "does not exist"],
+        ),
+        (
+            vec![
+                "probe".into(),
+                dog.clone(),
+                "--at".into(),
+                "0,0,0".into(),
+                "--out".into(),
+                s(&dir.join("p.bmp")).into(),
+            ],
+            vec!["--out", "p.bmp"],
+        ),
+        (
+            vec![
+                "bake-scene".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("f.bin")).into(),
+            ],
+            vec!["--out", ".inlayfield"],
+        ),
+        (
+            vec![
+                "bake-ssdf".into(),
+                s(&common::objects_dir().join("toy.glb")).into(),
+                "--out".into(),
+                s(&missing.with_extension("inlayssdf")).into(),
+            ],
+            vec!["--out", "does not exist"],
+        ),
+        (
+            vec![
+                "reference".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("r.tiff")).into(),
+            ],
+            vec!["--out", "r.tiff"],
+        ),
+    ];
+    for (args, needles) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = inlay(&args, &dir.join("cache"));
+        refused_before_work(&o, &needles);
+    }
+    assert!(!dir.join("ok.png").exists());
+    // Every refusal left the directory as it was: no output, no temporary.
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "cache" && n != "d.png")
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+/// A field file whose header asks for more nodes than the device can bind
+/// is refused from its header: a sparse 16 GiB file (1024³ nodes, more than
+/// any device binds in one buffer) is never read.
+#[test]
+fn a_field_too_large_for_the_device_is_refused_from_its_header() {
+    let dir = scratch("huge-field");
+    let path = dir.join("huge.inlayfield");
+    let mut header = Vec::new();
+    header.extend_from_slice(b"INLAYFLD");
+    for v in [1u32, 0, 1024, 1024, 1024] {
+        header.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [-1f32, -1.0, -1.0, 1.0, 1.0, 1.0] {
+        header.extend_from_slice(&v.to_le_bytes());
+    }
+    header.extend_from_slice(&0u32.to_le_bytes());
+    assert_eq!(header.len(), 56);
+    std::fs::write(&path, &header).unwrap();
+    let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+    file.set_len(56 + 16 * 1024u64.pow(3)).unwrap();
+    drop(file);
+    let o = inlay(
+        &[
+            "render",
+            &scene_path("dog.toml"),
+            "--field",
+            s(&path),
+            "--out",
+            s(&dir.join("x.png")),
+        ],
+        &dir,
+    );
+    refused_before_work(
+        &o,
+        &[
+            "huge.inlayfield",
+            "resolution",
+            "1024x1024x1024",
+            "largest storage binding",
+        ],
+    );
+    // A file shorter than its header says is refused before it is read.
+    let short = dir.join("short.inlayfield");
+    std::fs::write(&short, &header).unwrap();
+    let e = inlay_passes::field::load_field(&short).unwrap_err();
+    assert!(e.to_string().contains("truncated"), "{e}");
+}
+
+/// `inlay reference` killed at many points of its run (tracing, or writing
+/// its EXR) never leaves a broken image under the output's name: only the
+/// previous one or the new one, whole.
+#[test]
+fn a_run_killed_while_writing_leaves_the_previous_output_whole() {
+    let dir = scratch("killed");
+    let out = dir.join("image.exr");
+    let args = |samples: &str| {
+        vec![
+            "reference".to_string(),
+            scene_path("plants.toml"),
+            "--width".into(),
+            "960".into(),
+            "--height".into(),
+            "540".into(),
+            "--samples".into(),
+            samples.into(),
+            "--out".into(),
+            s(&out).into(),
+        ]
+    };
+    let started = Instant::now();
+    let o = Command::new(env!("CARGO_BIN_EXE_inlay"))
+        .args(args("1"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let whole_run = started.elapsed();
+    let check = |when: &str| {
+        let img = HdrImage::load_exr(&out)
+            .unwrap_or_else(|e| panic!("after a kill {when}, the output is broken: {e}"));
+        assert_eq!((img.width, img.height), (960, 540));
+    };
+    check("(first run)");
+    // Kills spread over the second half of the run (the write is at its
+    // end), and past its end too.
+    for i in 0..30u32 {
+        let delay = whole_run.mul_f64(0.5 + 0.025 * i as f64);
+        let mut child = Command::new(env!("CARGO_BIN_EXE_inlay"))
+            .args(args("1"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(delay);
+        let _ = child.kill();
+        let _ = child.wait();
+        check(&format!("after {:.0} ms", delay.as_secs_f64() * 1e3));
+    }
+    // Whatever a kill left is a hidden temporary, never the output's name.
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(
+            name == "image.exr" || name.starts_with(inlay_engine::output::PARTIAL_PREFIX),
+            "{name}"
+        );
+    }
+}
+
+/// An SSDF baked from one object and named for another is refused, naming
+/// the file and what to do; before, the other object's shadows were used.
+#[test]
+fn an_ssdf_is_used_only_for_the_object_it_was_baked_from() {
+    let dir = scratch("ssdf-object");
+    let objects = common::objects_dir();
+    let ssdf = dir.join("sphere.inlayssdf");
+    let o = inlay(
+        &[
+            "bake-ssdf",
+            s(&objects.join("metal-sphere.gltf")),
+            "--out",
+            s(&ssdf),
+            "--grid",
+            "4",
+            "--directions",
+            "8",
+            "--components",
+            "4",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let text = std::fs::read_to_string(scene_path("books.toml")).unwrap();
+    assert!(text.contains("objects/metal-sphere.gltf") && text.contains("scale = 0.1"));
+    let scene = |object: &str| {
+        text.replace("objects/metal-sphere.gltf", s(&objects.join(object)))
+            .replace(
+                "scale = 0.1",
+                &format!("scale = 0.1\nssdf = \"{}\"", s(&ssdf)),
+            )
+    };
+    let wrong = dir.join("wrong.toml");
+    std::fs::write(&wrong, scene("toy.glb")).unwrap();
+    let field = dir.join("books.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            s(&wrong),
+            "--out",
+            s(&field),
+            "--resolution",
+            "8",
+            "--samples",
+            "1",
+            "--bounces",
+            "0",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let o = inlay(
+        &[
+            "render",
+            s(&wrong),
+            "--field",
+            s(&field),
+            "--width",
+            "16",
+            "--height",
+            "9",
+            "--frames",
+            "1",
+            "--out",
+            s(&dir.join("wrong.png")),
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(!o.status.success(), "{t}");
+    for needle in ["sphere.inlayssdf", "object", "another mesh", "bake-ssdf"] {
+        assert!(t.contains(needle), "`{needle}` missing: {t}");
+    }
+    assert!(!dir.join("wrong.png").exists());
+}
+
+/// The text of a scene of `count` small cubes on a floor, at test knobs.
+fn many_cubes(count: usize) -> String {
+    let cube = common::objects_dir().join("checker-cube.gltf");
+    let mut text = String::from(
+        r#"name = "many"
+[recipe]
+bounds = { min = [-1.0, -0.1, -1.0], max = [1.0, 1.0, 1.0] }
+[[recipe.primitives]]
+name = "floor"
+type = "box"
+center = [0.0, -0.05, 0.0]
+size = [2.0, 0.1, 2.0]
+albedo = [0.5, 0.5, 0.5]
+[environment]
+lobes = [{ direction = [0.0, 1.0, 0.0], sharpness = 2.0, amplitude = [1.0, 1.0, 1.0] }]
+[[cameras]]
+position = [0.0, 1.5, 2.0]
+look_at = [0.0, 0.0, 0.0]
+[bake]
+resolution = 16
+samples = 1
+bounces = 0
+[lighting]
+probe_resolution = 4
+lobes = 2
+cold_iterations = 2
+warm_iterations = 1
+[shadows]
+grid = 4
+directions = 8
+components = 4
+"#,
+    );
+    for i in 0..count {
+        let (x, z) = (-0.8 + (i % 8) as f64 * 0.22, -0.8 + (i / 8) as f64 * 0.22);
+        text.push_str(&format!(
+            "[[objects]]\nname = \"cube{i}\"\nfile = \"{}\"\nposition = [{x:.3}, 0.05, {z:.3}]\nscale = 0.05\n",
+            s(&cube)
+        ));
+    }
+    text
+}
+
+/// As many objects as a scene may hold are inserted, shadowed and timed
+/// (before, from 31 objects on, the frame's passes outgrew the timer's 128
+/// and the render failed after its bakes); one more is refused when the
+/// scene is read.
+#[test]
+fn the_most_objects_a_scene_may_hold_render() {
+    let dir = scratch("many");
+    let most = inlay_passes::scene::MAX_OBJECTS;
+    let scene = dir.join("most.toml");
+    std::fs::write(&scene, many_cubes(most)).unwrap();
+    let out = dir.join("most.exr");
+    let o = inlay(
+        &[
+            "--validate",
+            "render",
+            s(&scene),
+            "--width",
+            "48",
+            "--height",
+            "27",
+            "--frames",
+            "1",
+            "--out",
+            s(&out),
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("cast-shadow"), "{t}");
+    assert_eq!(HdrImage::load_exr(&out).unwrap().non_finite_count(), 0);
+    let over = dir.join("over.toml");
+    std::fs::write(&over, many_cubes(most + 1)).unwrap();
+    let o = inlay(
+        &["render", s(&over), "--out", s(&dir.join("over.png"))],
+        &dir,
+    );
+    refused_before_work(&o, &["over.toml", "objects", "at most 64"]);
+}
