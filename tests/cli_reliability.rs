@@ -427,3 +427,36 @@ fn the_most_objects_a_scene_may_hold_render() {
     );
     refused_before_work(&o, &["over.toml", "objects", "at most 64"]);
 }
+
+/// `bake-scene` refuses, before baking, a resolution whose field the device
+/// could not render (before, it baked for minutes and `render` refused the
+/// file afterwards).
+#[test]
+fn bake_scene_refuses_a_field_the_device_cannot_render() {
+    let dir = scratch("bake-limit");
+    let info = common::gpu().info().clone();
+    let scene =
+        inlay_passes::scene::load_scene(std::path::Path::new(&scene_path("dog.toml"))).unwrap();
+    let res = inlay_passes::bake::grid_resolution(scene.recipe().unwrap(), 512);
+    if inlay_passes::field::check_field_fits(&info, res).is_ok() {
+        eprintln!(
+            "{} renders a 512-node field: nothing to refuse here",
+            info.name
+        );
+        return;
+    }
+    let out = dir.join("big.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            &scene_path("dog.toml"),
+            "--resolution",
+            "512",
+            "--out",
+            s(&out),
+        ],
+        &dir,
+    );
+    refused_before_work(&o, &["--resolution 512", "more than", &info.name]);
+    assert!(!out.exists());
+}
