@@ -117,9 +117,10 @@ pub struct SsdfSamples {
 }
 
 /// Bytes a triangle takes in the bake's largest storage buffer: a closed
-/// mesh has 1.5 silhouette edges a triangle, 96 bytes each (endpoints, two
-/// face planes, the opposite vertices).
-pub const BAKE_BYTES_PER_TRIANGLE: u64 = 144;
+/// mesh has 1.5 edges a triangle, and one node's silhouette may hold every
+/// edge in up to `ARC_PIECES` arcs of 32 bytes (192 bytes a triangle; the
+/// edges themselves take 96 bytes each, 144 a triangle).
+pub const BAKE_BYTES_PER_TRIANGLE: u64 = 192;
 
 /// Fails, before the silhouette and BVH are built, when `mesh` is too
 /// large for the bake's storage bindings on `info`'s device, naming the
@@ -129,7 +130,7 @@ pub fn check_bake_fits(info: &DeviceInfo, mesh: &ObjectMesh) -> anyhow::Result<(
     let need = BAKE_BYTES_PER_TRIANGLE * mesh.triangles() as u64;
     anyhow::ensure!(
         need <= limit,
-        "{}: {} triangles: the SSDF bake binds its silhouette edges in one buffer of about \
+        "{}: {} triangles: the SSDF bake binds one node's silhouette arcs in one buffer of about \
          {} MiB, more than {}'s largest storage binding ({} MiB); simplify the mesh to at \
          most {} triangles",
         mesh.name,
@@ -207,29 +208,46 @@ pub fn bake_reference(
         .collect()
 }
 
-/// The bake kernel.
+/// The bake's two kernels: each node's silhouette arcs, then S at every
+/// direction from them.
 pub struct SsdfBaker {
+    silhouette: Arc<ComputePipeline>,
     pipeline: Arc<ComputePipeline>,
 }
 
-/// Nodes per submission: small enough that progress moves and no single
-/// submission runs long on a slow device.
+/// Nodes per submission at most: small enough that progress moves and no
+/// single submission runs long on a slow device (fewer when a batch's
+/// arcs would outgrow a storage binding).
 const NODES_PER_BATCH: usize = 32;
 
+/// Bytes of one arc in the buffer between the two kernels (two vec4s).
+const ARC_BYTES: u64 = 32;
+
 impl SsdfBaker {
-    /// Compiles the kernel.
+    /// Compiles the kernels.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
+        let silhouette = lib.compute_pipeline(
+            ctx,
+            "ssdf/ssdf_silhouette.wgsl",
+            "main",
+            &[
+                Define::U32("ARC_PIECES", ARC_PIECES),
+                Define::F32("OUTSIDE_OFFSET", OUTSIDE_OFFSET as f32),
+            ],
+        )?;
         let pipeline = lib.compute_pipeline(
             ctx,
             "ssdf/ssdf_bake.wgsl",
             "main",
             &[
                 Define::U32("ARC_PIECES", ARC_PIECES),
-                Define::F32("OUTSIDE_OFFSET", OUTSIDE_OFFSET as f32),
                 Define::Bool("OCTAHEDRAL", true),
             ],
         )?;
-        Ok(Self { pipeline })
+        Ok(Self {
+            silhouette,
+            pipeline,
+        })
     }
 
     /// Bakes S for `mesh` with `knobs` (`progress(done, total)` after each
@@ -306,8 +324,11 @@ impl SsdfBaker {
         let edge_count = sil.edges.len() as u32;
         let mut out = Vec::with_capacity(points.len() * texels);
         let mut renderer = Renderer::new(ctx, 1)?;
-        for start in (0..points.len()).step_by(NODES_PER_BATCH) {
-            let count = NODES_PER_BATCH.min(points.len() - start);
+        let node_arc_bytes = ARC_BYTES * edge_count as u64 * ARC_PIECES as u64;
+        let limit = ctx.info().max_storage_buffer_range as u64;
+        let batch = NODES_PER_BATCH.min((limit / node_arc_bytes.max(1)).max(1) as usize);
+        for start in (0..points.len()).step_by(batch) {
+            let count = batch.min(points.len() - start);
             let size = (count * texels * 4) as u64;
             let readback = BufferReadback::new(ctx, "ssdf readback", size)?;
             renderer.begin_frame()?;
@@ -321,13 +342,26 @@ impl SsdfBaker {
                 edge_count,
                 node_count: count as u32,
             };
-            let mut written = target;
+            let mut arcs = graph.create_buffer("ssdf arcs", node_arc_bytes.max(16) * count as u64);
+            let mut arc_counts = graph.create_buffer("ssdf arc counts", 4 * count as u64);
             graph
-                .compute("ssdf-bake", &self.pipeline)
+                .compute("ssdf-silhouette", &self.silhouette)
                 .read("points", bound[0])
                 .read("edges", bound[1])
                 .read("bvh_nodes", bound[2])
                 .read("bvh_triangles", bound[3])
+                .write("arcs", &mut arcs)
+                .write("arc_counts", &mut arc_counts)
+                .push(&push)
+                .groups([count as u32, 1, 1]);
+            let mut written = target;
+            graph
+                .compute("ssdf-bake", &self.pipeline)
+                .read("points", bound[0])
+                .read("bvh_nodes", bound[2])
+                .read("bvh_triangles", bound[3])
+                .read("arcs", arcs)
+                .read("arc_counts", arc_counts)
                 .write("out_ssdf", &mut written)
                 .push(&push)
                 .groups([(texels as u32).div_ceil(64), count as u32, 1]);

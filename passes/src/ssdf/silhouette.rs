@@ -23,7 +23,6 @@
 //! (normal or UV seams) do not open the mesh.
 
 use std::collections::HashMap;
-use std::f64::consts::PI;
 
 use glam::{DVec3, DVec4};
 
@@ -89,12 +88,13 @@ pub struct SilhouetteView {
 impl SilhouetteView {
     /// S(d) for unit `d`, given whether the ray along `d` hits.
     pub fn signed_angle(&self, d: DVec3, hit: bool) -> f64 {
-        let mut best = PI;
+        let mut nearest = 4.0f64;
         for &(a, b, outer) in &self.arcs {
             if outer || !hit {
-                best = best.min(angle_to_arc(d, a, b));
+                nearest = nearest.min(chord2_to_arc(d, a, b));
             }
         }
+        let best = angle_of_chord2(nearest);
         if hit {
             -best
         } else {
@@ -167,15 +167,28 @@ impl SilhouetteMesh {
     }
 
     /// The silhouette seen from `x`; `hits(x, d)` says whether the ray
-    /// from x along d hits the object (used to find the outer arcs).
+    /// from x along d hits the object (used to find the outer arcs). Each
+    /// silhouette edge is classified in [`ARC_PIECES`] pieces; consecutive
+    /// pieces of the same class are kept as one arc (they lie on one great
+    /// circle, so the angle to their union is the angle to that arc).
     pub fn view_from(&self, x: DVec3, hits: impl Fn(DVec3, DVec3) -> bool) -> SilhouetteView {
-        let arcs = self
-            .edges
-            .iter()
-            .filter(|e| e.is_silhouette(x))
-            .flat_map(|e| (0..ARC_PIECES).map(move |k| e.piece(x, k)))
-            .map(|(a, b, probe)| (a, b, !hits(x, probe)))
-            .collect();
+        let mut arcs: Vec<(DVec3, DVec3, bool)> = Vec::new();
+        for e in self.edges.iter().filter(|e| e.is_silhouette(x)) {
+            let mut run: Option<(DVec3, DVec3, bool)> = None;
+            for k in 0..ARC_PIECES {
+                let (a, b, probe) = e.piece(x, k);
+                let outer = !hits(x, probe);
+                run = match run {
+                    Some((start, _, o)) if o == outer => Some((start, b, o)),
+                    Some(done) => {
+                        arcs.push(done);
+                        Some((a, b, outer))
+                    }
+                    None => Some((a, b, outer)),
+                };
+            }
+            arcs.extend(run);
+        }
         SilhouetteView { arcs }
     }
 }
@@ -185,29 +198,45 @@ pub fn angle_between(u: DVec3, v: DVec3) -> f64 {
     u.cross(v).length().atan2(u.dot(v))
 }
 
-/// The smallest angle from unit `d` to the shorter great-circle arc from
-/// unit `a` to unit `b`: to the great circle where d's projection falls
-/// within the arc, else to the nearer end. Mirrored by `ssdf_angle_to_arc`
-/// in `shaders/ssdf/ssdf_bake.wgsl`.
-pub fn angle_to_arc(d: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let ends = angle_between(d, a).min(angle_between(d, b));
+/// The squared chord from unit `d` to the nearest point of the shorter
+/// great-circle arc from unit `a` to unit `b`: to the great circle where d's
+/// projection falls within the arc, else to the nearer end. The chord,
+/// 2 sin(θ/2), grows with the angle θ, so the nearest arc is the one of
+/// smallest chord; it is accurate near θ = 0, where a cosine is not, and
+/// costs no inverse trigonometry. Mirrored by `ssdf_chord2_to_arc` in
+/// `shaders/ssdf/angles.wgsl` (which takes n precomputed).
+pub fn chord2_to_arc(d: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ends = (d - a).length_squared().min((d - b).length_squared());
     let n = a.cross(b);
     let len = n.length();
     if len < 1e-12 || a.dot(b) < -1.0 + 1e-12 {
         return ends;
     }
     let n = n / len;
-    if a.cross(d).dot(n) >= 0.0 && d.cross(b).dot(n) >= 0.0 {
-        // atan2(|d·n|, |d × n|): well conditioned up to a quarter turn.
-        d.dot(n).abs().atan2(d.cross(n).length()).min(ends)
+    if d.dot(n.cross(a)) >= 0.0 && d.dot(b.cross(n)) >= 0.0 {
+        // sin θ = |d·n|; 2(1 − cos θ) without cancellation.
+        let s2 = d.dot(n).powi(2);
+        ends.min(2.0 * s2 / (1.0 + (1.0 - s2).max(0.0).sqrt()))
     } else {
         ends
     }
 }
 
+/// The angle whose chord squared is `chord2` (0..=4).
+pub fn angle_of_chord2(chord2: f64) -> f64 {
+    2.0 * (0.5 * chord2.max(0.0).sqrt()).min(1.0).asin()
+}
+
+/// The smallest angle from unit `d` to the shorter great-circle arc from
+/// unit `a` to unit `b` ([`chord2_to_arc`] as an angle).
+pub fn angle_to_arc(d: DVec3, a: DVec3, b: DVec3) -> f64 {
+    angle_of_chord2(chord2_to_arc(d, a, b))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn arc_distances() {

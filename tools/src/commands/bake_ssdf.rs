@@ -51,7 +51,7 @@ pub fn run(ctx: &Arc<Context>, args: &BakeSsdfArgs) -> anyhow::Result<()> {
     });
     check_output("--out", &out, &["inlayssdf"])?;
     let mesh = Arc::new(load_gltf(&args.object)?);
-    let lib = inlay_passes::shaders::embedded_library();
+    let lib = inlay_passes::shaders::library()?;
     let (field, _) = bake_ssdf_with_progress(ctx, &lib, &mesh, &knobs)?;
     let mut outputs = Outputs::new();
     outputs.bytes(&out, &ssdf_bytes(&field))?;

@@ -175,7 +175,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             p.noise, p.floaters, p.see_through, p.seed
         );
     }
-    let lib = inlay_passes::shaders::embedded_library();
+    let lib = inlay_passes::shaders::library()?;
     let bars = [
         progress_bar("views", knobs.views as u64),
         progress_bar("near field", knobs.points() as u64),
