@@ -33,6 +33,9 @@ pub struct ModuleRow {
     pub ran_in: usize,
     /// Why it did not run, where it was skipped (the most frequent reason).
     pub skipped_because: Option<String>,
+    /// Its median over NeRF rendering's median (how Table 1 reads: the
+    /// paper's SG updating is 0.18 × its NeRF rendering).
+    pub march_ratio: Option<f64>,
 }
 
 /// The whole table.
@@ -53,6 +56,12 @@ pub struct Table1 {
     pub wall_median_ms: Option<f64>,
     /// Frames per second from the median wall time.
     pub wall_fps: Option<f64>,
+    /// Median, over the frames after the first (whose cold fit stands
+    /// apart), of everything but NeRF rendering: what inserting the
+    /// objects costs a frame.
+    pub insertion_median_ms: Option<f64>,
+    /// That over NeRF rendering's median (paper: 15 ms / 40 ms = 0.38).
+    pub insertion_ratio: Option<f64>,
 }
 
 /// A module's GPU time in `frame`, if any of its passes ran.
@@ -112,9 +121,35 @@ pub fn summarise(frames: &[FrameTimings], wall_ms: &[f64]) -> Table1 {
                 first_frame_ms,
                 ran_in: per_frame.iter().filter(|t| t.is_some()).count(),
                 skipped_because: reasons.first().map(|(r, _)| r.clone()),
+                march_ratio: None,
             }
         })
+        .collect::<Vec<ModuleRow>>();
+    let march_name = Table1Module::NerfRendering.name();
+    let march = modules
+        .iter()
+        .find(|r: &&ModuleRow| r.module == march_name)
+        .and_then(|r| r.median_ms)
+        .filter(|&m| m > 0.0);
+    let modules: Vec<ModuleRow> = modules
+        .into_iter()
+        .map(|mut r| {
+            r.march_ratio = r.median_ms.zip(march).map(|(m, n)| m / n);
+            r
+        })
         .collect();
+    let insertion: Vec<f64> = frames
+        .iter()
+        .skip(1)
+        .map(|f| {
+            crate::table1::modules()
+                .into_iter()
+                .filter(|(m, _)| *m != march_name)
+                .filter_map(|(_, passes)| module_ms(f, &passes))
+                .sum()
+        })
+        .collect();
+    let insertion_median_ms = (!insertion.is_empty()).then(|| quantile(&insertion, 0.5));
     let totals: Vec<f64> = frames.iter().map(|f| f.gpu_total_ms).collect();
     let frame_median_ms = quantile(&totals, 0.5);
     let wall_median = (!wall_ms.is_empty()).then(|| quantile(wall_ms, 0.5));
@@ -130,6 +165,8 @@ pub fn summarise(frames: &[FrameTimings], wall_ms: &[f64]) -> Table1 {
         },
         wall_median_ms: wall_median,
         wall_fps: wall_median.filter(|&m| m > 0.0).map(|m| 1000.0 / m),
+        insertion_median_ms,
+        insertion_ratio: insertion_median_ms.zip(march).map(|(i, m)| i / m),
     }
 }
 
@@ -138,9 +175,16 @@ impl Table1 {
     pub fn format(&self, title: &str) -> String {
         let mut out = format!("{title}\n");
         out.push_str(&format!(
-            "{:<16} {:>10} {:>10} {:>12}  {}\n",
-            "module", "ms p50", "ms p95", "first frame", "ran"
+            "{:<16} {:>10} {:>10} {:>20} {:>8}  {}\n",
+            "module", "ms p50", "ms p95", "first frame (× march)", "× march", "ran"
         ));
+        let march = self
+            .modules
+            .iter()
+            .find(|r| r.module == Table1Module::NerfRendering.name())
+            .and_then(|r| r.median_ms)
+            .filter(|&m| m > 0.0);
+        let ratio = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
         let ms = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
         for r in &self.modules {
             let ran = if r.ran_in == self.frames {
@@ -160,27 +204,40 @@ impl Table1 {
                         .map_or(String::new(), |why| format!("; otherwise skipped ({why})"))
                 )
             };
-            let first = if r.module == "SG updating" {
-                ms(r.first_frame_ms)
+            let first = if r.module == Table1Module::SgUpdating.name() {
+                // The cold fit, and its ratio to the march.
+                let cold = r.first_frame_ms.zip(march).map(|(f, m)| f / m);
+                format!("{} ({})", ms(r.first_frame_ms), ratio(cold))
             } else {
                 String::new()
             };
             out.push_str(&format!(
-                "{:<16} {:>10} {:>10} {:>12}  {ran}\n",
+                "{:<16} {:>10} {:>10} {:>20} {:>8}  {ran}\n",
                 r.module,
                 ms(r.median_ms),
                 ms(r.p95_ms),
-                first
+                first,
+                ratio(r.march_ratio)
+            ));
+        }
+        if let Some(i) = self.insertion_median_ms {
+            out.push_str(&format!(
+                "{:<16} {:>10.3} {:>10} {:>20} {:>8}  everything but NeRF rendering, frames after the first (paper: 0.38)\n",
+                "insertion",
+                i,
+                "",
+                "",
+                ratio(self.insertion_ratio)
             ));
         }
         out.push_str(&format!(
-            "{:<16} {:>10.3} {:>10.3}               {:.1} fps (GPU time)\n",
-            "frame", self.frame_median_ms, self.frame_p95_ms, self.gpu_fps
+            "{:<16} {:>10.3} {:>10.3} {:>29}  {:.1} fps (GPU time)\n",
+            "frame", self.frame_median_ms, self.frame_p95_ms, "", self.gpu_fps
         ));
         if let (Some(m), Some(fps)) = (self.wall_median_ms, self.wall_fps) {
             out.push_str(&format!(
-                "{:<16} {:>10.3} {:>10}               {fps:.1} fps (wall clock)\n",
-                "frame (wall)", m, ""
+                "{:<16} {:>10.3} {:>10} {:>29}  {fps:.1} fps (wall clock)\n",
+                "frame (wall)", m, "", ""
             ));
         }
         out
@@ -257,5 +314,16 @@ mod tests {
             "{text}"
         );
         assert!(text.contains("80.000"), "{text}");
+        // Ratios to the march (median 12 ms): Rendering 3 ms; the cold fit
+        // 80 ms; insertion per frame after the first 3.5, 3.5, 14.5, 3.5.
+        assert_eq!(row("Rendering").march_ratio, Some(0.25));
+        assert_eq!(row("NeRF rendering").march_ratio, Some(1.0));
+        assert_eq!(t.insertion_median_ms, Some(3.5));
+        assert_eq!(t.insertion_ratio, Some(3.5 / 12.0));
+        assert!(text.contains("80.000 (6.667)"), "{text}");
+        assert!(
+            text.contains("insertion") && text.contains("0.292"),
+            "{text}"
+        );
     }
 }
