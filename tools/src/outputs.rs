@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use inlay_engine::output::{check_output_path, OutputBatch};
-use inlay_engine::{Context, HdrImage, IMAGE_EXTENSIONS};
+use inlay_engine::{Context, HdrImage};
 
 /// Checks before any work that the path given to `flag` can take an output
 /// with one of `extensions` (empty: any); the error names the flag, the
@@ -18,7 +18,7 @@ pub fn check_output(flag: &str, path: &Path, extensions: &[&str]) -> anyhow::Res
 
 /// [`check_output`] for an image (`.exr` or `.png`).
 pub fn check_image_output(flag: &str, path: &Path) -> anyhow::Result<()> {
-    check_output(flag, path, &IMAGE_EXTENSIONS)
+    HdrImage::check_output(path).map_err(|e| anyhow::anyhow!("{flag}: {e}"))
 }
 
 /// A command's outputs, staged until [`Outputs::commit`].
