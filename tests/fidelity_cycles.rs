@@ -148,7 +148,7 @@ fn the_probe_irradiance_matches_cycles_sensors() {
             let cycles = 0.5 * (sensor("s1") + sensor("s2"));
             let (centre, _) = object.sphere();
             let env = inlay_passes::lighting::object_light_lobes(&scene, centre);
-            let pass = ProbePass::new(&ctx, &lib, knobs, scene.march, &env).unwrap();
+            let pass = ProbePass::new(&ctx, &lib, knobs, scene.march, &env, &[]).unwrap();
             common::run_frame(&ctx, |graph| {
                 let probe = pass.add(graph, &gpu_field, centre);
                 rb.add_to_graph(graph, probe);

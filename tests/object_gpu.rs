@@ -229,7 +229,20 @@ fn shading_kernel_matches_its_f64_mirror() {
     let ctx = common::gpu();
     let lib = embedded_library();
     let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
-    let shade = ShadePass::new(&ctx, &lib, 2).unwrap();
+    let shade = ShadePass::new(&ctx, &lib, 2, Default::default()).unwrap();
+    let empty = inlay_passes::field::GpuGridField::upload(
+        &ctx,
+        &inlay_passes::field::GridField::new(
+            glam::UVec3::splat(2),
+            inlay_passes::geometry::Aabb {
+                min: glam::DVec3::splat(-1.0),
+                max: glam::DVec3::splat(1.0),
+            },
+            vec![[0.0; 4]; 8],
+            1,
+        ),
+    )
+    .unwrap();
     let ndf = NdfLobes::new(2).unwrap();
     let (w, h) = (60, 24);
     let cam = camera(w, h);
@@ -287,7 +300,7 @@ fn shading_kernel_matches_its_f64_mirror() {
                 direct: None,
             })
             .collect();
-        let c = shade.add(graph, &cam, &g, &lobes, &[]);
+        let c = shade.add(graph, &cam, &g, &empty, &lobes, &[]);
         (g, c)
     });
     let mut counted = [0; 3];
@@ -367,10 +380,12 @@ fn sg_shading_matches_brute_force_against_the_probe() {
         scene.lighting.fit,
         march,
         &env,
+        &[],
+        1,
     )
     .unwrap();
     let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
-    let shade = ShadePass::new(&ctx, &lib, 1).unwrap();
+    let shade = ShadePass::new(&ctx, &lib, 1, march).unwrap();
     let (w, h) = (32, 32);
     let spec = CameraSpec {
         name: None,
@@ -416,7 +431,7 @@ fn sg_shading_matches_brute_force_against_the_probe() {
                     records,
                 )
                 .unwrap();
-            let c = shade.add(graph, &cam, &g, &[lobes], &[]);
+            let c = shade.add(graph, &cam, &g, &gpu_field, &[lobes], &[]);
             (g, c)
         });
         if class == 0 {
@@ -520,10 +535,12 @@ fn composite_hides_the_object_partly_behind_foliage() {
         scene.lighting.fit,
         scene.march,
         &env,
+        &[],
+        1,
     )
     .unwrap();
     let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
-    let shade = ShadePass::new(&ctx, &lib, 1).unwrap();
+    let shade = ShadePass::new(&ctx, &lib, 1, scene.march).unwrap();
     let composite = CompositePass::new(&ctx, &lib).unwrap();
     let (w, h) = (96, 54);
     let cam = CameraFrame::new(scene.camera("front").unwrap(), w, h);
@@ -551,7 +568,7 @@ fn composite_hides_the_object_partly_behind_foliage() {
         let g = gbuffer.add(graph, &cam, &[draw], records).unwrap();
         let bare = march.add(graph, &gpu_field, &cam, None);
         let clipped = march.add(graph, &gpu_field, &cam, Some(g.distance_id));
-        let object = shade.add(graph, &cam, &g, &[lobes], &[]);
+        let object = shade.add(graph, &cam, &g, &gpu_field, &[lobes], &[]);
         let out = composite.add(graph, clipped.colour_opacity, object, None);
         let front = composite.add_layered(
             graph,

@@ -209,7 +209,7 @@ fn the_probe_does_not_flicker_as_the_object_slides() {
     let (centre, radius) = (DVec3::new(0.1, 0.7, 0.05), 2.0 * voxel);
     let field = sphere_light(centre, radius, 50.0);
     let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
-    let pass = ProbePass::new(&ctx, &lib, k, march(), &[]).unwrap();
+    let pass = ProbePass::new(&ctx, &lib, k, march(), &[], &[]).unwrap();
     let rb = Readback::new(
         &ctx,
         ImageDesc {

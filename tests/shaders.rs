@@ -239,6 +239,8 @@ fn pipelines_are_compiled_once_per_key() {
             FitKnobs::default(),
             MarchKnobs::default(),
             &[],
+            &[],
+            1,
         )
         .unwrap();
         (light, t.elapsed())

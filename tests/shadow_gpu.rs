@@ -325,10 +325,14 @@ fn compare_cast_shadow(lobes: &[Sg64], direct: usize) -> CastComparison {
         let light = LightLobes {
             buffer: graph.import_buffer(&lobe_buf, None),
             count: lobes.len() as u32,
-            direct: (direct > 0).then(|| DirectRays {
-                lobes: direct as u32,
-                rays: graph.import_buffer(&ray_buf, None),
-                rays_per_lobe: 36,
+            direct: (direct > 0).then(|| {
+                let rays = graph.import_buffer(&ray_buf, None);
+                DirectRays {
+                    lobes: direct as u32,
+                    rays,
+                    rays_per_lobe: 36,
+                    local: no_local_lights(rays),
+                }
             }),
         };
         let table = fh.import(graph);
@@ -642,7 +646,8 @@ fn self_shadowed_shading_matches_its_mirror() {
     let fh = GpuFhTable::new(&ctx).unwrap();
     let gpu_object = GpuObject::upload(&ctx, &mesh).unwrap();
     let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
-    let shade = ShadePass::new(&ctx, &lib, 1).unwrap();
+    let shade = ShadePass::new(&ctx, &lib, 1, MarchKnobs::default()).unwrap();
+    let gpu_field = empty_field(&ctx);
     let ndf = NdfLobes::new(1).unwrap();
     let (c, r) = mesh.bounding_sphere();
     let spec = CameraSpec {
@@ -694,17 +699,21 @@ fn self_shadowed_shading_matches_its_mirror() {
             let light = LightLobes {
                 buffer: graph.import_buffer(&lobe_buf, None),
                 count: lobes.len() as u32,
-                direct: direct.then(|| DirectRays {
-                    lobes: 1,
-                    rays: graph.import_buffer(&ray_buf, None),
-                    rays_per_lobe: 36,
+                direct: direct.then(|| {
+                    let rays = graph.import_buffer(&ray_buf, None);
+                    DirectRays {
+                        lobes: 1,
+                        rays,
+                        rays_per_lobe: 36,
+                        local: no_local_lights(rays),
+                    }
                 }),
             };
             let self_shadow = SelfShadow {
                 fh_table: fh.import(graph),
                 ssdf: ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct),
             };
-            let out = shade.add(graph, &cam, &g, &[light], &[Some(self_shadow)]);
+            let out = shade.add(graph, &cam, &g, &gpu_field, &[light], &[Some(self_shadow)]);
             rb[0].add_to_graph(graph, g.normal_roughness);
             rb[1].add_to_graph(graph, g.albedo_metallic);
             rb[2].add_to_graph(graph, g.distance_id);
@@ -765,4 +774,29 @@ fn self_shadowed_shading_matches_its_mirror() {
         assert!(off <= allowed, "{off} of {shaded} pixels off the mirror");
     }
     common::assert_no_validation_errors(&ctx);
+}
+
+/// No local lights: any storage buffer stands in for their (unread) buffer.
+fn no_local_lights(
+    buffer: inlay_engine::graph::BufferHandle,
+) -> inlay_passes::lighting::LocalLightBindings {
+    inlay_passes::lighting::LocalLightBindings {
+        lights: buffer,
+        count: 0,
+        side: 1,
+    }
+}
+
+/// A field with nothing in it (the shading reads it only for local lights).
+fn empty_field(ctx: &Arc<inlay_engine::Context>) -> GpuGridField {
+    let field = inlay_passes::field::GridField::new(
+        glam::UVec3::splat(2),
+        inlay_passes::geometry::Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        },
+        vec![[0.0; 4]; 8],
+        1,
+    );
+    GpuGridField::upload(ctx, &field).unwrap()
 }

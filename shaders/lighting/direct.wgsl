@@ -1,13 +1,17 @@
 // The object's shading lobes (passes/src/lighting/direct_pass.rs): the M
-// fitted lobes copied from the fit's buffer, then each lobe of L_env too
+// fitted lobes copied from the fit's buffer; then each lobe of L_env too
 // sharp for the fit, its amplitude scaled by the field's mean
 // transmittance 1 − Ô along its rays from the object's centre (the rays
 // are the lobe's own stratified directions, passes/src/lighting/sharp.rs
-// lobe_rays). One invocation per output lobe. Mirrors
-// passes/src/lighting/direct_reference.rs.
+// lobe_rays); then each local light (lighting/local_light.wgsl) as the
+// centre sees it, its intensity measured towards the centre and written
+// with its sphere to `local_lights` for the per-pixel shading. One
+// invocation per output lobe. Mirrors passes/src/lighting/direct_reference.rs.
 #include "common/ray_box.wgsl"
+#include "common/sg.wgsl"
 #include "field/grid.wgsl"
 #include "march/volume_march.wgsl"
+#include "lighting/local_light.wgsl"
 
 struct DirectPush {
     origin: vec3<f32>,
@@ -16,6 +20,12 @@ struct DirectPush {
     fitted: u32,
     sharp: u32,
     rays: u32,
+    // Local lights after the sharp lobes, and the side of their rays.
+    local: u32,
+    local_side: u32,
+    // 1: shade the sharp lobes; 0: the environment is off, write them black.
+    environment: u32,
+    pad1: u32,
 }
 
 var<immediate> pc: DirectPush;
@@ -26,10 +36,38 @@ var<immediate> pc: DirectPush;
 @group(0) @binding(4) var<storage, read> sharp_lobes: array<vec4<f32>>;
 // `rays` unit directions per sharp lobe (xyz; w unused).
 @group(0) @binding(5) var<storage, read> sharp_rays: array<vec4<f32>>;
-// Output: M + K lobes, two vec4 each.
+// Output: M + K + L lobes, two vec4 each.
 @group(0) @binding(6) var<storage, read_write> lights: array<vec4<f32>>;
+// The local lights' spheres (centre, radius).
+@group(0) @binding(7) var<storage, read> local_spheres: array<vec4<f32>>;
+// Output: each local light as (centre, radius), (intensity, radius of the
+// disk it shines from; 0 while inactive).
+@group(0) @binding(8) var<storage, read_write> local_lights: array<vec4<f32>>;
 
 const DIRECT_NO_OBJECT: f32 = 3.0e38;
+
+fn local_light(i: u32, k: u32) {
+    let sphere = local_spheres[k];
+    local_lights[2u * k] = sphere;
+    if !local_active(sphere, pc.origin) {
+        local_lights[2u * k + 1u] = vec4<f32>(0.0);
+        lights[2u * i] = vec4<f32>(0.0, 1.0, 0.0, 1.0);
+        lights[2u * i + 1u] = vec4<f32>(0.0);
+        return;
+    }
+    let emission = local_intensity(sphere, pc.origin, pc.step, pc.termination);
+    local_lights[2u * k + 1u] = emission;
+    let n = pc.local_side * pc.local_side;
+    var clear = 0.0;
+    for (var r = 0u; r < n; r++) {
+        clear += local_transmittance_to(sphere, pc.origin, r, pc.local_side, emission.w, pc.step, pc.termination);
+    }
+    let to = sphere.xyz - pc.origin;
+    let g = local_sphere_lobe(normalize(to), length(to), emission.w, emission.xyz);
+    let t = clamp(clear / f32(max(n, 1u)), 0.0, 1.0);
+    lights[2u * i] = vec4<f32>(g.direction, g.sharpness);
+    lights[2u * i + 1u] = vec4<f32>(g.amplitude * t, 0.0);
+}
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -39,10 +77,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         lights[2u * i + 1u] = fitted_lobes[2u * i + 1u];
         return;
     }
+    if i >= pc.fitted + pc.sharp + pc.local {
+        return;
+    }
     if i >= pc.fitted + pc.sharp {
+        local_light(i, i - pc.fitted - pc.sharp);
         return;
     }
     let k = i - pc.fitted;
+    if pc.environment == 0u {
+        lights[2u * i] = sharp_lobes[2u * k];
+        lights[2u * i + 1u] = vec4<f32>(0.0);
+        return;
+    }
     var clear = 0.0;
     for (var r = 0u; r < pc.rays; r++) {
         let dir = sharp_rays[k * pc.rays + r].xyz;

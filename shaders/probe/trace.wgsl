@@ -6,12 +6,16 @@
 // integrate even a needle lobe.
 // When the scene has no environment light, `main_field_only` writes Ĉ: the
 // L_env term is not evaluated at all and `env_lobes` is not bound.
+// Local lights (lighting/local_light.wgsl) active from the origin are left
+// out: the colour a ray gathers inside their spheres is taken off, since
+// they are shaded per pixel.
 // Mirrors passes/src/probe/reference.rs.
 #include "common/ray_box.wgsl"
 #include "common/sg.wgsl"
 #include "common/direction_map.wgsl"
 #include "field/grid.wgsl"
 #include "march/volume_march.wgsl"
+#include "lighting/local_light.wgsl"
 
 struct ProbePush {
     origin: vec3<f32>,
@@ -21,8 +25,9 @@ struct ProbePush {
     termination: f32,
     env_lobe_count: u32,
     side: u32,
+    // Local lights in `local_spheres`.
+    local_count: u32,
     // The struct is 16-byte aligned (its vec3): pad to 48 bytes.
-    pad0: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -32,6 +37,8 @@ var<immediate> pc: ProbePush;
 @group(0) @binding(3) var probe: texture_storage_2d<rgba32float, write>;
 // Environment lobes, two vec4 each: (p, λ), (μ, 0).
 @group(0) @binding(4) var<storage, read> env_lobes: array<vec4<f32>>;
+// The local lights' spheres (centre, radius).
+@group(0) @binding(5) var<storage, read> local_spheres: array<vec4<f32>>;
 
 // "No object along the ray": the probe sees the whole field.
 const PROBE_NO_OBJECT: f32 = 3.0e38;
@@ -56,7 +63,14 @@ fn probe_sample(t: vec2<u32>, k: u32) -> ProbeSample {
     let ij = vec2<u32>(k % pc.side, k / pc.side);
     let size = vec2<u32>(pc.width, pc.height);
     let dd = dm_direction_density(dm_subsample_uv(t, ij, pc.side, size));
-    let m = march_ray(pc.origin, dd.xyz, PROBE_NO_OBJECT, pc.step, pc.termination);
+    var m = march_ray(pc.origin, dd.xyz, PROBE_NO_OBJECT, pc.step, pc.termination);
+    for (var l = 0u; l < pc.local_count; l++) {
+        let sphere = local_spheres[l];
+        if local_active(sphere, pc.origin) {
+            m.colour -= local_inside_colour(sphere, pc.origin, dd.xyz, pc.step, pc.termination);
+        }
+    }
+    m.colour = max(m.colour, vec3<f32>(0.0));
     return ProbeSample(dd.xyz, dd.w, m);
 }
 

@@ -7,6 +7,10 @@ fn shading_attenuation(k: u32) -> f32 {
 
 fn shading_prepare(x: vec3<f32>, n: vec3<f32>) {}
 
+fn shading_lobe(k: u32, g: Sg) -> Sg {
+    return g;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shade_pixel(id);

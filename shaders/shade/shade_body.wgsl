@@ -4,8 +4,12 @@
 // Output: the object's radiance I_v with coverage in alpha. The including
 // shader (shade/shade.wgsl, shade/shade_self_shadow.wgsl) defines the
 // entry point, calling shade_pixel, and the hooks
-//   shading_attenuation(k) -> f32 (Γ_k) and shading_prepare(x, n) (called
-//   with the pixel's world-space surface point and normal before shading).
+//   shading_attenuation(k) -> f32 (Γ_k), shading_prepare(x, n) (called
+//   with the pixel's world-space surface point and normal before shading)
+//   and shading_lobe(k, g) -> Sg (lobe k as this pixel sees it: g, or a
+//   local light's lobe from the pixel's point).
+// Bindings 0-2 are left to the field (field/grid.wgsl) for the variant
+// that marches it.
 #include "common/camera.wgsl"
 #include "brdf/sg_shading.wgsl"
 
@@ -20,26 +24,33 @@ struct ShadePush {
     // fit), and rays per lobe (read by shade_self_shadow_direct.wgsl).
     direct_lobes: u32,
     direct_rays: u32,
+    // How many of the direct lobes, at the end, are local lights, the side
+    // of their visibility rays, and the field's march step and termination
+    // (read by shade_self_shadow_direct.wgsl).
+    local_count: u32,
+    local_side: u32,
+    march_step: f32,
+    march_termination: f32,
 }
 
 var<immediate> pc: ShadePush;
-@group(0) @binding(0) var normal_roughness: texture_2d<f32>;
-@group(0) @binding(1) var albedo_metallic: texture_2d<f32>;
-@group(0) @binding(2) var distance_id: texture_2d<f32>;
+@group(0) @binding(16) var normal_roughness: texture_2d<f32>;
+@group(0) @binding(17) var albedo_metallic: texture_2d<f32>;
+@group(0) @binding(18) var distance_id: texture_2d<f32>;
 // The object's lobes as (p, λ), (μ, 0): the fit's current M (then its
 // candidates, unread) or the fitted and the direct lobes
 // (passes/src/lighting: LightLobes); the first pc.light_count are the light.
-@group(0) @binding(3) var<storage, read> light_lobes: array<vec4<f32>>;
+@group(0) @binding(19) var<storage, read> light_lobes: array<vec4<f32>>;
 // (c_j, k_j) of the NDF mixture (passes/src/brdf/ndf_lobes.rs).
-@group(0) @binding(4) var<storage, read> ndf_lobes: array<vec2<f32>>;
-@group(0) @binding(5) var out_object: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(20) var<storage, read> ndf_lobes: array<vec2<f32>>;
+@group(0) @binding(21) var out_object: texture_storage_2d<rgba32float, write>;
 
 fn shading_light_count() -> u32 {
     return pc.light_count;
 }
 
 fn shading_light(k: u32) -> Sg {
-    return sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+    return shading_lobe(k, sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]));
 }
 
 fn shading_ndf_count() -> u32 {

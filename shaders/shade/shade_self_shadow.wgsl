@@ -7,6 +7,10 @@ fn shading_attenuation(k: u32) -> f32 {
     return ssdf_attenuation(k);
 }
 
+fn shading_lobe(k: u32, g: Sg) -> Sg {
+    return g;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shade_pixel(id);

@@ -1,23 +1,88 @@
 // The object's SG shading pass (eq. 5) with self-shadows (eq. 9) where the
-// light ends in direct lobes (too sharp for the fit): those take Γ as the
-// share of their rays above the tangent plane that leave the surface clear,
-// cast against the object's mesh from DIRECT_RAY_OFFSET radii off it
-// (shadow/direct_rays.wgsl); the others Γ from the SSDF. Mirrors
-// passes/src/shadow/runtime.rs self_shadow_factors.
+// light ends in direct lobes: the lobes of L_env too sharp for the fit
+// take Γ as the share of their rays above the tangent plane that leave the
+// surface clear, cast against the object's mesh from DIRECT_RAY_OFFSET
+// radii off it (shadow/direct_rays.wgsl); the local lights, last, are
+// lobes from the pixel's own point towards their spheres
+// (lighting/local_light.wgsl), with Γ from their rays (local_visibility);
+// the other lobes take Γ from the SSDF. Mirrors
+// passes/src/shadow/runtime.rs self_shadow_factors and
+// passes/src/lighting/local.rs.
+#include "common/ray_box.wgsl"
+#include "field/grid.wgsl"
+#include "march/volume_march.wgsl"
 #include "shade/shade_body.wgsl"
 #include "shade/self_shadow_ssdf.wgsl"
+#include "lighting/local_light.wgsl"
 
 @group(0) @binding(10) var<storage, read> bvh_nodes: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> bvh_triangles: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read> sharp_rays: array<vec4<f32>>;
+// Each local light as (centre, radius), (intensity, radius of the disk it
+// shines from; 0 while inactive), written by the direct-light pass
+// (lighting/direct.wgsl).
+@group(0) @binding(22) var<storage, read> local_lights: array<vec4<f32>>;
 
 #include "geometry/mesh_bvh.wgsl"
 #include "shadow/direct_rays.wgsl"
+
+fn first_local() -> u32 {
+    return pc.light_count - min(pc.local_count, pc.light_count);
+}
+
+fn shading_lobe(k: u32, g: Sg) -> Sg {
+    if k < first_local() {
+        return g;
+    }
+    let l = k - first_local();
+    let info = local_lights[2u * l + 1u];
+    if info.w == 0.0 {
+        return g;
+    }
+    let sphere = local_lights[2u * l];
+    let to = sphere.xyz - shade_point;
+    return local_sphere_lobe(normalize(to), length(to), info.w, info.xyz);
+}
+
+// Γ of local light l at the pixel. The shading takes a lobe's diffuse
+// light through the SG clamped cosine, which for a lobe as sharp as a
+// small light is its integral times the cosine lobe at its axis; that
+// cosine lobe is 0.12 at the horizon and still 0.07 at 100°, where the
+// light is gone (a bright rim on every face turned from a lamp). So Γ
+// is the mean over the light's rays of max(n·d, 0) where the mesh leaves
+// the ray clear, times the field's transmittance along it, over the
+// cosine lobe at the light's direction: exact for a small light.
+fn local_visibility(l: u32) -> f32 {
+    let sphere = local_lights[2u * l];
+    let radius = local_lights[2u * l + 1u].w;
+    let lifted = shade_point + shade_normal * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
+    let o = ssdf_to_object_point(lifted);
+    let n = pc.local_side * pc.local_side;
+    var sum = 0.0;
+    for (var r = 0u; r < n; r++) {
+        let d = normalize(local_disk_point_towards(sphere, lifted, r, pc.local_side, radius) - lifted);
+        let cosine = dot(d, shade_normal);
+        if cosine <= 0.0 || bvh_occluded(o, ssdf_to_object_dir(d)) {
+            continue;
+        }
+        sum += cosine * local_transmittance_to(sphere, lifted, r, pc.local_side, radius, pc.march_step, pc.march_termination);
+    }
+    let axis = normalize(sphere.xyz - shade_point);
+    let lobe_cosine = sg_eval(sg_clamped_cosine(shade_normal), axis).x;
+    return sum / (f32(max(n, 1u)) * max(lobe_cosine, 1e-6));
+}
 
 fn shading_attenuation(k: u32) -> f32 {
     let first = pc.light_count - min(pc.direct_lobes, pc.light_count);
     if k < first {
         return ssdf_attenuation(k);
+    }
+    if k >= first_local() {
+        let l = k - first_local();
+        if local_lights[2u * l + 1u].w == 0.0 {
+            return 0.0;
+        }
+        return local_visibility(l);
     }
     let lifted = shade_point + shade_normal * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
     return direct_clear_fraction(lifted, k - first, pc.direct_rays, shade_normal, true);

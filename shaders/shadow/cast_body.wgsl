@@ -30,6 +30,12 @@ struct CastPush {
     // How many of them, at the end, are direct lobes, and rays per lobe.
     direct_lobes: u32,
     direct_rays: u32,
+    // How many of the direct lobes, at the end, are local lights, and the
+    // side of their rays (read by shadow/cast_direct.wgsl).
+    local_count: u32,
+    local_side: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 var<immediate> pc: CastPush;

@@ -45,6 +45,9 @@ pub struct GpuGridField {
     pub bounds: crate::geometry::Aabb,
     /// Nodes per axis.
     pub resolution: glam::UVec3,
+    /// The light sources inside the field, brightest first
+    /// ([`super::find_emitters`], found once at upload).
+    pub emitters: Vec<super::FieldEmitter>,
 }
 
 /// The field's buffers as imported into one frame's graph.
@@ -135,6 +138,7 @@ impl GpuGridField {
             diagonal: field.bounds.diagonal(),
             bounds: field.bounds,
             resolution: field.resolution,
+            emitters: super::find_emitters(field),
         })
     }
 

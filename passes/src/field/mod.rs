@@ -5,12 +5,14 @@
 //! interpolation; fields trained from photos and instant-ngp snapshots are
 //! later kinds behind the same trait.
 
+mod emitters;
 mod format;
 pub(crate) mod gpu_grid;
 mod grid;
 mod occupancy;
 mod perturb;
 
+pub use emitters::{find_emitters, FieldEmitter, MAX_FIELD_EMITTERS, MIN_EMITTER_RATIO};
 pub use format::{
     field_bytes, load_field, parse_field, read_field_header, save_field, FieldFormatError,
     FieldHeader, FIELD_MAGIC, FIELD_VERSION,

@@ -157,6 +157,14 @@ impl InsertionFrame {
             scene.objects.len()
         );
         let shadows = ssdfs.iter().any(Option::is_some);
+        let local = scene.lighting.local.choose(&field.emitters);
+        for l in &local {
+            log::info!(
+                "local light at {:.3} (radius {:.3}): shaded per pixel",
+                l.centre,
+                l.radius
+            );
+        }
         let mut objects = Vec::with_capacity(scene.objects.len());
         for (placed, ssdf) in scene.objects.iter().zip(ssdfs) {
             let (centre, _) = placed.sphere();
@@ -177,6 +185,8 @@ impl InsertionFrame {
                     scene.lighting.fit,
                     *march.knobs(),
                     &crate::lighting::object_light_lobes(scene, centre),
+                    &local,
+                    scene.lighting.local.rays,
                 )?,
                 ssdf: match ssdf {
                     Some(f) => Some(GpuSsdf::upload(ctx, f, &placed.mesh)?),
@@ -186,7 +196,7 @@ impl InsertionFrame {
         }
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, lib)?,
-            shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes)?,
+            shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes, *march.knobs())?,
             composite: CompositePass::new(ctx, lib)?,
             edge_aa: EdgeAaPass::new(ctx, lib, EdgeAaKnobs::default())?,
             cast: if shadows {
@@ -342,7 +352,9 @@ impl InsertionFrame {
         if !effects.self_shadow {
             graph.note_skipped("self-shadow", "self-shadows off");
         }
-        let object = self.shade.add(graph, frame, &g, &shown_lobes, &self_shadow);
+        let object = self
+            .shade
+            .add(graph, frame, &g, &self.field, &shown_lobes, &self_shadow);
         let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
         let layering = if effects.occlusion {
             Layering::FieldOverObject

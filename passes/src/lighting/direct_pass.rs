@@ -2,8 +2,9 @@
 //! `shaders/lighting/direct.wgsl`): after the fit, the object's shading lobes
 //! are assembled in one persistent buffer — the M fitted lobes, then each
 //! sharp lobe of L_env ([`super::sharp`]) scaled by the field's
-//! transmittance towards it. Built only when L_env has sharp lobes; the
-//! CPU mirror is [`super::direct_reference::direct_lights`].
+//! transmittance towards it, then each local light ([`super::local`]) as
+//! the object's centre sees it. Built only when there are sharp lobes or
+//! local lights; the CPU mirror is [`super::direct_reference::direct_lights`].
 
 use crate::frame::meta::{PassInfo, Table1Module};
 use std::sync::Arc;
@@ -13,8 +14,9 @@ use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context};
 
+use super::local::LocalLight;
 use super::sharp::lobe_rays;
-use super::{DirectRays, LightLobes};
+use super::{DirectRays, LightLobes, LocalLightBindings};
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
 use crate::sg::{Sg32, Sg64};
@@ -34,6 +36,14 @@ inlay_engine::gpu_struct! {
         pub sharp: u32,
         /// Rays per sharp lobe.
         pub rays: u32,
+        /// Local lights after the sharp lobes.
+        pub local: u32,
+        /// Side of each local light's visibility rays.
+        pub local_side: u32,
+        /// 1 to shade the sharp lobes of L_env, 0 to leave them black.
+        pub environment: u32,
+        /// Padding.
+        pub pad1: u32,
     }
 }
 
@@ -50,35 +60,77 @@ pub const DIRECT_LIGHT: &str = DIRECT_LIGHT_INFO.name;
 /// Bytes of one packed lobe ((p, λ), (μ, 0)).
 const LOBE_BYTES: u64 = 32;
 
-/// The sharp lobes, their rays and the assembled light buffer.
+/// The sharp lobes, their rays, the local lights and the assembled light
+/// buffer.
 pub struct DirectLightPass {
     pipeline: Arc<ComputePipeline>,
     sharp: Arc<Buffer>,
     rays: Arc<Buffer>,
     lights: Arc<Buffer>,
+    spheres: Arc<Buffer>,
+    local_lights: Arc<Buffer>,
     readback: BufferReadback,
     fitted: u32,
+    sharp_count: u32,
+    local_count: u32,
     count: u32,
     side: u32,
+    local_side: u32,
     march: MarchKnobs,
+}
+
+/// A storage buffer of `data`, or of one zero vec4 when `data` is empty
+/// (a binding the shader declares is always bound).
+fn storage(
+    ctx: &Arc<Context>,
+    name: &str,
+    data: &[u8],
+    extra: vk::BufferUsageFlags,
+) -> anyhow::Result<Arc<Buffer>> {
+    let zero = [0u8; 16];
+    let data = if data.is_empty() { &zero[..] } else { data };
+    Ok(Arc::new(Buffer::with_data(
+        ctx,
+        name,
+        data,
+        vk::BufferUsageFlags::STORAGE_BUFFER | extra,
+    )?))
+}
+
+/// Packs local lights' spheres as (centre, radius) vec4s.
+pub(crate) fn sphere_bytes(local: &[LocalLight]) -> Vec<u8> {
+    local
+        .iter()
+        .flat_map(|l| {
+            let c = l.centre.as_vec3();
+            [c.x, c.y, c.z, l.radius as f32]
+        })
+        .flat_map(f32::to_le_bytes)
+        .collect()
 }
 
 impl DirectLightPass {
     /// Compiles the pass for `fitted` fitted lobes followed by `sharp`,
-    /// each attenuated along `side`² rays; None when `sharp` is empty (the
-    /// fit's lobes are the whole light and no pass runs).
+    /// each attenuated along `side`² rays, then the `local` lights, each
+    /// seen along `local_side`² rays; None when there are neither sharp
+    /// lobes nor local lights (the fit's lobes are the whole light and no
+    /// pass runs).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
         fitted: u32,
         sharp: &[Sg64],
         side: u32,
+        local: &[LocalLight],
+        local_side: u32,
         march: MarchKnobs,
     ) -> anyhow::Result<Option<Self>> {
-        if sharp.is_empty() {
+        if sharp.is_empty() && local.is_empty() {
             return Ok(None);
         }
         let side = side.max(1);
+        let local_side = local_side.max(1);
         let pipeline = lib.compute_pipeline(
             ctx,
             "lighting/direct.wgsl",
@@ -96,23 +148,28 @@ impl DirectLightPass {
             .flat_map(|d| [d.x as f32, d.y as f32, d.z as f32, 0.0])
             .flat_map(f32::to_le_bytes)
             .collect();
-        let read = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let count = fitted + sharp.len() as u32;
+        let none = vk::BufferUsageFlags::empty();
+        let count = fitted + sharp.len() as u32 + local.len() as u32;
         let bytes = count as u64 * LOBE_BYTES;
         Ok(Some(Self {
             pipeline,
-            sharp: Arc::new(Buffer::with_data(ctx, "sharp-lobes", &lobe_bytes, read)?),
-            rays: Arc::new(Buffer::with_data(ctx, "sharp-rays", &ray_bytes, read)?),
-            lights: Arc::new(Buffer::with_data(
+            sharp: storage(ctx, "sharp-lobes", &lobe_bytes, none)?,
+            rays: storage(ctx, "sharp-rays", &ray_bytes, none)?,
+            lights: storage(
                 ctx,
                 "light-lobes",
                 &vec![0u8; bytes as usize],
-                read | vk::BufferUsageFlags::TRANSFER_SRC,
-            )?),
+                vk::BufferUsageFlags::TRANSFER_SRC,
+            )?,
+            spheres: storage(ctx, "local-spheres", &sphere_bytes(local), none)?,
+            local_lights: storage(ctx, "local-lights", &vec![0u8; 32 * local.len()], none)?,
             readback: BufferReadback::new(ctx, "light-lobes (readback)", bytes)?,
             fitted,
+            sharp_count: sharp.len() as u32,
+            local_count: local.len() as u32,
             count,
             side,
+            local_side,
             march,
         }))
     }
@@ -126,10 +183,16 @@ impl DirectLightPass {
     pub fn reused(&self, graph: &mut FrameGraph) -> LightLobes {
         let buffer = self.import(graph);
         let rays = graph.import_buffer(&self.rays, None);
-        self.light_lobes(buffer, rays)
+        let local = graph.import_buffer(&self.local_lights, None);
+        self.light_lobes(buffer, rays, local)
     }
 
-    fn light_lobes(&self, buffer: BufferHandle, rays: BufferHandle) -> LightLobes {
+    fn light_lobes(
+        &self,
+        buffer: BufferHandle,
+        rays: BufferHandle,
+        local: BufferHandle,
+    ) -> LightLobes {
         LightLobes {
             buffer,
             count: self.count,
@@ -137,6 +200,11 @@ impl DirectLightPass {
                 lobes: self.count - self.fitted,
                 rays,
                 rays_per_lobe: self.side * self.side,
+                local: LocalLightBindings {
+                    lights: local,
+                    count: self.local_count,
+                    side: self.local_side,
+                },
             }),
         }
     }
@@ -146,27 +214,45 @@ impl DirectLightPass {
         graph.import_buffer(&self.lights, None)
     }
 
+    /// Whether L_env has lobes shaded here.
+    pub fn has_sharp(&self) -> bool {
+        self.sharp_count > 0
+    }
+
+    /// Whether local lights are shaded here.
+    pub fn has_local(&self) -> bool {
+        self.local_count > 0
+    }
+
     /// Adds `direct-light`: copies the fit's current lobes from `fitted`
-    /// (the fit's buffer, as written this frame) and attenuates the sharp
-    /// lobes by `field` seen from `origin`; returns the assembled lobes.
+    /// (the fit's buffer, as written this frame), attenuates the sharp
+    /// lobes (black without the `environment`) by `field` seen from
+    /// `origin` and measures the local lights; returns the assembled lobes.
     pub fn add(
         &self,
         graph: &mut FrameGraph,
         field: &GpuGridField,
         origin: DVec3,
         fitted: BufferHandle,
+        environment: bool,
     ) -> LightLobes {
         let grid = field.import(graph);
         let sharp = graph.import_buffer(&self.sharp, None);
         let rays = graph.import_buffer(&self.rays, None);
         let lights = self.import(graph);
+        let spheres = graph.import_buffer(&self.spheres, None);
+        let mut local = graph.import_buffer(&self.local_lights, None);
         let push = DirectPush {
             origin: origin.as_vec3().to_array(),
             step: self.march.step(field.diagonal) as f32,
             termination: self.march.termination as f32,
             fitted: self.fitted,
-            sharp: self.count - self.fitted,
+            sharp: self.sharp_count,
             rays: self.side * self.side,
+            local: self.local_count,
+            local_side: self.local_side,
+            environment: environment as u32,
+            pad1: 0,
         };
         let mut lights = lights;
         grid.bind(graph.compute(DIRECT_LIGHT, &self.pipeline))
@@ -174,9 +260,11 @@ impl DirectLightPass {
             .read("sharp_lobes", sharp)
             .read("sharp_rays", rays)
             .write("lights", &mut lights)
+            .read("local_spheres", spheres)
+            .write("local_lights", &mut local)
             .push(&push)
             .threads([self.count, 1, 1]);
-        self.light_lobes(lights, rays)
+        self.light_lobes(lights, rays, local)
     }
 
     /// Adds a transfer pass copying the assembled lobes to the host;

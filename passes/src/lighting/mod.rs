@@ -6,10 +6,12 @@
 
 pub(crate) mod direct_pass;
 pub mod direct_reference;
+pub mod local;
 pub mod sharp;
 
 pub use direct_pass::{DirectLightPass, DIRECT_LIGHT, DIRECT_LIGHT_INFO};
 pub use direct_reference::direct_lights;
+pub use local::{LocalLight, LocalLightKnobs};
 pub use sharp::{lobe_rays, split_environment, SplitEnvironment};
 
 use std::sync::Arc;
@@ -64,6 +66,22 @@ pub struct DirectRays {
     pub rays: BufferHandle,
     /// Rays per lobe.
     pub rays_per_lobe: u32,
+    /// The local lights, last among the direct lobes (`count` may be 0:
+    /// the buffer is bound all the same).
+    pub local: LocalLightBindings,
+}
+
+/// The last `count` direct lobes are local lights ([`local`]), shaded per
+/// pixel from their spheres and intensities.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LocalLightBindings {
+    /// Each light's (centre, radius), (intensity, active) as the direct
+    /// pass wrote them.
+    pub lights: BufferHandle,
+    /// How many.
+    pub count: u32,
+    /// Side of each light's visibility rays (side² per shaded point).
+    pub side: u32,
 }
 
 /// The probe and fit passes with the state that decides when they run.
@@ -84,7 +102,9 @@ impl IncidentLight {
     /// sharper than the fit can hold on this probe
     /// ([`crate::sgfit::model::max_sharpness`]) skip the probe and are
     /// shaded directly, each attenuated along `probe.supersampling`² rays
-    /// (a sharp lobe is integrated as a texel is).
+    /// (a sharp lobe is integrated as a texel is). The `local` lights leave
+    /// the probe and are shaded per pixel along `local_side`² rays.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
@@ -92,11 +112,22 @@ impl IncidentLight {
         fit: FitKnobs,
         march: MarchKnobs,
         environment: &[Sg64],
+        local: &[LocalLight],
+        local_side: u32,
     ) -> anyhow::Result<Self> {
         let split = split_environment(environment, sharp_limit(&probe));
         let side = probe.supersampling;
-        let probe = ProbePass::new(ctx, lib, probe, march, &split.broad)?;
-        let direct = DirectLightPass::new(ctx, lib, fit.lobes, &split.sharp, side, march)?;
+        let probe = ProbePass::new(ctx, lib, probe, march, &split.broad, local)?;
+        let direct = DirectLightPass::new(
+            ctx,
+            lib,
+            fit.lobes,
+            &split.sharp,
+            side,
+            local,
+            local_side,
+            march,
+        )?;
         let fit = SgFitPass::new(ctx, lib, fit, probe.map())?;
         Ok(Self {
             probe,
@@ -109,7 +140,7 @@ impl IncidentLight {
     /// Whether any environment light is evaluated (broad lobes in the
     /// probe or sharp ones shaded directly).
     pub fn has_environment(&self) -> bool {
-        self.probe.has_environment() || self.direct.is_some()
+        self.probe.has_environment() || self.direct.as_ref().is_some_and(|d| d.has_sharp())
     }
 
     /// Decides this frame's work for an object centred at `centre` in a
@@ -164,8 +195,13 @@ impl IncidentLight {
         environment: bool,
     ) -> anyhow::Result<LightLobes> {
         let fitted = self.fit.knobs().lobes;
-        let direct = self.direct.as_ref().filter(|_| environment);
-        if self.direct.is_some() && !environment {
+        // Local lights are the field's own: they are shaded with the
+        // environment off too (its sharp lobes then black).
+        let direct = self
+            .direct
+            .as_ref()
+            .filter(|d| environment || d.has_local());
+        if self.direct.is_some() && direct.is_none() {
             graph.note_skipped(DIRECT_LIGHT, "environment light off");
         }
         match work {
@@ -188,7 +224,7 @@ impl IncidentLight {
                 let probe = self.probe.add_with(graph, field, centre, environment);
                 let lobes = self.fit.add(graph, probe, start, iterations)?;
                 Ok(match direct {
-                    Some(d) => d.add(graph, field, centre, lobes),
+                    Some(d) => d.add(graph, field, centre, lobes, environment),
                     None => LightLobes {
                         buffer: lobes,
                         count: fitted,

@@ -33,9 +33,9 @@ inlay_engine::gpu_struct! {
         pub env_lobe_count: u32,
         /// Rays per texel side.
         pub side: u32,
+        /// Local lights left out ([`crate::lighting::local`]).
+        pub local_count: u32,
         /// Padding to the struct's 16-byte alignment.
-        pub pad0: u32,
-        /// Padding.
         pub pad1: u32,
         /// Padding.
         pub pad2: u32,
@@ -78,19 +78,22 @@ pub struct ProbePass {
     map: DirectionMap,
     supersampling: u32,
     march: MarchKnobs,
+    spheres: Arc<Buffer>,
+    local_count: u32,
 }
 
 impl ProbePass {
     /// Compiles the pass and creates its probe image. `environment` is the
     /// distant light L_env (blurred here to the probe's sub-sample spacing,
     /// [`texel_environment`]); when empty, the pass runs the entry point
-    /// without the L_env term.
+    /// without the L_env term. The `local` lights' light is left out.
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
         knobs: ProbeKnobs,
         march: MarchKnobs,
         environment: &[Sg64],
+        local: &[crate::lighting::LocalLight],
     ) -> anyhow::Result<Self> {
         knobs
             .check()
@@ -148,6 +151,17 @@ impl ProbePass {
             map,
             supersampling: knobs.supersampling,
             march,
+            spheres: {
+                let mut bytes = crate::lighting::direct_pass::sphere_bytes(local);
+                bytes.resize(bytes.len().max(16), 0);
+                Arc::new(Buffer::with_data(
+                    ctx,
+                    "probe local spheres",
+                    &bytes,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                )?)
+            },
+            local_count: local.len() as u32,
         })
     }
 
@@ -200,14 +214,16 @@ impl ProbePass {
             termination: self.march.termination as f32,
             env_lobe_count: env.map_or(0, |(_, n)| n),
             side: self.supersampling,
-            pad0: 0,
+            local_count: self.local_count,
             pad1: 0,
             pad2: 0,
         };
         let mut probe = probe;
         let pipeline = chosen.map_or(&self.field_only, |e| &e.pipeline);
+        let spheres = graph.import_buffer(&self.spheres, None);
         grid.bind(graph.compute(PROBE_TRACE, pipeline))
             .write("probe", &mut probe)
+            .read("local_spheres", spheres)
             .read_opt("env_lobes", env.map(|(b, _)| b))
             .push(&push)
             .threads([w, h, 1]);

@@ -248,6 +248,8 @@ pub struct LightingKnobs {
     pub probe: crate::probe::ProbeKnobs,
     /// Lobes, iterations, damping.
     pub fit: crate::sgfit::FitKnobs,
+    /// The field's light sources shaded per pixel.
+    pub local: crate::lighting::LocalLightKnobs,
 }
 
 impl LightingKnobs {
@@ -268,7 +270,13 @@ impl LightingKnobs {
                 warm_iterations: s.warm_iterations.unwrap_or(d.fit.warm_iterations),
                 damping: s.damping.unwrap_or(d.fit.damping),
             },
+            local: crate::lighting::LocalLightKnobs {
+                count: s.local_lights.unwrap_or(d.local.count),
+                ratio: s.local_light_ratio.unwrap_or(d.local.ratio),
+                rays: s.local_light_rays.unwrap_or(d.local.rays),
+            },
         };
+        k.local.check()?;
         k.probe
             .check()
             .map_err(|(f, m)| (format!("probe_{f}"), m))?;

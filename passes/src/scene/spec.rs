@@ -152,4 +152,7 @@ pub(crate) struct LightingSpec {
     pub warm_iterations: Option<u32>,
     pub damping: Option<f64>,
     pub environment: Option<String>,
+    pub local_lights: Option<u32>,
+    pub local_light_ratio: Option<f64>,
+    pub local_light_rays: Option<u32>,
 }

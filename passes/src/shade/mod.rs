@@ -17,9 +17,12 @@ use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
 use crate::brdf::NdfLobes;
 use crate::camera::{CameraFrame, CameraRays};
+use crate::field::GpuGridField;
 use crate::gbuffer::GBuffer;
 use crate::lighting::LightLobes;
+use crate::march::MarchKnobs;
 use crate::shadow::{shadow_defines, SsdfBindings};
+use inlay_engine::shader::Define;
 
 inlay_engine::gpu_struct! {
     /// `ShadePush` of `shaders/shade/shade_body.wgsl`.
@@ -36,6 +39,14 @@ inlay_engine::gpu_struct! {
         pub direct_lobes: u32,
         /// Rays per direct lobe.
         pub direct_rays: u32,
+        /// Local lights at the end of the direct lobes.
+        pub local_count: u32,
+        /// Side of each local light's visibility rays.
+        pub local_side: u32,
+        /// The field's march step (world units).
+        pub march_step: f32,
+        /// The march's early-termination transmittance.
+        pub march_termination: f32,
         /// Padding (the struct's size rounds up to 16 bytes).
         pub _pad: [u32; 3],
     }
@@ -80,14 +91,23 @@ pub struct ShadePass {
     self_shadowed_direct: Arc<ComputePipeline>,
     ndf: Arc<Buffer>,
     ndf_lobes: NdfLobes,
+    march: MarchKnobs,
 }
 
 impl ShadePass {
-    /// Compiles the pass for an `ndf_lobes`-lobe GGX mixture.
-    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, ndf_lobes: u32) -> anyhow::Result<Self> {
+    /// Compiles the pass for an `ndf_lobes`-lobe GGX mixture; local lights'
+    /// visibility marches the field with `march`.
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        ndf_lobes: u32,
+        march: MarchKnobs,
+    ) -> anyhow::Result<Self> {
         let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
-        let shadowed = |file: &str| lib.compute_pipeline(ctx, file, "main", &shadow_defines());
+        let mut defines = shadow_defines();
+        defines.push(Define::Bool("SKIP_EMPTY", march.skip_empty));
+        let shadowed = |file: &str| lib.compute_pipeline(ctx, file, "main", &defines);
         Ok(Self {
             pipeline: lib.compute_pipeline(ctx, "shade/shade.wgsl", "main", &[])?,
             self_shadowed: shadowed("shade/shade_self_shadow.wgsl")?,
@@ -99,6 +119,7 @@ impl ShadePass {
                 vk::BufferUsageFlags::STORAGE_BUFFER,
             )?),
             ndf_lobes: ndf,
+            march,
         })
     }
 
@@ -109,12 +130,14 @@ impl ShadePass {
 
     /// Adds `object-shade`: object i's pixels (index i in the G-buffer) are
     /// shaded with `lobes[i]` (an SG fit's lobe buffer), self-shadowed
-    /// (eq. 9) where `self_shadow[i]` is given.
+    /// (eq. 9) where `self_shadow[i]` is given; local lights are seen
+    /// through `field`.
     pub fn add(
         &self,
         graph: &mut FrameGraph,
         camera: &CameraFrame,
         gbuffer: &GBuffer,
+        field: &GpuGridField,
         lobes: &[LightLobes],
         self_shadow: &[Option<SelfShadow>],
     ) -> ImageHandle {
@@ -129,8 +152,10 @@ impl ShadePass {
         );
         let ndf = graph.import_buffer(&self.ndf, None);
         let mut out = out;
+        let grid = field.import(graph);
         let mut pass = graph.compute_pass(OBJECT_SHADE);
         for (i, l) in lobes.iter().enumerate() {
+            let local = l.direct.map(|d| d.local);
             let push = ShadePush {
                 camera: camera.rays(),
                 object_index: i as f32,
@@ -138,6 +163,10 @@ impl ShadePass {
                 light_count: l.count,
                 direct_lobes: l.direct.map_or(0, |d| d.lobes),
                 direct_rays: l.direct.map_or(0, |d| d.rays_per_lobe),
+                local_count: local.map_or(0, |x| x.count),
+                local_side: local.map_or(1, |x| x.side),
+                march_step: self.march.step(field.diagonal) as f32,
+                march_termination: self.march.termination as f32,
                 _pad: [0; 3],
             };
             let shadow = self_shadow.get(i).copied().flatten();
@@ -146,8 +175,8 @@ impl ShadePass {
                 (Some(_), None) => &self.self_shadowed,
                 (None, _) => &self.pipeline,
             };
-            let mut d = pass
-                .dispatch(pipeline)
+            let mut d = grid
+                .bind(pass.dispatch(pipeline))
                 .read("normal_roughness", gbuffer.normal_roughness)
                 .read("albedo_metallic", gbuffer.albedo_metallic)
                 .read("distance_id", gbuffer.distance_id)
@@ -166,6 +195,7 @@ impl ShadePass {
                     .read("bvh_triangles", s.ssdf.bvh_triangles);
             }
             d.read_opt("sharp_rays", l.direct.map(|r| r.rays))
+                .read_opt("local_lights", local.map(|x| x.lights))
                 .threads([width, height, 1]);
         }
         pass.finish();

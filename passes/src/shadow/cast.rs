@@ -32,6 +32,14 @@ inlay_engine::gpu_struct! {
         pub direct_lobes: u32,
         /// Rays per direct lobe.
         pub direct_rays: u32,
+        /// Local lights at the end of the direct lobes.
+        pub local_count: u32,
+        /// Side of each local light's rays.
+        pub local_side: u32,
+        /// Padding (the struct's size rounds up to 16 bytes).
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
     }
 }
 
@@ -110,6 +118,10 @@ impl CastShadowPass {
             light_count: lobes.count,
             direct_lobes: direct.map_or(0, |d| d.lobes),
             direct_rays: direct.map_or(0, |d| d.rays_per_lobe),
+            local_count: direct.map_or(0, |d| d.local.count),
+            local_side: direct.map_or(1, |d| d.local.side),
+            pad0: 0,
+            pad1: 0,
         };
         let pipeline = match (previous.is_some(), direct.is_some()) {
             (false, false) => &self.first,
@@ -131,6 +143,7 @@ impl CastShadowPass {
             .read("bvh_nodes", ssdf.bvh_nodes)
             .read("bvh_triangles", ssdf.bvh_triangles)
             .read_opt("sharp_rays", direct.map(|d| d.rays))
+            .read_opt("local_lights", direct.map(|d| d.local.lights))
             .write("out_shadow", &mut out)
             .push(&push)
             .threads([width, height, 1]);

@@ -114,7 +114,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
             resolution: n,
             ..scene.lighting.probe
         };
-        let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env)?;
+        let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env, &[])?;
         let fit = SgFitPass::new(ctx, &library, base, probe.map())?;
         let (report, trace, t_max) = measure(
             ctx,
@@ -157,7 +157,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
             resolution: n,
             ..scene.lighting.probe
         };
-        let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env)?;
+        let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env, &[])?;
         let mut cells = Vec::new();
         for &m in &args.lobes {
             let fit_knobs = FitKnobs { lobes: m, ..base };

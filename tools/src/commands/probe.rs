@@ -247,7 +247,7 @@ pub fn trace_and_fit(
     env: &[Sg64],
 ) -> anyhow::Result<TracedProbe> {
     let library = inlay_passes::shaders::library()?;
-    let light = IncidentLight::new(ctx, &library, probe_knobs, fit_knobs, march, env)?;
+    let light = IncidentLight::new(ctx, &library, probe_knobs, fit_knobs, march, env, &[], 1)?;
     let map = light.probe.map();
     let readback = Readback::new(
         ctx,
@@ -265,7 +265,7 @@ pub fn trace_and_fit(
         .fit
         .add(&mut graph, image, FitStart::Cold, fit_knobs.cold_iterations)?;
     if let Some(d) = &light.direct {
-        d.add(&mut graph, field, at, lobes);
+        d.add(&mut graph, field, at, lobes, true);
     }
     readback.add_to_graph(&mut graph, image);
     light.add_readback(&mut graph);
