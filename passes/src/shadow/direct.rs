@@ -12,6 +12,7 @@ use glam::DVec3;
 
 use crate::geometry::MeshScene;
 use crate::geometry::Ray;
+use crate::lighting::local::{Emission, LocalLight};
 use crate::object::PlacedObject;
 
 /// A self-shadow ray starts this many bounding radii off the surface,
@@ -20,7 +21,8 @@ use crate::object::PlacedObject;
 pub const DIRECT_RAY_OFFSET: f64 = 1e-3;
 
 /// What the direct lobes' shadows are cast from: the object's mesh in its
-/// own frame ([`crate::ssdf::object_scene`]) and each direct lobe's rays.
+/// own frame ([`crate::ssdf::object_scene`]), each direct lobe's rays, and
+/// the local lights that come after those.
 #[derive(Clone, Copy)]
 pub struct DirectOcclusion<'a> {
     /// The object in its own frame.
@@ -28,17 +30,27 @@ pub struct DirectOcclusion<'a> {
     /// Each direct lobe's rays (world directions), in the order the lobes
     /// come last in the light ([`crate::lighting::lobe_rays`]).
     pub rays: &'a [Vec<DVec3>],
+    /// The local lights, last of all, each with the emission the
+    /// direct-light pass measured ([`crate::lighting::local`]), and the
+    /// side of their rays (side² per point).
+    pub local: &'a [(LocalLight, Emission)],
+    /// Side of the local lights' rays.
+    pub local_side: u32,
 }
 
 impl DirectOcclusion<'_> {
     /// The index of the first direct lobe among `count` lobes.
     pub fn first(&self, count: usize) -> usize {
-        count.saturating_sub(self.rays.len())
+        count.saturating_sub(self.rays.len() + self.local.len())
     }
 
     /// The share of direct lobe `k`'s rays from world point `x` that the
     /// placed object leaves clear; with `above = Some(n)` only rays above
-    /// the plane of normal `n` count (1 when none does).
+    /// the plane of normal `n` count (1 when none does). For a local light
+    /// (k past the rays), the share of its rays to its disk the mesh leaves
+    /// clear, every ray counted (its cast shadow,
+    /// `shaders/shadow/local_rays.wgsl`; its self-shadow also needs the
+    /// field, [`crate::lighting::local::visibility`]).
     pub fn clear_fraction(
         &self,
         placed: &PlacedObject,
@@ -46,6 +58,18 @@ impl DirectOcclusion<'_> {
         k: usize,
         above: Option<DVec3>,
     ) -> f64 {
+        if let Some((light, emission)) = k
+            .checked_sub(self.rays.len())
+            .and_then(|l| self.local.get(l))
+        {
+            return crate::lighting::local::mesh_clear_fraction(
+                self.scene,
+                placed.world_to_object(),
+                light,
+                x,
+                (self.local_side, emission.radius),
+            );
+        }
         let m = placed.world_to_object();
         let origin = m.transform_point3(x);
         let (mut clear, mut counted) = (0u32, 0u32);
