@@ -856,6 +856,7 @@ fn lamp_field(c: DVec3, r: f64) -> (inlay_passes::field::GridField, LocalLight) 
     let light = LocalLight {
         centre: lamp,
         radius: 0.5 * r,
+        emission: None,
     };
     (field, light)
 }
@@ -1113,6 +1114,7 @@ fn local_light_shadow_matches_its_mirror() {
     let light = LocalLight {
         centre: c + DVec3::new(0.3, 3.0, 0.2) * r,
         radius: 0.4 * r,
+        emission: None,
     };
     let emission = Emission {
         intensity: DVec3::splat(6.0) * r * r,

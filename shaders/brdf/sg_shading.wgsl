@@ -19,7 +19,6 @@ fn shade_sg(n: vec3<f32>, v: vec3<f32>, albedo_in: vec3<f32>, roughness_in: f32,
     let r_raw = 2.0 * nv_true * n - v;
     let r_len = length(r_raw);
     let r = select(n, r_raw / r_len, r_len > 0.0);
-    let cosine = sg_clamped_cosine(n);
     let ndf_sharpness = 2.0 / (alpha * alpha) / (4.0 * nv);
     let ndf_amplitude = 1.0 / (BRDF_PI * alpha * alpha);
     let f0 = brdf_f0(albedo, metallic);
@@ -32,7 +31,7 @@ fn shade_sg(n: vec3<f32>, v: vec3<f32>, albedo_in: vec3<f32>, roughness_in: f32,
             continue;
         }
         let g = shading_light(k);
-        diffuse += gamma * diffuse_colour * sg_inner_product(g, cosine);
+        diffuse += gamma * diffuse_colour * sg_diffuse_irradiance(g, n);
         for (var j = 0u; j < shading_ndf_count(); j++) {
             let ck = shading_ndf(j);
             let d = Sg(r, ck.y * ndf_sharpness, vec3<f32>(ck.x * ndf_amplitude));

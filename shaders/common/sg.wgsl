@@ -75,6 +75,46 @@ fn sg_clamped_cosine(n: vec3<f32>) -> Sg {
     return Sg(n, SG_COSINE_SHARPNESS, vec3<f32>(SG_PI / sg_sphere_factor(SG_COSINE_SHARPNESS)));
 }
 
+// The irradiance ∫ G(v) max(v·n, 0) dv on a surface of unit normal n, by
+// Stephen Hill's fitted curve (passes/src/sg/math.rs irradiance).
+fn sg_irradiance(g: Sg, n: vec3<f32>) -> vec3<f32> {
+    let mu_n = dot(g.direction, n);
+    let lambda = max(g.sharpness, 1e-4);
+    let c0 = 0.36;
+    let c1 = 1.0 / (4.0 * c0);
+    let eml = exp(-lambda);
+    let em2l = eml * eml;
+    let rl = 1.0 / lambda;
+    let scale = 1.0 + 2.0 * em2l - rl;
+    let bias = (eml - em2l) * rl - em2l;
+    let x = sqrt(max(1.0 - scale, 0.0));
+    let x0 = c0 * mu_n;
+    let x1 = c1 * x;
+    let sum = x0 + x1;
+    var y = clamp(mu_n, 0.0, 1.0);
+    if abs(x0) <= x1 {
+        y = sum * sum / x;
+    }
+    let result = max(scale * y + bias, 0.0);
+    return g.amplitude * (result * 2.0 * SG_PI / lambda);
+}
+
+// The irradiance as the shading takes it: the fit from λ 2 up, the
+// clamped-cosine lobe's inner product below 1, blended between
+// (passes/src/sg/math.rs diffuse_irradiance).
+fn sg_diffuse_irradiance(g: Sg, n: vec3<f32>) -> vec3<f32> {
+    let w = clamp(g.sharpness - 1.0, 0.0, 1.0);
+    var lobe = vec3<f32>(0.0);
+    if w < 1.0 {
+        lobe = sg_inner_product(g, sg_clamped_cosine(n));
+    }
+    var fit = vec3<f32>(0.0);
+    if w > 0.0 {
+        fit = sg_irradiance(g, n);
+    }
+    return lobe * (1.0 - w) + fit * w;
+}
+
 // A lobe stored as (p, λ), (μ, 0).
 fn sg_unpack(axis_sharpness: vec4<f32>, amplitude: vec4<f32>) -> Sg {
     return Sg(axis_sharpness.xyz, axis_sharpness.w, amplitude.xyz);

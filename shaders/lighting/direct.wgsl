@@ -38,7 +38,8 @@ var<immediate> pc: DirectPush;
 @group(0) @binding(5) var<storage, read> sharp_rays: array<vec4<f32>>;
 // Output: M + K + L lobes, two vec4 each.
 @group(0) @binding(6) var<storage, read_write> lights: array<vec4<f32>>;
-// The local lights' spheres (centre, radius).
+// The local lights, two vec4 each: (centre, radius), and the emission
+// when known (intensity, radius it shines from; w = 0: measure it here).
 @group(0) @binding(7) var<storage, read> local_spheres: array<vec4<f32>>;
 // Output: each local light as (centre, radius), (intensity, radius of the
 // disk it shines from; 0 while inactive).
@@ -47,7 +48,7 @@ var<immediate> pc: DirectPush;
 const DIRECT_NO_OBJECT: f32 = 3.0e38;
 
 fn local_light(i: u32, k: u32) {
-    let sphere = local_spheres[k];
+    let sphere = local_spheres[2u * k];
     local_lights[2u * k] = sphere;
     if !local_active(sphere, pc.origin) {
         local_lights[2u * k + 1u] = vec4<f32>(0.0);
@@ -55,7 +56,10 @@ fn local_light(i: u32, k: u32) {
         lights[2u * i + 1u] = vec4<f32>(0.0);
         return;
     }
-    let emission = local_intensity(sphere, pc.origin, pc.step, pc.termination);
+    var emission = local_spheres[2u * k + 1u];
+    if emission.w <= 0.0 {
+        emission = local_intensity(sphere, pc.origin, pc.step, pc.termination);
+    }
     local_lights[2u * k + 1u] = emission;
     let n = pc.local_side * pc.local_side;
     var clear = 0.0;

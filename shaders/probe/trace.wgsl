@@ -37,7 +37,7 @@ var<immediate> pc: ProbePush;
 @group(0) @binding(3) var probe: texture_storage_2d<rgba32float, write>;
 // Environment lobes, two vec4 each: (p, λ), (μ, 0).
 @group(0) @binding(4) var<storage, read> env_lobes: array<vec4<f32>>;
-// The local lights' spheres (centre, radius).
+// The local lights, two vec4 each: (centre, radius), known emission.
 @group(0) @binding(5) var<storage, read> local_spheres: array<vec4<f32>>;
 
 // "No object along the ray": the probe sees the whole field.
@@ -65,7 +65,7 @@ fn probe_sample(t: vec2<u32>, k: u32) -> ProbeSample {
     let dd = dm_direction_density(dm_subsample_uv(t, ij, pc.side, size));
     var m = march_ray(pc.origin, dd.xyz, PROBE_NO_OBJECT, pc.step, pc.termination);
     for (var l = 0u; l < pc.local_count; l++) {
-        let sphere = local_spheres[l];
+        let sphere = local_spheres[2u * l];
         if local_active(sphere, pc.origin) {
             m.colour -= local_inside_colour(sphere, pc.origin, dd.xyz, pc.step, pc.termination);
         }

@@ -44,14 +44,12 @@ fn shading_lobe(k: u32, g: Sg) -> Sg {
     return local_sphere_lobe(normalize(to), length(to), info.w, info.xyz);
 }
 
-// Γ of local light l at the pixel. The shading takes a lobe's diffuse
-// light through the SG clamped cosine, which for a lobe as sharp as a
-// small light is its integral times the cosine lobe at its axis; that
-// cosine lobe is 0.12 at the horizon and still 0.07 at 100°, where the
-// light is gone (a bright rim on every face turned from a lamp). So Γ
-// is the mean over the light's rays of max(n·d, 0) where the mesh leaves
-// the ray clear, times the field's transmittance along it, over the
-// cosine lobe at the light's direction: exact for a small light.
+// Γ of local light l at the pixel: the share of its rays that arrive,
+// each the field's transmittance where the mesh leaves the ray clear and
+// it comes from above the tangent plane (a ray from below carries no
+// light: a light wholly below the horizon gets Γ = 0, where the SG
+// clamped cosine's tail, 0.12 at the horizon and 0.07 at 100°, would
+// light a rim on faces turned from it).
 fn local_visibility(l: u32) -> f32 {
     let sphere = local_lights[2u * l];
     let radius = local_lights[2u * l + 1u].w;
@@ -61,15 +59,12 @@ fn local_visibility(l: u32) -> f32 {
     var sum = 0.0;
     for (var r = 0u; r < n; r++) {
         let d = normalize(local_disk_point_towards(sphere, lifted, r, pc.local_side, radius) - lifted);
-        let cosine = dot(d, shade_normal);
-        if cosine <= 0.0 || bvh_occluded(o, ssdf_to_object_dir(d)) {
+        if dot(d, shade_normal) <= 0.0 || bvh_occluded(o, ssdf_to_object_dir(d)) {
             continue;
         }
-        sum += cosine * local_transmittance_to(sphere, lifted, r, pc.local_side, radius, pc.march_step, pc.march_termination);
+        sum += local_transmittance_to(sphere, lifted, r, pc.local_side, radius, pc.march_step, pc.march_termination);
     }
-    let axis = normalize(sphere.xyz - shade_point);
-    let lobe_cosine = sg_eval(sg_clamped_cosine(shade_normal), axis).x;
-    return sum / (f32(max(n, 1u)) * max(lobe_cosine, 1e-6));
+    return sum / f32(max(n, 1u));
 }
 
 fn shading_attenuation(k: u32) -> f32 {

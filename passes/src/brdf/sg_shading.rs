@@ -1,7 +1,10 @@
 //! Shading as a sum of SG inner products (eq. 5), the f64 definition that
 //! `shaders/brdf/sg_shading.wgsl` mirrors. For each light lobe k
 //! (attenuated by Γ_k, the self-shadow factor; 1 until shadows exist):
-//! - diffuse: (1 − m)·a/π · ∫ G_k · S_cos(n), S_cos the clamped-cosine SG;
+//! - diffuse: (1 − m)·a/π · E_k(n), E_k the lobe's irradiance on the
+//!   surface ([`Sg64::diffuse_irradiance`]: Hill's fitted curve, and the
+//!   paper's ∫ G_k · S_cos(n), S_cos the clamped-cosine SG, for broad
+//!   lobes; the paper's alone lit faces turned from a small light);
 //! - specular: for each NDF lobe j, warped to the reflection direction
 //!   r = 2(n·v)n − v with sharpness λ_j/(4 n·v), the product G_k ⊗ D_j is
 //!   integrated and multiplied by Fresnel, Smith's visibility and the
@@ -49,7 +52,6 @@ pub fn shade_sg_split(
     let nv_true = n.dot(v);
     let nv = nv_true.max(MIN_NV);
     let r = (2.0 * nv_true * n - v).normalize_or(n);
-    let cosine = Sg64::clamped_cosine(n);
     let ndf_sharpness = 2.0 / (alpha * alpha) / (4.0 * nv);
     let ndf_amplitude = 1.0 / (std::f64::consts::PI * alpha * alpha);
     let (f0, diffuse_colour) = (m.f0(), m.diffuse());
@@ -59,7 +61,7 @@ pub fn shade_sg_split(
         if gamma <= 0.0 {
             continue;
         }
-        out.diffuse += gamma * diffuse_colour * g.inner_product(&cosine);
+        out.diffuse += gamma * diffuse_colour * g.diffuse_irradiance(n);
         for &(c, s) in &ndf.lobes {
             let d = Sg64 {
                 direction: r,

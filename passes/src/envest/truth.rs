@@ -201,8 +201,23 @@ pub fn hidden_light_lobes(
     at: DVec3,
     max_sharpness: f64,
 ) -> Vec<Sg64> {
+    hidden_light_lobes_except(recipe, env, at, max_sharpness, |_| false)
+}
+
+/// As [`hidden_light_lobes`], leaving out the emitters `skip` picks (which
+/// the caller lights otherwise).
+pub fn hidden_light_lobes_except(
+    recipe: &Recipe,
+    env: &Environment,
+    at: DVec3,
+    max_sharpness: f64,
+    skip: impl Fn(&Primitive) -> bool,
+) -> Vec<Sg64> {
     let mut lobes = environment_lobes(env);
-    for p in emitters(recipe, Lights::Hidden) {
+    for p in emitters(recipe, Lights::Hidden)
+        .into_iter()
+        .filter(|p| !skip(p))
+    {
         let Some((axis, solid)) = emitter_cone(p, at) else {
             continue;
         };

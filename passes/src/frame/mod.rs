@@ -174,18 +174,22 @@ impl InsertionFrame {
                     placed.name
                 );
             }
+            // Lit from where it is placed: a recipe's hidden lights are
+            // lobes seen from there (and stay so while it is dragged), its
+            // hidden bulbs local lights with the field's own.
+            let (lobes, hidden) =
+                crate::lighting::object_lights(scene, centre, scene.lighting.local.count > 0);
+            let lights: Vec<_> = local.iter().copied().chain(hidden).collect();
             objects.push(FrameObject {
                 gpu: GpuObject::upload(ctx, &placed.mesh)?,
-                // Lit from where it is placed: a recipe's hidden lights are
-                // lobes seen from there (and stay so while it is dragged).
                 light: IncidentLight::new(
                     ctx,
                     lib,
                     scene.lighting.probe,
                     scene.lighting.fit,
                     *march.knobs(),
-                    &crate::lighting::object_light_lobes(scene, centre),
-                    &local,
+                    &lobes,
+                    &lights,
                     scene.lighting.local.rays,
                 )?,
                 ssdf: match ssdf {

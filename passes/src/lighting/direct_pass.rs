@@ -97,13 +97,19 @@ fn storage(
     )?))
 }
 
-/// Packs local lights' spheres as (centre, radius) vec4s.
+/// Packs local lights as two vec4s each: (centre, radius), and their
+/// known emission (intensity, radius it shines from), zero when it is
+/// measured from the field.
 pub(crate) fn sphere_bytes(local: &[LocalLight]) -> Vec<u8> {
     local
         .iter()
         .flat_map(|l| {
             let c = l.centre.as_vec3();
-            [c.x, c.y, c.z, l.radius as f32]
+            let e = l.emission.map_or([0.0; 4], |e| {
+                let i = e.intensity.as_vec3();
+                [i.x, i.y, i.z, e.radius as f32]
+            });
+            [c.x, c.y, c.z, l.radius as f32, e[0], e[1], e[2], e[3]]
         })
         .flat_map(f32::to_le_bytes)
         .collect()

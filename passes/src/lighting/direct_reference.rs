@@ -79,7 +79,7 @@ pub fn direct_and_local_lights(
             intensities.push(None);
             continue;
         }
-        let e = local::intensity(field, l, origin, march);
+        let e = l.emission_towards(field, origin, march);
         lobes.push(local::lobe_at(field, l, origin, e, local_side, march));
         intensities.push(Some(e));
     }

@@ -22,13 +22,18 @@ use crate::geometry::Ray;
 use crate::march::{march_ray, MarchKnobs};
 use crate::sg::Sg64;
 
-/// A sphere holding one of the field's light sources.
+/// A sphere holding one of the field's light sources, or a light outside
+/// the field whose emission is known.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocalLight {
     /// Its centre (world).
     pub centre: DVec3,
     /// Its radius (world).
     pub radius: f64,
+    /// Its emission when known (a recipe's emitter outside the field, an
+    /// environment file's point light): not measured from the field, which
+    /// does not hold it. None: measured every frame ([`intensity`]).
+    pub emission: Option<Emission>,
 }
 
 /// How many of the field's emitters are shaded as local lights, and how.
@@ -93,10 +98,15 @@ impl LocalLightKnobs {
             .map(|e| LocalLight {
                 centre: e.centre,
                 radius: e.radius,
+                emission: None,
             })
             .collect()
     }
 }
+
+/// The radius a point light is given as a local light (world units): a
+/// millimetre, whose lobe is as sharp as any ([`sphere_lobe`] caps it).
+pub const POINT_LIGHT_RADIUS: f64 = 1e-3;
 
 /// The most local lights a scene may ask for.
 pub const MAX_LOCAL_LIGHTS: u32 = 8;
@@ -110,6 +120,45 @@ pub const INTENSITY_SIDE: u32 = 24;
 pub const ACTIVE_DISTANCE: f64 = 2.0;
 
 impl LocalLight {
+    /// A ball of `radius` at `centre` shining `radiance` from all of its
+    /// surface, outside the field: its intensity is radiance × πr² towards
+    /// every direction.
+    pub fn known_ball(centre: DVec3, radius: f64, radiance: DVec3) -> Self {
+        Self {
+            centre,
+            radius,
+            emission: Some(Emission {
+                intensity: radiance * (std::f64::consts::PI * radius * radius),
+                radius,
+            }),
+        }
+    }
+
+    /// A point light of radiant `intensity` at `position` (an environment
+    /// file's near light), as a ball of [`POINT_LIGHT_RADIUS`].
+    pub fn known_point(position: DVec3, intensity: DVec3) -> Self {
+        Self {
+            centre: position,
+            radius: POINT_LIGHT_RADIUS,
+            emission: Some(Emission {
+                intensity,
+                radius: POINT_LIGHT_RADIUS,
+            }),
+        }
+    }
+
+    /// Its emission towards `towards`: the known one, or measured in
+    /// `field` ([`intensity`]).
+    pub fn emission_towards(
+        &self,
+        field: &dyn RadianceField,
+        towards: DVec3,
+        march: &MarchKnobs,
+    ) -> Emission {
+        self.emission
+            .unwrap_or_else(|| intensity(field, self, towards, march))
+    }
+
     /// Whether the light is shaded locally for an object centred at
     /// `origin` (else the probe holds it).
     pub fn active(&self, origin: DVec3) -> bool {
@@ -338,14 +387,13 @@ pub fn mesh_clear_fraction(
 
 /// Γ of a local light at a shaded point `x` of normal `n` (mirrors
 /// `local_visibility` in `shaders/shade/shade_self_shadow_direct.wgsl`):
-/// the mean over `side`² rays to its disk of max(n·d, 0) where the mesh
-/// leaves the ray clear, times the field's transmittance along it, over
-/// the SG clamped cosine at the light's direction. The shading takes a
-/// lobe's diffuse light through that cosine lobe, which for a lobe as
-/// sharp as a small light is its integral times the cosine lobe at its
-/// axis; the cosine lobe is 0.12 at the horizon and 0.07 at 100°, where
-/// the light is gone, so Γ carries the true cosine instead (exact for a
-/// small light). `x` is already lifted off the surface.
+/// the share of `side`² rays to its disk that arrive, each the field's
+/// transmittance where the mesh leaves the ray clear and it comes from
+/// above the tangent plane. A ray from below carries no light, so a light
+/// wholly below the horizon gets Γ = 0 (the SG clamped cosine the shading
+/// uses is 0.12 at the horizon and 0.07 at 100°: with Γ = 1 there, faces
+/// turned from a lamp showed a bright rim). `x` is already lifted off the
+/// surface.
 #[allow(clippy::too_many_arguments)]
 pub fn visibility(
     field: &dyn RadianceField,
@@ -363,20 +411,17 @@ pub fn visibility(
     let sum: f64 = (0..count)
         .map(|k| {
             let d = (light.disk_point_towards(x, k, side, emission.radius) - x).normalize();
-            let cosine = d.dot(n);
             let ray = Ray {
                 origin,
                 dir: world_to_object.transform_vector3(d).normalize(),
             };
-            if cosine <= 0.0 || scene.occluded(&ray, 0.0, f64::INFINITY) {
+            if d.dot(n) <= 0.0 || scene.occluded(&ray, 0.0, f64::INFINITY) {
                 return 0.0;
             }
-            cosine * transmittance_to(field, light, x, (k, side, emission.radius), march)
+            transmittance_to(field, light, x, (k, side, emission.radius), march)
         })
         .sum();
-    let axis = (light.centre - x).normalize();
-    let lobe_cosine = Sg64::clamped_cosine(n).eval(axis).x;
-    sum / (count.max(1) as f64 * lobe_cosine.max(1e-6))
+    sum / count.max(1) as f64
 }
 
 #[cfg(test)]
@@ -440,6 +485,7 @@ mod tests {
         let l = LocalLight {
             centre: DVec3::new(0.0, 0.0, 5.0),
             radius: 1.0,
+            emission: None,
         };
         let (t0, t1) = l.chord(DVec3::ZERO, DVec3::Z).unwrap();
         assert!((t0 - 4.0).abs() < 1e-12 && (t1 - 6.0).abs() < 1e-12);
@@ -502,6 +548,7 @@ mod tests {
         let light = LocalLight {
             centre: ball.c,
             radius: 0.4,
+            emission: None,
         };
         let expected = ball.l * std::f64::consts::PI * 0.09;
         for towards in [DVec3::new(1.5, 0.0, 0.0), DVec3::new(-0.7, 1.3, 0.9)] {
@@ -543,6 +590,7 @@ mod tests {
         let light = LocalLight {
             centre: ball.c,
             radius: 0.25,
+            emission: None,
         };
         for d in [0.6, 1.0, 1.8] {
             let origin = DVec3::new(0.0, 0.0, d);

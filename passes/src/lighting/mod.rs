@@ -292,6 +292,48 @@ pub fn object_light_lobes(scene: &Scene, at: DVec3) -> Vec<Sg64> {
     }
 }
 
+/// The light an object at `at` is lit with from outside the field, split
+/// for shading: distant lobes, and the lights with a position, shaded per
+/// pixel as local lights ([`local`]) when `local` is on: a recipe's
+/// hidden balls (a ceiling bulb) and an environment file's point lights.
+/// Seen from one point, a bulb 1.5 m above a 50 cm object comes from one
+/// direction at one distance; per pixel its direction, its fall-off and
+/// the field between are each point's own. With `local` off, all of it is
+/// lobes ([`object_light_lobes`]).
+pub fn object_lights(scene: &Scene, at: DVec3, local: bool) -> (Vec<Sg64>, Vec<LocalLight>) {
+    use crate::scene::Shape;
+    if !local {
+        return (object_light_lobes(scene, at), Vec::new());
+    }
+    match (&scene.object_environment, scene.recipe()) {
+        (Some(o), _) => (
+            o.lobes.clone(),
+            o.lights
+                .iter()
+                .map(|l| LocalLight::known_point(l.position, l.intensity))
+                .collect(),
+        ),
+        (None, Some(r)) => {
+            let ball = |p: &crate::scene::Primitive| match p.shape {
+                Shape::Sphere { centre, radius } => {
+                    Some(LocalLight::known_ball(centre, radius, p.emission))
+                }
+                _ => None,
+            };
+            let lobes = crate::envest::hidden_light_lobes_except(
+                r,
+                &scene.environment,
+                at,
+                crate::sgfit::model::MAX_SHARPNESS,
+                |p| ball(p).is_some(),
+            );
+            let (_, outside) = r.lights();
+            (lobes, outside.into_iter().filter_map(ball).collect())
+        }
+        (None, None) => (environment_lobes(&scene.environment), Vec::new()),
+    }
+}
+
 /// The distant light L_env as M SG lobes from a scene's declared
 /// environment: none for a black one, its own lobes for an SG one, and for
 /// an equirect map an SG fit (f64 reference LM, [`FitKnobs::default`], cold

@@ -104,6 +104,59 @@ macro_rules! sg_math {
                 self.product(other).integral()
             }
 
+            /// The irradiance ∫ G(v) max(v·n, 0) dv the lobe delivers to a
+            /// surface of unit normal `n`, by Stephen Hill's fitted curve
+            /// (M. Pettineo, "SG Series Part 3", 2016): exact in the
+            /// limits, and unlike the inner product with
+            /// [`Self::clamped_cosine`] it falls to zero below the horizon
+            /// for sharp lobes (that lobe is 0.12 at the horizon and 0.07
+            /// at 100°, where a small light's irradiance is gone).
+            pub fn irradiance(&self, n: $v) -> $v {
+                let mu_n = self.direction.dot(n);
+                let lambda = self.sharpness.max(1e-4 as $t);
+                let c0 = 0.36 as $t;
+                let c1 = 1.0 / (4.0 * c0);
+                let eml = (-lambda).exp();
+                let em2l = eml * eml;
+                let rl = 1.0 / lambda;
+                let scale = 1.0 + 2.0 * em2l - rl;
+                let bias = (eml - em2l) * rl - em2l;
+                let x = (1.0 - scale).max(0.0).sqrt();
+                let x0 = c0 * mu_n;
+                let x1 = c1 * x;
+                let sum = x0 + x1;
+                let y = if x0.abs() <= x1 {
+                    sum * sum / x
+                } else {
+                    mu_n.clamp(0.0, 1.0)
+                };
+                let result = (scale * y + bias).max(0.0);
+                self.amplitude * (result * 2.0 * std::$t::consts::PI / lambda)
+            }
+
+            /// The irradiance the lobe delivers to a surface of unit normal
+            /// `n`, as the shading takes it: [`Self::irradiance`] (Hill's
+            /// fit) for lobes of sharpness 2 and more, the inner product with
+            /// [`Self::clamped_cosine`] below 1 (where the fit fails: 100 %
+            /// off at λ 0.3), blended linearly between. Against quadrature
+            /// the worst error over the angle to the normal, relative to the
+            /// irradiance facing the lobe, is 1.6 % from λ 5 up (the cosine
+            /// lobe alone: 6–16 %) and under 5 % at λ 1–2.
+            pub fn diffuse_irradiance(&self, n: $v) -> $v {
+                let w = (self.sharpness - 1.0).clamp(0.0, 1.0);
+                let lobe = if w < 1.0 {
+                    self.inner_product(&Self::clamped_cosine(n))
+                } else {
+                    $v::ZERO
+                };
+                let fit = if w > 0.0 {
+                    self.irradiance(n)
+                } else {
+                    $v::ZERO
+                };
+                lobe * (1.0 - w) + fit * w
+            }
+
             /// One lobe standing for the clamped cosine max(v·n, 0) around
             /// unit normal `n`, with the cosine's integral π.
             pub fn clamped_cosine(n: $v) -> Self {
