@@ -336,7 +336,7 @@ fn direct_light_matches_the_cpu_reference() {
 #[test]
 fn local_lights_leave_the_probe_and_return_as_lobes() {
     use inlay_passes::lighting::direct_reference::direct_and_local_lights;
-    use inlay_passes::lighting::LocalLightKnobs;
+    use inlay_passes::lighting::{LocalLight, LocalLightKnobs};
     use inlay_passes::probe::trace_probe_without;
     let ctx = common::gpu();
     let lib = embedded_library();
@@ -348,27 +348,27 @@ fn local_lights_leave_the_probe_and_return_as_lobes() {
     let lamp = DVec3::new(0.1, 0.95, 0.35);
     assert!(local[0].centre.distance(lamp) < 0.03, "{:?}", local[0]);
     // Behind the foliage's edge (as PLANTS' toy), and in the open.
+    let probe_knobs = ProbeKnobs {
+        map: MapKind::Octahedral,
+        resolution: 16,
+        supersampling: 3,
+    };
+    let fit_knobs = FitKnobs {
+        lobes: 4,
+        cold_iterations: 4,
+        ..FitKnobs::default()
+    };
     for (centre, bound) in [
         (DVec3::new(-0.6, 0.3, -0.4), 0.2),
         (DVec3::new(0.5, 0.5, 0.5), 0.05),
     ] {
         assert!(local[0].active(centre));
-        let probe_knobs = ProbeKnobs {
-            map: MapKind::Octahedral,
-            resolution: 16,
-            supersampling: 3,
-        };
         // The probe without the lamp, on both sides.
         let pass = ProbePass::new(&ctx, &lib, probe_knobs, march(), &[], &local).unwrap();
         let gpu = gpu_probe(&ctx, &pass, &field, centre);
         let without = trace_probe_without(&field, centre, &probe_knobs, &march(), &[], &local);
         assert_matches(&gpu, &without, "plants without its lamp");
         // The lamp's lobe, on both sides.
-        let fit_knobs = FitKnobs {
-            lobes: 4,
-            cold_iterations: 4,
-            ..FitKnobs::default()
-        };
         let side = 6;
         let mut light = IncidentLight::new(
             &ctx,
@@ -422,6 +422,33 @@ fn local_lights_leave_the_probe_and_return_as_lobes() {
             (lobe - lamp_share).abs() <= bound * lamp_share,
             "lobe {lobe} against the probe's {lamp_share}"
         );
+    }
+    // A light outside the field with known emission (a recipe's hidden
+    // bulb) is environment light: black with the environment off, while
+    // the field's lamp stays.
+    let bulb = LocalLight::known_ball(DVec3::new(0.0, 2.5, 0.0), 0.03, DVec3::splat(5000.0));
+    let both = [local[0], bulb];
+    let centre = DVec3::new(0.5, 0.5, 0.5);
+    let mut light =
+        IncidentLight::new(&ctx, &lib, probe_knobs, fit_knobs, march(), &[], &both, 2).unwrap();
+    assert!(light.has_environment());
+    for environment in [true, false] {
+        light.reset();
+        let work = light.plan(centre, environment as u64);
+        common::run_frame(&ctx, |graph| {
+            light
+                .add_with(graph, &gpu_field, centre, work, environment)
+                .unwrap();
+            light.add_readback(graph);
+        });
+        let lobes = light.read_lights().unwrap();
+        let (lamp, bulb) = (
+            lobes[4].amplitude.max_element(),
+            lobes[5].amplitude.max_element(),
+        );
+        eprintln!("environment {environment}: lamp {lamp}, bulb {bulb}");
+        assert!(lamp > 0.0);
+        assert_eq!(bulb > 0.0, environment);
     }
     common::assert_no_validation_errors(&ctx);
 }

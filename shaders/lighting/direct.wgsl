@@ -23,7 +23,8 @@ struct DirectPush {
     // Local lights after the sharp lobes, and the side of their rays.
     local: u32,
     local_side: u32,
-    // 1: shade the sharp lobes; 0: the environment is off, write them black.
+    // 1: shade the sharp lobes and the lights of known emission; 0: the
+    // environment is off, write them black.
     environment: u32,
     pad1: u32,
 }
@@ -50,14 +51,17 @@ const DIRECT_NO_OBJECT: f32 = 3.0e38;
 fn local_light(i: u32, k: u32) {
     let sphere = local_spheres[2u * k];
     local_lights[2u * k] = sphere;
-    if !local_active(sphere, pc.origin) {
+    var emission = local_spheres[2u * k + 1u];
+    // A light of known emission lies outside the field: it is environment
+    // light, off with the environment.
+    let known = emission.w > 0.0;
+    if !local_active(sphere, pc.origin) || (known && pc.environment == 0u) {
         local_lights[2u * k + 1u] = vec4<f32>(0.0);
         lights[2u * i] = vec4<f32>(0.0, 1.0, 0.0, 1.0);
         lights[2u * i + 1u] = vec4<f32>(0.0);
         return;
     }
-    var emission = local_spheres[2u * k + 1u];
-    if emission.w <= 0.0 {
+    if !known {
         emission = local_intensity(sphere, pc.origin, pc.step, pc.termination);
     }
     local_lights[2u * k + 1u] = emission;

@@ -40,7 +40,8 @@ inlay_engine::gpu_struct! {
         pub local: u32,
         /// Side of each local light's visibility rays.
         pub local_side: u32,
-        /// 1 to shade the sharp lobes of L_env, 0 to leave them black.
+        /// 1 to shade the sharp lobes of L_env and the local lights of
+        /// known emission (outside the field), 0 to leave them black.
         pub environment: u32,
         /// Padding.
         pub pad1: u32,
@@ -73,6 +74,7 @@ pub struct DirectLightPass {
     fitted: u32,
     sharp_count: u32,
     local_count: u32,
+    known_count: u32,
     count: u32,
     side: u32,
     local_side: u32,
@@ -173,6 +175,7 @@ impl DirectLightPass {
             fitted,
             sharp_count: sharp.len() as u32,
             local_count: local.len() as u32,
+            known_count: local.iter().filter(|l| l.emission.is_some()).count() as u32,
             count,
             side,
             local_side,
@@ -220,14 +223,16 @@ impl DirectLightPass {
         graph.import_buffer(&self.lights, None)
     }
 
-    /// Whether L_env has lobes shaded here.
-    pub fn has_sharp(&self) -> bool {
-        self.sharp_count > 0
+    /// Whether environment light is shaded here: sharp lobes of L_env, or
+    /// local lights of known emission (outside the field).
+    pub fn has_environment(&self) -> bool {
+        self.sharp_count > 0 || self.known_count > 0
     }
 
-    /// Whether local lights are shaded here.
-    pub fn has_local(&self) -> bool {
-        self.local_count > 0
+    /// Whether the field's own lights are shaded here (local lights
+    /// measured from the field), which the environment switch leaves on.
+    pub fn has_field_lights(&self) -> bool {
+        self.local_count > self.known_count
     }
 
     /// Adds `direct-light`: copies the fit's current lobes from `fitted`

@@ -75,8 +75,8 @@ pub struct DirectRays {
 /// pixel from their spheres and intensities.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LocalLightBindings {
-    /// Each light's (centre, radius), (intensity, active) as the direct
-    /// pass wrote them.
+    /// Each light's (centre, radius), (intensity, radius of the disk it
+    /// shines from; 0 while inactive) as the direct pass wrote them.
     pub lights: BufferHandle,
     /// How many.
     pub count: u32,
@@ -138,9 +138,9 @@ impl IncidentLight {
     }
 
     /// Whether any environment light is evaluated (broad lobes in the
-    /// probe or sharp ones shaded directly).
+    /// probe, sharp ones shaded directly, or lights outside the field).
     pub fn has_environment(&self) -> bool {
-        self.probe.has_environment() || self.direct.as_ref().is_some_and(|d| d.has_sharp())
+        self.probe.has_environment() || self.direct.as_ref().is_some_and(|d| d.has_environment())
     }
 
     /// Decides this frame's work for an object centred at `centre` in a
@@ -195,12 +195,12 @@ impl IncidentLight {
         environment: bool,
     ) -> anyhow::Result<LightLobes> {
         let fitted = self.fit.knobs().lobes;
-        // Local lights are the field's own: they are shaded with the
-        // environment off too (its sharp lobes then black).
+        // The field's own local lights are shaded with the environment off
+        // too (its sharp lobes and outside lights then black).
         let direct = self
             .direct
             .as_ref()
-            .filter(|d| environment || d.has_local());
+            .filter(|d| environment || d.has_field_lights());
         if self.direct.is_some() && direct.is_none() {
             graph.note_skipped(DIRECT_LIGHT, "environment light off");
         }
