@@ -63,7 +63,7 @@ use inlay_passes::object::{ObjectRecords, PlacedObject};
 use inlay_passes::rng::Pcg32;
 use inlay_passes::sg::Sg64;
 use inlay_passes::shadow::{
-    cast_shadow_factor, field_normal, hemisphere_integral, self_shadow_factors, CastShadowPass,
+    cast_shadow_factor, hemisphere_integral, self_shadow_factors, shadow_point, CastShadowPass,
     DirectOcclusion, GpuFhTable, GpuSsdf, SHADOW_FORMAT,
 };
 use inlay_passes::ssdf::reference::{hits, ssdf_by_ray_casting};
@@ -314,16 +314,12 @@ fn compare_cast_shadow(
     };
     let (w, h) = (48u32, 36u32);
     let cam = CameraFrame::new(&spec, w, h);
-    let march = MarchPass::new(
-        &ctx,
-        &lib,
-        MarchKnobs {
-            skip_empty: false,
-            ..scene.march
-        },
-    )
-    .unwrap();
-    let cast = CastShadowPass::new(&ctx, &lib).unwrap();
+    let march_knobs = MarchKnobs {
+        skip_empty: false,
+        ..scene.march
+    };
+    let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
+    let cast = CastShadowPass::new(&ctx, &lib, march_knobs).unwrap();
     let desc = |format| ImageDesc {
         width: w,
         height: h,
@@ -376,12 +372,19 @@ fn compare_cast_shadow(
                 continue;
             }
             let ray = cam.pixel_ray(x, y);
-            let p = ray.at(depth.pixels[i][0] as f64 / o);
-            let Some(n) = field_normal(&grid_field, p) else {
+            let premultiplied =
+                DVec3::from_array(std::array::from_fn(|c| colour.pixels[i][c] as f64));
+            let Some(sp) = shadow_point(
+                &grid_field,
+                &ray,
+                (premultiplied, depth.pixels[i][0] as f64, o),
+                &march_knobs,
+            ) else {
+                assert_eq!(g, DVec3::ONE, "({x},{y}): no surface, yet shadowed");
                 continue;
             };
-            let radiance =
-                DVec3::from_array(std::array::from_fn(|c| colour.pixels[i][c] as f64 / o));
+            let (p, n) = (sp.point, sp.normal);
+            let radiance = premultiplied / o;
             let factor = |radiance| {
                 cast_shadow_factor(
                     &ssdf.field,
@@ -396,7 +399,8 @@ fn compare_cast_shadow(
                     &ssdf.reflectance,
                 )
             };
-            let diff = (factor(radiance) - g).abs().max_element();
+            let shared = DVec3::ONE - (DVec3::ONE - factor(radiance)) * sp.share;
+            let diff = (shared - g).abs().max_element();
             if diff > 2e-3 {
                 off += 1;
             } else {

@@ -11,10 +11,12 @@ struct MarchResult {
     colour: vec3<f32>,
     opacity: f32,
     depth: f32,
+    // Where the opacity first reached 1/2, or −1 (reference.rs half_depth).
+    half_depth: f32,
 }
 
 fn march_ray(origin: vec3<f32>, dir: vec3<f32>, t_object: f32, step: f32, termination: f32) -> MarchResult {
-    var r = MarchResult(vec3<f32>(0.0), 0.0, 0.0);
+    var r = MarchResult(vec3<f32>(0.0), 0.0, 0.0, -1.0);
     let tb = ray_box(origin, dir, grid_info.bounds_min, grid_info.bounds_max);
     let t0 = min(t_object, tb.x);
     let t1 = min(t_object, tb.y);
@@ -41,6 +43,10 @@ fn march_ray(origin: vec3<f32>, dir: vec3<f32>, t_object: f32, step: f32, termin
         let v = grid_sample(x);
         let attenuation = exp(-v.w * (b - a));
         let w = transmittance * (1.0 - attenuation);
+        if r.half_depth < 0.0 && r.opacity + w >= 0.5 {
+            let s = log(2.0 * transmittance) / max(v.w, 1e-30);
+            r.half_depth = a + clamp(s, 0.0, b - a);
+        }
         r.colour += w * v.rgb;
         r.opacity += w;
         r.depth += w * t;

@@ -17,7 +17,9 @@
 // passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
 // multiplies the previous object's ρ image (cast_main_chained). Output: ρ in rgb.
 // Needs: the shadow defines (passes/src/shadow/gpu.rs).
+#include "common/ray_box.wgsl"
 #include "field/grid.wgsl"
+#include "march/volume_march.wgsl"
 #include "common/camera.wgsl"
 #include "common/sg.wgsl"
 
@@ -34,8 +36,10 @@ struct CastPush {
     // side of their rays (read by shadow/cast_direct.wgsl).
     local_count: u32,
     local_side: u32,
-    pad0: u32,
-    pad1: u32,
+    // The march's step and termination, for pixels marched again
+    // (shadow_point).
+    march_step: f32,
+    march_termination: f32,
 }
 
 var<immediate> pc: CastPush;
@@ -134,7 +138,30 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     return select(vec3<f32>(1.0), vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), total > vec3<f32>(0.0));
 }
 
-// ρ at pixel `pixel` (1 where the field is empty or flat).
+// The field's normal −∇σ at x by central differences, or zero where the
+// density is flat (empty space, inside a homogeneous medium).
+fn field_normal_at(x: vec3<f32>) -> vec3<f32> {
+    let h = pc.normal_step;
+    let g = vec3<f32>(
+        density(x + vec3<f32>(h, 0.0, 0.0)) - density(x - vec3<f32>(h, 0.0, 0.0)),
+        density(x + vec3<f32>(0.0, h, 0.0)) - density(x - vec3<f32>(0.0, h, 0.0)),
+        density(x + vec3<f32>(0.0, 0.0, h)) - density(x - vec3<f32>(0.0, 0.0, h)),
+    );
+    if length(g) <= 1e-12 {
+        return vec3<f32>(0.0);
+    }
+    return -normalize(g);
+}
+
+const CAST_NO_OBJECT: f32 = 3.0e38;
+
+// ρ at pixel `pixel` (1 where the field is empty or flat). The shadow is
+// taken at the field's expected depth D̂/Ô; where that point lies off any
+// surface (the pixel sees a table through glass, and D̂/Ô falls between
+// them), at the depth where the ray's opacity reached 1/2 instead, and
+// only the share of the pixel's colour gathered from that surface on is
+// shadowed: the glass's own light is not (passes/src/shadow/runtime.rs
+// shadow_point).
 fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
     let colour = textureLoad(field_colour, pixel, 0);
     let opacity = colour.a;
@@ -143,16 +170,25 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
     }
     let dir = camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5));
     let x = pc.camera.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
-    let h = pc.normal_step;
-    let g = vec3<f32>(
-        density(x + vec3<f32>(h, 0.0, 0.0)) - density(x - vec3<f32>(h, 0.0, 0.0)),
-        density(x + vec3<f32>(0.0, h, 0.0)) - density(x - vec3<f32>(0.0, h, 0.0)),
-        density(x + vec3<f32>(0.0, 0.0, h)) - density(x - vec3<f32>(0.0, 0.0, h)),
-    );
-    if length(g) <= 1e-12 {
+    let n = field_normal_at(x);
+    if any(n != vec3<f32>(0.0)) {
+        return cast_factor(x, n, colour.rgb / opacity);
+    }
+    let half = march_ray(pc.camera.origin, dir, CAST_NO_OBJECT, pc.march_step, pc.march_termination).half_depth;
+    if half < 0.0 {
         return vec3<f32>(1.0);
     }
-    return cast_factor(x, -normalize(g), colour.rgb / opacity);
+    let behind_x = pc.camera.origin + dir * half;
+    let behind_n = field_normal_at(behind_x);
+    if all(behind_n == vec3<f32>(0.0)) {
+        return vec3<f32>(1.0);
+    }
+    // What lies in front of the surface: up to two normal steps before it
+    // (its density rises over about one).
+    let front = march_ray(pc.camera.origin, dir, max(half - 2.0 * pc.normal_step, 0.0), pc.march_step, pc.march_termination).colour;
+    let share = clamp((colour.rgb - front) / max(colour.rgb, vec3<f32>(1e-30)), vec3<f32>(0.0), vec3<f32>(1.0));
+    let rho = cast_factor(behind_x, behind_n, colour.rgb / opacity);
+    return vec3<f32>(1.0) - (vec3<f32>(1.0) - rho) * share;
 }
 
 // The including shader's `main` calls this: ρ alone.

@@ -204,7 +204,7 @@ impl InsertionFrame {
             composite: CompositePass::new(ctx, lib)?,
             edge_aa: EdgeAaPass::new(ctx, lib, EdgeAaKnobs::default())?,
             cast: if shadows {
-                Some(CastShadowPass::new(ctx, lib)?)
+                Some(CastShadowPass::new(ctx, lib, *march.knobs())?)
             } else {
                 None
             },

@@ -10,7 +10,7 @@ use crate::field::RadianceField;
 use crate::geometry::{ray_box, Ray};
 
 /// Volume-rendering integrals along one ray.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarchResult {
     /// Ĉ: premultiplied colour.
     pub colour: DVec3,
@@ -18,8 +18,25 @@ pub struct MarchResult {
     pub opacity: f64,
     /// D̂: opacity-weighted depth (distance along the ray).
     pub depth: f64,
+    /// Where the opacity first reached 1/2 (within its segment, solved
+    /// exactly for the segment's density), or −1 if it never did: the
+    /// first surface that hides most of what lies behind it. Behind glass
+    /// D̂/Ô lies between the glass and the table; this lies on the table.
+    pub half_depth: f64,
     /// Field samples evaluated (skipped ones not counted).
     pub samples: u32,
+}
+
+impl Default for MarchResult {
+    fn default() -> Self {
+        Self {
+            colour: DVec3::ZERO,
+            opacity: 0.0,
+            depth: 0.0,
+            half_depth: -1.0,
+            samples: 0,
+        }
+    }
 }
 
 /// Marches `ray` (unit direction) through `field`, clipped at distance
@@ -60,6 +77,11 @@ pub fn march_ray(
         r.samples += 1;
         let attenuation = (-sigma * (b - a)).exp();
         let w = transmittance * (1.0 - attenuation);
+        if r.half_depth < 0.0 && r.opacity + w >= 0.5 {
+            // T(s) = transmittance·e^{−σs} = 1/2 within [a, b].
+            let s = (2.0 * transmittance).ln() / sigma.max(1e-30);
+            r.half_depth = a + s.clamp(0.0, b - a);
+        }
         r.colour += w * c;
         r.opacity += w;
         r.depth += w * t;

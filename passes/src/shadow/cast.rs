@@ -17,7 +17,7 @@ use super::gpu::{shadow_defines, SsdfBindings};
 use crate::camera::{CameraFrame, CameraRays};
 use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
-use crate::march::MarchOutputs;
+use crate::march::{MarchKnobs, MarchOutputs};
 
 inlay_engine::gpu_struct! {
     /// `CastPush` of `shaders/shadow/cast_body.wgsl`.
@@ -36,10 +36,11 @@ inlay_engine::gpu_struct! {
         pub local_count: u32,
         /// Side of each local light's rays.
         pub local_side: u32,
-        /// Padding (the struct's size rounds up to 16 bytes).
-        pub pad0: u32,
-        /// Padding.
-        pub pad1: u32,
+        /// The field's march step, for a pixel whose point at D̂/Ô lies
+        /// off any surface (behind glass) and is marched again.
+        pub march_step: f32,
+        /// The march's early-termination transmittance.
+        pub march_termination: f32,
     }
 }
 
@@ -70,15 +71,23 @@ pub struct CastShadowPass {
     chained: Arc<ComputePipeline>,
     first_direct: Arc<ComputePipeline>,
     chained_direct: Arc<ComputePipeline>,
+    march: MarchKnobs,
 }
 
 impl CastShadowPass {
-    /// Compiles the pass.
-    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
+    /// Compiles the pass; a pixel whose point lies off any surface is
+    /// marched again with `march` ([`super::shadow_point`]).
+    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, march: MarchKnobs) -> anyhow::Result<Self> {
+        let mut defines = shadow_defines();
+        defines.push(inlay_engine::shader::Define::Bool(
+            "SKIP_EMPTY",
+            march.skip_empty,
+        ));
         let build = |file: &str, entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
-            Ok(lib.compute_pipeline(ctx, file, entry, &shadow_defines())?)
+            Ok(lib.compute_pipeline(ctx, file, entry, &defines)?)
         };
         Ok(Self {
+            march,
             first: build("shadow/cast.wgsl", "main")?,
             chained: build("shadow/cast.wgsl", "main_chained")?,
             first_direct: build("shadow/cast_direct.wgsl", "main")?,
@@ -120,8 +129,8 @@ impl CastShadowPass {
             direct_rays: direct.map_or(0, |d| d.rays_per_lobe),
             local_count: direct.map_or(0, |d| d.local.count),
             local_side: direct.map_or(1, |d| d.local.side),
-            pad0: 0,
-            pad1: 0,
+            march_step: self.march.step(field.diagonal) as f32,
+            march_termination: self.march.termination as f32,
         };
         let pipeline = match (previous.is_some(), direct.is_some()) {
             (false, false) => &self.first,

@@ -18,6 +18,6 @@ pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};
 pub use gpu::{object_block, shadow_defines, GpuFhTable, GpuSsdf, SsdfBindings};
 pub use runtime::{
-    cast_shadow_factor, field_normal, self_shadow_factors, sphere_clear_of, sphere_share,
-    world_ssdf, CAST_SKIP_SHARE, HORIZON_FLOOR,
+    cast_shadow_factor, field_normal, self_shadow_factors, shadow_point, sphere_clear_of,
+    sphere_share, world_ssdf, ShadowPoint, CAST_SKIP_SHARE, HORIZON_FLOOR,
 };

@@ -217,3 +217,141 @@ pub fn field_normal(field: &crate::field::GridField, x: DVec3) -> Option<DVec3> 
     let g = field.density_gradient(x);
     (g.length() > 1e-12).then(|| -g.normalize())
 }
+
+/// Where the cast shadow is taken for one pixel ([`shadow_point`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowPoint {
+    /// The field point.
+    pub point: DVec3,
+    /// The field's normal there.
+    pub normal: DVec3,
+    /// The share of the pixel's colour (per channel) gathered from the
+    /// point on, which the shadow darkens: ρ' = 1 − (1 − ρ)·share.
+    pub share: DVec3,
+}
+
+/// Where the cast shadow is taken for a pixel whose ray is `ray` and whose
+/// march gave `colour` (Ĉ), `depth` (D̂) and `opacity` (Ô): at the expected
+/// depth D̂/Ô, darkening all of the pixel; where that point lies off any
+/// surface (the density is flat there: a table seen through glass puts
+/// D̂/Ô between the two), at the depth where the ray's opacity reached 1/2
+/// ([`crate::march::MarchResult::half_depth`]), darkening only the share
+/// of the pixel's colour gathered from that surface on, two node spacings
+/// before it (the glass's own light is not in the shadow). None: no surface (ρ = 1). Mirrors `pixel_factor`
+/// in `shaders/shadow/cast_body.wgsl`.
+pub fn shadow_point(
+    field: &crate::field::GridField,
+    ray: &crate::geometry::Ray,
+    (colour, depth, opacity): (DVec3, f64, f64),
+    march: &crate::march::MarchKnobs,
+) -> Option<ShadowPoint> {
+    if opacity <= 1e-4 {
+        return None;
+    }
+    let p = ray.at(depth / opacity);
+    if let Some(normal) = field_normal(field, p) {
+        return Some(ShadowPoint {
+            point: p,
+            normal,
+            share: DVec3::ONE,
+        });
+    }
+    let half = crate::march::march_ray(field, ray, f64::INFINITY, march).half_depth;
+    if half < 0.0 {
+        return None;
+    }
+    let point = ray.at(half);
+    let normal = field_normal(field, point)?;
+    // What lies in front of the surface: up to two normal steps before it
+    // (its density rises over about one).
+    let h = field.spacing().min_element();
+    let front = crate::march::march_ray(field, ray, (half - 2.0 * h).max(0.0), march).colour;
+    let share = ((colour - front) / colour.max(DVec3::splat(1e-30))).clamp(DVec3::ZERO, DVec3::ONE);
+    Some(ShadowPoint {
+        point,
+        normal,
+        share,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::GridField;
+    use crate::geometry::{Aabb, Ray};
+    use crate::march::MarchKnobs;
+    use glam::UVec3;
+
+    /// A pane of thin glass (optical depth about 0.3 across) at y 0.6–0.64 above an
+    /// opaque floor (y < 0.2), seen from above: D̂/Ô lies in the air between
+    /// them, where the density is flat, so the shadow is taken where the
+    /// opacity reached 1/2: on the floor. Without the pane, at D̂/Ô, on the
+    /// floor too; with nothing below, on the pane or nowhere.
+    #[test]
+    fn a_shadow_seen_through_glass_falls_on_what_is_behind_it() {
+        let n = 51u32;
+        let bounds = Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::ONE,
+        };
+        let field = |pane: bool, floor: bool| {
+            let mut nodes = Vec::new();
+            for _z in 0..n {
+                for y in 0..n {
+                    for _x in 0..n {
+                        let y = y as f64 / (n - 1) as f64;
+                        let sigma = if floor && y < 0.2 {
+                            500.0
+                        } else if pane && (0.6..=0.64).contains(&y) {
+                            5.0
+                        } else {
+                            0.0
+                        };
+                        nodes.push([0.5, 0.5, 0.5, sigma as f32]);
+                    }
+                }
+            }
+            GridField::new(UVec3::splat(n), bounds, nodes, 4)
+        };
+        let knobs = MarchKnobs {
+            samples_per_ray: 2048,
+            termination: 1e-4,
+            skip_empty: false,
+        };
+        let ray = Ray {
+            origin: DVec3::new(0.5, 0.95, 0.5),
+            dir: DVec3::NEG_Y,
+        };
+        let at = |f: &GridField| {
+            let m = crate::march::march_ray(f, &ray, f64::INFINITY, &knobs);
+            shadow_point(f, &ray, (m.colour, m.depth, m.opacity), &knobs)
+                .map(|s| (s.point, s.normal, s.share))
+        };
+        let glass = field(true, true);
+        let m = crate::march::march_ray(&glass, &ray, f64::INFINITY, &knobs);
+        let expected = ray.at(m.depth / m.opacity);
+        assert!(
+            expected.y > 0.25 && expected.y < 0.58,
+            "D̂/Ô at {expected}: not between the pane and the floor"
+        );
+        let (p, normal, share) = at(&glass).expect("a surface behind the glass");
+        assert!((p.y - 0.2).abs() < 0.03, "{p}");
+        assert!(normal.y > 0.9, "{normal}");
+        // The pane's own light is not shadowed: pane and floor are the same
+        // grey, so the floor's share of the pixel is the pane's
+        // transmittance (about e^{−0.3}).
+        let t = 1.0 - crate::march::march_ray(&glass, &ray, 0.5, &knobs).opacity;
+        assert!(
+            (share - DVec3::splat(t)).abs().max_element() < 0.02,
+            "{share} vs {t}"
+        );
+        let (p, _, share) = at(&field(false, true)).expect("the bare floor");
+        assert!((p.y - 0.2).abs() < 0.03, "{p}");
+        assert_eq!(share, DVec3::ONE);
+        // The pane alone never reaches half opacity: the shadow falls on the
+        // pane where its density slopes, or nowhere.
+        if let Some((p, _, _)) = at(&field(true, false)) {
+            assert!((0.57..0.67).contains(&p.y), "{p}");
+        }
+    }
+}
