@@ -243,7 +243,7 @@ pub fn inside_colour(
 
 /// What a light sends one way: its radiant intensity (the integral of
 /// the radiance it sends that way over its projected area) and the radius
-/// of the disk it shines from, √(2 E[ρ²]) with ρ the distance from the
+/// of the disk it shines from, √(2 E\[ρ²\]) with ρ the distance from the
 /// centre weighted by the light (a uniform disk's own radius). The sphere
 /// holds the emitter with a margin; its visibility rays aim at the
 /// emitter's disk, and its lobe is as sharp as that disk.
