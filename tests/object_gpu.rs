@@ -230,19 +230,7 @@ fn shading_kernel_matches_its_f64_mirror() {
     let lib = embedded_library();
     let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
     let shade = ShadePass::new(&ctx, &lib, 2, Default::default()).unwrap();
-    let empty = inlay_passes::field::GpuGridField::upload(
-        &ctx,
-        &inlay_passes::field::GridField::new(
-            glam::UVec3::splat(2),
-            inlay_passes::geometry::Aabb {
-                min: glam::DVec3::splat(-1.0),
-                max: glam::DVec3::splat(1.0),
-            },
-            vec![[0.0; 4]; 8],
-            1,
-        ),
-    )
-    .unwrap();
+    let empty = common::empty_field(&ctx);
     let ndf = NdfLobes::new(2).unwrap();
     let (w, h) = (60, 24);
     let cam = camera(w, h);

@@ -644,6 +644,152 @@ use inlay_passes::gbuffer::{
 use inlay_passes::object::GpuObject;
 use inlay_passes::shade::{SelfShadow, ShadePass, OBJECT_COLOUR_FORMAT};
 
+/// The toy seen close up for the shading tests: its mesh with its SSDF
+/// (12³, 16²) and f_h table on the GPU, the G-buffer pass and the camera.
+struct ToyView {
+    ctx: Arc<inlay_engine::Context>,
+    lib: inlay_engine::shader::ShaderLibrary,
+    ssdf_field: Arc<SsdfField>,
+    placed: PlacedObject,
+    ssdf: GpuSsdf,
+    fh: GpuFhTable,
+    gpu_object: GpuObject,
+    gbuffer: GBufferPass,
+    cam: CameraFrame,
+}
+
+/// One pixel of the toy as [`ToyView::shade`] rendered it.
+struct ShadedPixel {
+    ray: Ray,
+    /// The G-buffer's surface point, normal and material.
+    point: DVec3,
+    normal: DVec3,
+    material: SurfaceMaterial,
+    /// What the shading kernel wrote.
+    gpu: DVec3,
+}
+
+impl ToyView {
+    fn new() -> Self {
+        let ctx = common::gpu();
+        let lib = embedded_library();
+        let mesh = bundled("toy.glb");
+        let ssdf_field = Arc::new(small_field(&ctx, &mesh, 12, 16));
+        let placed = PlacedObject {
+            name: "toy".into(),
+            mesh: mesh.clone(),
+            pose: Default::default(),
+            material: Default::default(),
+        };
+        let (c, r) = mesh.bounding_sphere();
+        let spec = CameraSpec {
+            name: None,
+            position: c + DVec3::new(0.4, 0.5, 2.2) * r,
+            look_at: c,
+            up: DVec3::Y,
+            fov_y: 40.0,
+        };
+        Self {
+            ssdf: GpuSsdf::upload(&ctx, ssdf_field.clone(), &mesh).unwrap(),
+            fh: GpuFhTable::new(&ctx).unwrap(),
+            gpu_object: GpuObject::upload(&ctx, &mesh).unwrap(),
+            gbuffer: GBufferPass::new(&ctx, &lib).unwrap(),
+            cam: CameraFrame::new(&spec, 48, 40),
+            ssdf_field,
+            placed,
+            ctx,
+            lib,
+        }
+    }
+
+    /// Renders the toy's G-buffer and `shade`'s output over `field`, lit by
+    /// what `lights` imports, self-shadowed; returns the toy's pixels and
+    /// the brightest value written.
+    fn shade(
+        &self,
+        shade: &ShadePass,
+        field: &GpuGridField,
+        lights: impl Fn(&mut inlay_engine::graph::FrameGraph) -> LightLobes,
+    ) -> (Vec<ShadedPixel>, f64) {
+        let (w, h) = (self.cam.width, self.cam.height);
+        let rb = [
+            NORMAL_ROUGHNESS_FORMAT,
+            ALBEDO_METALLIC_FORMAT,
+            DISTANCE_ID_FORMAT,
+            OBJECT_COLOUR_FORMAT,
+        ]
+        .map(|format| {
+            Readback::new(
+                &self.ctx,
+                ImageDesc {
+                    width: w,
+                    height: h,
+                    format,
+                },
+            )
+            .unwrap()
+        });
+        common::run_frame(&self.ctx, |graph| {
+            let records = ObjectRecords::upload(graph, [&self.placed]);
+            let g = self
+                .gbuffer
+                .add(
+                    graph,
+                    &self.cam,
+                    &[ObjectDraw {
+                        placed: &self.placed,
+                        gpu: &self.gpu_object,
+                        record: 0,
+                    }],
+                    records,
+                )
+                .unwrap();
+            let light = lights(graph);
+            let self_shadow = SelfShadow {
+                fh_table: self.fh.import(graph),
+                ssdf: self
+                    .ssdf
+                    .import(graph, &self.placed, (records, 0), OutsideMode::Correct),
+            };
+            let out = shade.add(graph, &self.cam, &g, field, &[light], &[Some(self_shadow)]);
+            rb[0].add_to_graph(graph, g.normal_roughness);
+            rb[1].add_to_graph(graph, g.albedo_metallic);
+            rb[2].add_to_graph(graph, g.distance_id);
+            rb[3].add_to_graph(graph, out);
+        });
+        let [nr, am, di, colour] = rb.map(|r| r.read().unwrap());
+        let peak = colour
+            .pixels
+            .iter()
+            .map(|p| p[0].max(p[1]).max(p[2]) as f64)
+            .fold(0.0, f64::max);
+        let mut pixels = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                if di.pixels[i][1] < 0.0 {
+                    continue;
+                }
+                let ray = self.cam.pixel_ray(x, y);
+                let g = nr.pixels[i].map(f64::from);
+                let a = am.pixels[i].map(f64::from);
+                pixels.push(ShadedPixel {
+                    point: ray.at(di.pixels[i][0] as f64),
+                    normal: DVec3::new(g[0], g[1], g[2]).normalize(),
+                    material: SurfaceMaterial {
+                        albedo: DVec3::new(a[0], a[1], a[2]),
+                        roughness: g[3],
+                        metallic: a[3],
+                    },
+                    gpu: DVec3::from_array(std::array::from_fn(|c| colour.pixels[i][c] as f64)),
+                    ray,
+                });
+            }
+        }
+        (pixels, peak)
+    }
+}
+
 /// The self-shadowed shading kernels (`shade/shade_self_shadow.wgsl`, and
 /// `shade/shade_self_shadow_direct.wgsl` whose last lobe is a direct one,
 /// its Γ ray-cast against the mesh) against their f64 mirror: Γ from
@@ -656,142 +802,62 @@ use inlay_passes::shade::{SelfShadow, ShadePass, OBJECT_COLOUR_FORMAT};
 /// direct lobe (measured: none).
 #[test]
 fn self_shadowed_shading_matches_its_mirror() {
-    let ctx = common::gpu();
-    let lib = embedded_library();
-    let mesh = bundled("toy.glb");
-    let field = Arc::new(small_field(&ctx, &mesh, 12, 16));
-    let placed = PlacedObject {
-        name: "toy".into(),
-        mesh: mesh.clone(),
-        pose: Default::default(),
-        material: Default::default(),
-    };
-    let ssdf = GpuSsdf::upload(&ctx, field.clone(), &mesh).unwrap();
-    let fh = GpuFhTable::new(&ctx).unwrap();
-    let gpu_object = GpuObject::upload(&ctx, &mesh).unwrap();
-    let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
-    let shade = ShadePass::new(&ctx, &lib, 1, MarchKnobs::default()).unwrap();
-    let gpu_field = empty_field(&ctx);
+    let view = ToyView::new();
+    let ctx = &view.ctx;
+    let shade = ShadePass::new(ctx, &view.lib, 1, MarchKnobs::default()).unwrap();
+    let gpu_field = common::empty_field(ctx);
     let ndf = NdfLobes::new(1).unwrap();
-    let (c, r) = mesh.bounding_sphere();
-    let spec = CameraSpec {
-        name: None,
-        position: c + DVec3::new(0.4, 0.5, 2.2) * r,
-        look_at: c,
-        up: DVec3::Y,
-        fov_y: 40.0,
-    };
-    let (w, h) = (48u32, 40u32);
-    let cam = CameraFrame::new(&spec, w, h);
     let mut lobes = test_lobes();
     lobes.rotate_left(1);
-    let lobe_buf = lobe_buffer(&ctx, &lobes);
+    let lobe_buf = lobe_buffer(ctx, &lobes);
     let rays = vec![lobe_rays(lobes.last().unwrap(), 6)];
-    let ray_buf = ray_buffer(&ctx, &rays);
-    let object_scene = inlay_passes::ssdf::object_scene(&mesh);
+    let ray_buf = ray_buffer(ctx, &rays);
+    let object_scene = inlay_passes::ssdf::object_scene(&view.placed.mesh);
     let occlusion = DirectOcclusion {
         scene: &object_scene,
         rays: &rays,
         local: &[],
         local_side: 1,
     };
-    let desc = |format| ImageDesc {
-        width: w,
-        height: h,
-        format,
-    };
     for direct in [false, true] {
-        let rb = [
-            NORMAL_ROUGHNESS_FORMAT,
-            ALBEDO_METALLIC_FORMAT,
-            DISTANCE_ID_FORMAT,
-            OBJECT_COLOUR_FORMAT,
-        ]
-        .map(|f| Readback::new(&ctx, desc(f)).unwrap());
-        common::run_frame(&ctx, |graph| {
-            let records = ObjectRecords::upload(graph, [&placed]);
-            let g = gbuffer
-                .add(
-                    graph,
-                    &cam,
-                    &[ObjectDraw {
-                        placed: &placed,
-                        gpu: &gpu_object,
-                        record: 0,
-                    }],
-                    records,
-                )
-                .unwrap();
-            let light = LightLobes {
-                buffer: graph.import_buffer(&lobe_buf, None),
-                count: lobes.len() as u32,
-                direct: direct.then(|| {
-                    let rays = graph.import_buffer(&ray_buf, None);
-                    DirectRays {
-                        lobes: 1,
-                        rays,
-                        rays_per_lobe: 36,
-                        local: no_local_lights(rays),
-                    }
-                }),
-            };
-            let self_shadow = SelfShadow {
-                fh_table: fh.import(graph),
-                ssdf: ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct),
-            };
-            let out = shade.add(graph, &cam, &g, &gpu_field, &[light], &[Some(self_shadow)]);
-            rb[0].add_to_graph(graph, g.normal_roughness);
-            rb[1].add_to_graph(graph, g.albedo_metallic);
-            rb[2].add_to_graph(graph, g.distance_id);
-            rb[3].add_to_graph(graph, out);
+        let (pixels, peak) = view.shade(&shade, &gpu_field, |graph| LightLobes {
+            buffer: graph.import_buffer(&lobe_buf, None),
+            count: lobes.len() as u32,
+            direct: direct.then(|| {
+                let rays = graph.import_buffer(&ray_buf, None);
+                DirectRays {
+                    lobes: 1,
+                    rays,
+                    rays_per_lobe: 36,
+                    local: no_local_lights(rays),
+                }
+            }),
         });
-        let [nr, am, di, colour] = rb.map(|r| r.read().unwrap());
-        let peak = colour
-            .pixels
-            .iter()
-            .map(|p| p[0].max(p[1]).max(p[2]) as f64)
-            .fold(0.0, f64::max);
-        let (mut shaded, mut off, mut worst, mut shadowed) = (0, 0, 0.0f64, 0);
-        for y in 0..h {
-            for x in 0..w {
-                let i = (y * w + x) as usize;
-                if di.pixels[i][1] < 0.0 {
-                    continue;
-                }
-                let ray = cam.pixel_ray(x, y);
-                let p = ray.at(di.pixels[i][0] as f64);
-                let g = nr.pixels[i].map(f64::from);
-                let a = am.pixels[i].map(f64::from);
-                let n = DVec3::new(g[0], g[1], g[2]).normalize();
-                let m = SurfaceMaterial {
-                    albedo: DVec3::new(a[0], a[1], a[2]),
-                    roughness: g[3],
-                    metallic: a[3],
-                };
-                let gamma = self_shadow_factors(
-                    &field,
-                    &placed,
-                    &fh.table,
-                    &lobes,
-                    p,
-                    n,
-                    OutsideMode::Correct,
-                    direct.then_some(occlusion),
-                );
-                if gamma.iter().any(|&g| g < 0.5) {
-                    shadowed += 1;
-                }
-                let cpu = shade_sg_split(&lobes, &gamma, n, -ray.dir, &m, &ndf).total();
-                let gpu = DVec3::from_array(std::array::from_fn(|c| colour.pixels[i][c] as f64));
-                let err = ((gpu - cpu).abs() / (cpu.abs() * 1e-4 + 1e-5 * peak)).max_element();
-                if err > 1.0 {
-                    off += 1;
-                } else {
-                    worst = worst.max(err);
-                }
-                shaded += 1;
+        let (mut off, mut worst, mut shadowed) = (0, 0.0f64, 0);
+        for px in &pixels {
+            let gamma = self_shadow_factors(
+                &view.ssdf_field,
+                &view.placed,
+                &view.fh.table,
+                &lobes,
+                px.point,
+                px.normal,
+                OutsideMode::Correct,
+                direct.then_some(occlusion),
+            );
+            if gamma.iter().any(|&g| g < 0.5) {
+                shadowed += 1;
+            }
+            let cpu =
+                shade_sg_split(&lobes, &gamma, px.normal, -px.ray.dir, &px.material, &ndf).total();
+            let err = ((px.gpu - cpu).abs() / (cpu.abs() * 1e-4 + 1e-5 * peak)).max_element();
+            if err > 1.0 {
+                off += 1;
+            } else {
+                worst = worst.max(err);
             }
         }
+        let shaded = pixels.len();
         eprintln!(
             "self-shadowed shading, direct lobe {direct}: {shaded} pixels, {shadowed} shadowed, {off} off the mirror, worst {worst:.3} of the tolerance"
         );
@@ -799,7 +865,7 @@ fn self_shadowed_shading_matches_its_mirror() {
         let allowed = if direct { shaded / 100 } else { 0 };
         assert!(off <= allowed, "{off} of {shaded} pixels off the mirror");
     }
-    common::assert_no_validation_errors(&ctx);
+    common::assert_no_validation_errors(ctx);
 }
 
 /// No local lights: any storage buffer stands in for their (unread) buffer.
@@ -811,20 +877,6 @@ fn no_local_lights(
         count: 0,
         side: 1,
     }
-}
-
-/// A field with nothing in it (the shading reads it only for local lights).
-fn empty_field(ctx: &Arc<inlay_engine::Context>) -> GpuGridField {
-    let field = inlay_passes::field::GridField::new(
-        glam::UVec3::splat(2),
-        inlay_passes::geometry::Aabb {
-            min: DVec3::splat(-1.0),
-            max: DVec3::splat(1.0),
-        },
-        vec![[0.0; 4]; 8],
-        1,
-    );
-    GpuGridField::upload(ctx, &field).unwrap()
 }
 
 /// A field around the toy (its bounding sphere `c`, `r`): a glowing ball
@@ -876,38 +928,17 @@ fn lamp_field(c: DVec3, r: f64) -> (inlay_passes::field::GridField, LocalLight) 
 #[test]
 fn local_light_shading_matches_its_mirror() {
     use inlay_passes::lighting::local;
-    let ctx = common::gpu();
-    let lib = embedded_library();
-    let mesh = bundled("toy.glb");
-    let ssdf_field = Arc::new(small_field(&ctx, &mesh, 12, 16));
-    let placed = PlacedObject {
-        name: "toy".into(),
-        mesh: mesh.clone(),
-        pose: Default::default(),
-        material: Default::default(),
-    };
-    let ssdf = GpuSsdf::upload(&ctx, ssdf_field.clone(), &mesh).unwrap();
-    let fh = GpuFhTable::new(&ctx).unwrap();
-    let gpu_object = GpuObject::upload(&ctx, &mesh).unwrap();
-    let gbuffer = GBufferPass::new(&ctx, &lib).unwrap();
+    let view = ToyView::new();
+    let ctx = &view.ctx;
     let march = MarchKnobs {
         samples_per_ray: 256,
         ..MarchKnobs::default()
     };
-    let shade = ShadePass::new(&ctx, &lib, 1, march).unwrap();
+    let shade = ShadePass::new(ctx, &view.lib, 1, march).unwrap();
     let ndf = NdfLobes::new(1).unwrap();
-    let (c, r) = mesh.bounding_sphere();
+    let (c, r) = view.placed.mesh.bounding_sphere();
     let (field, light) = lamp_field(c, r);
-    let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
-    let spec = CameraSpec {
-        name: None,
-        position: c + DVec3::new(0.4, 0.5, 2.2) * r,
-        look_at: c,
-        up: DVec3::Y,
-        fov_y: 40.0,
-    };
-    let (w, h) = (48u32, 40u32);
-    let cam = CameraFrame::new(&spec, w, h);
+    let gpu_field = GpuGridField::upload(ctx, &field).unwrap();
     let emission = Emission {
         intensity: DVec3::new(0.8, 0.6, 0.5) * r * r,
         radius: 0.3 * r,
@@ -923,140 +954,77 @@ fn local_light_shading_matches_its_mirror() {
         emission.radius,
         emission.intensity,
     ));
-    let lobe_buf = lobe_buffer(&ctx, &lobes);
-    let local_buf = local_light_buffer(&ctx, &[(light, emission)]);
-    let ray_buf = ray_buffer(&ctx, &[vec![DVec3::Y]]);
-    let object_scene = inlay_passes::ssdf::object_scene(&mesh);
-    let rb = [
-        NORMAL_ROUGHNESS_FORMAT,
-        ALBEDO_METALLIC_FORMAT,
-        DISTANCE_ID_FORMAT,
-        OBJECT_COLOUR_FORMAT,
-    ]
-    .map(|format| {
-        Readback::new(
-            &ctx,
-            ImageDesc {
-                width: w,
-                height: h,
-                format,
-            },
-        )
-        .unwrap()
-    });
-    common::run_frame(&ctx, |graph| {
-        let records = ObjectRecords::upload(graph, [&placed]);
-        let g = gbuffer
-            .add(
-                graph,
-                &cam,
-                &[ObjectDraw {
-                    placed: &placed,
-                    gpu: &gpu_object,
-                    record: 0,
-                }],
-                records,
-            )
-            .unwrap();
-        let lights = LightLobes {
-            buffer: graph.import_buffer(&lobe_buf, None),
-            count: lobes.len() as u32,
-            direct: Some(DirectRays {
-                lobes: 1,
-                rays: graph.import_buffer(&ray_buf, None),
-                rays_per_lobe: 1,
-                local: LocalLightBindings {
-                    lights: graph.import_buffer(&local_buf, None),
-                    count: 1,
-                    side,
-                },
-            }),
-        };
-        let self_shadow = SelfShadow {
-            fh_table: fh.import(graph),
-            ssdf: ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct),
-        };
-        let out = shade.add(graph, &cam, &g, &gpu_field, &[lights], &[Some(self_shadow)]);
-        rb[0].add_to_graph(graph, g.normal_roughness);
-        rb[1].add_to_graph(graph, g.albedo_metallic);
-        rb[2].add_to_graph(graph, g.distance_id);
-        rb[3].add_to_graph(graph, out);
-    });
-    let [nr, am, di, colour] = rb.map(|r| r.read().unwrap());
-    let peak = colour
-        .pixels
-        .iter()
-        .map(|p| p[0].max(p[1]).max(p[2]) as f64)
-        .fold(0.0, f64::max);
-    let fitted = lobes.len() - 1;
-    let to_object = placed.world_to_object();
-    let (mut shaded, mut off, mut worst) = (0, 0, 0.0f64);
-    let (mut clear, mut partial, mut hidden) = (0, 0, 0);
-    for y in 0..h {
-        for x in 0..w {
-            let i = (y * w + x) as usize;
-            if di.pixels[i][1] < 0.0 {
-                continue;
-            }
-            let ray = cam.pixel_ray(x, y);
-            let p = ray.at(di.pixels[i][0] as f64);
-            let g = nr.pixels[i].map(f64::from);
-            let a = am.pixels[i].map(f64::from);
-            let n = DVec3::new(g[0], g[1], g[2]).normalize();
-            let m = SurfaceMaterial {
-                albedo: DVec3::new(a[0], a[1], a[2]),
-                roughness: g[3],
-                metallic: a[3],
-            };
-            let mut gamma = self_shadow_factors(
-                &ssdf_field,
-                &placed,
-                &fh.table,
-                &lobes[..fitted],
-                p,
-                n,
-                OutsideMode::Correct,
-                None,
-            );
-            let lifted = p + n * (inlay_passes::shadow::DIRECT_RAY_OFFSET * placed.sphere().1);
-            let v = local::visibility(
-                &field,
-                &object_scene,
-                to_object,
-                &light,
-                emission,
-                lifted,
-                n,
+    let lobe_buf = lobe_buffer(ctx, &lobes);
+    let local_buf = local_light_buffer(ctx, &[(light, emission)]);
+    let ray_buf = ray_buffer(ctx, &[vec![DVec3::Y]]);
+    let object_scene = inlay_passes::ssdf::object_scene(&view.placed.mesh);
+    let (pixels, peak) = view.shade(&shade, &gpu_field, |graph| LightLobes {
+        buffer: graph.import_buffer(&lobe_buf, None),
+        count: lobes.len() as u32,
+        direct: Some(DirectRays {
+            lobes: 1,
+            rays: graph.import_buffer(&ray_buf, None),
+            rays_per_lobe: 1,
+            local: LocalLightBindings {
+                lights: graph.import_buffer(&local_buf, None),
+                count: 1,
                 side,
-                &march,
-            );
-            let facing = (light.centre - p).normalize().dot(n) > 0.2;
-            match v {
-                _ if !facing => {}
-                v if v < 0.05 => hidden += 1,
-                v if v < 0.5 => partial += 1,
-                _ => clear += 1,
-            }
-            gamma.push(v);
-            let mut here = lobes.clone();
-            let to = light.centre - p;
-            here[fitted] = local::sphere_lobe(
-                to.normalize(),
-                to.length(),
-                emission.radius,
-                emission.intensity,
-            );
-            let cpu = shade_sg_split(&here, &gamma, n, -ray.dir, &m, &ndf).total();
-            let gpu = DVec3::from_array(std::array::from_fn(|c| colour.pixels[i][c] as f64));
-            let err = ((gpu - cpu).abs() / (cpu.abs() * 3e-4 + 1e-5 * peak)).max_element();
-            if err > 1.0 {
-                off += 1;
-            } else {
-                worst = worst.max(err);
-            }
-            shaded += 1;
+            },
+        }),
+    });
+    let fitted = lobes.len() - 1;
+    let to_object = view.placed.world_to_object();
+    let (mut off, mut worst) = (0, 0.0f64);
+    let (mut clear, mut partial, mut hidden) = (0, 0, 0);
+    for px in &pixels {
+        let (p, n) = (px.point, px.normal);
+        let mut gamma = self_shadow_factors(
+            &view.ssdf_field,
+            &view.placed,
+            &view.fh.table,
+            &lobes[..fitted],
+            p,
+            n,
+            OutsideMode::Correct,
+            None,
+        );
+        let lifted = p + n * (inlay_passes::shadow::DIRECT_RAY_OFFSET * view.placed.sphere().1);
+        let v = local::visibility(
+            &field,
+            &object_scene,
+            to_object,
+            &light,
+            emission,
+            lifted,
+            n,
+            side,
+            &march,
+        );
+        let facing = (light.centre - p).normalize().dot(n) > 0.2;
+        match v {
+            _ if !facing => {}
+            v if v < 0.05 => hidden += 1,
+            v if v < 0.5 => partial += 1,
+            _ => clear += 1,
+        }
+        gamma.push(v);
+        let mut here = lobes.clone();
+        let to = light.centre - p;
+        here[fitted] = local::sphere_lobe(
+            to.normalize(),
+            to.length(),
+            emission.radius,
+            emission.intensity,
+        );
+        let cpu = shade_sg_split(&here, &gamma, n, -px.ray.dir, &px.material, &ndf).total();
+        let err = ((px.gpu - cpu).abs() / (cpu.abs() * 3e-4 + 1e-5 * peak)).max_element();
+        if err > 1.0 {
+            off += 1;
+        } else {
+            worst = worst.max(err);
         }
     }
+    let shaded = pixels.len();
     eprintln!(
         "local light shading: {shaded} pixels ({clear} facing it clear, {partial} partly hidden, {hidden} hidden), {off} off the mirror, worst {worst:.3} of the tolerance"
     );
@@ -1069,7 +1037,7 @@ fn local_light_shading_matches_its_mirror() {
         off <= shaded / 50,
         "{off} of {shaded} pixels off the mirror"
     );
-    common::assert_no_validation_errors(&ctx);
+    common::assert_no_validation_errors(ctx);
 }
 
 /// Local lights as the direct-light pass writes them: (centre, radius),

@@ -132,3 +132,18 @@ pub fn test_library() -> inlay_engine::shader::ShaderLibrary {
     }
     lib
 }
+
+/// A field with nothing in it, on the GPU (for passes that bind a field but,
+/// in a test, need none of it: the shading reads it only for local lights).
+pub fn empty_field(ctx: &Arc<Context>) -> inlay_passes::field::GpuGridField {
+    let field = inlay_passes::field::GridField::new(
+        glam::UVec3::splat(2),
+        inlay_passes::geometry::Aabb {
+            min: glam::DVec3::splat(-1.0),
+            max: glam::DVec3::splat(1.0),
+        },
+        vec![[0.0; 4]; 8],
+        1,
+    );
+    inlay_passes::field::GpuGridField::upload(ctx, &field).unwrap()
+}
