@@ -261,6 +261,17 @@ impl<'a> PathTracer<'a> {
         pr.emission_at(n) + reflected
     }
 
+    /// Irradiance at `p` on a surface facing `n`, every light and bounce
+    /// the tracer takes, as the mean of `samples` paths (π × the mean of
+    /// the Lambertian estimate, which is per unit albedo and so E/π).
+    pub fn irradiance(&self, p: DVec3, n: DVec3, samples: u32, rng: &mut Pcg32) -> DVec3 {
+        let origin = p + n * self.epsilon;
+        let sum: DVec3 = (0..samples)
+            .map(|_| self.scattered(origin, Scatter::Lambert(n), 0, rng))
+            .sum();
+        PI * sum / f64::from(samples.max(1))
+    }
+
     /// Radiance scattered towards any direction from point `p` inside medium
     /// `prim` (albedo times the phase-weighted incident light).
     pub fn medium_radiance(&self, prim: usize, p: DVec3, rng: &mut Pcg32) -> DVec3 {
@@ -470,6 +481,41 @@ mod tests {
         let up = recipe(vec![floor(0.8), panel(DVec3::Y)]);
         let t = PathTracer::new(&up, &env, 0);
         assert_eq!(mean_radiance(&t, DVec3::ZERO, DVec3::Y, 1000), DVec3::ZERO);
+    }
+
+    /// The irradiance under the bulb is π L_e sin²θmax facing it, nothing
+    /// facing away (no bounces, nothing else lit); under a uniform sky of
+    /// radiance L over an albedo-0.5 floor with one bounce, π L facing up and
+    /// π L (1 + 0.5)/2 facing sideways (half sky, half the floor's 0.5 L).
+    /// The field's light alone counts in-field emitters only.
+    #[test]
+    fn irradiance_matches_closed_forms() {
+        let env = Environment::Black;
+        let r = recipe(vec![floor(0.8), bulb()]);
+        let t = PathTracer::new(&r, &env, 0);
+        let mut rng = Pcg32::new(9, 1);
+        let up = t.irradiance(DVec3::ZERO, DVec3::Y, 4000, &mut rng);
+        let expected = 1e4 * PI * (0.05f64 / 3.0).powi(2);
+        assert!((up.y / expected - 1.0).abs() < 0.01, "{up} vs {expected}");
+        let down = t.irradiance(DVec3::new(0.0, 0.5, 0.0), -DVec3::Y, 100, &mut rng);
+        assert_eq!(down, DVec3::ZERO);
+        let x = DVec3::new(0.0, 0.3, 0.0);
+        let hidden = crate::envest::field_light_irradiance(&r, x, DVec3::Y, 500, 0, 3);
+        assert_eq!(hidden, DVec3::ZERO, "a hidden bulb is not the field's light");
+        let mut shown = r.clone();
+        shown.primitives[1].in_field = Some(true);
+        let e = crate::envest::field_light_irradiance(&shown, x, DVec3::Y, 4000, 0, 3);
+        let expected = 1e4 * PI * (0.05f64 / 2.7).powi(2);
+        assert!((e.y / expected - 1.0).abs() < 0.01, "{e} vs {expected}");
+        let sky =
+            Environment::Map(EquirectMap::new(8, 4, vec![DVec3::splat(2.0); 32], 1.0).unwrap());
+        let r = recipe(vec![floor(0.5)]);
+        let t = PathTracer::new(&r, &sky, 1);
+        let up = t.irradiance(DVec3::ZERO, DVec3::Y, 20_000, &mut rng);
+        assert!((up.y / (2.0 * PI) - 1.0).abs() < 0.01, "{up}");
+        let side = t.irradiance(DVec3::new(0.0, 0.5, 0.0), DVec3::X, 20_000, &mut rng);
+        let expected = PI * (2.0 + 0.5 * 2.0) / 2.0;
+        assert!((side.y / expected - 1.0).abs() < 0.02, "{side} vs {expected}");
     }
 
     /// Under a small sphere light straight above: L_o = a/π · L_e · π (r/D)².

@@ -47,6 +47,6 @@ pub use quality::{view_quality, QualityScore, ViewImage};
 pub use recovery::{emitter_recovery, EmitterRecovery};
 pub use surface::{draw_points, emitter_limit, view_candidates, SurfacePoint, ViewPoints};
 pub use truth::{
-    hidden_light_lobes, hidden_light_lobes_except, light_irradiance, lobes_irradiance,
-    point_lights_irradiance, test_points, Lights, Validation,
+    field_light_irradiance, hidden_light_lobes, hidden_light_lobes_except, light_irradiance,
+    lobes_irradiance, point_lights_irradiance, test_points, Lights, Validation,
 };

@@ -121,6 +121,29 @@ pub fn light_irradiance(
     e
 }
 
+/// Irradiance at `x` with normal `n` from the light the field shows: the
+/// emitters inside it and everything they light, `bounces` scattering
+/// events deep (what the object's probe carries, where direct light from
+/// a lamp behind foliage can be a small part of it). Hidden emitters and
+/// the environment are left out.
+pub fn field_light_irradiance(
+    recipe: &Recipe,
+    x: DVec3,
+    n: DVec3,
+    samples: u32,
+    bounces: u32,
+    seed: u64,
+) -> DVec3 {
+    let mut geometry = recipe.clone();
+    geometry
+        .primitives
+        .retain(|p| !p.is_emitter() || p.in_field == Some(true));
+    let env = Environment::Black;
+    let tracer = PathTracer::new(&geometry, &env, bounces);
+    let mut rng = Pcg32::new(seed, 0xF1E1);
+    tracer.irradiance(x, n, samples, &mut rng)
+}
+
 /// Irradiance at `x` with normal `n` from distant `lobes`; occluded by
 /// `recipe` when `occluded` (the same occlusion as [`light_irradiance`], so
 /// the two differ only by the light; the hidden emitters' spheres, which

@@ -15,8 +15,8 @@ use inlay_engine::{Context, HdrImage};
 use inlay_passes::envest::recovery::SEARCH_CONE_DEGREES;
 use inlay_passes::envest::PointLight;
 use inlay_passes::envest::{
-    emitter_recovery, environment_file_text, estimate_environment, hidden_light_lobes,
-    EnvEstimateKnobs, Stage, Validation,
+    emitter_recovery, environment_file_text, estimate_environment, field_light_irradiance,
+    hidden_light_lobes, EnvEstimateKnobs, Stage, Validation,
 };
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
 use inlay_passes::march::MarchPass;
@@ -297,10 +297,22 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
                     "— (none there)".to_string()
                 }
             };
+            // What the object's probe carries: the field's light with its
+            // bounces (behind foliage, direct light is a small part of it).
+            let field = field_light_irradiance(
+                recipe,
+                v.points[0].0,
+                v.points[0].1,
+                4096,
+                scene.bake.bounces.max(1),
+                knobs.seed,
+            );
             println!(
-                "at the object, facing up: estimate / hidden light = {}, estimate / all lights = {}",
+                "at the object, facing up: estimate / hidden light = {}, estimate / all lights' direct light = {}, \
+                 estimate / the field's light (all bounces) = {}",
                 ratio(h),
-                ratio(a)
+                ratio(a),
+                ratio(field)
             );
         }
         println!(
