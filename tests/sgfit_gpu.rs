@@ -306,13 +306,21 @@ fn warm_starts_from_extreme_lobes_and_after_a_jump() {
     let warm = gpu_fit(&ctx, &fit, &map, &moved, FitStart::Warm, 4);
     assert_sane("small move", &warm);
     assert!(!warm.started_cold);
-    // As good as the converged cold fit it started from (the filtered
-    // probe leaves a residual of about 0.015 at 8 lobes).
+    // Where the f64 reference goes from the same lobes, and far better than
+    // the same iterations from the cold start.
+    let prev: Vec<Sg64> = r.lobes.iter().map(|g| g.to_f64()).collect();
+    let moved_samples = samples_of(&map, &moved);
+    let cpu = fit_reference(&moved_samples, fit.knobs(), Start::Warm(&prev), 4);
+    let cold = fit_reference(&moved_samples, fit.knobs(), Start::Cold, 4);
     assert!(
-        warm.relative_residual() < 1.1 * r.relative_residual() + 0.002,
-        "{} after {}",
+        warm.relative_residual() < 1.1 * cpu.relative_residual() + 0.002
+            && warm.relative_residual() < 0.5 * cold.relative_residual(),
+        "warm {} ({:?}), the reference {} ({:?}), cold {}",
         warm.relative_residual(),
-        r.relative_residual()
+        warm.costs,
+        cpu.relative_residual(),
+        cpu.costs,
+        cold.relative_residual()
     );
     // The object jumps: the sun is now below and elsewhere.
     let mut jumped = sky_and_sun();
@@ -329,4 +337,39 @@ fn warm_starts_from_extreme_lobes_and_after_a_jump() {
         cold.relative_residual()
     );
     assert!(warm.relative_residual() <= 1.5 * cold.relative_residual() + 0.02);
+}
+
+/// More parameters than the solver's 256 invocations (M = 64: 384) and
+/// between (M = 40: 240): the GPU's first iterations take the f64
+/// reference's steps (each cost within 0.1 %; a wrong step, or one
+/// rejected where the reference accepts it, is off by far more). A
+/// left-looking solver that read a row another invocation was still
+/// writing passed at M ≤ 32 and failed here.
+#[test]
+fn many_lobes_take_the_reference_steps() {
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let map = DirectionMap::new(MapKind::Octahedral, 32);
+    let texels = texels_of(&map, &sky_and_sun(), |i, t| {
+        let (a, b) = ((i * 7) % 13, (i * 3) % 5);
+        [t[0] + 0.1 * a as f32, t[1], t[2] + 0.05 * b as f32, 1.0]
+    });
+    for m in [40u32, 64] {
+        let knobs = FitKnobs {
+            lobes: m,
+            ..FitKnobs::default()
+        };
+        let fit = SgFitPass::new(&ctx, &lib, knobs, map).unwrap();
+        let gpu = gpu_fit(&ctx, &fit, &map, &texels, FitStart::Cold, 4);
+        let cpu = fit_reference(&samples_of(&map, &texels), &knobs, Start::Cold, 4);
+        assert!(cpu.costs[4] < 0.1 * cpu.costs[0], "{:?}", cpu.costs);
+        for (g, c) in gpu.costs.iter().zip(&cpu.costs) {
+            assert!(
+                (g / c - 1.0).abs() < 1e-3,
+                "M = {m}: {:?} vs {:?}",
+                gpu.costs,
+                cpu.costs
+            );
+        }
+    }
 }

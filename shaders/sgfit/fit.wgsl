@@ -7,7 +7,8 @@
 //   init_cold (M groups)       cold-start lobes into slot 1
 //   cost (slot 1 [, slot 0])   partial sums of the cost of a slot's lobes
 //   select (1 thread)          warm lobes (slot 0) or the cold start, state reset
-//   per iteration: jacobian, normal, solve, cost (slot 1), decide.
+//   per iteration: texel_features, gram_blocks, assemble (the normal equations from
+//                              the features' Gram matrix), solve, cost (slot 1), decide.
 //   conserve_energy (M groups), finish_energy (1 thread): the lobes' amplitudes
 //                              set to hold the probe's energy (energy.rs)
 // The lobe buffer holds two slots (0: current, 1: candidate) of M lobes,
@@ -22,16 +23,17 @@ struct FitPush {
     width: u32,
     height: u32,
     lobe_count: u32,
-    // Columns of the Jacobian and normal matrices: 6M + 1 rounded up to 16.
+    // Columns of the normal matrix: 6M + 1 rounded up to 16.
     cols: u32,
-    // Rows of the Jacobian: 3 × texels rounded up to 16.
+    // Rows of the feature matrix: texels rounded up to 16.
     rows: u32,
     slot: u32,
     warm: u32,
     // Cost-partial workgroups (texels / 64, rounded up).
     groups: u32,
     damping: f32,
-    pad0: u32,
+    // Columns of the feature matrix: 4M + 3 rounded up to 16.
+    feature_cols: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -42,7 +44,9 @@ var<immediate> pc: FitPush;
 @group(0) @binding(1) var<storage, read_write> lobes: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> state: FitState;
 @group(0) @binding(3) var<storage, read_write> partials: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read_write> jac: array<f32>;
+// Per texel, its features (model.rs `texel_features`), `feature_cols` a row,
+// lobe k's four in vec4 k, the residual in vec4 M.
+@group(0) @binding(4) var<storage, read_write> features: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> normal: array<f32>;
 @group(0) @binding(6) var<storage, read_write> work: array<f32>;
 // Per texel: the filtered radiance (rgb) and the solid angle (w).
@@ -50,6 +54,9 @@ var<immediate> pc: FitPush;
 // The probe filter as a sparse matrix (filter_probe).
 @group(0) @binding(8) var<storage, read> filter_offsets: array<u32>;
 @group(0) @binding(9) var<storage, read> filter_entries: array<vec2<u32>>;
+// The features' Gram matrix, row-major, its upper 4 × 4 blocks
+// (gram_blocks).
+@group(0) @binding(10) var<storage, read_write> gram: array<vec4<f32>>;
 
 // The fit's scalars and its cost log, kept across frames for the warm
 // start and read back by the host (`FitState` in passes/src/sgfit/pass.rs,
@@ -386,23 +393,28 @@ fn select_start() {
 
 // ---- one iteration --------------------------------------------------------
 
-// Three rows (r, g, b) of [J | r] per texel; skipped while the normal
+// Row t of the feature matrix: √w (G_k, G_k ∂s, G_k ∂u, G_k ∂v) per lobe,
+// then √w (model − L), zero past 4M + 3 and for invalid texels (mirrors
+// `texel_features` in passes/src/sgfit/model.rs). Skipped while the normal
 // equations of the current lobes are still valid (after a rejected step).
 @compute @workgroup_size(64, 1, 1)
-fn jacobian(@builtin(global_invocation_id) id: vec3<u32>) {
+fn texel_features(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = id.x;
     if t >= texel_count() || state.normal_valid != 0.0 {
         return;
     }
     let m = pc.lobe_count;
-    let p = 6u * m;
-    let xy = texel_xy(t);
+    let blocks = pc.feature_cols / 4u;
+    let row0 = t * blocks;
     let l = fit_radiance(t);
-    let valid = fit_texel_valid(l);
-    let size = vec2<u32>(pc.width, pc.height);
-    let v = dm_direction(xy, size);
+    if !fit_texel_valid(l) {
+        for (var j = 0u; j < blocks; j++) {
+            features[row0 + j] = vec4<f32>(0.0);
+        }
+        return;
+    }
+    let v = dm_direction(texel_xy(t), vec2<u32>(pc.width, pc.height));
     let sw = sqrt(fit_weight(t));
-    let row0 = 3u * t * pc.cols;
     var model = vec3<f32>(0.0);
     for (var k = 0u; k < m; k++) {
         let g = lobe(0u, k);
@@ -410,66 +422,100 @@ fn jacobian(@builtin(global_invocation_id) id: vec3<u32>) {
         model += g.amplitude * e;
         let b = tangent_basis(g.direction);
         let dv = v - g.direction;
-        let ds = -0.5 * g.sharpness * dot(dv, dv);
-        let du = g.sharpness * dot(v, b.t1);
-        let dw = g.sharpness * dot(v, b.t2);
-        for (var c = 0u; c < 3u; c++) {
-            let row = row0 + c * pc.cols + 6u * k;
-            let mu = g.amplitude[c];
-            let f = select(0.0, sw * mu * e, valid);
-            for (var c2 = 0u; c2 < 3u; c2++) {
-                jac[row + c2] = select(0.0, sw * 2.0 * sqrt(mu) * e, valid && c2 == c);
-            }
-            jac[row + 3u] = f * ds;
-            jac[row + 4u] = f * du;
-            jac[row + 5u] = f * dw;
-        }
+        let d = vec3<f32>(-0.5 * dot(dv, dv), dot(v, b.t1), dot(v, b.t2)) * g.sharpness;
+        features[row0 + k] = sw * e * vec4<f32>(1.0, d);
     }
-    for (var c = 0u; c < 3u; c++) {
-        let row = row0 + c * pc.cols;
-        jac[row + p] = select(0.0, sw * (model[c] - l[c]), valid);
-        for (var j = p + 1u; j < pc.cols; j++) {
-            jac[row + j] = 0.0;
-        }
+    features[row0 + m] = vec4<f32>(sw * (model - l), 0.0);
+    for (var j = m + 1u; j < blocks; j++) {
+        features[row0 + j] = vec4<f32>(0.0);
     }
 }
 
-var<workgroup> tile_a: array<f32, 256>;
-var<workgroup> tile_b: array<f32, 256>;
-var<workgroup> wg_flag: u32;
-
-// One 16 × 16 tile of [J | r]ᵀ[J | r] (upper tiles only): JᵀJ, Jᵀr in
-// column 6M. Skipped while the normal equations are still valid.
-@compute @workgroup_size(16, 16, 1)
-fn normal_tile(@builtin(local_invocation_id) l: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>) {
-    if l.x == 0u && l.y == 0u {
-        wg_flag = u32(state.normal_valid != 0.0);
-    }
-    let skip = workgroupUniformLoad(&wg_flag);
-    if skip != 0u || wg.y > wg.x {
+// One 4 × 4 block of the features' Gram matrix Σ_t f_t f_tᵀ per
+// invocation, upper blocks only (rows 4i.., columns 4j.., i ≤ j): 16
+// products for two vec4 loads a texel, no barriers. Skipped while the
+// normal equations are still valid.
+@compute @workgroup_size(64, 1, 1)
+fn gram_blocks(@builtin(global_invocation_id) id: vec3<u32>) {
+    let blocks = pc.feature_cols / 4u;
+    let i = id.x / blocks;
+    let j = id.x % blocks;
+    if i >= blocks || j < i || state.normal_valid != 0.0 {
         return;
     }
-    let real_rows = 3u * texel_count();
-    let ci = wg.y * 16u + l.y;
-    let cj = wg.x * 16u + l.x;
-    var acc = 0.0;
-    for (var r0 = 0u; r0 < pc.rows; r0 += 16u) {
-        let r = r0 + l.y;
-        var a = 0.0;
-        var b = 0.0;
-        if r < real_rows {
-            a = jac[r * pc.cols + wg.y * 16u + l.x];
-            b = jac[r * pc.cols + wg.x * 16u + l.x];
-        }
-        tile_a[l.y * 16u + l.x] = a;
-        tile_b[l.y * 16u + l.x] = b;
-        workgroupBarrier();
-        for (var k = 0u; k < 16u; k++) {
-            acc += tile_a[k * 16u + l.y] * tile_b[k * 16u + l.x];
-        }
-        workgroupBarrier();
+    var c0 = vec4<f32>(0.0);
+    var c1 = vec4<f32>(0.0);
+    var c2 = vec4<f32>(0.0);
+    var c3 = vec4<f32>(0.0);
+    for (var t = 0u; t < texel_count(); t++) {
+        let a = features[t * blocks + i];
+        let b = features[t * blocks + j];
+        c0 += a.x * b;
+        c1 += a.y * b;
+        c2 += a.z * b;
+        c3 += a.w * b;
     }
-    normal[ci * pc.cols + cj] = acc;
+    let at = 4u * i * blocks + j;
+    gram[at] = c0;
+    gram[at + blocks] = c1;
+    gram[at + 2u * blocks] = c2;
+    gram[at + 3u * blocks] = c3;
+}
+
+// Gram entry (a, b), read from the upper blocks.
+fn gram_at(a: u32, b: u32) -> f32 {
+    let r = min(a, b);
+    let c = max(a, b);
+    return gram[r * (pc.feature_cols / 4u) + c / 4u][c % 4u];
+}
+
+// The feature of parameter i (0–5) of lobe k: the three amplitudes share G_k.
+fn param_feature(k: u32, i: u32) -> u32 {
+    return 4u * k + max(i, 2u) - 2u;
+}
+
+// Entry (i, j ≥ i) of JᵀJ, or of Jᵀr for j = 6M, from the Gram matrix and
+// the current lobes (mirrors `normal_from_gram` in passes/src/sgfit/model.rs).
+@compute @workgroup_size(64, 1, 1)
+fn assemble(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = 6u * pc.lobe_count;
+    if id.x >= p * (p + 1u) || state.normal_valid != 0.0 {
+        return;
+    }
+    let i = id.x / (p + 1u);
+    let j = id.x % (p + 1u);
+    if j < i {
+        return;
+    }
+    let k = i / 6u;
+    let ii = i % 6u;
+    let gk = lobe(0u, k);
+    let fi = param_feature(k, ii);
+    var value = 0.0;
+    if j == p {
+        let f = 4u * pc.lobe_count;
+        let r = vec3<f32>(gram_at(fi, f), gram_at(fi, f + 1u), gram_at(fi, f + 2u));
+        if ii < 3u {
+            value = 2.0 * sqrt(gk.amplitude[ii]) * r[ii];
+        } else {
+            value = dot(gk.amplitude, r);
+        }
+    } else {
+        let l = j / 6u;
+        let jj = j % 6u;
+        let gl = lobe(0u, l);
+        let g = gram_at(fi, param_feature(l, jj));
+        if ii < 3u && jj < 3u {
+            value = select(0.0, 4.0 * sqrt(gk.amplitude[ii]) * sqrt(gl.amplitude[ii]) * g, ii == jj);
+        } else if ii < 3u {
+            value = 2.0 * sqrt(gk.amplitude[ii]) * gl.amplitude[ii] * g;
+        } else if jj < 3u {
+            value = 2.0 * sqrt(gl.amplitude[jj]) * gk.amplitude[jj] * g;
+        } else {
+            value = dot(gk.amplitude, gl.amplitude) * g;
+        }
+    }
+    normal[i * pc.cols + j] = value;
 }
 
 var<workgroup> red_max: array<f32, 256>;
@@ -477,21 +523,26 @@ var<workgroup> wg_fail: u32;
 var<workgroup> wg_bad_step: atomic<u32>;
 
 // The damped, Jacobi-scaled step by Cholesky in one workgroup, applied to
-// the current lobes into slot 1 (see passes/src/sgfit/solve.rs). Layout of
-// `work`: n × n lower triangle, then √D (n), then the right-hand side (n).
+// the current lobes into slot 1 (mirrors passes/src/sgfit/solve.rs). Layout
+// of `work`: n × n lower triangle, then √D (n), then the right-hand side
+// (n), then the step (n). Right-looking, with L's columns kept unscaled
+// (C_ij = L_ij L_jj, the diagonal holding L_jj²), so each invocation reads
+// the pivot itself and a column costs one barrier; the right-hand side
+// rides along as row n (its forward substitution comes with the
+// factorisation), and the back substitution takes one barrier a step.
 @compute @workgroup_size(256, 1, 1)
 fn solve(@builtin(local_invocation_index) lid: u32) {
     let n = 6u * pc.lobe_count;
     let cols = pc.cols;
     let d_at = n * n;
     let y_at = n * n + n;
+    let x_at = n * n + 2u * n;
     var mx = 0.0;
     for (var i = lid; i < n; i += 256u) {
         mx = max(mx, normal[i * cols + i]);
     }
     red_max[lid] = mx;
     if lid == 0u {
-        wg_fail = 0u;
         atomicStore(&wg_bad_step, 0u);
     }
     workgroupBarrier();
@@ -513,72 +564,51 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
         let i = idx / n;
         let j = idx % n;
         if j <= i {
-            // (j, i) lies in the upper triangle the normal kernel wrote.
+            // (j, i) lies in the upper triangle the assemble kernel wrote.
             let a = normal[j * cols + i] / (work[d_at + i] * work[d_at + j]);
             work[idx] = a + select(0.0, eta, i == j);
         }
     }
     storageBarrier();
-    // Cholesky, column by column.
     for (var j = 0u; j < n; j++) {
-        if lid == 0u {
-            let pivot = work[j * n + j];
-            if pivot > 0.0 && fit_finite(pivot) {
-                work[j * n + j] = sqrt(pivot);
+        // L_jj², final since the previous column's barrier.
+        let pivot = work[j * n + j];
+        if !(pivot > 0.0 && fit_finite(pivot)) {
+            atomicStore(&wg_bad_step, 1u);
+        }
+        for (var i = j + 1u + lid; i <= n; i += 256u) {
+            if i < n {
+                // Row i: A_ik −= L_ij L_kj = C_ij C_kj / L_jj² (k in j+1..=i).
+                let f = work[i * n + j] / pivot;
+                for (var k = j + 1u; k <= i; k++) {
+                    work[i * n + k] -= f * work[k * n + j];
+                }
             } else {
-                wg_fail = 1u;
-            }
-        }
-        storageBarrier();
-        if workgroupUniformLoad(&wg_fail) != 0u {
-            break;
-        }
-        let ljj = work[j * n + j];
-        for (var i = j + 1u + lid; i < n; i += 256u) {
-            work[i * n + j] /= ljj;
-        }
-        storageBarrier();
-        for (var i = j + 1u + lid; i < n; i += 256u) {
-            let lij = work[i * n + j];
-            for (var k = j + 1u; k <= i; k++) {
-                work[i * n + k] -= lij * work[k * n + j];
+                // The right-hand side: y_k −= L_kj z_j = C_kj y_j / L_jj².
+                let f = work[y_at + j] / pivot;
+                for (var k = j + 1u; k < n; k++) {
+                    work[y_at + k] -= f * work[k * n + j];
+                }
             }
         }
         storageBarrier();
     }
-    if workgroupUniformLoad(&wg_fail) != 0u {
-        if lid == 0u {
-            state.candidate_ok = 0.0;
-        }
-        return;
-    }
-    // L z = y, then Lᵀ x = z.
-    for (var j = 0u; j < n; j++) {
-        if lid == 0u {
-            work[y_at + j] /= work[j * n + j];
-        }
-        storageBarrier();
-        let yj = work[y_at + j];
-        for (var i = j + 1u + lid; i < n; i += 256u) {
-            work[y_at + i] -= work[i * n + j] * yj;
-        }
-        storageBarrier();
-    }
+    // Lᵀ x = z with z_j = y_j / L_jj: x_j = y_j / L_jj², then
+    // y_i −= C_ji x_j for i < j.
     for (var jj = 0u; jj < n; jj++) {
         let j = n - 1u - jj;
+        let xj = work[y_at + j] / work[j * n + j];
         if lid == 0u {
-            work[y_at + j] /= work[j * n + j];
+            work[x_at + j] = xj;
         }
-        storageBarrier();
-        let yj = work[y_at + j];
         for (var i = lid; i < j; i += 256u) {
-            work[y_at + i] -= work[j * n + i] * yj;
+            work[y_at + i] -= work[j * n + i] * xj;
         }
         storageBarrier();
     }
     for (var i = lid; i < n; i += 256u) {
-        let delta = work[y_at + i] / work[d_at + i];
-        work[y_at + i] = delta;
+        let delta = work[x_at + i] / work[d_at + i];
+        work[x_at + i] = delta;
         if !fit_finite(delta) {
             atomicStore(&wg_bad_step, 1u);
         }
@@ -590,7 +620,7 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
     let failed = workgroupUniformLoad(&wg_fail);
     if failed == 0u {
         for (var k = lid; k < pc.lobe_count; k += 256u) {
-            let b = y_at + 6u * k;
+            let b = x_at + 6u * k;
             let d0 = vec4<f32>(work[b], work[b + 1u], work[b + 2u], work[b + 3u]);
             let d1 = vec2<f32>(work[b + 4u], work[b + 5u]);
             store_lobe(1u, k, fit_apply_step(lobe(0u, k), d0, d1));

@@ -501,7 +501,11 @@ mod tests {
         assert_eq!(down, DVec3::ZERO);
         let x = DVec3::new(0.0, 0.3, 0.0);
         let hidden = crate::envest::field_light_irradiance(&r, x, DVec3::Y, 500, 0, 3);
-        assert_eq!(hidden, DVec3::ZERO, "a hidden bulb is not the field's light");
+        assert_eq!(
+            hidden,
+            DVec3::ZERO,
+            "a hidden bulb is not the field's light"
+        );
         let mut shown = r.clone();
         shown.primitives[1].in_field = Some(true);
         let e = crate::envest::field_light_irradiance(&shown, x, DVec3::Y, 4000, 0, 3);
@@ -515,7 +519,10 @@ mod tests {
         assert!((up.y / (2.0 * PI) - 1.0).abs() < 0.01, "{up}");
         let side = t.irradiance(DVec3::new(0.0, 0.5, 0.0), DVec3::X, 20_000, &mut rng);
         let expected = PI * (2.0 + 0.5 * 2.0) / 2.0;
-        assert!((side.y / expected - 1.0).abs() < 0.02, "{side} vs {expected}");
+        assert!(
+            (side.y / expected - 1.0).abs() < 0.02,
+            "{side} vs {expected}"
+        );
     }
 
     /// Under a small sphere light straight above: L_o = a/π · L_e · π (r/D)².

@@ -1,6 +1,7 @@
 //! The fit's model, one definition mirrored by `shaders/sgfit/model.wgsl`:
 //! the parameterisation, the cold-start initialisation, the cost, the
-//! Jacobian rows and the step.
+//! Jacobian rows (and the features whose Gram matrix gives the normal
+//! equations) and the step.
 //!
 //! Lobe k has six parameters around its current value (p, λ, μ):
 //! a_c = √μ_c (so μ = a² ≥ 0), s = ln λ (so λ > 0, clamped to
@@ -228,7 +229,8 @@ pub fn cost(probe: &ProbeSamples, lobes: &[Sg64]) -> f64 {
 }
 
 /// The three Jacobian rows of texel t (channels r, g, b), each with
-/// 6M derivative columns followed by the residual.
+/// 6M derivative columns followed by the residual: the explicit form
+/// the fit's normal equations ([`normal_from_gram`]) are checked against.
 pub fn jacobian_rows(probe: &ProbeSamples, lobes: &[Sg64], t: usize, rows: &mut [Vec<f64>; 3]) {
     let p = PARAMS_PER_LOBE * lobes.len();
     for row in rows.iter_mut() {
@@ -259,6 +261,94 @@ pub fn jacobian_rows(probe: &ProbeSamples, lobes: &[Sg64], t: usize, rows: &mut 
     for (c, row) in rows.iter_mut().enumerate() {
         row[p] = sw * (m[c] - probe.radiance[t][c]);
     }
+}
+
+/// Features per lobe in [`texel_features`].
+pub const FEATURES_PER_LOBE: usize = 4;
+
+/// Texel t's features: √w_t × (G_k, G_k ∂s, G_k ∂u, G_k ∂v) for each lobe
+/// k (∂ the derivative of G_k's exponent along ln λ and the two tangent
+/// moves of its axis), then √w_t (model − L) per channel: 4M + 3 numbers.
+/// Every entry of the texel's three Jacobian rows ([`jacobian_rows`]) is
+/// one of them times an amplitude term (2a_kc or μ_kc), so the normal
+/// equations follow from the features' Gram matrix Σ_t f_t f_tᵀ
+/// ([`normal_from_gram`]): (4M + 3)² products a texel where the rows take
+/// 3 (6M + 1)², and no Jacobian is stored. Mirrored by `texel_features` in
+/// `shaders/sgfit/fit.wgsl`.
+pub fn texel_features(probe: &ProbeSamples, lobes: &[Sg64], t: usize, out: &mut Vec<f64>) {
+    let f = FEATURES_PER_LOBE * lobes.len();
+    out.clear();
+    out.resize(f + 3, 0.0);
+    let w = probe.weights[t];
+    if w <= 0.0 {
+        return;
+    }
+    let sw = w.sqrt();
+    let v = probe.directions[t];
+    let mut m = DVec3::ZERO;
+    for (k, g) in lobes.iter().enumerate() {
+        let e = g.weight(v);
+        m += g.amplitude * e;
+        let (t1, t2) = tangent_basis(g.direction);
+        let ds = -0.5 * g.sharpness * (v - g.direction).length_squared();
+        let (du, dv) = (g.sharpness * v.dot(t1), g.sharpness * v.dot(t2));
+        let se = sw * e;
+        out[FEATURES_PER_LOBE * k..FEATURES_PER_LOBE * (k + 1)].copy_from_slice(&[
+            se,
+            se * ds,
+            se * du,
+            se * dv,
+        ]);
+    }
+    let r = sw * (m - probe.radiance[t]);
+    out[f..].copy_from_slice(&r.to_array());
+}
+
+/// The normal matrix JᵀJ (6M × 6M, row-major) and the gradient Jᵀr at
+/// `lobes` from the features' Gram matrix `gram` (F × F, F = 4M + 3,
+/// row-major, symmetric; [`texel_features`]). With a_kc = √μ_kc, feature
+/// e_k = 4k and d_k^i = 4k + 1 + i, for parameters (a_kc, s_k, u_k, v_k):
+/// (a_kc, a_lc') = δ_cc' 4 a_kc a_lc G[e_k, e_l]; (a_kc, ·_l^i) =
+/// 2 a_kc μ_lc G[e_k, d_l^i]; (·_k^i, ·_l^j) = (μ_k · μ_l) G[d_k^i, d_l^j];
+/// the gradient: 2 a_kc G[e_k, r_c] and Σ_c μ_kc G[d_k^i, r_c]. Mirrored
+/// by `assemble` in `shaders/sgfit/fit.wgsl`.
+pub fn normal_from_gram(gram: &[f64], lobes: &[Sg64]) -> (Vec<f64>, Vec<f64>) {
+    let m = lobes.len();
+    let f = FEATURES_PER_LOBE * m + 3;
+    let p = PARAMS_PER_LOBE * m;
+    let g = |i: usize, j: usize| gram[i * f + j];
+    let root = |k: usize, c: usize| lobes[k].amplitude[c].sqrt();
+    let mu = |k: usize, c: usize| lobes[k].amplitude[c];
+    // The feature of parameter i of lobe k (0–2 amplitudes share e_k).
+    let feature = |k: usize, i: usize| FEATURES_PER_LOBE * k + i.saturating_sub(2);
+    let mut a = vec![0.0; p * p];
+    let mut b = vec![0.0; p];
+    for k in 0..m {
+        for i in 0..PARAMS_PER_LOBE {
+            let row = PARAMS_PER_LOBE * k + i;
+            let fi = feature(k, i);
+            for l in 0..m {
+                for j in 0..PARAMS_PER_LOBE {
+                    let fj = feature(l, j);
+                    let value = match (i < 3, j < 3) {
+                        (true, true) if i == j => 4.0 * root(k, i) * root(l, i) * g(fi, fj),
+                        (true, true) => 0.0,
+                        (true, false) => 2.0 * root(k, i) * mu(l, i) * g(fi, fj),
+                        (false, true) => 2.0 * root(l, j) * mu(k, j) * g(fi, fj),
+                        (false, false) => lobes[k].amplitude.dot(lobes[l].amplitude) * g(fi, fj),
+                    };
+                    a[row * p + PARAMS_PER_LOBE * l + j] = value;
+                }
+            }
+            let r = |c: usize| g(fi, f - 3 + c);
+            b[row] = if i < 3 {
+                2.0 * root(k, i) * r(i)
+            } else {
+                (0..3).map(|c| mu(k, c) * r(c)).sum()
+            };
+        }
+    }
+    (a, b)
 }
 
 /// Lobes moved by the parameter step `delta` (6 per lobe), sharpness kept

@@ -2,7 +2,8 @@
 //! `sg-fit`, recording the cold start, the start selection and the
 //! iterations as successive dispatches. The current lobes and the fit's
 //! state (cost, damping, residual log) persist across frames for the warm
-//! start; the Jacobian, normal matrix and solver workspace are transient.
+//! start; the features, their Gram matrix, the normal matrix and the solver
+//! workspace are transient.
 
 use crate::frame::meta::{PassInfo, Table1Module};
 use std::sync::Arc;
@@ -26,9 +27,9 @@ inlay_engine::gpu_struct! {
         pub height: u32,
         /// Lobes M.
         pub lobe_count: u32,
-        /// Jacobian and normal-matrix columns (6M + 1 rounded up to 16).
+        /// Normal-matrix columns (6M + 1 rounded up to 16).
         pub cols: u32,
-        /// Jacobian rows (3 × texels rounded up to 16).
+        /// Feature-matrix rows (texels rounded up to 16).
         pub rows: u32,
         /// Which lobe slot a kernel works on (0: current, 1: candidate).
         pub slot: u32,
@@ -38,8 +39,8 @@ inlay_engine::gpu_struct! {
         pub groups: u32,
         /// Initial LM damping.
         pub damping: f32,
-        /// Padding.
-        pub pad0: u32,
+        /// Feature-matrix columns (4M + 3 rounded up to 16).
+        pub feature_cols: u32,
         /// Padding.
         pub pad1: u32,
         /// Padding.
@@ -131,8 +132,9 @@ struct Kernels {
     init_cold: Arc<ComputePipeline>,
     cost: Arc<ComputePipeline>,
     select_start: Arc<ComputePipeline>,
-    jacobian: Arc<ComputePipeline>,
-    normal_tile: Arc<ComputePipeline>,
+    features: Arc<ComputePipeline>,
+    gram_blocks: Arc<ComputePipeline>,
+    assemble: Arc<ComputePipeline>,
     solve: Arc<ComputePipeline>,
     decide: Arc<ComputePipeline>,
     conserve_energy: Arc<ComputePipeline>,
@@ -144,6 +146,7 @@ struct Kernels {
 struct Shape {
     cols: u32,
     rows: u32,
+    feature_cols: u32,
     groups: u32,
 }
 
@@ -187,7 +190,8 @@ fn round_up(x: u32, m: u32) -> u32 {
 
 impl SgFitPass {
     /// Compiles the kernels and creates the persistent buffers; fails with
-    /// a clear message when the Jacobian would not fit one storage binding.
+    /// a clear message when the feature matrix would not fit one storage
+    /// binding.
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
@@ -200,18 +204,22 @@ impl SgFitPass {
         let texels = map.texels() as u32;
         let shape = Shape {
             cols: round_up(knobs.parameters() as u32 + 1, 16),
-            rows: round_up(3 * texels, 16),
+            rows: round_up(texels, 16),
+            feature_cols: round_up(
+                (model::FEATURES_PER_LOBE * knobs.lobes as usize + 3) as u32,
+                16,
+            ),
             groups: texels.div_ceil(64),
         };
-        let jacobian_bytes = shape.rows as u64 * shape.cols as u64 * 4;
+        let feature_bytes = shape.rows as u64 * shape.feature_cols as u64 * 4;
         let limit = ctx.info().max_storage_buffer_range as u64;
-        if jacobian_bytes > limit {
+        if feature_bytes > limit {
             anyhow::bail!(
-                "the fit's Jacobian ({} rows × {} columns, {} MiB) exceeds this device's largest \
-                 storage binding ({} MiB): lower the probe resolution or the lobe count",
+                "the fit's feature matrix ({} rows × {} columns, {} MiB) exceeds this device's \
+                 largest storage binding ({} MiB): lower the probe resolution or the lobe count",
                 shape.rows,
-                shape.cols,
-                jacobian_bytes >> 20,
+                shape.feature_cols,
+                feature_bytes >> 20,
                 limit >> 20
             );
         }
@@ -230,8 +238,9 @@ impl SgFitPass {
             init_cold: build("init_cold")?,
             cost: build("cost")?,
             select_start: build("select_start")?,
-            jacobian: build("jacobian")?,
-            normal_tile: build("normal_tile")?,
+            features: build("texel_features")?,
+            gram_blocks: build("gram_blocks")?,
+            assemble: build("assemble")?,
             solve: build("solve")?,
             decide: build("decide")?,
             conserve_energy: build("conserve_energy")?,
@@ -325,7 +334,7 @@ impl SgFitPass {
             warm: warm as u32,
             groups: self.shape.groups,
             damping: self.knobs.damping as f32,
-            pad0: 0,
+            feature_cols: self.shape.feature_cols,
             pad1: 0,
             pad2: 0,
         }
@@ -352,9 +361,14 @@ impl SgFitPass {
         let graph_offsets = graph.import_buffer(&self.filter_offsets, None);
         let graph_entries = graph.import_buffer(&self.filter_entries, None);
         let partials = graph.create_buffer("sg-fit-partials", 2 * s.groups as u64 * 16);
-        let jacobian = graph.create_buffer("sg-fit-jacobian", s.rows as u64 * s.cols as u64 * 4);
+        let features =
+            graph.create_buffer("sg-fit-features", s.rows as u64 * s.feature_cols as u64 * 4);
+        let gram = graph.create_buffer(
+            "sg-fit-gram",
+            s.feature_cols as u64 * s.feature_cols as u64 * 4,
+        );
         let normal = graph.create_buffer("sg-fit-normal", s.cols as u64 * s.cols as u64 * 4);
-        let work = graph.create_buffer("sg-fit-work", (n * n + 2 * n) * 4);
+        let work = graph.create_buffer("sg-fit-work", (n * n + 3 * n) * 4);
         let fitted = graph.create_buffer("sg-fit-probe", self.map.texels() as u64 * 16);
         // The transients are written before they are read within the pass
         // (StorageWrite: no previous content); the lobes and the state
@@ -364,17 +378,20 @@ impl SgFitPass {
         let lobes = pass.buffer_at("lobes", lobes, BufferAccess::StorageReadWrite);
         pass.buffer_at("state", state, BufferAccess::StorageReadWrite);
         pass.buffer_at("partials", partials, BufferAccess::StorageWrite);
-        pass.buffer_at("jac", jacobian, BufferAccess::StorageWrite);
+        pass.buffer_at("features", features, BufferAccess::StorageWrite);
         pass.buffer_at("normal", normal, BufferAccess::StorageWrite);
         pass.buffer_at("work", work, BufferAccess::StorageWrite);
         pass.buffer_at("fitted", fitted, BufferAccess::StorageWrite);
         pass.buffer_at("filter_offsets", graph_offsets, BufferAccess::StorageRead);
         pass.buffer_at("filter_entries", graph_entries, BufferAccess::StorageRead);
+        pass.buffer_at("gram", gram, BufferAccess::StorageWrite);
         let warm = start == FitStart::Warm;
         let candidate = self.push(1, warm);
         let current = self.push(0, warm);
         let k = &self.kernels;
-        let tiles = s.cols / 16;
+        let blocks = s.feature_cols / 4;
+        let block_groups = (blocks * blocks).div_ceil(64);
+        let entries = (n * (n + 1)).div_ceil(64) as u32;
         let mut run = |p: &Arc<ComputePipeline>, push: &FitPush, groups: [u32; 3]| {
             pass.dispatch(p).push(push).groups(groups)
         };
@@ -386,8 +403,9 @@ impl SgFitPass {
         }
         run(&k.select_start, &candidate, [1, 1, 1]);
         for _ in 0..iterations {
-            run(&k.jacobian, &candidate, [s.groups, 1, 1]);
-            run(&k.normal_tile, &candidate, [tiles, tiles, 1]);
+            run(&k.features, &candidate, [s.groups, 1, 1]);
+            run(&k.gram_blocks, &candidate, [block_groups, 1, 1]);
+            run(&k.assemble, &candidate, [entries, 1, 1]);
             run(&k.solve, &candidate, [1, 1, 1]);
             run(&k.cost, &candidate, [s.groups, 1, 1]);
             run(&k.decide, &candidate, [1, 1, 1]);

@@ -5,7 +5,8 @@ use rayon::prelude::*;
 
 use super::knobs::FitKnobs;
 use super::model::{
-    apply_step, cold_start, cost, jacobian_rows, max_sharpness, ProbeSamples, PARAMS_PER_LOBE,
+    apply_step, cold_start, cost, max_sharpness, normal_from_gram, texel_features, ProbeSamples,
+    FEATURES_PER_LOBE,
 };
 use super::solve::damped_step;
 use crate::sg::Sg64;
@@ -62,31 +63,40 @@ pub fn relative_residual(cost: f64, energy: f64) -> f64 {
     }
 }
 
-/// The normal matrix JᵀJ (row-major) and gradient Jᵀr at `lobes`.
-fn normal_equations(probe: &ProbeSamples, lobes: &[Sg64]) -> (Vec<f64>, Vec<f64>) {
-    let p = PARAMS_PER_LOBE * lobes.len();
-    let zero = || (vec![0.0; p * p], vec![0.0; p]);
+/// The features' Gram matrix Σ_t f_t f_tᵀ ([`texel_features`], F × F
+/// row-major, F = 4M + 3).
+pub fn feature_gram(probe: &ProbeSamples, lobes: &[Sg64]) -> Vec<f64> {
+    let f = FEATURES_PER_LOBE * lobes.len() + 3;
     (0..probe.directions.len())
         .into_par_iter()
-        .fold(zero, |(mut a, mut b), t| {
-            let mut rows = [Vec::new(), Vec::new(), Vec::new()];
-            jacobian_rows(probe, lobes, t, &mut rows);
-            for row in &rows {
-                let nz: Vec<usize> = (0..p).filter(|&i| row[i] != 0.0).collect();
-                for &i in &nz {
-                    b[i] += row[i] * row[p];
-                    for &j in &nz {
-                        a[i * p + j] += row[i] * row[j];
+        .fold(
+            || (vec![0.0; f * f], Vec::new()),
+            |(mut g, mut x), t| {
+                texel_features(probe, lobes, t, &mut x);
+                if x.iter().any(|v| *v != 0.0) {
+                    for i in 0..f {
+                        for j in 0..f {
+                            g[i * f + j] += x[i] * x[j];
+                        }
                     }
                 }
-            }
-            (a, b)
-        })
-        .reduce(zero, |(mut a, mut b), (a2, b2)| {
-            a.iter_mut().zip(a2).for_each(|(x, y)| *x += y);
-            b.iter_mut().zip(b2).for_each(|(x, y)| *x += y);
-            (a, b)
-        })
+                (g, x)
+            },
+        )
+        .map(|(g, _)| g)
+        .reduce(
+            || vec![0.0; f * f],
+            |mut a, b| {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                a
+            },
+        )
+}
+
+/// The normal matrix JᵀJ (row-major) and gradient Jᵀr at `lobes`, from
+/// the features' Gram matrix as the GPU builds them.
+pub fn normal_equations(probe: &ProbeSamples, lobes: &[Sg64]) -> (Vec<f64>, Vec<f64>) {
+    normal_from_gram(&feature_gram(probe, lobes), lobes)
 }
 
 /// Fits `knobs.lobes` SGs to `probe` by Levenberg–Marquardt for

@@ -29,36 +29,36 @@ pub fn damped_step(a: &[f64], b: &[f64], n: usize, eta: f64) -> Option<Vec<f64>>
             l[i * n + j] = a[i * n + j] / (d[i] * d[j]) + if i == j { eta } else { 0.0 };
         }
     }
-    // Cholesky, column by column (the order the GPU kernel uses).
+    // Right-looking Cholesky with L's columns kept unscaled (C_ij = L_ij
+    // L_jj, the diagonal holding L_jj²), the order the GPU kernel uses (one
+    // barrier a column there), the right-hand side updated along as an
+    // extra row: A_ik −= C_ij C_kj / L_jj², y_k −= C_kj y_j / L_jj².
+    let mut y: Vec<f64> = (0..n).map(|i| -b[i] / d[i]).collect();
     for j in 0..n {
         let pivot = l[j * n + j];
         if !(pivot > 0.0 && pivot.is_finite()) {
             return None;
         }
-        let ljj = pivot.sqrt();
-        l[j * n + j] = ljj;
         for i in j + 1..n {
-            l[i * n + j] /= ljj;
-        }
-        for i in j + 1..n {
+            let f = l[i * n + j] / pivot;
             for k in j + 1..=i {
-                l[i * n + k] -= l[i * n + j] * l[k * n + j];
+                l[i * n + k] -= f * l[k * n + j];
             }
         }
-    }
-    let mut y: Vec<f64> = (0..n).map(|i| -b[i] / d[i]).collect();
-    for j in 0..n {
-        y[j] /= l[j * n + j];
-        for i in j + 1..n {
-            y[i] -= l[i * n + j] * y[j];
+        let f = y[j] / pivot;
+        for k in j + 1..n {
+            y[k] -= f * l[k * n + j];
         }
     }
+    // Lᵀ x = z with z_j = y_j / L_jj: x_j = y_j / L_jj², then y_i −= C_ji x_j.
+    let mut x = vec![0.0; n];
     for j in (0..n).rev() {
-        y[j] /= l[j * n + j];
+        x[j] = y[j] / l[j * n + j];
         for i in 0..j {
-            y[i] -= l[j * n + i] * y[j];
+            y[i] -= l[j * n + i] * x[j];
         }
     }
+    let y = x;
     let delta: Vec<f64> = y.iter().zip(&d).map(|(y, d)| y / d).collect();
     delta.iter().all(|x| x.is_finite()).then_some(delta)
 }

@@ -62,3 +62,44 @@ fn fit_recovers_a_sum_of_lobes() {
         assert!(g.sharpness > 0.0 && g.amplitude.min_element() >= 0.0);
     }
 }
+
+/// The normal equations from the features' Gram matrix equal JᵀJ and Jᵀr
+/// summed from the explicit Jacobian rows (f64, relative 1e-12), on a
+/// probe with noise and an invalid texel and lobes of unequal channels.
+#[test]
+fn gram_normal_equations_match_the_explicit_jacobian() {
+    let map = DirectionMap::new(MapKind::Octahedral, 12);
+    let probe = probe_of(&map, &sky_and_sun(), |i| {
+        if i == 7 {
+            [f64::NAN, 0.0, 0.0, 1.0]
+        } else {
+            [0.01 * (i % 5) as f64, 0.02 * (i % 3) as f64, 0.0, 0.0]
+        }
+    });
+    assert_eq!(probe.invalid, 1);
+    let lobes = model::cold_start(&probe, 5);
+    let (a, b) = reference::normal_equations(&probe, &lobes);
+    let p = model::PARAMS_PER_LOBE * lobes.len();
+    let (mut a0, mut b0) = (vec![0.0; p * p], vec![0.0; p]);
+    let mut rows = [Vec::new(), Vec::new(), Vec::new()];
+    for t in 0..probe.directions.len() {
+        model::jacobian_rows(&probe, &lobes, t, &mut rows);
+        for row in &rows {
+            for i in 0..p {
+                b0[i] += row[i] * row[p];
+                for j in 0..p {
+                    a0[i * p + j] += row[i] * row[j];
+                }
+            }
+        }
+    }
+    let scale = a0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for (x, y) in a.iter().zip(&a0) {
+        assert!((x - y).abs() <= 1e-12 * scale, "{x} vs {y}");
+    }
+    let scale = b0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(scale > 0.0);
+    for (x, y) in b.iter().zip(&b0) {
+        assert!((x - y).abs() <= 1e-12 * scale, "{x} vs {y}");
+    }
+}

@@ -14,9 +14,11 @@ use inlay_engine::graph::FrameGraph;
 use inlay_engine::{Context, Renderer, SubmitSync};
 use inlay_passes::field::GpuGridField;
 use inlay_passes::lighting::environment_lobes;
-use inlay_passes::probe::{ProbeKnobs, ProbePass};
+use inlay_passes::probe::{trace_probe, ProbeKnobs, ProbePass};
 use inlay_passes::scene::load_scene;
-use inlay_passes::sgfit::{relative_residual, FitKnobs, FitReport, FitStart, SgFitPass};
+use inlay_passes::sgfit::{
+    fit_reference, relative_residual, FitKnobs, FitReport, FitStart, ProbeSamples, SgFitPass, Start,
+};
 
 use crate::commands::probe::PlacementArgs;
 use crate::field_source::scene_field;
@@ -48,6 +50,10 @@ pub struct BenchSgArgs {
     /// Use this field file instead of the scene's field or recipe.
     #[arg(long)]
     pub field: Option<PathBuf>,
+    /// Also fit the probe traced on the CPU with the f64 reference fit, for
+    /// the residual-against-M table (slow: the CPU traces every probe).
+    #[arg(long)]
+    pub reference: bool,
 }
 
 /// Traces the probe and fits it `frames` times; returns the last report and
@@ -144,8 +150,13 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
         ));
     }
     println!(
-        "\nRelative residual against M after {} iterations, cold start:\n",
-        args.fit_iterations
+        "\nRelative residual against M after {} iterations, cold start{}:\n",
+        args.fit_iterations,
+        if args.reference {
+            " (in brackets: the f64 reference fit of the probe traced on the CPU)"
+        } else {
+            ""
+        }
     );
     let header: Vec<String> = args.lobes.iter().map(|m| format!("M={m}")).collect();
     println!("| probe | {} |", header.join(" | "));
@@ -158,13 +169,22 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
             ..scene.lighting.probe
         };
         let probe = ProbePass::new(ctx, &library, knobs, scene.march, &env, &[])?;
+        let cpu_probe = args.reference.then(|| {
+            let texels = trace_probe(&field, at, &knobs, &scene.march, &env);
+            ProbeSamples::new(&probe.map(), &texels)
+        });
         let mut cells = Vec::new();
         for &m in &args.lobes {
             let fit_knobs = FitKnobs { lobes: m, ..base };
             let fit = SgFitPass::new(ctx, &library, fit_knobs, probe.map())?;
             let (report, _, t) =
                 measure(ctx, &probe, &fit, &gpu_field, at, args.fit_iterations, 1)?;
-            cells.push(format!("{:.4}", report.relative_residual()));
+            let mut cell = format!("{:.4}", report.relative_residual());
+            if let Some(samples) = &cpu_probe {
+                let cpu = fit_reference(samples, &fit_knobs, Start::Cold, args.fit_iterations);
+                cell += &format!(" (f64 {:.4})", cpu.relative_residual());
+            }
+            cells.push(cell);
             lobe_timing.push((n, m, t));
         }
         let map = probe.map();
