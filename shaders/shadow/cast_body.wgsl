@@ -64,39 +64,61 @@ fn density(x: vec3<f32>) -> f32 {
     return grid_sample(x).w;
 }
 
-fn clears_sphere(x: vec3<f32>, dir: vec3<f32>) -> bool {
-    let to = ssdf_world_sphere().xyz - x;
-    let dist = length(to);
-    let r = ssdf_world_sphere().w;
-    if dist <= r {
-        return false;
-    }
-    return ssdf_angle_between(dir, to / dist) - asin(r / dist) >= CAST_HALF_PI;
-}
-
 // Below this share of a lobe's energy the object can block, the lobe is
 // left unshadowed (runtime.rs CAST_SKIP_SHARE).
 const CAST_SKIP_SHARE: f32 = 1e-3;
+// Where the object can block less than this share of a point's light, the
+// point is left unshadowed (runtime.rs CAST_TOLERANCE).
+const CAST_TOLERANCE: f32 = 1e-3;
 
-// The largest share of lobe p's hemisphere energy the bounding sphere can
-// block from x: p's largest value over the sphere's cone times the cone's
-// solid angle, covered to the mesh's fill far away and wholly at the
-// sphere, over p's hemisphere integral (runtime.rs sphere_share).
-fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
+// The bounding sphere seen from one point (runtime.rs SphereView): the
+// direction to its centre, cos β and sin β of its angular radius, the
+// cone's solid angle 2π(1 − cos β) times the share the mesh covers (its
+// fill far away, all of it at the sphere), and whether the point is inside.
+struct CastSphere {
+    u: vec3<f32>,
+    cos_beta: f32,
+    sin_beta: f32,
+    covered_solid: f32,
+    inside: bool,
+}
+
+fn cast_sphere(x: vec3<f32>) -> CastSphere {
     let to = ssdf_world_sphere().xyz - x;
     let dist = length(to);
     let r = ssdf_world_sphere().w;
     if dist <= r {
+        return CastSphere(vec3<f32>(0.0, 1.0, 0.0), 0.0, 1.0, 0.0, true);
+    }
+    let sin_beta = r / dist;
+    let cos_beta = sqrt(max(1.0 - sin_beta * sin_beta, 0.0));
+    let fill = ssdf.reflectance.w;
+    let covered = fill + (1.0 - fill) * sin_beta * sin_beta;
+    return CastSphere(to / dist, cos_beta, sin_beta, 2.0 * SG_PI * (1.0 - cos_beta) * covered, false);
+}
+
+// cos(max(γ − β, 0)), γ the angle from unit `dir` to the centre.
+fn cast_cos_gap(v: CastSphere, dir: vec3<f32>) -> f32 {
+    let cos_gamma = clamp(dot(dir, v.u), -1.0, 1.0);
+    if cos_gamma >= v.cos_beta {
         return 1.0;
     }
-    let beta = asin(r / dist);
-    let gamma = ssdf_angle_between(p.direction, to / dist);
-    let peak = exp(p.sharpness * (cos(max(gamma - beta, 0.0)) - 1.0));
-    let s = sin(0.5 * beta);
-    let solid = 4.0 * SG_PI * s * s;
-    let fill = ssdf.reflectance.w;
-    let covered = fill + (1.0 - fill) * (r / dist) * (r / dist);
-    return min(peak * solid * covered / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
+    return cos_gamma * v.cos_beta + sqrt(max(1.0 - cos_gamma * cos_gamma, 0.0)) * v.sin_beta;
+}
+
+// The largest share of lobe p's hemisphere energy the bounding sphere can
+// block (runtime.rs sphere_share), and whether the sphere lies a quarter
+// turn or more from p's axis (runtime.rs sphere_clear_of).
+fn sphere_share(v: CastSphere, p: Sg, cos_gap: f32) -> f32 {
+    if v.inside {
+        return 1.0;
+    }
+    let peak = exp(p.sharpness * (cos_gap - 1.0));
+    return min(peak * v.covered_solid / (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness)), 1.0);
+}
+
+fn clears_sphere(v: CastSphere, cos_gap: f32) -> bool {
+    return !v.inside && cos_gap <= 0.0;
 }
 
 // `radiance`: the field's colour at x; π × it floors the irradiance the
@@ -104,30 +126,51 @@ fn sphere_share(x: vec3<f32>, p: Sg) -> f32 {
 // least πL; runtime.rs cast_shadow_factor).
 fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     let cosine = sg_clamped_cosine(n);
-    var blocked = vec3<f32>(0.0);
-    var den = vec3<f32>(0.0);
-    var prepared = false;
     let m = pc.light_count;
     let first_direct = m - min(pc.direct_lobes, m);
+    let view = cast_sphere(x);
+    // First the irradiance, and the most the object can block of it (each
+    // lobe's w × share bounds its w (1 − q)): where that is under
+    // CAST_TOLERANCE of the light, ρ = 1 without the SSDF or any ray.
+    var den = vec3<f32>(0.0);
+    var most = vec3<f32>(0.0);
     for (var k = 0u; k < m; k++) {
-        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
-        let p = sg_product(g, cosine);
+        let p = sg_product(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), cosine);
         let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
         den += w;
+        let gap = cast_cos_gap(view, p.direction);
+        let share = sphere_share(view, p, gap);
+        if !clears_sphere(view, gap) && share >= CAST_SKIP_SHARE {
+            most += w * share;
+        }
+    }
+    let total = max(den, SG_PI * radiance);
+    let reach = most / max(total, vec3<f32>(1e-30));
+    if !(max(reach.x, max(reach.y, reach.z)) >= CAST_TOLERANCE) {
+        return vec3<f32>(1.0);
+    }
+    var blocked = vec3<f32>(0.0);
+    var prepared = false;
+    for (var k = 0u; k < m; k++) {
+        let p = sg_product(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), cosine);
+        let gap = cast_cos_gap(view, p.direction);
+        let share = sphere_share(view, p, gap);
+        if clears_sphere(view, gap) || share < CAST_SKIP_SHARE {
+            continue;
+        }
         var q = 1.0;
-        let share = sphere_share(x, p);
-        if !clears_sphere(x, p.direction) && share >= CAST_SKIP_SHARE && k >= first_direct {
+        if k >= first_direct {
             q = cast_direct_visibility(x, k - first_direct, pc.direct_rays);
-        } else if !clears_sphere(x, p.direction) && share >= CAST_SKIP_SHARE {
+        } else {
             if !prepared {
                 ssdf_prepare(ssdf_to_object_point(x));
                 prepared = true;
             }
             q = max(fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness), 1.0 - share);
         }
+        let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
         blocked += w * (1.0 - q);
     }
-    let total = max(den, SG_PI * radiance);
     if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {
         // The bounce, its light from below x's plane at x's own ratio
         // before it (runtime.rs cast_shadow_factor: the field the object's

@@ -33,7 +33,13 @@ var<private> ssdf_coef: array<f32, SSDF_MAX_COMPONENTS>;
 // 0 inside, 1 outside (nearest node), 2 outside in infinity mode.
 var<private> ssdf_state: u32;
 var<private> ssdf_x: vec3<f32>;
-var<private> ssdf_xb: vec3<f32>;
+// Outside in the correct mode, what depends on the point alone: the unit
+// directions to the grid's centre from it (cf) and from its nearest node
+// (cb), the ratio of the sphere's angular radii seen from them, and the
+// rotation taking cf to cb (its axis cf × cb and cosine).
+var<private> ssdf_cf: vec3<f32>;
+var<private> ssdf_cb: vec3<f32>;
+var<private> ssdf_shrink: f32;
 
 // The object's world-space bounding sphere (centre, radius).
 fn ssdf_world_sphere() -> vec4<f32> {
@@ -96,7 +102,14 @@ fn ssdf_prepare(x: vec3<f32>) {
     }
     ssdf_state = 1u;
     let n = vec3<u32>(clamp(round(l), vec3<f32>(0.0), vec3<f32>(top)));
-    ssdf_xb = ssdf_node_position(n);
+    let xb = ssdf_node_position(n);
+    let o = ssdf.grid.xyz;
+    let r = ssdf.grid.w;
+    let df = length(o - x);
+    let db = length(o - xb);
+    ssdf_cf = (o - x) / df;
+    ssdf_cb = (o - xb) / db;
+    ssdf_shrink = asin(min(r / df, 1.0)) / asin(min(r / db, 1.0));
     let node = ssdf_node_index(n);
     for (var c = 0u; c < k; c++) {
         ssdf_coef[c] = ssdf_coefs[node * k + c];
@@ -156,13 +169,9 @@ fn ssdf_value(d: vec3<f32>) -> f32 {
     if ssdf_state == 0u || ssdf.dims.w == 0u {
         return ssdf_direction_value(d);
     }
-    let o = ssdf.grid.xyz;
-    let r = ssdf.grid.w;
-    let df = length(o - ssdf_x);
-    let db = length(o - ssdf_xb);
-    let cf = (o - ssdf_x) / df;
-    let cb = (o - ssdf_xb) / db;
-    let shrink = asin(min(r / df, 1.0)) / asin(min(r / db, 1.0));
+    let cf = ssdf_cf;
+    let cb = ssdf_cb;
+    let shrink = ssdf_shrink;
     let alpha = ssdf_angle_between(d, cf);
     // The smallest rotation taking cf to cb, applied to d.
     let axis = cross(cf, cb);

@@ -19,5 +19,5 @@ pub use fh::{fh_exact, hemisphere_integral, FhTable};
 pub use gpu::{object_block, shadow_defines, GpuFhTable, GpuSsdf, SsdfBindings};
 pub use runtime::{
     cast_shadow_factor, field_normal, self_shadow_factors, shadow_point, sphere_clear_of,
-    sphere_share, world_ssdf, ShadowPoint, CAST_SKIP_SHARE, HORIZON_FLOOR,
+    sphere_share, world_ssdf, ShadowPoint, SphereView, CAST_SKIP_SHARE, HORIZON_FLOOR,
 };

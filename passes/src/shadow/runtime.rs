@@ -106,6 +106,12 @@ pub const HORIZON_FLOOR: f64 = 1e-6;
 /// the SSDF (`CAST_SKIP_SHARE` in the shader).
 pub const CAST_SKIP_SHARE: f64 = 1e-3;
 
+/// Where the object can block less than this share of a point's light
+/// (Σ_k w_k × its share bound, over the irradiance), the point is left
+/// unshadowed without the SSDF or any ray: ρ is then off by at most this
+/// (`CAST_TOLERANCE` in the shader).
+pub const CAST_TOLERANCE: f64 = 1e-3;
+
 /// The largest share of the hemisphere energy of lobe `p` (a light lobe
 /// times the cosine) that the sphere (`c`, `r`) can block seen from `x`:
 /// the lobe's largest value over the sphere's cone times the cone's solid
@@ -119,32 +125,90 @@ pub const CAST_SKIP_SHARE: f64 = 1e-3;
 /// it at the sphere: ROOM's monkey fills 0.43 of its sphere's disc, and
 /// with the whole sphere's bound ROOM's far field was 1.24 % darker where
 /// Cycles' is 0.27 % brighter (the bounce on, docs/fidelity.md).
-/// 1 from inside the sphere.
+/// 1 from inside the sphere. One point's view of the sphere serves all
+/// its lobes: [`SphereView`].
 pub fn sphere_share(x: DVec3, p: &Sg64, c: DVec3, r: f64, fill: f64) -> f64 {
-    let to = c - x;
-    let dist = to.length();
-    if dist <= r {
-        return 1.0;
-    }
-    let sin2 = (r / dist).powi(2);
-    let beta = (r / dist).asin();
-    let gamma = crate::ssdf::silhouette::angle_between(p.direction, to / dist);
-    let peak = (p.sharpness * ((gamma - beta).max(0.0).cos() - 1.0)).exp();
-    let solid = 4.0 * std::f64::consts::PI * (0.5 * beta).sin().powi(2);
-    let covered = fill + (1.0 - fill) * sin2;
-    (peak * solid * covered / hemisphere_integral(p.sharpness)).min(1.0)
+    SphereView::new(x, c, r, fill).share(p)
 }
 
 /// Whether the bounding sphere `(c, r)` seen from `x` lies at least a
 /// quarter turn from `dir` (then S ≥ π/2 along it and nothing is blocked).
 pub fn sphere_clear_of(x: DVec3, dir: DVec3, c: DVec3, r: f64) -> bool {
-    let to = c - x;
-    let dist = to.length();
-    if dist <= r {
-        return false;
+    SphereView::new(x, c, r, 0.0).clear_of(dir)
+}
+
+/// The object's bounding sphere seen from one point, what
+/// [`sphere_share`] and [`sphere_clear_of`] need of it for any lobe: its
+/// direction u, its angular radius β (as cos β, sin β = r/d), the cone's
+/// solid angle 2π(1 − cos β) and the share of it the mesh covers. Per lobe
+/// of axis p, γ = ∠(p, u) enters as cos(max(γ − β, 0)) = cos γ cos β +
+/// sin γ sin β (1 where γ ≤ β): no inverse trigonometry per lobe. Mirrored
+/// by `CastSphere` in `shaders/shadow/cast_body.wgsl`.
+#[derive(Debug, Clone, Copy)]
+pub struct SphereView {
+    /// Unit direction from the point to the centre.
+    pub u: DVec3,
+    /// cos β.
+    pub cos_beta: f64,
+    /// sin β = r / distance.
+    pub sin_beta: f64,
+    /// Solid angle × covered share (0 inside).
+    pub covered_solid: f64,
+    /// Whether the point is inside the sphere.
+    pub inside: bool,
+}
+
+impl SphereView {
+    /// The sphere (`c`, `r`) from `x`, the mesh covering `fill` of its disc
+    /// far away.
+    pub fn new(x: DVec3, c: DVec3, r: f64, fill: f64) -> Self {
+        let to = c - x;
+        let dist = to.length();
+        if dist <= r {
+            return Self {
+                u: DVec3::Y,
+                cos_beta: 0.0,
+                sin_beta: 1.0,
+                covered_solid: 0.0,
+                inside: true,
+            };
+        }
+        let sin_beta = r / dist;
+        let cos_beta = (1.0 - sin_beta * sin_beta).max(0.0).sqrt();
+        let solid = 2.0 * std::f64::consts::PI * (1.0 - cos_beta);
+        let covered = fill + (1.0 - fill) * sin_beta * sin_beta;
+        Self {
+            u: to / dist,
+            cos_beta,
+            sin_beta,
+            covered_solid: solid * covered,
+            inside: false,
+        }
     }
-    let cone = (r / dist).asin();
-    crate::ssdf::silhouette::angle_between(dir, to / dist) - cone >= std::f64::consts::FRAC_PI_2
+
+    /// cos(max(γ − β, 0)) for a lobe of unit axis `dir`.
+    fn cos_gap(&self, dir: DVec3) -> f64 {
+        let cos_gamma = dir.dot(self.u).clamp(-1.0, 1.0);
+        if cos_gamma >= self.cos_beta {
+            return 1.0;
+        }
+        let sin_gamma = (1.0 - cos_gamma * cos_gamma).max(0.0).sqrt();
+        cos_gamma * self.cos_beta + sin_gamma * self.sin_beta
+    }
+
+    /// [`sphere_share`] of lobe `p`.
+    pub fn share(&self, p: &Sg64) -> f64 {
+        if self.inside {
+            return 1.0;
+        }
+        let peak = (p.sharpness * (self.cos_gap(p.direction) - 1.0)).exp();
+        (peak * self.covered_solid / hemisphere_integral(p.sharpness)).min(1.0)
+    }
+
+    /// [`sphere_clear_of`] along `dir`: γ − β ≥ π/2.
+    pub fn clear_of(&self, dir: DVec3) -> bool {
+        !self.inside && self.cos_gap(dir) <= 0.0
+    }
 }
 
 /// ρ (per channel) at world point `x` with unit normal `n` under `lobes`,
@@ -160,7 +224,9 @@ pub fn sphere_clear_of(x: DVec3, dir: DVec3, c: DVec3, r: f64) -> bool {
 /// light the object sends back ([`super::bounce_irradiance`] with its
 /// silhouette reflectance, `object`, its light from below `x`'s plane at
 /// `x`'s ratio before it; zero fill and albedo give the paper's black
-/// occluder) offsets the blocked light, never beyond it.
+/// occluder) offsets the blocked light, never beyond it. Where the object
+/// can block under [`CAST_TOLERANCE`] of the light, ρ = 1 without the SSDF
+/// or any ray.
 #[allow(clippy::too_many_arguments)]
 pub fn cast_shadow_factor(
     field: &SsdfField,
@@ -174,26 +240,68 @@ pub fn cast_shadow_factor(
     direct: Option<DirectOcclusion<'_>>,
     object: &super::ObjectReflectance,
 ) -> DVec3 {
+    cast_shadow_factor_within(
+        field,
+        placed,
+        table,
+        lobes,
+        (x, n, radiance),
+        mode,
+        direct,
+        object,
+        CAST_TOLERANCE,
+    )
+}
+
+/// [`cast_shadow_factor`] at point, normal and radiance `at`, leaving a
+/// point unshadowed where the object can block under `tolerance` of its
+/// light (0: never).
+#[allow(clippy::too_many_arguments)]
+pub fn cast_shadow_factor_within(
+    field: &SsdfField,
+    placed: &PlacedObject,
+    table: &FhTable,
+    lobes: &[Sg64],
+    (x, n, radiance): (DVec3, DVec3, DVec3),
+    mode: OutsideMode,
+    direct: Option<DirectOcclusion<'_>>,
+    object: &super::ObjectReflectance,
+    tolerance: f64,
+) -> DVec3 {
     let cosine = Sg64::clamped_cosine(n);
     let (c, r) = placed.sphere();
+    let view = SphereView::new(x, c, r, object.fill);
     let first = direct.map_or(lobes.len(), |d| d.first(lobes.len()));
-    let (mut blocked, mut den) = (DVec3::ZERO, DVec3::ZERO);
-    for (k, g) in lobes.iter().enumerate() {
-        let p = g.product(&cosine);
-        let w = p.amplitude * hemisphere_integral(p.sharpness);
-        den += w;
-        let share = sphere_share(x, &p, c, r, object.fill);
-        let q = if sphere_clear_of(x, p.direction, c, r) || share < CAST_SKIP_SHARE {
-            1.0
-        } else if let Some(d) = direct.filter(|_| k >= first) {
+    let products: Vec<Sg64> = lobes.iter().map(|g| g.product(&cosine)).collect();
+    let weight = |p: &Sg64| p.amplitude * hemisphere_integral(p.sharpness);
+    let blockable = |p: &Sg64| {
+        let share = view.share(p);
+        (!view.clear_of(p.direction) && share >= CAST_SKIP_SHARE).then_some(share)
+    };
+    // The irradiance, and the most the object can block of it (w × share
+    // bounds each lobe's w (1 − q)): under CAST_TOLERANCE of the light, ρ = 1.
+    let den: DVec3 = products.iter().map(weight).sum();
+    let most: DVec3 = products
+        .iter()
+        .filter_map(|p| blockable(p).map(|share| weight(p) * share))
+        .sum();
+    let total = den.max(std::f64::consts::PI * radiance);
+    if (most / total.max(DVec3::splat(1e-300))).max_element() < tolerance {
+        return DVec3::ONE;
+    }
+    let mut blocked = DVec3::ZERO;
+    for (k, p) in products.iter().enumerate() {
+        let Some(share) = blockable(p) else {
+            continue;
+        };
+        let q = if let Some(d) = direct.filter(|_| k >= first) {
             d.clear_fraction(placed, x, k - first, None)
         } else {
             let s = world_ssdf(field, placed, x, p.direction, mode);
             (table.fraction(s as f32, p.sharpness as f32) as f64).max(1.0 - share)
         };
-        blocked += w * (1.0 - q);
+        blocked += weight(p) * (1.0 - q);
     }
-    let total = den.max(std::f64::consts::PI * radiance);
     if blocked.max_element() > 0.0 {
         // x's own ratio before the bounce: the bounce's light from below
         // x's plane is the field around x, shadowed about as deeply
@@ -281,6 +389,137 @@ mod tests {
     use crate::geometry::{Aabb, Ray};
     use crate::march::MarchKnobs;
     use glam::UVec3;
+
+    /// The sphere's view from a point equals the inverse-trigonometric
+    /// form it replaced: β = asin(r/d), γ = ∠(p, c − x), share from
+    /// cos(max(γ − β, 0)), clear where γ − β ≥ π/2.
+    #[test]
+    fn sphere_view_matches_the_angles() {
+        let mut rng = crate::rng::Pcg32::new(3, 9);
+        let (c, r) = (DVec3::new(0.2, 0.5, -0.1), 0.3);
+        for _ in 0..2000 {
+            let x = c + crate::ssdf::tests::random_direction(&mut rng) * (4.0 * r * rng.next_f64());
+            let p = Sg64 {
+                direction: crate::ssdf::tests::random_direction(&mut rng),
+                sharpness: 10f64.powf(4.0 * rng.next_f64() - 1.0),
+                amplitude: DVec3::ONE,
+            };
+            let fill = rng.next_f64();
+            let view = SphereView::new(x, c, r, fill);
+            let to = c - x;
+            let dist = to.length();
+            if dist <= r {
+                assert!(view.inside && view.share(&p) == 1.0 && !view.clear_of(p.direction));
+                continue;
+            }
+            let beta = (r / dist).asin();
+            let gamma = p.direction.dot(to / dist).clamp(-1.0, 1.0).acos();
+            let peak = (p.sharpness * ((gamma - beta).max(0.0).cos() - 1.0)).exp();
+            let solid = 4.0 * std::f64::consts::PI * (0.5 * beta).sin().powi(2);
+            let covered = fill + (1.0 - fill) * (r / dist).powi(2);
+            let share = (peak * solid * covered / hemisphere_integral(p.sharpness)).min(1.0);
+            assert!((view.share(&p) - share).abs() <= 1e-9 * share.max(1e-300) + 1e-15);
+            let clear = gamma - beta >= std::f64::consts::FRAC_PI_2;
+            if (gamma - beta - std::f64::consts::FRAC_PI_2).abs() > 1e-9 {
+                assert_eq!(view.clear_of(p.direction), clear);
+            }
+        }
+    }
+
+    /// Leaving unshadowed the points where the object can block under the
+    /// tolerance of the light moves ρ by at most the tolerance, and only
+    /// there: a sphere's exact SSDF (S = ∠(d, c − x) − asin(r/|c − x|)),
+    /// a sun, a broad lobe and a sky, floor points out to 25 radii.
+    #[test]
+    fn the_cast_tolerance_bounds_the_change() {
+        use crate::probe::{DirectionMap, MapKind};
+        let mesh = crate::ssdf::tests::bundled_mesh("metal-sphere.gltf");
+        let placed = PlacedObject {
+            name: "ball".into(),
+            mesh: mesh.clone(),
+            pose: Default::default(),
+            material: Default::default(),
+        };
+        let (c, r) = placed.sphere();
+        let grid = crate::ssdf::grid_for(&mesh, 8);
+        let map = DirectionMap::new(MapKind::Octahedral, 16);
+        let mut values = Vec::new();
+        for i in 0..grid.count() {
+            let x = grid.position_of(i);
+            for t in 0..map.texels() as u32 {
+                let d = map.direction(t % map.width, t / map.width);
+                let to = c - x;
+                let dist = to.length().max(1.0001 * r);
+                let s = d.dot(to.normalize()).clamp(-1.0, 1.0).acos() - (r / dist).asin();
+                values.push(s as f32);
+            }
+        }
+        let samples = crate::ssdf::SsdfSamples {
+            grid,
+            directions: 16,
+            values,
+            object: mesh.geometry_key(),
+            seconds: 0.0,
+        };
+        let field = SsdfField::compress(&samples, 8);
+        let table = FhTable::new();
+        let object = super::super::ObjectReflectance::measure(&mesh);
+        let lobes = [
+            Sg64 {
+                direction: DVec3::new(0.3, 1.0, 0.2).normalize(),
+                sharpness: 120.0,
+                amplitude: DVec3::splat(300.0),
+            },
+            Sg64 {
+                direction: DVec3::new(-0.5, 0.6, 0.1).normalize(),
+                sharpness: 3.0,
+                amplitude: DVec3::new(2.0, 1.5, 1.0),
+            },
+            Sg64 {
+                direction: DVec3::Y,
+                sharpness: 0.5,
+                amplitude: DVec3::new(0.3, 0.4, 0.6),
+            },
+        ];
+        let mut rng = crate::rng::Pcg32::new(5, 2);
+        let (mut skipped, mut shadowed) = (0, 0);
+        for _ in 0..3000 {
+            let [u, v] = rng.next_2d();
+            let (rad, phi) = (r * (1.0 + 24.0 * u * u), 2.0 * std::f64::consts::PI * v);
+            let x = DVec3::new(c.x + rad * phi.cos(), c.y - r, c.z + rad * phi.sin());
+            let at = (x, DVec3::Y, DVec3::splat(0.2));
+            let rho = |tol| {
+                cast_shadow_factor_within(
+                    &field,
+                    &placed,
+                    &table,
+                    &lobes,
+                    at,
+                    OutsideMode::Correct,
+                    None,
+                    &object,
+                    tol,
+                )
+            };
+            let (exact, within) = (rho(0.0), rho(CAST_TOLERANCE));
+            if within == DVec3::ONE && exact != DVec3::ONE {
+                skipped += 1;
+                assert!(
+                    (DVec3::ONE - exact).max_element() <= CAST_TOLERANCE,
+                    "{x}: {exact}"
+                );
+            } else {
+                assert_eq!(within, exact, "{x}");
+            }
+            if exact.max_element() < 0.9 {
+                shadowed += 1;
+            }
+        }
+        assert!(
+            skipped > 300 && shadowed > 20,
+            "{skipped} skipped, {shadowed} shadowed"
+        );
+    }
 
     /// A pane of thin glass (optical depth about 0.3 across) at y 0.6–0.64 above an
     /// opaque floor (y < 0.2), seen from above: D̂/Ô lies in the air between
