@@ -195,19 +195,27 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
             .any(|p| p == "probe-trace" || p == "sg-fit" || p == "direct-light"),
         "{executed:?}"
     );
-    // The object moves, or the lighting changes: a warm update.
+    // The object moves, or the lighting changes: a warm update, two of its
+    // four iterations in the frame (`frame_iterations`), the other two in
+    // the next with the fit continued on the same probe, then nothing.
     for (c, v) in [(centre + DVec3::X * 0.05, 0), (centre + DVec3::X * 0.05, 1)] {
         let (work, executed) = frame(&mut light, c, v);
         assert_eq!(
             work,
             LightingWork::Update {
                 start: FitStart::Warm,
-                iterations: 4
+                iterations: 2
             }
         );
         assert!(executed.iter().any(|p| p == "sg-fit"));
+        let (work, executed) = frame(&mut light, c, v);
+        assert_eq!(work, LightingWork::Continue { iterations: 2 });
+        assert!(executed.iter().any(|p| p == "sg-fit"));
+        assert!(!executed.iter().any(|p| p == "probe-trace"), "{executed:?}");
         let r = light.fit.read_report().unwrap();
         assert!(!r.started_cold && r.relative_residual() <= 1.1 * gpu.relative_residual() + 0.01);
+        assert_eq!(r.costs.len(), 5, "four iterations over two frames");
+        assert_eq!(frame(&mut light, c, v).0, LightingWork::Reuse);
     }
 }
 

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use inlay_engine::{vk, Context, Image, ImageDesc};
 use inlay_passes::probe::{DirectionMap, MapKind, PROBE_FORMAT};
-use inlay_passes::sg::Sg64;
+use inlay_passes::sg::{Sg32, Sg64};
 use inlay_passes::sgfit::model::{self, MAX_SHARPNESS, MIN_SHARPNESS};
 use inlay_passes::sgfit::{
     fit_reference, FitKnobs, FitReport, FitStart, ProbeSamples, SgFitPass, Start,
@@ -308,7 +308,7 @@ fn warm_starts_from_extreme_lobes_and_after_a_jump() {
     assert!(!warm.started_cold);
     // Where the f64 reference goes from the same lobes, and far better than
     // the same iterations from the cold start.
-    let prev: Vec<Sg64> = r.lobes.iter().map(|g| g.to_f64()).collect();
+    let prev: Vec<Sg64> = r.iterate.iter().map(|g| g.to_f64()).collect();
     let moved_samples = samples_of(&map, &moved);
     let cpu = fit_reference(&moved_samples, fit.knobs(), Start::Warm(&prev), 4);
     let cold = fit_reference(&moved_samples, fit.knobs(), Start::Cold, 4);
@@ -372,4 +372,50 @@ fn many_lobes_take_the_reference_steps() {
             );
         }
     }
+}
+
+/// A warm update spread over frames (2 iterations, then the fit continued
+/// three times) ends on the lobes of the same update run whole: the same
+/// iterate and the same shading lobes, up to f32 rounding (measured equal).
+#[test]
+fn a_fit_spread_over_frames_reaches_the_same_lobes() {
+    let ctx = common::gpu();
+    let (fit, map) = small_fit(&ctx);
+    let texels = texels_of(&map, &sky_and_sun(), |_, t| t);
+    let moved = texels_of(&map, &sky_and_sun(), |i, t| {
+        [t[0] * 1.1, t[1] * (1.0 + 0.01 * (i % 7) as f32), t[2], 1.0]
+    });
+    let run = |chunks: &[u32]| {
+        gpu_fit(&ctx, &fit, &map, &texels, FitStart::Cold, 12);
+        let mut r = gpu_fit(&ctx, &fit, &map, &moved, FitStart::Warm, chunks[0]);
+        for &n in &chunks[1..] {
+            r = gpu_fit(&ctx, &fit, &map, &moved, FitStart::Continue, n);
+        }
+        r
+    };
+    let whole = run(&[8]);
+    let spread = run(&[2, 2, 2, 2]);
+    assert!(!whole.started_cold && whole.accepted >= 2, "{whole:?}");
+    assert_eq!(spread.accepted, whole.accepted);
+    assert_eq!(spread.costs.len(), whole.costs.len());
+    let close = |a: &[Sg32], b: &[Sg32]| {
+        a.iter().zip(b).all(|(x, y)| {
+            (x.direction - y.direction).length() < 1e-5
+                && (x.sharpness / y.sharpness - 1.0).abs() < 1e-5
+                && (x.amplitude - y.amplitude).abs().max_element()
+                    <= 1e-5 * y.amplitude.max_element().max(1e-3)
+        })
+    };
+    assert!(
+        close(&spread.iterate, &whole.iterate),
+        "{spread:?}\n{whole:?}"
+    );
+    assert!(close(&spread.lobes, &whole.lobes));
+    // Continued from where it stopped, not from the shading lobes: the
+    // cost never rises across the frames.
+    assert!(
+        spread.costs.windows(2).all(|w| w[1] <= w[0]),
+        "{:?}",
+        spread.costs
+    );
 }

@@ -319,7 +319,7 @@ fn compare_cast_shadow(
         ..scene.march
     };
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
-    let cast = CastShadowPass::new(&ctx, &lib, march_knobs).unwrap();
+    let cast = CastShadowPass::new(&ctx, &lib, march_knobs, 1).unwrap();
     let desc = |format| ImageDesc {
         width: w,
         height: h,
@@ -434,6 +434,102 @@ fn compare_cast_shadow(
         sampled: brute.len(),
         shadowed: brute.iter().filter(|(_, t)| t.y < 0.9).count(),
     }
+}
+
+/// At half resolution (`[shadows] cast_scale = 2`): each block's ρ is the
+/// full-resolution pass's at the block's source pixel (the same kernel at
+/// the same point: 1e-6), and `shadow-upsample` is its f64 mirror
+/// (`shadow::upsample_shadow`, 1e-5: f32 weights).
+#[test]
+fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
+    use inlay_passes::shadow::upsample::{low_size, source_pixel};
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let scene = common::bundled_scene("books.toml");
+    let grid_field = common::bake_small(&scene, 64, 2, 0);
+    let gpu_field = GpuGridField::upload(&ctx, &grid_field).unwrap();
+    let placed: PlacedObject = scene.objects[0].clone();
+    let field = Arc::new(small_field(&ctx, &placed.mesh, 8, 16));
+    let ssdf = GpuSsdf::upload(&ctx, field, &placed.mesh).unwrap();
+    let fh = GpuFhTable::new(&ctx).unwrap();
+    let lobes = test_lobes();
+    let lobe_buf = lobe_buffer(&ctx, &lobes);
+    let (c, _) = placed.sphere();
+    let spec = CameraSpec {
+        name: None,
+        position: c + DVec3::new(0.0, 0.5, 0.45),
+        look_at: c - DVec3::new(0.0, 0.1, 0.0),
+        up: DVec3::Y,
+        fov_y: 40.0,
+    };
+    let (w, h) = (47u32, 35u32);
+    let (lw, lh) = low_size(w, h, 2);
+    let cam = CameraFrame::new(&spec, w, h);
+    let march_knobs = MarchKnobs {
+        skip_empty: false,
+        ..scene.march
+    };
+    let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
+    let full = CastShadowPass::new(&ctx, &lib, march_knobs, 1).unwrap();
+    let half = CastShadowPass::new(&ctx, &lib, march_knobs, 2).unwrap();
+    assert!(CastShadowPass::new(&ctx, &lib, march_knobs, 9).is_err());
+    let desc = |width, height, format| ImageDesc {
+        width,
+        height,
+        format,
+    };
+    let rb = [
+        Readback::new(&ctx, desc(w, h, MARCH_COLOUR_FORMAT)).unwrap(),
+        Readback::new(&ctx, desc(w, h, MARCH_DEPTH_FORMAT)).unwrap(),
+        Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
+        Readback::new(&ctx, desc(lw, lh, SHADOW_FORMAT)).unwrap(),
+        Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
+    ];
+    common::run_frame(&ctx, |graph| {
+        let m = march.add(graph, &gpu_field, &cam, None);
+        let light = LightLobes {
+            buffer: graph.import_buffer(&lobe_buf, None),
+            count: lobes.len() as u32,
+            direct: None,
+        };
+        let table = fh.import(graph);
+        let records = ObjectRecords::upload(graph, [&placed]);
+        let s = ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct);
+        let reference = full.add(graph, &gpu_field, &cam, &m, light, table, s, None);
+        let low = half.add(graph, &gpu_field, &cam, &m, light, table, s, None);
+        let up = half.finish(graph, &cam, &m, low);
+        rb[0].add_to_graph(graph, m.colour_opacity);
+        rb[1].add_to_graph(graph, m.depth);
+        rb[2].add_to_graph(graph, reference);
+        rb[3].add_to_graph(graph, low);
+        rb[4].add_to_graph(graph, up);
+    });
+    let [colour, depth, reference, low, up] = rb.map(|r| r.read().unwrap());
+    let rgb = |p: &[f32; 4]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    let mut shadowed = 0;
+    for y in 0..lh {
+        for x in 0..lw {
+            let (sx, sy) = source_pixel(x, y, 2, w, h);
+            let a = rgb(&low.pixels[(y * lw + x) as usize]);
+            let b = rgb(&reference.pixels[(sy * w + sx) as usize]);
+            assert!((a - b).abs().max_element() < 1e-6, "({x}, {y}): {a} vs {b}");
+            shadowed += (a.y < 0.9) as u32;
+        }
+    }
+    assert!(shadowed >= 3, "{shadowed} shadowed blocks");
+    let z: Vec<Option<f64>> = colour
+        .pixels
+        .iter()
+        .zip(&depth.pixels)
+        .map(|(c, d)| (c[3] > 1e-4).then(|| d[0] as f64 / c[3] as f64))
+        .collect();
+    let low_rho: Vec<DVec3> = low.pixels.iter().map(rgb).collect();
+    let mirror = inlay_passes::shadow::upsample_shadow(&low_rho, &z, w, h, 2);
+    for (i, m) in mirror.iter().enumerate() {
+        let g = rgb(&up.pixels[i]);
+        assert!((g - *m).abs().max_element() < 1e-5, "pixel {i}: {g} vs {m}");
+    }
+    common::assert_no_validation_errors(&ctx);
 }
 
 /// The cast shadow under a sun, a broad lobe and a sky, all from the SSDF.

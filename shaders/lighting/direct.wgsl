@@ -26,7 +26,9 @@ struct DirectPush {
     // 1: shade the sharp lobes and the lights of known emission; 0: the
     // environment is off, write them black.
     environment: u32,
-    pad1: u32,
+    // 1: copy the fitted lobes alone (a fit continued with the object
+    // still; the rest stands).
+    fitted_only: u32,
 }
 
 var<immediate> pc: DirectPush;
@@ -85,7 +87,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         lights[2u * i + 1u] = fitted_lobes[2u * i + 1u];
         return;
     }
-    if i >= pc.fitted + pc.sharp + pc.local {
+    if i >= pc.fitted + pc.sharp + pc.local || pc.fitted_only != 0u {
         return;
     }
     if i >= pc.fitted + pc.sharp {

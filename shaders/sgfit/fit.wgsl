@@ -4,16 +4,18 @@
 // successive dispatches):
 //   filter_probe (texels / 64) the probe filtered by passes/src/sgfit/probe_filter.rs's
 //                              matrix, with each texel's solid angle, into `fitted`
-//   init_cold (M groups)       cold-start lobes into slot 1
-//   cost (slot 1 [, slot 0])   partial sums of the cost of a slot's lobes
-//   select (1 thread)          warm lobes (slot 0) or the cold start, state reset
+//   a fresh fit:
+//     init_cold (M groups)     cold-start lobes into the candidate slot
+//     cost (candidate [, current]) partial sums of the cost of a slot's lobes
+//     select (1 thread)        warm lobes (current) or the cold start, state reset
+//   or a fit continued from an earlier frame: resume (1 thread)
 //   per iteration: texel_features, gram_blocks, assemble (the normal equations from
-//                              the features' Gram matrix), solve, cost (slot 1), decide.
-//   conserve_energy (M groups), finish_energy (1 thread): the lobes' amplitudes
-//                              set to hold the probe's energy (energy.rs)
-// The lobe buffer holds two slots (0: current, 1: candidate) of M lobes,
-// two vec4 each. `state` holds the scalars listed below and the cost after
-// every iteration.
+//                              the features' Gram matrix), solve, cost (candidate), decide.
+//   conserve_energy (M groups): the current lobes with amplitudes that hold
+//                              the probe's energy (energy.rs), into the shading slot.
+// The lobe buffer holds three slots of M lobes (SLOT_*), two vec4 each.
+// `state` holds the scalars listed below and the cost after every
+// iteration.
 #include "common/sg.wgsl"
 #include "common/direction_map.wgsl"
 #include "common/tangent_basis.wgsl"
@@ -78,6 +80,13 @@ struct FitState {
     // The cost at the start and after each iteration: MAX_ITERATIONS + 1.
     log: array<f32, 257>,
 }
+
+// The lobe buffer's slots of M lobes: the shading lobes (what the frame
+// reads, the iterate with its energy conserved), the fit's current iterate,
+// and the candidate step.
+const SLOT_SHADING: u32 = 0u;
+const SLOT_CURRENT: u32 = 1u;
+const SLOT_CANDIDATE: u32 = 2u;
 
 const DAMPING_DOWN: f32 = 0.333333333;
 const DAMPING_UP: f32 = 4.0;
@@ -145,7 +154,7 @@ fn store_lobe(slot: u32, k: u32, g: Sg) {
 
 fn copy_candidate_to_current() {
     for (var k = 0u; k < pc.lobe_count; k++) {
-        store_lobe(0u, k, lobe(1u, k));
+        store_lobe(SLOT_CURRENT, k, lobe(SLOT_CANDIDATE, k));
     }
 }
 
@@ -259,22 +268,23 @@ fn init_cold(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) w
         if red_a[0] > 0.0 {
             amplitude = red_v[0] / red_a[0];
         }
-        store_lobe(1u, k, Sg(g.direction, g.sharpness, amplitude));
+        store_lobe(SLOT_CANDIDATE, k, Sg(g.direction, g.sharpness, amplitude));
     }
 }
 
 // ---- energy -----------------------------------------------------------------
 
-// Lobe k (workgroup k) of slot 0 with its amplitude set to its share of the
-// probe's energy, Σ_t Ω_t L_t G_k(v_t) / Σ_j G_j(v_t), over its integral,
-// into slot 1 (mirrors passes/src/sgfit/energy.rs); `finish_energy` copies
-// slot 1 to slot 0 once every workgroup has read slot 0.
+// Lobe k (workgroup k) of the current lobes with its amplitude set to its
+// share of the probe's energy, Σ_t Ω_t L_t G_k(v_t) / Σ_j G_j(v_t), over
+// its integral, into the shading slot (mirrors passes/src/sgfit/energy.rs):
+// the iterate itself stays as the fit left it, so a fit continued next
+// frame goes on from where it stopped.
 @compute @workgroup_size(64, 1, 1)
 fn conserve_energy(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let k = wg.x;
     let n = texel_count();
     let size = vec2<u32>(pc.width, pc.height);
-    let g = lobe(0u, k);
+    let g = lobe(SLOT_CURRENT, k);
     var share = vec3<f32>(0.0);
     for (var t = lid; t < n; t += 64u) {
         let l = fit_radiance(t);
@@ -284,7 +294,7 @@ fn conserve_energy(@builtin(local_invocation_index) lid: u32, @builtin(workgroup
         let v = dm_direction(texel_xy(t), size);
         var sum = vec3<f32>(0.0);
         for (var j = 0u; j < pc.lobe_count; j++) {
-            sum += sg_eval(lobe(0u, j), v);
+            sum += sg_eval(lobe(SLOT_CURRENT, j), v);
         }
         let mine = sg_eval(g, v);
         share += fit_weight(t) * l * select(vec3<f32>(0.0), mine / sum, sum > vec3<f32>(0.0));
@@ -298,13 +308,8 @@ fn conserve_energy(@builtin(local_invocation_index) lid: u32, @builtin(workgroup
         workgroupBarrier();
     }
     if lid == 0u {
-        store_lobe(1u, k, Sg(g.direction, g.sharpness, red_v[0] / sg_sphere_factor(g.sharpness)));
+        store_lobe(SLOT_SHADING, k, Sg(g.direction, g.sharpness, red_v[0] / sg_sphere_factor(g.sharpness)));
     }
-}
-
-@compute @workgroup_size(1, 1, 1)
-fn finish_energy() {
-    copy_candidate_to_current();
 }
 
 // ---- cost -------------------------------------------------------------------
@@ -348,14 +353,14 @@ fn cost(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
         workgroupBarrier();
     }
     if lid == 0u {
-        partials[pc.slot * pc.groups + wg.x] = vec4<f32>(red_a[0], red_b[0], red_c[0], 0.0);
+        partials[(pc.slot - 1u) * pc.groups + wg.x] = vec4<f32>(red_a[0], red_b[0], red_c[0], 0.0);
     }
 }
 
 fn sum_partials(slot: u32) -> vec4<f32> {
     var s = vec4<f32>(0.0);
     for (var g = 0u; g < pc.groups; g++) {
-        s += partials[slot * pc.groups + g];
+        s += partials[(slot - 1u) * pc.groups + g];
     }
     return s;
 }
@@ -366,11 +371,11 @@ fn sum_partials(slot: u32) -> vec4<f32> {
 // than the cold start, else from the cold start; resets the state.
 @compute @workgroup_size(1, 1, 1)
 fn select_start() {
-    let cold = sum_partials(1u);
+    let cold = sum_partials(SLOT_CANDIDATE);
     var warm_cost = -1.0;
     var use_warm = false;
     if pc.warm != 0u {
-        warm_cost = sum_partials(0u).x;
+        warm_cost = sum_partials(SLOT_CURRENT).x;
         use_warm = fit_finite(warm_cost) && warm_cost <= cold.x;
     }
     if !use_warm {
@@ -417,7 +422,7 @@ fn texel_features(@builtin(global_invocation_id) id: vec3<u32>) {
     let sw = sqrt(fit_weight(t));
     var model = vec3<f32>(0.0);
     for (var k = 0u; k < m; k++) {
-        let g = lobe(0u, k);
+        let g = lobe(SLOT_CURRENT, k);
         let e = sg_weight(g, v);
         model += g.amplitude * e;
         let b = tangent_basis(g.direction);
@@ -489,7 +494,7 @@ fn assemble(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let k = i / 6u;
     let ii = i % 6u;
-    let gk = lobe(0u, k);
+    let gk = lobe(SLOT_CURRENT, k);
     let fi = param_feature(k, ii);
     var value = 0.0;
     if j == p {
@@ -503,7 +508,7 @@ fn assemble(@builtin(global_invocation_id) id: vec3<u32>) {
     } else {
         let l = j / 6u;
         let jj = j % 6u;
-        let gl = lobe(0u, l);
+        let gl = lobe(SLOT_CURRENT, l);
         let g = gram_at(fi, param_feature(l, jj));
         if ii < 3u && jj < 3u {
             value = select(0.0, 4.0 * sqrt(gk.amplitude[ii]) * sqrt(gl.amplitude[ii]) * g, ii == jj);
@@ -623,7 +628,7 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
             let b = x_at + 6u * k;
             let d0 = vec4<f32>(work[b], work[b + 1u], work[b + 2u], work[b + 3u]);
             let d1 = vec2<f32>(work[b + 4u], work[b + 5u]);
-            store_lobe(1u, k, fit_apply_step(lobe(0u, k), d0, d1));
+            store_lobe(SLOT_CANDIDATE, k, fit_apply_step(lobe(SLOT_CURRENT, k), d0, d1));
         }
     }
     if lid == 0u {
@@ -631,11 +636,19 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
     }
 }
 
-// Accepts the candidate (slot 1) if its cost is finite and lower, adapts
+// Goes on with the fit of an earlier frame on the same probe: its lobes,
+// cost and damping stand; the normal equations, not kept across frames,
+// are built again.
+@compute @workgroup_size(1, 1, 1)
+fn resume() {
+    state.normal_valid = 0.0;
+}
+
+// Accepts the candidate if its cost is finite and lower, adapts
 // the damping and logs the cost.
 @compute @workgroup_size(1, 1, 1)
 fn decide() {
-    let c = sum_partials(1u).x;
+    let c = sum_partials(SLOT_CANDIDATE).x;
     let current = state.cost;
     let eta = state.damping;
     if state.candidate_ok != 0.0 && fit_finite(c) && c < current {
@@ -648,7 +661,7 @@ fn decide() {
         state.damping = min(eta * DAMPING_UP, 1.0 / DAMPING_LIMIT);
         state.normal_valid = 1.0;
     }
-    let it = u32(state.iterations) + 1u;
+    let it = min(u32(state.iterations) + 1u, 256u);
     state.iterations = f32(it);
     state.log[it] = state.cost;
 }

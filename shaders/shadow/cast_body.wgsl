@@ -40,6 +40,12 @@ struct CastPush {
     // (shadow_point).
     march_step: f32,
     march_termination: f32,
+    // ρ is taken at one pixel (its centre) of each scale × scale block
+    // (shadow/upsample.wgsl brings it back to full resolution).
+    scale: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 var<immediate> pc: CastPush;
@@ -234,22 +240,27 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
     return vec3<f32>(1.0) - (vec3<f32>(1.0) - rho) * share;
 }
 
+// The full-resolution pixel block `id` is taken at (upsample.rs
+// source_pixel).
+fn cast_source(id: vec2<u32>) -> vec2<i32> {
+    let p = min(id * pc.scale + vec2<u32>(pc.scale / 2u), vec2<u32>(pc.camera.width - 1u, pc.camera.height - 1u));
+    return vec2<i32>(p);
+}
+
 // The including shader's `main` calls this: ρ alone.
 fn cast_main(id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy) {
+    if camera_outside(pc.camera, id.xy * pc.scale) {
         return;
     }
-    let pixel = vec2<i32>(id.xy);
-    textureStore(out_shadow, pixel, vec4<f32>(pixel_factor(pixel), 1.0));
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(pixel_factor(cast_source(id.xy)), 1.0));
 }
 
 // The including shader's `main_chained` calls this: ρ times the previous
 // object's.
 fn cast_main_chained(id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy) {
+    if camera_outside(pc.camera, id.xy * pc.scale) {
         return;
     }
-    let pixel = vec2<i32>(id.xy);
-    let rho = pixel_factor(pixel) * textureLoad(previous, pixel, 0).rgb;
-    textureStore(out_shadow, pixel, vec4<f32>(rho, 1.0));
+    let rho = pixel_factor(cast_source(id.xy)) * textureLoad(previous, vec2<i32>(id.xy), 0).rgb;
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(rho, 1.0));
 }

@@ -95,7 +95,7 @@ pub struct PassInfo {
 }
 
 /// The frame's passes, in the order a frame runs them.
-pub const FRAME_PASSES: [PassInfo; 9] = [
+pub const FRAME_PASSES: [PassInfo; 10] = [
     probe::PROBE_TRACE_INFO,
     sgfit::SG_FIT_INFO,
     lighting::DIRECT_LIGHT_INFO,
@@ -103,6 +103,7 @@ pub const FRAME_PASSES: [PassInfo; 9] = [
     march::NERF_MARCH_INFO,
     shade::OBJECT_SHADE_INFO,
     shadow::CAST_SHADOW_INFO,
+    shadow::SHADOW_UPSAMPLE_INFO,
     composite::COMPOSITE_INFO,
     edge_aa::OBJECT_EDGE_AA_INFO,
 ];

@@ -204,7 +204,12 @@ impl InsertionFrame {
             composite: CompositePass::new(ctx, lib)?,
             edge_aa: EdgeAaPass::new(ctx, lib, EdgeAaKnobs::default())?,
             cast: if shadows {
-                Some(CastShadowPass::new(ctx, lib, *march.knobs())?)
+                Some(CastShadowPass::new(
+                    ctx,
+                    lib,
+                    *march.knobs(),
+                    scene.shadows.cast_scale,
+                )?)
             } else {
                 None
             },
@@ -397,6 +402,6 @@ impl InsertionFrame {
                 shadow = Some(cast.add(graph, &self.field, frame, field, l, fh_table, s, shadow));
             }
         }
-        shadow
+        shadow.map(|low| cast.finish(graph, frame, field, low))
     }
 }

@@ -43,8 +43,9 @@ inlay_engine::gpu_struct! {
         /// 1 to shade the sharp lobes of L_env and the local lights of
         /// known emission (outside the field), 0 to leave them black.
         pub environment: u32,
-        /// Padding.
-        pub pad1: u32,
+        /// 1 to copy the fitted lobes alone (a fit continued with the
+        /// object still: the sharp lobes and the local lights stand).
+        pub fitted_only: u32,
     }
 }
 
@@ -247,6 +248,21 @@ impl DirectLightPass {
         fitted: BufferHandle,
         environment: bool,
     ) -> LightLobes {
+        self.add_with(graph, field, origin, fitted, environment, false)
+    }
+
+    /// As [`Self::add`]; with `fitted_only`, only the fitted lobes are
+    /// copied in, the sharp lobes and local lights standing as the last
+    /// frame measured them (the object has not moved).
+    pub fn add_with(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        origin: DVec3,
+        fitted: BufferHandle,
+        environment: bool,
+        fitted_only: bool,
+    ) -> LightLobes {
         let grid = field.import(graph);
         let sharp = graph.import_buffer(&self.sharp, None);
         let rays = graph.import_buffer(&self.rays, None);
@@ -263,7 +279,7 @@ impl DirectLightPass {
             local: self.local_count,
             local_side: self.local_side,
             environment: environment as u32,
-            pad1: 0,
+            fitted_only: fitted_only as u32,
         };
         let mut lights = lights;
         grid.bind(graph.compute(DIRECT_LIGHT, &self.pipeline))
@@ -274,7 +290,7 @@ impl DirectLightPass {
             .read("local_spheres", spheres)
             .write("local_lights", &mut local)
             .push(&push)
-            .threads([self.count, 1, 1]);
+            .threads([if fitted_only { self.fitted } else { self.count }, 1, 1]);
         self.light_lobes(lights, rays, local)
     }
 

@@ -40,6 +40,12 @@ pub enum LightingWork {
         /// Iterations of the fit.
         iterations: u32,
     },
+    /// Go on with the last fit on the last probe for `iterations` more
+    /// (the object is still; the update it began is not finished).
+    Continue {
+        /// Iterations this frame.
+        iterations: u32,
+    },
 }
 
 /// The lobes an object is shaded with, as a frame sees them: a buffer of
@@ -95,6 +101,8 @@ pub struct IncidentLight {
     pub direct: Option<DirectLightPass>,
     /// The object's centre and the lighting version of the last fit.
     last: Option<([u64; 3], u64)>,
+    /// Iterations of the last warm update still to run.
+    pending: u32,
 }
 
 impl IncidentLight {
@@ -134,6 +142,7 @@ impl IncidentLight {
             fit,
             direct,
             last: Default::default(),
+            pending: 0,
         })
     }
 
@@ -149,15 +158,31 @@ impl IncidentLight {
     pub fn plan(&mut self, centre: DVec3, version: u64) -> LightingWork {
         let key = (centre.to_array().map(f64::to_bits), version);
         let knobs = *self.fit.knobs();
+        let chunk = |n: u32| match knobs.frame_iterations {
+            0 => n,
+            f => n.min(f),
+        };
         let work = match self.last {
-            None => LightingWork::Update {
-                start: FitStart::Cold,
-                iterations: knobs.cold_iterations,
-            },
-            Some(last) if last != key => LightingWork::Update {
-                start: FitStart::Warm,
-                iterations: knobs.warm_iterations,
-            },
+            None => {
+                self.pending = 0;
+                LightingWork::Update {
+                    start: FitStart::Cold,
+                    iterations: knobs.cold_iterations,
+                }
+            }
+            Some(last) if last != key => {
+                let n = chunk(knobs.warm_iterations);
+                self.pending = knobs.warm_iterations - n;
+                LightingWork::Update {
+                    start: FitStart::Warm,
+                    iterations: n,
+                }
+            }
+            Some(_) if self.pending > 0 => {
+                let n = chunk(self.pending);
+                self.pending -= n;
+                LightingWork::Continue { iterations: n }
+            }
             Some(_) => LightingWork::Reuse,
         };
         self.last = Some(key);
@@ -167,6 +192,7 @@ impl IncidentLight {
     /// Forgets the last fit: the next frame starts cold.
     pub fn reset(&mut self) {
         self.last = None;
+        self.pending = 0;
     }
 
     /// Adds the probe trace (with L_env) and the fit when `work` asks for
@@ -215,6 +241,19 @@ impl IncidentLight {
                     Some(d) => d.reused(graph),
                     None => LightLobes {
                         buffer: graph.import_buffer(self.fit.lobes(), None),
+                        count: fitted,
+                        direct: None,
+                    },
+                })
+            }
+            LightingWork::Continue { iterations } => {
+                graph.note_skipped(PROBE_TRACE, "the fit goes on with the last probe");
+                let probe = self.probe.import(graph);
+                let lobes = self.fit.add(graph, probe, FitStart::Continue, iterations)?;
+                Ok(match direct {
+                    Some(d) => d.add_with(graph, field, centre, lobes, environment, true),
+                    None => LightLobes {
+                        buffer: lobes,
                         count: fitted,
                         direct: None,
                     },

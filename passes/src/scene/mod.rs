@@ -196,6 +196,10 @@ pub struct ShadowKnobs {
     pub outside: crate::ssdf::OutsideMode,
     /// Knobs of the SSDF bakes this scene triggers.
     pub bake: crate::ssdf::SsdfKnobs,
+    /// The cast shadow is taken at one pixel of each `cast_scale` ×
+    /// `cast_scale` block and brought back to full resolution (1: every
+    /// pixel, the paper; [`crate::shadow::upsample`]).
+    pub cast_scale: u32,
 }
 
 impl Default for ShadowKnobs {
@@ -205,6 +209,7 @@ impl Default for ShadowKnobs {
             cast: true,
             outside: crate::ssdf::OutsideMode::Correct,
             bake: crate::ssdf::SsdfKnobs::default(),
+            cast_scale: 1,
         }
     }
 }
@@ -268,6 +273,7 @@ impl LightingKnobs {
                 lobes: s.lobes.unwrap_or(d.fit.lobes),
                 cold_iterations: s.cold_iterations.unwrap_or(d.fit.cold_iterations),
                 warm_iterations: s.warm_iterations.unwrap_or(d.fit.warm_iterations),
+                frame_iterations: s.frame_iterations.unwrap_or(d.fit.frame_iterations),
                 damping: s.damping.unwrap_or(d.fit.damping),
             },
             local: crate::lighting::LocalLightKnobs {
@@ -472,11 +478,22 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         if let Some((k, m)) = bake.problem() {
             return Err(e(&format!("shadows.{k}"), m));
         }
+        let cast_scale = sp.and_then(|s| s.cast_scale).unwrap_or(d.cast_scale);
+        if !(1..=crate::shadow::MAX_CAST_SCALE).contains(&cast_scale) {
+            return Err(e(
+                "shadows.cast_scale",
+                format!(
+                    "{cast_scale} must be in 1..={}",
+                    crate::shadow::MAX_CAST_SCALE
+                ),
+            ));
+        }
         ShadowKnobs {
             self_shadow: sp.and_then(|s| s.self_shadow).unwrap_or(d.self_shadow),
             cast: sp.and_then(|s| s.cast).unwrap_or(d.cast),
             outside: sp.and_then(|s| s.outside).unwrap_or(d.outside),
             bake,
+            cast_scale,
         }
     };
     if spec.objects.len() > MAX_OBJECTS {

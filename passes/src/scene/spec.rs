@@ -47,6 +47,7 @@ pub(crate) struct ShadowsSpec {
     pub grid: Option<u32>,
     pub directions: Option<u32>,
     pub components: Option<u32>,
+    pub cast_scale: Option<u32>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -150,6 +151,7 @@ pub(crate) struct LightingSpec {
     pub lobes: Option<u32>,
     pub cold_iterations: Option<u32>,
     pub warm_iterations: Option<u32>,
+    pub frame_iterations: Option<u32>,
     pub damping: Option<f64>,
     pub environment: Option<String>,
     pub local_lights: Option<u32>,

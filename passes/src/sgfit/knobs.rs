@@ -9,6 +9,12 @@ pub struct FitKnobs {
     pub cold_iterations: u32,
     /// Iterations after a warm start from the previous frame's lobes.
     pub warm_iterations: u32,
+    /// Most iterations of a warm update run in one frame (0: all of them):
+    /// the rest run in the frames after, the fit going on from where it
+    /// stopped, so a moving object's frame never waits for the whole update
+    /// and the lighting reaches the same lobes ⌈warm / this⌉ frames after the
+    /// object stops. The cold fit runs whole in its frame.
+    pub frame_iterations: u32,
     /// Initial Marquardt damping η (of the Jacobi-scaled normal equations).
     pub damping: f64,
 }
@@ -19,6 +25,7 @@ impl Default for FitKnobs {
             lobes: 32,
             cold_iterations: 40,
             warm_iterations: 8,
+            frame_iterations: 2,
             damping: 1e-2,
         }
     }
@@ -41,6 +48,7 @@ impl FitKnobs {
         for (name, v) in [
             ("cold_iterations", self.cold_iterations),
             ("warm_iterations", self.warm_iterations),
+            ("frame_iterations", self.frame_iterations),
         ] {
             if v > MAX_ITERATIONS {
                 return Err((name.into(), format!("{v} must be at most {MAX_ITERATIONS}")));

@@ -31,7 +31,7 @@ inlay_engine::gpu_struct! {
         pub cols: u32,
         /// Feature-matrix rows (texels rounded up to 16).
         pub rows: u32,
-        /// Which lobe slot a kernel works on (0: current, 1: candidate).
+        /// Which lobe slot a kernel works on (1: current, 2: candidate).
         pub slot: u32,
         /// Warm start (1) or cold (0).
         pub warm: u32,
@@ -65,7 +65,19 @@ pub enum FitStart {
     Cold,
     /// From the lobes of the previous fit, unless the cold start fits better.
     Warm,
+    /// Going on with the previous fit on the same probe: its iterate, cost
+    /// and damping stand (a fit spread over several frames takes the same
+    /// steps as in one).
+    Continue,
 }
+
+/// Slots of M lobes in the lobe buffer: what shading reads (the iterate
+/// with its energy conserved), the fit's iterate, its candidate step.
+const SLOTS: u64 = 3;
+/// The slot of the fit's iterate (`SLOT_CURRENT` in the shader).
+const SLOT_CURRENT: u32 = 1;
+/// The slot of the candidate step (`SLOT_CANDIDATE` in the shader).
+const SLOT_CANDIDATE: u32 = 2;
 
 /// Entries of the fit's cost log: the start and every iteration.
 const LOG_LENGTH: usize = MAX_ITERATIONS as usize + 1;
@@ -104,8 +116,11 @@ inlay_engine::gpu_struct! {
 /// What the last GPU fit reported (read back after its frame).
 #[derive(Debug, Clone)]
 pub struct FitReport {
-    /// The fitted lobes.
+    /// The fitted lobes, as shading reads them (energy conserved).
     pub lobes: Vec<Sg32>,
+    /// The fit's iterate (what a warm start or a continued fit goes on
+    /// from).
+    pub iterate: Vec<Sg32>,
     /// Cost after each iteration (index 0: at the start).
     pub costs: Vec<f64>,
     /// Σ w |L|² of the probe.
@@ -137,8 +152,8 @@ struct Kernels {
     assemble: Arc<ComputePipeline>,
     solve: Arc<ComputePipeline>,
     decide: Arc<ComputePipeline>,
+    resume: Arc<ComputePipeline>,
     conserve_energy: Arc<ComputePipeline>,
-    finish_energy: Arc<ComputePipeline>,
 }
 
 /// Sizes derived from the knobs and the probe.
@@ -165,7 +180,7 @@ pub struct SgFitPass {
     state_readback: BufferReadback,
 }
 
-/// Both slots of the lobe buffer holding `lobes` (axes normalised).
+/// Every slot of the lobe buffer holding `lobes` (axes normalised).
 fn lobe_bytes_of(lobes: &[Sg32]) -> Vec<u8> {
     let packed: Vec<f32> = lobes
         .iter()
@@ -177,10 +192,8 @@ fn lobe_bytes_of(lobes: &[Sg32]) -> Vec<u8> {
             .packed()
         })
         .collect();
-    packed
-        .iter()
-        .chain(&packed)
-        .flat_map(|f| f.to_le_bytes())
+    (0..SLOTS)
+        .flat_map(|_| packed.iter().flat_map(|f| f.to_le_bytes()))
         .collect()
 }
 
@@ -243,10 +256,10 @@ impl SgFitPass {
             assemble: build("assemble")?,
             solve: build("solve")?,
             decide: build("decide")?,
+            resume: build("resume")?,
             conserve_energy: build("conserve_energy")?,
-            finish_energy: build("finish_energy")?,
         };
-        let lobe_bytes = 2 * knobs.lobes as u64 * 32;
+        let lobe_bytes = SLOTS * knobs.lobes as u64 * 32;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
         // Before any fit: legal, dark lobes (a warm start from them is a
         // fit of nothing, which the cold start beats on any lit probe).
@@ -299,13 +312,14 @@ impl SgFitPass {
         &self.knobs
     }
 
-    /// The persistent lobe buffer: M current lobes (two vec4 each: (p, λ),
-    /// (μ, 0)), then M candidate lobes. Shading passes read the first M.
+    /// The persistent lobe buffer: M shading lobes (two vec4 each: (p, λ),
+    /// (μ, 0)), then the fit's M current and M candidate lobes. Shading
+    /// passes read the first M.
     pub fn lobes(&self) -> &Arc<Buffer> {
         &self.lobes
     }
 
-    /// Replaces the current lobes (the next warm start begins from them).
+    /// Replaces the lobes, every slot (the next warm start begins from them).
     pub fn set_lobes(&mut self, ctx: &Arc<Context>, lobes: &[Sg32]) -> anyhow::Result<()> {
         anyhow::ensure!(
             lobes.len() == self.knobs.lobes as usize,
@@ -342,7 +356,8 @@ impl SgFitPass {
 
     /// Adds the `sg-fit` pass fitting the lobes to `probe` (an image laid
     /// out by this pass's direction map) from `start` for `iterations`
-    /// iterations; returns the lobe buffer as written.
+    /// iterations; returns the lobe buffer as written. A continued fit
+    /// needs the probe the fit it continues began on.
     pub fn add(
         &self,
         graph: &mut FrameGraph,
@@ -386,8 +401,8 @@ impl SgFitPass {
         pass.buffer_at("filter_entries", graph_entries, BufferAccess::StorageRead);
         pass.buffer_at("gram", gram, BufferAccess::StorageWrite);
         let warm = start == FitStart::Warm;
-        let candidate = self.push(1, warm);
-        let current = self.push(0, warm);
+        let candidate = self.push(SLOT_CANDIDATE, warm);
+        let current = self.push(SLOT_CURRENT, warm);
         let k = &self.kernels;
         let blocks = s.feature_cols / 4;
         let block_groups = (blocks * blocks).div_ceil(64);
@@ -396,12 +411,16 @@ impl SgFitPass {
             pass.dispatch(p).push(push).groups(groups)
         };
         run(&k.filter_probe, &candidate, [s.groups, 1, 1]);
-        run(&k.init_cold, &candidate, [self.knobs.lobes, 1, 1]);
-        run(&k.cost, &candidate, [s.groups, 1, 1]);
-        if warm {
-            run(&k.cost, &current, [s.groups, 1, 1]);
+        if start == FitStart::Continue {
+            run(&k.resume, &candidate, [1, 1, 1]);
+        } else {
+            run(&k.init_cold, &candidate, [self.knobs.lobes, 1, 1]);
+            run(&k.cost, &candidate, [s.groups, 1, 1]);
+            if warm {
+                run(&k.cost, &current, [s.groups, 1, 1]);
+            }
+            run(&k.select_start, &candidate, [1, 1, 1]);
         }
-        run(&k.select_start, &candidate, [1, 1, 1]);
         for _ in 0..iterations {
             run(&k.features, &candidate, [s.groups, 1, 1]);
             run(&k.gram_blocks, &candidate, [block_groups, 1, 1]);
@@ -411,7 +430,6 @@ impl SgFitPass {
             run(&k.decide, &candidate, [1, 1, 1]);
         }
         run(&k.conserve_energy, &candidate, [self.knobs.lobes, 1, 1]);
-        run(&k.finish_energy, &candidate, [1, 1, 1]);
         pass.finish();
         Ok(lobes)
     }
@@ -432,10 +450,16 @@ impl SgFitPass {
         let l = self.lobes_readback.read_f32()?;
         let st: FitState = self.state_readback.read_pod()?;
         let m = self.knobs.lobes as usize;
-        let lobes = (0..m).map(|k| Sg32::unpack(&l[8 * k..8 * k + 8])).collect();
+        let slot = |s: usize| {
+            (0..m)
+                .map(|k| Sg32::unpack(&l[8 * (s * m + k)..8 * (s * m + k) + 8]))
+                .collect()
+        };
+        let (lobes, iterate) = (slot(0), slot(SLOT_CURRENT as usize));
         let iterations = (st.iterations as usize).min(MAX_ITERATIONS as usize);
         Ok(FitReport {
             lobes,
+            iterate,
             costs: st.log[..=iterations].iter().map(|&c| c as f64).collect(),
             energy: st.energy as f64,
             started_cold: st.started_cold != 0.0,

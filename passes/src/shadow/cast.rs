@@ -41,8 +41,41 @@ inlay_engine::gpu_struct! {
         pub march_step: f32,
         /// The march's early-termination transmittance.
         pub march_termination: f32,
+        /// ρ is taken at one pixel of each scale × scale block.
+        pub scale: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
+
+inlay_engine::gpu_struct! {
+    /// `UpsamplePush` of `shaders/shadow/upsample.wgsl`.
+    pub struct UpsamplePush = "shadow/upsample.wgsl" : "UpsamplePush" {
+        /// Full-resolution width.
+        pub width: u32,
+        /// Full-resolution height.
+        pub height: u32,
+        /// The cast shadow's scale.
+        pub scale: u32,
+        /// Padding.
+        pub pad: u32,
+    }
+}
+
+/// The pass bringing a cast shadow taken at a fraction of the resolution
+/// back to full resolution ([`super::upsample`]).
+pub const SHADOW_UPSAMPLE_INFO: PassInfo = PassInfo {
+    name: "shadow-upsample",
+    module: Table1Module::Shadow,
+    switch: Some(CAST_SHADOW_SWITCH),
+};
+
+/// The upsampling pass's name in the frame graph.
+pub const SHADOW_UPSAMPLE: &str = SHADOW_UPSAMPLE_INFO.name;
 
 /// The cast-shadow pass: its name, Table 1 module and effect switch.
 pub const CAST_SHADOW_INFO: PassInfo = PassInfo {
@@ -71,13 +104,27 @@ pub struct CastShadowPass {
     chained: Arc<ComputePipeline>,
     first_direct: Arc<ComputePipeline>,
     chained_direct: Arc<ComputePipeline>,
+    upsample: Arc<ComputePipeline>,
     march: MarchKnobs,
+    scale: u32,
 }
 
 impl CastShadowPass {
     /// Compiles the pass; a pixel whose point lies off any surface is
-    /// marched again with `march` ([`super::shadow_point`]).
-    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, march: MarchKnobs) -> anyhow::Result<Self> {
+    /// marched again with `march` ([`super::shadow_point`]); ρ is taken at
+    /// one pixel of each `scale` × `scale` block (1: every pixel) and
+    /// brought back by [`Self::finish`].
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        march: MarchKnobs,
+        scale: u32,
+    ) -> anyhow::Result<Self> {
+        anyhow::ensure!(
+            (1..=super::MAX_CAST_SCALE).contains(&scale),
+            "cast-shadow scale {scale}: must be in 1..={}",
+            super::MAX_CAST_SCALE
+        );
         let mut defines = shadow_defines();
         defines.push(inlay_engine::shader::Define::Bool(
             "SKIP_EMPTY",
@@ -92,7 +139,52 @@ impl CastShadowPass {
             chained: build("shadow/cast.wgsl", "main_chained")?,
             first_direct: build("shadow/cast_direct.wgsl", "main")?,
             chained_direct: build("shadow/cast_direct.wgsl", "main_chained")?,
+            upsample: build("shadow/upsample.wgsl", "main")?,
+            scale,
         })
+    }
+
+    /// The scale ρ is taken at.
+    pub fn scale(&self) -> u32 {
+        self.scale
+    }
+
+    /// The full-resolution ρ from the last [`Self::add`]'s `low` image: as
+    /// it is at scale 1, else through `shadow-upsample`.
+    pub fn finish(
+        &self,
+        graph: &mut FrameGraph,
+        camera: &CameraFrame,
+        march: &MarchOutputs,
+        low: ImageHandle,
+    ) -> ImageHandle {
+        if self.scale == 1 {
+            return low;
+        }
+        let (width, height) = (camera.width, camera.height);
+        let mut out = graph.create_image(
+            "shadow-full",
+            ImageDesc {
+                width,
+                height,
+                format: SHADOW_FORMAT,
+            },
+        );
+        let push = UpsamplePush {
+            width,
+            height,
+            scale: self.scale,
+            pad: 0,
+        };
+        graph
+            .compute(SHADOW_UPSAMPLE, &self.upsample)
+            .read("field_colour", march.colour_opacity)
+            .read("field_depth", march.depth)
+            .read("low_shadow", low)
+            .write("out_shadow", &mut out)
+            .push(&push)
+            .threads([width, height, 1]);
+        out
     }
 
     /// Adds `cast-shadow` for one object lit by `lobes`, multiplying
@@ -109,7 +201,7 @@ impl CastShadowPass {
         ssdf: SsdfBindings,
         previous: Option<ImageHandle>,
     ) -> ImageHandle {
-        let (width, height) = (camera.width, camera.height);
+        let (width, height) = super::upsample::low_size(camera.width, camera.height, self.scale);
         let grid = field.import(graph);
         let out = graph.create_image(
             "shadow",
@@ -131,6 +223,10 @@ impl CastShadowPass {
             local_side: direct.map_or(1, |d| d.local.side),
             march_step: self.march.step(field.diagonal) as f32,
             march_termination: self.march.termination as f32,
+            scale: self.scale,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         };
         let pipeline = match (previous.is_some(), direct.is_some()) {
             (false, false) => &self.first,

@@ -11,9 +11,13 @@ pub mod direct;
 pub mod fh;
 pub mod gpu;
 pub mod runtime;
+pub mod upsample;
 
 pub use bounce::{bounce_irradiance, ObjectReflectance};
-pub use cast::{CastShadowPass, CAST_SHADOW, CAST_SHADOW_INFO, CAST_SHADOW_SWITCH, SHADOW_FORMAT};
+pub use cast::{
+    CastShadowPass, CAST_SHADOW, CAST_SHADOW_INFO, CAST_SHADOW_SWITCH, SHADOW_FORMAT,
+    SHADOW_UPSAMPLE, SHADOW_UPSAMPLE_INFO,
+};
 pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};
 pub use gpu::{object_block, shadow_defines, GpuFhTable, GpuSsdf, SsdfBindings};
@@ -21,3 +25,4 @@ pub use runtime::{
     cast_shadow_factor, field_normal, self_shadow_factors, shadow_point, sphere_clear_of,
     sphere_share, world_ssdf, ShadowPoint, SphereView, CAST_SKIP_SHARE, HORIZON_FLOOR,
 };
+pub use upsample::{upsample_shadow, MAX_CAST_SCALE};

@@ -9,10 +9,11 @@ use inlay_passes::scene::Scene;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Preset {
     /// 128 samples per ray, a 16×16 probe, 8 lobes, 20 cold and 2 warm
-    /// LM iterations: interactive on a CPU device at small sizes.
+    /// LM iterations, the cast shadow at half resolution: interactive on a
+    /// CPU device at small sizes.
     Fast,
     /// 256 samples per ray, a 32×32 probe, 16 lobes, 40 cold and 4 warm
-    /// iterations.
+    /// iterations, the cast shadow at half resolution.
     Balanced,
     /// The scene file's knobs (the paper's defaults unless it says otherwise).
     Scene,
@@ -41,9 +42,9 @@ impl Preset {
     /// scene file asks for).
     pub fn apply(self, authored: &Scene) -> Scene {
         let mut s = authored.clone();
-        let (samples, probe, lobes, cold, warm) = match self {
-            Preset::Fast => (128, 16, 8, 20, 2),
-            Preset::Balanced => (256, 32, 16, 40, 4),
+        let (samples, probe, lobes, cold, warm, cast_scale) = match self {
+            Preset::Fast => (128, 16, 8, 20, 2, 2),
+            Preset::Balanced => (256, 32, 16, 40, 4, 2),
             Preset::Scene => return s,
         };
         s.march.samples_per_ray = s.march.samples_per_ray.min(samples);
@@ -51,6 +52,7 @@ impl Preset {
         s.lighting.fit.lobes = s.lighting.fit.lobes.min(lobes);
         s.lighting.fit.cold_iterations = s.lighting.fit.cold_iterations.min(cold);
         s.lighting.fit.warm_iterations = s.lighting.fit.warm_iterations.min(warm);
+        s.shadows.cast_scale = s.shadows.cast_scale.max(cast_scale);
         s
     }
 }

@@ -1,0 +1,78 @@
+// The cast shadow taken at one pixel of each s × s block brought back to
+// full resolution (mirrors passes/src/shadow/upsample.rs upsample_shadow):
+// each pixel blends the four nearest blocks bilinearly, each weighted down
+// as the depth at its source pixel departs from the pixel's (to zero at
+// UPSAMPLE_DEPTH_FALLOFF relative), or takes the block nearest in depth
+// where none lies on its surface; ρ = 1 where the field is empty.
+
+struct UpsamplePush {
+    width: u32,
+    height: u32,
+    scale: u32,
+    pad: u32,
+}
+
+var<immediate> pc: UpsamplePush;
+@group(0) @binding(0) var field_colour: texture_2d<f32>;
+@group(0) @binding(1) var field_depth: texture_2d<f32>;
+@group(0) @binding(2) var low_shadow: texture_2d<f32>;
+@group(0) @binding(3) var out_shadow: texture_storage_2d<rgba32float, write>;
+
+const UPSAMPLE_DEPTH_FALLOFF: f32 = 0.05;
+
+// Depth along the ray at full-resolution pixel p, or −1 where empty.
+fn upsample_depth(p: vec2<u32>) -> f32 {
+    let o = textureLoad(field_colour, vec2<i32>(p), 0).a;
+    if o <= 1e-4 {
+        return -1.0;
+    }
+    return textureLoad(field_depth, vec2<i32>(p), 0).r / o;
+}
+
+fn upsample_source(c: vec2<u32>) -> vec2<u32> {
+    return min(c * pc.scale + vec2<u32>(pc.scale / 2u), vec2<u32>(pc.width - 1u, pc.height - 1u));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    let z = upsample_depth(id.xy);
+    if z < 0.0 {
+        textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(1.0));
+        return;
+    }
+    let low = vec2<u32>((pc.width + pc.scale - 1u) / pc.scale, (pc.height + pc.scale - 1u) / pc.scale);
+    let t = max((vec2<f32>(id.xy) + vec2<f32>(0.5)) / f32(pc.scale) - vec2<f32>(0.5), vec2<f32>(0.0));
+    let i0 = min(vec2<u32>(floor(t)), low - vec2<u32>(1u));
+    let i1 = min(i0 + vec2<u32>(1u), low - vec2<u32>(1u));
+    let f = clamp(t - vec2<f32>(i0), vec2<f32>(0.0), vec2<f32>(1.0));
+    var sum = vec3<f32>(0.0);
+    var weight = 0.0;
+    var nearest = vec3<f32>(1.0);
+    var nearest_gap = 3.0e38;
+    for (var k = 0u; k < 4u; k++) {
+        let c = vec2<u32>(select(i0.x, i1.x, (k & 1u) != 0u), select(i0.y, i1.y, (k & 2u) != 0u));
+        let wx = select(1.0 - f.x, f.x, (k & 1u) != 0u);
+        let wy = select(1.0 - f.y, f.y, (k & 2u) != 0u);
+        let zq = upsample_depth(upsample_source(c));
+        if zq < 0.0 {
+            continue;
+        }
+        let rho = textureLoad(low_shadow, vec2<i32>(c), 0).rgb;
+        let gap = abs(zq - z) / max(z, 1e-30);
+        if gap < nearest_gap {
+            nearest = rho;
+            nearest_gap = gap;
+        }
+        let w = wx * wy * max(1.0 - gap / UPSAMPLE_DEPTH_FALLOFF, 0.0);
+        sum += w * rho;
+        weight += w;
+    }
+    var rho = nearest;
+    if weight > 1e-6 {
+        rho = sum / weight;
+    }
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(rho, 1.0));
+}
