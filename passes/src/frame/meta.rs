@@ -162,7 +162,10 @@ mod tests {
         let t = table1();
         assert_eq!(t.len(), 6);
         assert_eq!(t[0], ("NeRF rendering", vec![march::NERF_MARCH]));
-        assert_eq!(t[5], ("Shadow", vec![shadow::CAST_SHADOW]));
+        assert_eq!(
+            t[5],
+            ("Shadow", vec![shadow::CAST_SHADOW, shadow::SHADOW_UPSAMPLE])
+        );
         let count: usize = t.iter().map(|(_, p)| p.len()).sum();
         assert_eq!(count, FRAME_PASSES.len());
     }

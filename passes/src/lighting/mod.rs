@@ -50,7 +50,7 @@ pub enum LightingWork {
 
 /// The lobes an object is shaded with, as a frame sees them: a buffer of
 /// packed lobes ((p, λ), (μ, 0)) whose first `count` are the light (the
-/// fit's buffer holds a second slot of candidates after them).
+/// fit's buffer holds its iterate and its candidate after them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LightLobes {
     /// The buffer.
@@ -154,7 +154,10 @@ impl IncidentLight {
 
     /// Decides this frame's work for an object centred at `centre` in a
     /// field whose lighting is at `version` (bump it whenever the field or
-    /// the environment light changes), and remembers them.
+    /// the environment light changes), and remembers them: a cold fit
+    /// first; a warm update when either changed, at most the fit's
+    /// `frame_iterations` of it this frame; while the object stays, the
+    /// rest of that update continued; then nothing.
     pub fn plan(&mut self, centre: DVec3, version: u64) -> LightingWork {
         let key = (centre.to_array().map(f64::to_bits), version);
         let knobs = *self.fit.knobs();
