@@ -35,6 +35,30 @@ pub enum Motion {
     /// Left where the scene puts it: after the first frame the probe and
     /// the fit are skipped.
     Still,
+    /// Dragged for the first half of the frames, then left still: how many
+    /// frames the lighting takes to settle once the object stops (a warm
+    /// update spread over frames, `[lighting] frame_iterations`).
+    Stop,
+}
+
+/// The first frame an object moving with `motion` over `frames` frames is
+/// still in (None: it moves throughout, or never).
+pub fn stop_frame(motion: Motion, frames: u32) -> Option<u32> {
+    (motion == Motion::Stop).then_some(frames / 2)
+}
+
+/// How many frames from `stop` on ran the SG fit: the frames the lighting
+/// took to settle after the object stopped.
+pub fn settling_frames(frames: &[FrameTimings], stop: u32) -> usize {
+    frames
+        .iter()
+        .skip(stop as usize)
+        .filter(|f| {
+            f.passes
+                .iter()
+                .any(|p| p.name == inlay_passes::sgfit::SG_FIT)
+        })
+        .count()
 }
 
 /// Options of `profile`.
@@ -117,7 +141,12 @@ pub fn profile_view(
         );
     };
     for i in 0..frames.max(1) {
-        if let (Motion::Drag, Some(p0)) = (motion, &start_pose) {
+        let moving = match motion {
+            Motion::Drag => true,
+            Motion::Still => false,
+            Motion::Stop => Some(i) < stop_frame(motion, frames),
+        };
+        if let (true, Some(p0)) = (moving, &start_pose) {
             let (_, radius) = p0.sphere();
             let a = std::f64::consts::TAU * i as f64 / 60.0;
             let mut p = p0.clone();
@@ -179,6 +208,12 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
         args.frames,
         args.motion,
     )?;
+    if let Some(stop) = stop_frame(args.motion, args.frames) {
+        println!(
+            "the object stopped at frame {stop}; the SG fit ran in {} frames after that",
+            settling_frames(&run.frames, stop)
+        );
+    }
     let wall: Vec<f64> = run.submitted_ms.windows(2).map(|w| w[1] - w[0]).collect();
     let table = summarise(&run.frames, &wall);
     let device = format!("{} ({:?})", ctx.info().name, ctx.info().kind);
@@ -223,4 +258,33 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
     outputs.json(&args.trace, &trace)?;
     outputs.commit(Some(ctx))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inlay_engine::timing::PassTiming;
+
+    /// `stop` moves for half the frames; the frames after that which ran
+    /// the fit are counted, and only those.
+    #[test]
+    fn settling_counts_the_fits_after_the_stop() {
+        assert_eq!(stop_frame(Motion::Stop, 12), Some(6));
+        assert_eq!(stop_frame(Motion::Drag, 12), None);
+        assert_eq!(stop_frame(Motion::Still, 12), None);
+        let frame = |fit: bool| FrameTimings {
+            passes: ["nerf-march", if fit { "sg-fit" } else { "composite" }]
+                .map(|name| PassTiming {
+                    name: name.into(),
+                    start_ms: 0.0,
+                    gpu_ms: 1.0,
+                    cpu_ms: 0.0,
+                })
+                .to_vec(),
+            ..Default::default()
+        };
+        let run: Vec<FrameTimings> = [true, true, true, true, false, false].map(frame).to_vec();
+        assert_eq!(settling_frames(&run, 2), 2);
+        assert_eq!(settling_frames(&run, 5), 0);
+    }
 }
