@@ -315,7 +315,8 @@ fn conserve_energy(@builtin(local_invocation_index) lid: u32, @builtin(workgroup
 // ---- cost -------------------------------------------------------------------
 
 // Partial sums over 64 texels of (Σ w|fit − L|², Σ w|L|², invalid texels)
-// for the lobes of slot pc.slot, into partials[slot · groups + group].
+// for the lobes of slot pc.slot (current or candidate), into
+// partials[(slot − 1) · groups + group].
 @compute @workgroup_size(64, 1, 1)
 fn cost(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let t = id.x;
@@ -367,7 +368,7 @@ fn sum_partials(slot: u32) -> vec4<f32> {
 
 // ---- start --------------------------------------------------------------------
 
-// Starts the fit from the previous lobes (slot 0) when warm and no worse
+// Starts the fit from the previous iterate (the current slot) when warm and no worse
 // than the cold start, else from the cold start; resets the state.
 @compute @workgroup_size(1, 1, 1)
 fn select_start() {
@@ -528,7 +529,7 @@ var<workgroup> wg_fail: u32;
 var<workgroup> wg_bad_step: atomic<u32>;
 
 // The damped, Jacobi-scaled step by Cholesky in one workgroup, applied to
-// the current lobes into slot 1 (mirrors passes/src/sgfit/solve.rs). Layout
+// the current lobes into the candidate slot (mirrors passes/src/sgfit/solve.rs). Layout
 // of `work`: n × n lower triangle, then √D (n), then the right-hand side
 // (n), then the step (n). Right-looking, with L's columns kept unscaled
 // (C_ij = L_ij L_jj, the diagonal holding L_jj²), so each invocation reads
