@@ -244,6 +244,18 @@ fn bad_scene_files_name_the_key() {
             "cube",
         ),
         (
+            format!("{base}\n[lighting]\nframe_iterations = 1000\n"),
+            "lighting.frame_iterations",
+        ),
+        (
+            format!("{base}\n[shadows]\ncast_scale = 0\n"),
+            "shadows.cast_scale",
+        ),
+        (
+            format!("{base}\n[shadows]\ncast_scale = 5\n"),
+            "shadows.cast_scale",
+        ),
+        (
             base.replace("max = [0.9, 0.9, 0.9]", "max = [-2.0, 0.9, 0.9]"),
             "recipe.bounds",
         ),
