@@ -265,6 +265,50 @@ struct CastComparison {
     shadowed: usize,
 }
 
+/// BOOKS' first object over a small bake of its field, with its SSDF, the
+/// f_h table and a camera looking down at it: what the cast-shadow tests
+/// share.
+struct CastScene {
+    grid_field: inlay_passes::field::GridField,
+    gpu_field: GpuGridField,
+    placed: PlacedObject,
+    ssdf: GpuSsdf,
+    fh: GpuFhTable,
+    march_knobs: MarchKnobs,
+    spec: CameraSpec,
+}
+
+fn cast_scene(ctx: &Arc<inlay_engine::Context>) -> CastScene {
+    let scene = common::bundled_scene("books.toml");
+    let grid_field = common::bake_small(&scene, 64, 2, 0);
+    let gpu_field = GpuGridField::upload(ctx, &grid_field).unwrap();
+    let placed: PlacedObject = scene.objects[0].clone();
+    let field = Arc::new(small_field(ctx, &placed.mesh, 8, 16));
+    let ssdf = GpuSsdf::upload(ctx, field, &placed.mesh).unwrap();
+    let fh = GpuFhTable::new(ctx).unwrap();
+    let (c, _) = placed.sphere();
+    let spec = CameraSpec {
+        name: None,
+        position: c + DVec3::new(0.0, 0.5, 0.45),
+        look_at: c - DVec3::new(0.0, 0.1, 0.0),
+        up: DVec3::Y,
+        fov_y: 40.0,
+    };
+    let march_knobs = MarchKnobs {
+        skip_empty: false,
+        ..scene.march
+    };
+    CastScene {
+        grid_field,
+        gpu_field,
+        placed,
+        ssdf,
+        fh,
+        march_knobs,
+        spec,
+    }
+}
+
 /// The cast-shadow pass on BOOKS (its gold sphere on the white book, seen
 /// from above) under `lobes`, the last `direct` of them shadowed by rays
 /// cast against the mesh: the kernel against its CPU mirror at every field
@@ -279,13 +323,15 @@ fn compare_cast_shadow(
 ) -> CastComparison {
     let ctx = common::gpu();
     let lib = embedded_library();
-    let scene = common::bundled_scene("books.toml");
-    let grid_field = common::bake_small(&scene, 64, 2, 0);
-    let gpu_field = GpuGridField::upload(&ctx, &grid_field).unwrap();
-    let placed: PlacedObject = scene.objects[0].clone();
-    let field = Arc::new(small_field(&ctx, &placed.mesh, 8, 16));
-    let ssdf = GpuSsdf::upload(&ctx, field, &placed.mesh).unwrap();
-    let fh = GpuFhTable::new(&ctx).unwrap();
+    let CastScene {
+        grid_field,
+        gpu_field,
+        placed,
+        ssdf,
+        fh,
+        march_knobs,
+        spec,
+    } = cast_scene(&ctx);
     let lobe_buf = lobe_buffer(&ctx, lobes);
     let locals = local.map_or(0, |_| 1);
     let sharp_end = lobes.len() - locals;
@@ -304,20 +350,8 @@ fn compare_cast_shadow(
         local_side: 3,
     };
     let direct_total = direct + locals;
-    let (c, _) = placed.sphere();
-    let spec = CameraSpec {
-        name: None,
-        position: c + DVec3::new(0.0, 0.5, 0.45),
-        look_at: c - DVec3::new(0.0, 0.1, 0.0),
-        up: DVec3::Y,
-        fov_y: 40.0,
-    };
     let (w, h) = (48u32, 36u32);
     let cam = CameraFrame::new(&spec, w, h);
-    let march_knobs = MarchKnobs {
-        skip_empty: false,
-        ..scene.march
-    };
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
     let cast = CastShadowPass::new(&ctx, &lib, march_knobs, 1).unwrap();
     let desc = |format| ImageDesc {
@@ -445,30 +479,20 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
     use inlay_passes::shadow::upsample::{low_size, source_pixel};
     let ctx = common::gpu();
     let lib = embedded_library();
-    let scene = common::bundled_scene("books.toml");
-    let grid_field = common::bake_small(&scene, 64, 2, 0);
-    let gpu_field = GpuGridField::upload(&ctx, &grid_field).unwrap();
-    let placed: PlacedObject = scene.objects[0].clone();
-    let field = Arc::new(small_field(&ctx, &placed.mesh, 8, 16));
-    let ssdf = GpuSsdf::upload(&ctx, field, &placed.mesh).unwrap();
-    let fh = GpuFhTable::new(&ctx).unwrap();
+    let CastScene {
+        gpu_field,
+        placed,
+        ssdf,
+        fh,
+        march_knobs,
+        spec,
+        ..
+    } = cast_scene(&ctx);
     let lobes = test_lobes();
     let lobe_buf = lobe_buffer(&ctx, &lobes);
-    let (c, _) = placed.sphere();
-    let spec = CameraSpec {
-        name: None,
-        position: c + DVec3::new(0.0, 0.5, 0.45),
-        look_at: c - DVec3::new(0.0, 0.1, 0.0),
-        up: DVec3::Y,
-        fov_y: 40.0,
-    };
     let (w, h) = (47u32, 35u32);
     let (lw, lh) = low_size(w, h, 2);
     let cam = CameraFrame::new(&spec, w, h);
-    let march_knobs = MarchKnobs {
-        skip_empty: false,
-        ..scene.march
-    };
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
     let full = CastShadowPass::new(&ctx, &lib, march_knobs, 1).unwrap();
     let half = CastShadowPass::new(&ctx, &lib, march_knobs, 2).unwrap();
