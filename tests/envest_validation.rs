@@ -26,6 +26,11 @@ use inlay_passes::envest::{estimate_environment, EnvEstimateKnobs, Validation};
 
 /// Estimates `name`'s environment and checks it against the recipe.
 fn validate(name: &str, rays_per_point: u32) -> Validation {
+    validate_with(name, rays_per_point, 0)
+}
+
+/// As [`validate`], with `near_lights` near lights beside the lobes.
+fn validate_with(name: &str, rays_per_point: u32, near_lights: u32) -> Validation {
     let scene = common::bundled_scene(name);
     let ctx = common::gpu();
     let lib = inlay_passes::shaders::embedded_library();
@@ -34,12 +39,20 @@ fn validate(name: &str, rays_per_point: u32) -> Validation {
         views: 30,
         rays_per_point,
         iterations: 1000,
+        near_lights,
         ..EnvEstimateKnobs::default()
     };
     let est =
         estimate_environment(&ctx, &lib, &field, scene.march, &knobs, &|_, _, _, _| {}).unwrap();
     common::assert_no_validation_errors(&ctx);
-    let v = Validation::new(&scene, scene.recipe().unwrap(), &est.fit.lobes, 2048, 1);
+    let v = Validation::with_lights(
+        &scene,
+        scene.recipe().unwrap(),
+        &est.fit.lobes,
+        &est.fit.lights,
+        2048,
+        1,
+    );
     eprintln!(
         "{name}: {} points, final loss {:.4e}, {} lobes kept",
         est.surface.points.len(),
@@ -95,4 +108,17 @@ fn dog_hidden_light_is_recovered_within_15_percent() {
 fn room_with_an_in_field_softbox_stays_within_bounds() {
     let e = validate("room.toml", 8192).hidden_error();
     assert!(e < 1.5, "error {:.1} %", 100.0 * e);
+}
+
+/// ROOM with one near light beside the lobes (docs/fidelity.md, "Ninth
+/// pass"): the bulb 1.5 m above the field is placed 1.8–2.0 m up and the
+/// error falls to 35–50 % over seeds 1–3 (measured 34.8 % on seed 1; 59 %
+/// with two lights before they started with half the light and with the
+/// irradiance at the centre as their parameter). Held below 45 %. Ignored
+/// with the other ROOM test (same command).
+#[test]
+#[ignore]
+fn room_with_a_near_light_beside_the_lobes_halves_the_error() {
+    let e = validate_with("room.toml", 8192, 1).hidden_error();
+    assert!(e < 0.45, "error {:.1} %", 100.0 * e);
 }

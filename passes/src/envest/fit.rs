@@ -98,7 +98,7 @@ fn point_loss(
         mlp: g_mlp,
         env: g_env,
         lights: g_lights,
-        diagonal,
+        bounds,
         scale,
     }) = grads
     {
@@ -106,7 +106,7 @@ fn point_loss(
         mlp.backward(&trace, k * (e_a * r_b + r_a * e_b) * inv_pi, g_mlp);
         term_a.backward(env, k * r_b * a * inv_pi, g_env);
         term_b.backward(env, k * r_a * a * inv_pi, g_env);
-        near_light.backward(lights, diagonal, k * (r_a + r_b) * a * inv_pi, g_lights);
+        near_light.backward(lights, bounds, k * (r_a + r_b) * a * inv_pi, g_lights);
         if prior.weight > 0.0 {
             // Each half's gradient scaled by the slope the other half sees,
             // so the noise of the two does not multiply. The near lights
@@ -118,7 +118,7 @@ fn point_loss(
             let w = LUMINANCE_WEIGHTS * (0.5 * scale);
             term_a.backward(env, w * slope_b, g_env);
             term_b.backward(env, w * slope_a, g_env);
-            near_light.backward(lights, diagonal, w * (slope_a + slope_b), g_lights);
+            near_light.backward(lights, bounds, w * (slope_a + slope_b), g_lights);
         }
     }
     (loss, r_a.dot(r_b) / 3.0)
@@ -129,21 +129,33 @@ struct PointGrads<'a> {
     mlp: &'a mut [f64],
     env: &'a mut [f64],
     lights: &'a mut [f64],
-    /// The field's diagonal (the lights' position unit).
-    diagonal: f64,
+    /// The field's bounds (the lights' frame).
+    bounds: &'a crate::geometry::Aabb,
     /// The point's weight in the batch.
     scale: f64,
 }
 
+/// Share of the starting light the near lights take when there are any
+/// (the lobes start with the rest). Started at a twentieth, they grew
+/// slowly while the albedo took up the slack, and ROOM's settled on the
+/// bounds' margin, 1.3 m below its bulb (docs/fidelity.md, "Ninth pass").
+pub const NEAR_START_SHARE: f64 = 0.5;
+
 /// Runs the fit from the starting environment
-/// ([`super::env_model::initial_params`]); `progress(step, steps, batch
+/// ([`super::env_model::initial_params`], its light shared with the near
+/// lights when there are any); `progress(step, steps, batch
 /// loss)` every few steps.
 pub fn fit_environment(
     data: &FitData,
     knobs: &EnvEstimateKnobs,
     progress: &dyn Fn(u32, u32, f64),
 ) -> FitResult {
-    let env = initial_params(knobs.lobes as usize, mean_luminance(data.points));
+    let share = if knobs.near_lights > 0 {
+        1.0 - NEAR_START_SHARE
+    } else {
+        1.0
+    };
+    let env = initial_params(knobs.lobes as usize, share * mean_luminance(data.points));
     fit_from(data, knobs, env, true, progress)
 }
 
@@ -184,11 +196,12 @@ pub fn fit_from(
         knobs.albedo_octaves,
         knobs.seed,
     );
-    let diagonal = data.bounds.diagonal();
-    // Near lights start dim (a twentieth of the points' mean irradiance
-    // scale at the field's centre); with a known environment, none.
+    // Near lights start with [`NEAR_START_SHARE`] of the points' mean
+    // irradiance scale at the field's centre, shared among them, and the
+    // lobes with the rest; with a known environment, none.
     let mut near = if fit_env {
-        let start = 0.05 * std::f64::consts::PI * mean_luminance(data.points);
+        let k = knobs.near_lights.max(1) as f64;
+        let start = NEAR_START_SHARE * std::f64::consts::PI * mean_luminance(data.points) / k;
         near_lights::initial_params(knobs.near_lights as usize, &data.bounds, start)
     } else {
         Vec::new()
@@ -208,7 +221,7 @@ pub fn fit_from(
         );
         let env_lobes = lobes(&env);
         let sampler = EnvSampler::new(&env_lobes);
-        let lights = near_lights::lights(&near, diagonal);
+        let lights = near_lights::lights(&near, &data.bounds);
         let mut rng = Pcg32::new(knobs.seed, 0xBA7C_0000_0000 | step as u64);
         let picks: Vec<usize> = (0..batch).map(|_| rng.next_u32() as usize % n).collect();
         let scale = 1.0 / batch as f64;
@@ -238,7 +251,7 @@ pub fn fit_from(
                             mlp: &mut g_mlp,
                             env: &mut g_env,
                             lights: &mut g_near,
-                            diagonal,
+                            bounds: &data.bounds,
                             scale,
                         }),
                     )
@@ -277,7 +290,7 @@ pub fn fit_from(
     }
     let env_lobes = lobes(&env);
     let sampler = EnvSampler::new(&env_lobes);
-    let lights = near_lights::prune_dim(data, near_lights::lights(&near, diagonal));
+    let lights = near_lights::prune_dim(data, near_lights::lights(&near, &data.bounds));
     let (final_loss, exact_loss) = (0..n)
         .into_par_iter()
         .map(|i| {

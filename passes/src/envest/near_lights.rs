@@ -10,15 +10,21 @@
 //! direction and distance to the light, Ô the point's cached opacity.
 //!
 //! Parameters, 6 per light: the position over the field's diagonal (so one
-//! step size suits any scene) and log intensity per channel. The gradient
-//! holds the opacity fixed (it is a step function of the direction).
+//! step size suits any scene) and, per channel, the log of the irradiance
+//! the light gives the field's centre facing it, E_c = I/|p − c|². With
+//! the intensity itself as the parameter, a light moving towards the field
+//! also brightened it, so a fit that started dim pulled its lights in
+//! until they sat on the bounds (ROOM: 1.3 m below its bulb); with E_c,
+//! moving a light changes only how its light is spread. The gradient holds
+//! the opacity fixed (it is a step function of the direction).
 
 use glam::DVec3;
 
 use crate::geometry::Aabb;
 use crate::sg::Sg64;
 
-/// Parameters per light: position / diagonal (3), log intensity (3).
+/// Parameters per light: position / diagonal (3), log irradiance at the
+/// field's centre (3).
 pub const PARAMS_PER_LIGHT: usize = 6;
 
 /// How far outside the bounds (a fraction of the diagonal) a light must
@@ -76,39 +82,44 @@ impl PointLight {
 /// irradiance it gives the centre, facing it).
 pub fn initial_params(k: usize, bounds: &Aabb, irradiance: f64) -> Vec<f64> {
     let diag = bounds.diagonal();
-    let centre = 0.5 * (bounds.min + bounds.max);
+    let centre = bounds.center();
     let dist = 0.75 * diag;
-    let intensity = (irradiance.max(1e-12) * dist * dist).ln();
+    let level = irradiance.max(1e-12).ln();
     (0..k)
         .flat_map(|j| {
             let phi = 2.0 * std::f64::consts::PI * j as f64 / k.max(1) as f64;
             let tilt = if k == 1 { 0.0 } else { 0.5 };
             let dir = DVec3::new(tilt * phi.cos(), 1.0, tilt * phi.sin()).normalize();
             let p = (centre + dir * dist) / diag;
-            [p.x, p.y, p.z, intensity, intensity, intensity]
+            [p.x, p.y, p.z, level, level, level]
         })
         .collect()
 }
 
-/// The lights `params` describe, for a field of `diagonal`.
-pub fn lights(params: &[f64], diagonal: f64) -> Vec<PointLight> {
+/// The lights `params` describe, for a field of `bounds`.
+pub fn lights(params: &[f64], bounds: &Aabb) -> Vec<PointLight> {
+    let (diag, centre) = (bounds.diagonal(), bounds.center());
     params
         .chunks_exact(PARAMS_PER_LIGHT)
-        .map(|p| PointLight {
-            position: DVec3::new(p[0], p[1], p[2]) * diagonal,
-            intensity: DVec3::new(p[3], p[4], p[5]).exp(),
+        .map(|p| {
+            let position = DVec3::new(p[0], p[1], p[2]) * diag;
+            PointLight {
+                position,
+                intensity: DVec3::new(p[3], p[4], p[5]).exp()
+                    * (position - centre).length_squared(),
+            }
         })
         .collect()
 }
 
 /// Keeps `params` in range: each light outside `bounds` by
 /// [`MIN_OUTSIDE`] (pushed out through the nearest face), within
-/// [`MAX_DISTANCE`] diagonals of the centre, log intensities in [−40, 40].
+/// [`MAX_DISTANCE`] diagonals of the centre, log irradiances in [−40, 40].
 pub fn project(params: &mut [f64], bounds: &Aabb) {
     let diag = bounds.diagonal();
     let margin = MIN_OUTSIDE * diag;
     let (lo, hi) = (bounds.min - margin, bounds.max + margin);
-    let centre = 0.5 * (bounds.min + bounds.max);
+    let centre = bounds.center();
     for p in params.chunks_exact_mut(PARAMS_PER_LIGHT) {
         let mut x = DVec3::new(p[0], p[1], p[2]) * diag;
         if x.cmpgt(lo).all() && x.cmplt(hi).all() {
@@ -181,22 +192,27 @@ pub fn near_term(
 
 impl NearLightTerm {
     /// Adds ∂loss/∂params to `grad` given ∂loss/∂E (RGB), for lights of a
-    /// field of `diagonal`.
-    pub fn backward(&self, lights: &[PointLight], diagonal: f64, d_e: DVec3, grad: &mut [f64]) {
+    /// field of `bounds`.
+    pub fn backward(&self, lights: &[PointLight], bounds: &Aabb, d_e: DVec3, grad: &mut [f64]) {
+        let (diagonal, centre) = (bounds.diagonal(), bounds.center());
         for ((l, (el, df)), g) in lights
             .iter()
             .zip(&self.parts)
             .zip(grad.chunks_exact_mut(PARAMS_PER_LIGHT))
         {
-            // ∂E_c/∂log I_c = E_c; ∂E_c/∂p = I_c ∂f/∂p, p = q · diagonal.
+            // E = I f with I = exp(q) |p − c|²: ∂E/∂q = E; ∂E/∂p = I ∂f/∂p
+            // + E · 2(p − c)/|p − c|², and p = position param · diagonal.
             let ge = *el * d_e;
             g[3] += ge.x;
             g[4] += ge.y;
             g[5] += ge.z;
-            let s = (l.intensity * d_e).element_sum() * diagonal;
-            g[0] += s * df.x;
-            g[1] += s * df.y;
-            g[2] += s * df.z;
+            let off = l.position - centre;
+            let spread = 2.0 * off / off.length_squared().max(1e-12);
+            let s = (l.intensity * d_e).element_sum();
+            let gp = (s * *df + ge.element_sum() * spread) * diagonal;
+            g[0] += gp.x;
+            g[1] += gp.y;
+            g[2] += gp.z;
         }
     }
 }
@@ -238,11 +254,11 @@ mod tests {
     use super::*;
 
     /// The hand-written gradient matches central differences of the
-    /// irradiance, for position and intensity, with partial visibility.
+    /// irradiance, for position and the irradiance at the centre (of a box
+    /// not centred on the origin), with partial visibility.
     #[test]
     fn gradient_matches_finite_differences() {
-        let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
-        let diag = bounds.diagonal();
+        let bounds = Aabb::new(DVec3::new(-1.0, -0.5, -1.0), DVec3::new(1.5, 1.0, 0.8));
         let params = vec![
             0.1, 0.6, -0.05, 0.3, -0.2, 0.1, -0.3, 0.5, 0.2, 1.0, 0.5, 0.0,
         ];
@@ -252,9 +268,9 @@ mod tests {
         );
         let vis = |w: DVec3| 0.5 + 0.3 * w.x;
         let weights = DVec3::new(0.3, 0.5, 0.2);
-        let term = near_term(&lights(&params, diag), x, n, &vis);
+        let term = near_term(&lights(&params, &bounds), x, n, &vis);
         let mut grad = vec![0.0; params.len()];
-        term.backward(&lights(&params, diag), diag, weights, &mut grad);
+        term.backward(&lights(&params, &bounds), &bounds, weights, &mut grad);
         for i in 0..params.len() {
             let h = 1e-6;
             let (mut a, mut b) = (params.clone(), params.clone());
@@ -263,8 +279,8 @@ mod tests {
             // The visibility moves with the direction; the gradient holds it
             // fixed, so compare with it frozen at the current directions.
             let fixed = |p: &[f64]| {
-                let ls = lights(p, diag);
-                let now = lights(&params, diag);
+                let ls = lights(p, &bounds);
+                let now = lights(&params, &bounds);
                 ls.iter()
                     .zip(&now)
                     .map(|(l, l0)| {
@@ -311,7 +327,7 @@ mod tests {
             0.0,
         ];
         project(&mut p, &bounds);
-        let ls = lights(&p, diag);
+        let ls = lights(&p, &bounds);
         assert!(
             (ls[0].position.y - (1.0 + MIN_OUTSIDE * diag)).abs() < 1e-12,
             "{}",

@@ -266,6 +266,21 @@ fn synthetic_data(
     Vec<super::surface::SurfacePoint>,
     super::near_field::NearField,
 ) {
+    synthetic_data_lit(&|_, normal| {
+        sun.amplitude
+            * (2.0 * std::f64::consts::PI / sun.sharpness)
+            * sun.direction.dot(normal).max(0.0)
+    })
+}
+
+/// As [`synthetic_data`], the hidden light's irradiance at a point with a
+/// normal given by `hidden`.
+fn synthetic_data_lit(
+    hidden: &dyn Fn(DVec3, DVec3) -> DVec3,
+) -> (
+    Vec<super::surface::SurfacePoint>,
+    super::near_field::NearField,
+) {
     use super::near_field::NearField;
     use super::surface::SurfacePoint;
     let side = 8u32;
@@ -287,9 +302,7 @@ fn synthetic_data(
         );
         let albedo = 0.6;
         let e_nerf = DVec3::splat(0.3);
-        let e_sun = sun.amplitude
-            * (2.0 * std::f64::consts::PI / sun.sharpness)
-            * sun.direction.dot(normal).max(0.0);
+        let e_sun = hidden(position, normal);
         points.push(SurfacePoint {
             position,
             normal,
@@ -325,6 +338,7 @@ fn small_fit_knobs(lobes: u32, iterations: u32) -> super::knobs::EnvEstimateKnob
         batch: 64,
         env_samples: 16,
         env_rate: 0.05,
+        near_lights: 0,
         ..Default::default()
     }
 }
@@ -336,6 +350,32 @@ fn synthetic_sun() -> crate::sg::Sg64 {
         sharpness: 60.0,
         amplitude: DVec3::splat(40.0),
     }
+}
+
+/// A hidden point light 0.5 above the field is found where it is, with its
+/// intensity, by the fit with one near light beside the lobes.
+#[test]
+fn a_near_light_is_found_where_it_is() {
+    use super::fit::fit_environment;
+    use super::knobs::EnvEstimateKnobs;
+    use super::near_lights::PointLight;
+    let bulb = PointLight {
+        position: DVec3::new(0.1, 0.8, -0.1),
+        intensity: DVec3::splat(0.5),
+    };
+    let (points, near) = synthetic_data_lit(&|x, n| bulb.irradiance(x, n).0);
+    let data = synthetic_fit_data(&points, &near);
+    let knobs = EnvEstimateKnobs {
+        near_lights: 1,
+        ..small_fit_knobs(8, 600)
+    };
+    let fit = fit_environment(&data, &knobs, &|_, _, _| {});
+    eprintln!("lights {:?}, loss {:.3e}", fit.lights, fit.exact_loss);
+    assert_eq!(fit.lights.len(), 1);
+    let off = (fit.lights[0].position - bulb.position).length();
+    assert!(off < 0.1, "the near light is {off} from the bulb");
+    let ratio = fit.lights[0].intensity.x / bulb.intensity.x;
+    assert!((ratio - 1.0).abs() < 0.1, "intensity ratio {ratio}");
 }
 
 #[test]

@@ -20,7 +20,7 @@ pub fn random_view(bounds: &Aabb, seed: u64, index: u64) -> CameraSpec {
     let r = (1.0 - z * z).max(0.0).sqrt();
     let phi = 2.0 * std::f64::consts::PI * v;
     let dir = DVec3::new(r * phi.cos(), z, r * phi.sin());
-    let centre = 0.5 * (bounds.min + bounds.max);
+    let centre = bounds.center();
     let distance = 0.5 * bounds.size().max_element();
     let up = if dir.y.abs() > 0.99 {
         DVec3::Z

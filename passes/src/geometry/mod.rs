@@ -31,6 +31,11 @@ impl Aabb {
         self.max - self.min
     }
 
+    /// The centre point.
+    pub fn center(&self) -> DVec3 {
+        0.5 * (self.min + self.max)
+    }
+
     /// Length of the diagonal.
     pub fn diagonal(&self) -> f64 {
         self.size().length()
