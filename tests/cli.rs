@@ -164,3 +164,71 @@ fn a_broken_shader_directory_is_reported_with_file_and_line() {
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("demo/quads.wgsl:"), "{}", text(&o));
 }
+
+/// `inlay render-views` writes a training set that `inlay dataset` reads
+/// back (EXR frames and bracketed PNGs); a broken dataset is refused with
+/// every bad frame named.
+#[test]
+fn render_views_writes_a_dataset_that_dataset_reads() {
+    let dir = scratch("render-views");
+    let out = dir.join("dog-views");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/dog.toml");
+    let o = inlay(&[
+        "render-views",
+        scene,
+        "--views",
+        "3",
+        "--size",
+        "16x12",
+        "--samples",
+        "2",
+        "--brackets=-1,1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = inlay(&["dataset", out.to_str().unwrap()]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("instant-ngp dialect") && t.contains("frames: 3 usable"),
+        "{t}"
+    );
+    assert!(t.contains("from the file's `aabb`"), "{t}");
+    let o = inlay(&["dataset", out.join("brackets").to_str().unwrap()]);
+    let t = text(&o);
+    assert!(o.status.success() && t.contains("frames: 6 usable"), "{t}");
+    assert!(t.contains("exposure_time given for 6 frames"), "{t}");
+
+    // Two frames lose their images: both are named, and nothing panics.
+    std::fs::remove_file(out.join("view-000.exr")).unwrap();
+    std::fs::write(out.join("view-002.exr"), b"not an exr").unwrap();
+    let o = inlay(&["dataset", out.to_str().unwrap()]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("transforms.json: frames: 2 of 3 frames cannot be used"),
+        "{t}"
+    );
+    assert!(
+        t.contains("frames[0]") && t.contains("frames[2]") && !t.contains("frames[1]:"),
+        "{t}"
+    );
+    let o = inlay(&["dataset", out.to_str().unwrap(), "--skip-bad-frames"]);
+    let t = text(&o);
+    assert!(
+        o.status.success() && t.contains("1 usable, 2 left out"),
+        "{t}"
+    );
+
+    let o = inlay(&[
+        "render-views",
+        scene,
+        "--size",
+        "16by12",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("WxH"), "{}", text(&o));
+}

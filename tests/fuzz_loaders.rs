@@ -384,6 +384,56 @@ fn environment_files() {
     });
 }
 
+/// Datasets (`transforms.json`): mutated files beside the two small frames
+/// and the mask they name; whatever loads has finite, usable cameras and
+/// radiance, and what does not names the file.
+#[test]
+fn transforms_files() {
+    use inlay_passes::dataset::{load_dataset, LoadOptions};
+    let dir = scratch("transforms");
+    image::RgbaImage::from_pixel(5, 4, image::Rgba([200, 120, 255, 180]))
+        .save(dir.join("a.png"))
+        .unwrap();
+    image::GrayImage::from_fn(5, 4, |x, _| image::Luma([(x > 0) as u8 * 255]))
+        .save(dir.join("m.png"))
+        .unwrap();
+    let exr = inlay_engine::HdrImage {
+        width: 5,
+        height: 4,
+        pixels: (0..20).map(|i| [i as f32, f32::NAN, 0.5, 1.0]).collect(),
+    };
+    exr.write_file(&dir.join("b.exr"), 1.0).unwrap();
+    let seeds = seeds_in(&corpus_dir("transforms"), &[".json"]);
+    let file = dir.join("transforms.json");
+    fuzz("transforms", &seeds, false, |bytes, _| {
+        std::fs::write(&file, bytes).map_err(|e| e.to_string())?;
+        match load_dataset(&dir, &LoadOptions::default()) {
+            Ok(d) => {
+                if d.frames.is_empty() || !d.bounds.is_valid() {
+                    return Err(format!("loaded without frames or bounds: {:?}", d.bounds));
+                }
+                for f in &d.frames {
+                    if f.intrinsics.problem().is_some() || !f.pose.matrix.is_finite() {
+                        return Err(format!("frame {} loaded unusable", f.index));
+                    }
+                    let finite = f
+                        .image
+                        .radiance
+                        .iter()
+                        .flatten()
+                        .all(|v| v.is_finite() && *v >= 0.0);
+                    if !finite {
+                        return Err(format!("frame {} holds a bad pixel", f.index));
+                    }
+                }
+                Ok(true)
+            }
+            Err(e) if e.to_string().contains("transforms.json") => Ok(false),
+            Err(e) => Err(format!("an error that does not name the file: {e}")),
+        }
+    });
+}
+
 /// Copies `scenes/objects` and the corpus's scene directory into a scratch
 /// directory, so that mutated scene files resolve what they name.
 fn scene_workspace() -> PathBuf {

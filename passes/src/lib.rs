@@ -18,6 +18,7 @@ pub mod bake;
 pub mod brdf;
 pub mod camera;
 pub mod composite;
+pub mod dataset;
 pub mod edge_aa;
 pub mod envest;
 pub mod field;

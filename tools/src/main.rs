@@ -57,6 +57,10 @@ enum Command {
     BakeSsdf(inlay::commands::bake_ssdf::BakeSsdfArgs),
     /// Estimate the distant environment light the field does not show (SG lobes) and write it as an environment file.
     EstimateEnv(inlay::commands::estimate_env::EstimateEnvArgs),
+    /// Read a dataset of posed photographs (transforms.json: Blender synthetic, instant-ngp or nerfstudio) and report its frames, cameras, bounds and unusable pixels.
+    Dataset(inlay::commands::dataset::DatasetArgs),
+    /// Path trace a training set of a recipe scene: EXR views from a cap of cameras and their transforms.json (instant-ngp convention), optionally bracketed sRGB PNGs.
+    RenderViews(inlay::commands::render_views::RenderViewsArgs),
     /// Render a scene's radiance field headless from one of its cameras.
     Render(inlay::commands::render::RenderArgs),
     /// Run N frames with the objects inserted and print the paper's Table 1 (median/p95 per module); writes JSON and a Chrome trace.
@@ -154,6 +158,8 @@ fn main() -> ExitCode {
             inlay::commands::bench_sg::run(ctx, args)
         }),
         Command::BenchShade(args) => inlay::commands::bench_shade::run(args),
+        Command::Dataset(args) => inlay::commands::dataset::run(args),
+        Command::RenderViews(args) => inlay::commands::render_views::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,210 @@
+//! Training sets from the bundled recipes: cameras spread over a cap
+//! around the field as a capture would be, and the `transforms.json`
+//! (instant-ngp convention) and bracketed sRGB frames that describe them.
+
+use glam::DVec3;
+use serde_json::json;
+
+use super::pose::Pose;
+use crate::camera::CameraSpec;
+use crate::geometry::Aabb;
+
+/// Lowest camera elevation above the field's centre, degrees.
+pub const CAP_LOWEST: f64 = 10.0;
+/// Highest camera elevation, degrees.
+pub const CAP_HIGHEST: f64 = 60.0;
+
+/// `views` cameras looking at the field's centre from a cap between
+/// [`CAP_LOWEST`] and [`CAP_HIGHEST`] degrees of elevation, spread evenly
+/// over its area (a Fibonacci spiral), far enough that the field's bounding
+/// sphere fills 1/1.1 of the narrower field of view (`fov_y` degrees, for
+/// an image `aspect` = width / height).
+pub fn cap_cameras(bounds: &Aabb, views: u32, fov_y: f64, aspect: f64) -> Vec<CameraSpec> {
+    let centre = bounds.center();
+    let radius = 0.5 * bounds.diagonal();
+    let half_y = 0.5 * fov_y.to_radians();
+    let half = half_y.min((half_y.tan() * aspect).atan());
+    let distance = 1.1 * radius / half.sin();
+    let (s0, s1) = (
+        CAP_LOWEST.to_radians().sin(),
+        CAP_HIGHEST.to_radians().sin(),
+    );
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..views)
+        .map(|i| {
+            let t = (i as f64 + 0.5) / views as f64;
+            let elevation = (s0 + t * (s1 - s0)).asin();
+            let azimuth = i as f64 * golden;
+            let dir = DVec3::new(
+                elevation.cos() * azimuth.cos(),
+                elevation.sin(),
+                elevation.cos() * azimuth.sin(),
+            );
+            CameraSpec {
+                name: Some(format!("view-{i:03}")),
+                position: centre + distance * dir,
+                look_at: centre,
+                up: DVec3::Y,
+                fov_y,
+            }
+        })
+        .collect()
+}
+
+/// One frame of a written dataset.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WrittenFrame {
+    /// File name, relative to the transforms file.
+    pub file: String,
+    /// The camera.
+    pub camera: CameraSpec,
+    /// Exposure time (relative; radiance × exposure is what the sensor
+    /// records, 1 at white), for bracketed frames.
+    pub exposure_time: Option<f64>,
+}
+
+/// The `transforms.json` of `frames` of `width` × `height` pixels taken of
+/// a field of `bounds`: instant-ngp's keys (`fl_x`, `fl_y`, `cx`, `cy`,
+/// `w`, `h`; `aabb_scale`, `scale` and `offset` mapping the bounds' cube
+/// onto its unit cube) and the bounds themselves as `aabb`. All frames
+/// share `fov_y`.
+pub fn transforms_json(
+    frames: &[WrittenFrame],
+    width: u32,
+    height: u32,
+    bounds: &Aabb,
+) -> serde_json::Value {
+    let fov_y = frames.first().map_or(50.0, |f| f.camera.fov_y);
+    let f = 0.5 * height as f64 / (0.5 * fov_y.to_radians()).tan();
+    let extent = bounds.size().max_element();
+    let scale = 1.0 / extent;
+    let c = bounds.center();
+    // instant-ngp holds world (x, y, z) at its (z, x, y): its offset along
+    // its axis k centres the world axis it holds.
+    let offset = [0.5 - c.y * scale, 0.5 - c.z * scale, 0.5 - c.x * scale];
+    let frames: Vec<serde_json::Value> = frames
+        .iter()
+        .map(|fr| {
+            let pose = Pose::looking_at(fr.camera.position, fr.camera.look_at, fr.camera.up);
+            let rows: Vec<Vec<f64>> = (0..4)
+                .map(|r| pose.matrix.row(r).to_array().to_vec())
+                .collect();
+            let mut v = json!({ "file_path": fr.file, "transform_matrix": rows });
+            if let Some(t) = fr.exposure_time {
+                v["exposure_time"] = t.into();
+            }
+            v
+        })
+        .collect();
+    json!({
+        "fl_x": f, "fl_y": f,
+        "cx": 0.5 * width as f64, "cy": 0.5 * height as f64,
+        "w": width, "h": height,
+        "aabb": [bounds.min.to_array(), bounds.max.to_array()],
+        "aabb_scale": 1, "scale": scale, "offset": offset,
+        "frames": frames,
+    })
+}
+
+/// Linear [0, 1] to 8-bit sRGB (values outside clip).
+pub fn linear_to_srgb8(v: f32) -> u8 {
+    let v = v.clamp(0.0, 1.0);
+    let s = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// A bracketed LDR frame as PNG bytes: clip(`exposure` × radiance) through
+/// the sRGB curve, 8 bits, as a camera with an sRGB response records it.
+pub fn bracket_png(rgb: &[[f32; 3]], width: u32, height: u32, exposure: f32) -> Vec<u8> {
+    let bytes: Vec<u8> = rgb
+        .iter()
+        .flat_map(|p| p.map(|c| linear_to_srgb8(c * exposure)))
+        .collect();
+    let mut out = std::io::Cursor::new(Vec::new());
+    image::write_buffer_with_format(
+        &mut out,
+        &bytes,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .expect("encoding a PNG in memory");
+    out.into_inner()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::CameraFrame;
+    use crate::dataset::{load_dataset, BoundsSource, Dialect, LoadOptions};
+
+    /// A written dataset reads back: the loader's ray through each pixel
+    /// is the camera's, and instant-ngp's cube holds the bounds.
+    #[test]
+    fn a_written_capture_reads_back_with_the_cameras_rays() {
+        let bounds = Aabb::new(DVec3::new(-1.0, -0.1, -0.8), DVec3::new(1.0, 1.2, 0.6));
+        let (w, h) = (12u32, 8u32);
+        let cams = cap_cameras(&bounds, 5, 40.0, w as f64 / h as f64);
+        let dir = std::env::temp_dir().join(format!("inlay-capture-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let frames: Vec<WrittenFrame> = cams
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let file = format!("v{i}.png");
+                let rgb = vec![[0.2f32, 0.5, 2.0]; (w * h) as usize];
+                std::fs::write(dir.join(&file), bracket_png(&rgb, w, h, 0.5)).unwrap();
+                WrittenFrame {
+                    file,
+                    camera: c.clone(),
+                    exposure_time: Some(0.5),
+                }
+            })
+            .collect();
+        let doc = transforms_json(&frames, w, h, &bounds);
+        std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+        let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+        assert_eq!(d.dialect, Dialect::InstantNgp);
+        assert_eq!(d.bounds_source, BoundsSource::AabbKey);
+        assert_eq!(d.bounds, bounds);
+        for (f, c) in d.frames.iter().zip(&cams) {
+            let frame = CameraFrame::new(c, w, h);
+            for (u, v) in [(0.5, 0.5), (11.5, 7.5), (6.0, 4.0), (3.25, 6.75)] {
+                let want = frame.ray(u, v).dir;
+                let got = f.pose.to_world(f.intrinsics.direction(u, v).unwrap());
+                assert!((got - want).length() < 1e-9, "{u} {v}: {got} vs {want}");
+            }
+            assert_eq!(f.exposure_time, Some(0.5));
+            // 2.0 × 0.5 clips: the blue channel is a lower bound.
+            assert_eq!(f.image.state[0], crate::dataset::PixelState::LowerBound);
+            let g = f.image.radiance[0][1];
+            assert!((g - 0.25).abs() < 0.01, "{g}");
+            // Every camera sees the whole field.
+            let r = 0.5 * bounds.diagonal();
+            assert!(frame.sphere_visible(bounds.center(), r));
+        }
+        let ngp = crate::dataset::bounds::ngp_bounds(
+            doc["aabb_scale"].as_f64().unwrap(),
+            doc["scale"].as_f64().unwrap(),
+            [0, 1, 2].map(|k| doc["offset"][k].as_f64().unwrap()),
+        );
+        assert!(
+            ngp.contains(bounds.min) && ngp.contains(bounds.max),
+            "{ngp:?}"
+        );
+        // Elevations lie on the cap.
+        for c in &cams {
+            let d = (c.position - bounds.center()).normalize();
+            let el = d.y.asin().to_degrees();
+            assert!(
+                (CAP_LOWEST - 1e-9..=CAP_HIGHEST + 1e-9).contains(&el),
+                "{el}"
+            );
+        }
+    }
+}

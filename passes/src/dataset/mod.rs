@@ -1,0 +1,557 @@
+//! Posed photographs as users have them: a `transforms.json` in one of its
+//! three common dialects, read into frames of linear radiance with a pose,
+//! intrinsics (with the lens' distortion inverted exactly) and what each
+//! pixel can tell a trainer.
+//!
+//! - **Blender synthetic** (the NeRF paper's datasets): a folder with
+//!   `transforms_{train,val,test}.json`, `camera_angle_x`, paths without an
+//!   extension (`.png` added), RGBA PNGs composited over a stated
+//!   background.
+//! - **instant-ngp**: one `transforms.json`; `fl_x`/`fl_y`/`cx`/`cy`/`w`/`h`
+//!   or `camera_angle_x`/`camera_angle_y`, globally or per frame;
+//!   `k1`/`k2`/`p1`/`p2`; `aabb_scale` with `scale` and `offset`; EXR frames
+//!   as linear HDR.
+//! - **nerfstudio**: `camera_model` PINHOLE or OPENCV (k1, k2, p1, p2,
+//!   undistorted exactly); per-frame intrinsics; `mask_path`. Fisheye and
+//!   other models are refused with a message that says so.
+//!
+//! In every dialect: an `aabb` key ([[min], [max]], world units) gives the
+//! field's bounds, and a frame's `exposure_time` (seconds) is kept for
+//! exposure brackets. Poses are camera-to-world in the OpenGL convention
+//! (x right, y up, looking along −z) and must be rigid. Frames whose image
+//! is missing, unreadable or of the wrong size, or whose pose is not rigid,
+//! are all reported together; NaN, infinite and negative pixels are masked
+//! and counted, saturated LDR pixels kept as lower bounds.
+
+pub mod bounds;
+pub mod capture;
+pub mod intrinsics;
+mod json;
+pub mod pixels;
+pub mod pose;
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+pub use bounds::BoundsSource;
+pub use intrinsics::{Distortion, Intrinsics};
+pub use pixels::{FrameImage, PixelCounts, PixelState};
+pub use pose::Pose;
+
+use crate::geometry::Aabb;
+use json::Obj;
+
+/// The dialects of `transforms.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dialect {
+    /// The NeRF paper's Blender synthetic scenes.
+    BlenderSynthetic,
+    /// instant-ngp's.
+    InstantNgp,
+    /// nerfstudio's.
+    Nerfstudio,
+}
+
+impl std::fmt::Display for Dialect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Dialect::BlenderSynthetic => "Blender synthetic",
+            Dialect::InstantNgp => "instant-ngp",
+            Dialect::Nerfstudio => "nerfstudio",
+        })
+    }
+}
+
+/// How to read a dataset.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadOptions {
+    /// The field's bounds, overriding the file's.
+    pub bounds: Option<Aabb>,
+    /// Linear RGB that transparent pixels of RGBA images are composited
+    /// over (the Blender synthetic scenes are usually trained on white).
+    pub background: [f32; 3],
+    /// Which Blender synthetic split to read (`train`, `val`, `test`).
+    pub split: String,
+    /// Leave out the frames that cannot be used (reported) instead of
+    /// failing.
+    pub skip_bad_frames: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            bounds: None,
+            background: [1.0; 3],
+            split: "train".into(),
+            skip_bad_frames: false,
+        }
+    }
+}
+
+/// One posed photograph.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// Its index among the file's frames.
+    pub index: usize,
+    /// The image file.
+    pub image_path: PathBuf,
+    /// Where the camera was.
+    pub pose: Pose,
+    /// The camera's intrinsics.
+    pub intrinsics: Intrinsics,
+    /// Exposure time in seconds, where given (`exposure_time`).
+    pub exposure_time: Option<f64>,
+    /// Its pixels.
+    pub image: FrameImage,
+}
+
+/// A frame that cannot be used, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameProblem {
+    /// Its index among the file's frames.
+    pub index: usize,
+    /// The key path of the frame (`frames[3]`).
+    pub key: String,
+    /// What is wrong.
+    pub problem: String,
+}
+
+/// A dataset read whole.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    /// The `transforms.json` read.
+    pub file: PathBuf,
+    /// Its dialect.
+    pub dialect: Dialect,
+    /// The usable frames.
+    pub frames: Vec<Frame>,
+    /// The field's bounds.
+    pub bounds: Aabb,
+    /// Where the bounds came from.
+    pub bounds_source: BoundsSource,
+    /// The pixels that are not values, over all frames.
+    pub counts: PixelCounts,
+    /// Frames left out (with [`LoadOptions::skip_bad_frames`]).
+    pub skipped: Vec<FrameProblem>,
+}
+
+/// Why a dataset cannot be read: the file, the key and what is wrong, and
+/// every frame that cannot be used.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DatasetError {
+    /// The file.
+    pub file: PathBuf,
+    /// The key path ("" for the file as a whole).
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+    /// The frames that cannot be used, all of them.
+    pub frames: Vec<FrameProblem>,
+}
+
+impl DatasetError {
+    /// An error at `key` of `file`.
+    pub fn at(file: &Path, key: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            file: file.to_path_buf(),
+            key: key.into(),
+            message: message.into(),
+            frames: Vec::new(),
+        }
+    }
+}
+
+impl std::fmt::Display for DatasetError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if !self.key.is_empty() {
+            write!(f, ": {}", self.key)?;
+        }
+        write!(f, ": {}", self.message)?;
+        for p in &self.frames {
+            write!(f, "\n  {}: {}", p.key, p.problem)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for DatasetError {}
+
+/// The `transforms.json` that `path` names: the file itself, or in a
+/// folder `transforms.json`, else `transforms_<split>.json`.
+pub fn transforms_file(path: &Path, split: &str) -> Result<PathBuf, DatasetError> {
+    if path.is_file() {
+        return Ok(path.to_path_buf());
+    }
+    if !path.is_dir() {
+        return Err(DatasetError::at(path, "", "no such file or folder"));
+    }
+    let plain = path.join("transforms.json");
+    if plain.is_file() {
+        return Ok(plain);
+    }
+    let split_file = path.join(format!("transforms_{split}.json"));
+    if split_file.is_file() {
+        return Ok(split_file);
+    }
+    Err(DatasetError::at(
+        path,
+        "",
+        format!("holds neither transforms.json nor transforms_{split}.json"),
+    ))
+}
+
+/// Reads the dataset at `path` (a `transforms.json`, or a folder holding
+/// one).
+pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, DatasetError> {
+    let file = transforms_file(path, &options.split)?;
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| DatasetError::at(&file, "", format!("unreadable: {e}")))?;
+    let map = json::parse_object(&file, &text)?;
+    let top = Obj {
+        map: &map,
+        file: &file,
+        at: "",
+    };
+    let dialect = dialect_of(&file, top)?;
+    let folder = file.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let frames_value = map
+        .get("frames")
+        .and_then(|v| v.as_array())
+        .ok_or_else(|| top.error("frames", "expected a list of frames"))?;
+    if frames_value.is_empty() {
+        return Err(top.error("frames", "no frames"));
+    }
+    // Read each frame's keys first (errors in the file stop everything),
+    // then its image (problems are collected).
+    let keys: Vec<String> = (0..frames_value.len())
+        .map(|i| format!("frames[{i}]"))
+        .collect();
+    let mut specs = Vec::with_capacity(frames_value.len());
+    for (i, v) in frames_value.iter().enumerate() {
+        let Some(m) = v.as_object() else {
+            return Err(top.error(&keys[i], "expected an object"));
+        };
+        let obj = Obj {
+            map: m,
+            file: &file,
+            at: &keys[i],
+        };
+        specs.push(frame_spec(i, top, obj, dialect, &folder)?);
+    }
+    let results: Vec<Result<Frame, FrameProblem>> = specs
+        .into_par_iter()
+        .map(|s| read_frame(s, options))
+        .collect();
+    let mut frames = Vec::new();
+    let mut problems = Vec::new();
+    for r in results {
+        match r {
+            Ok(f) => frames.push(f),
+            Err(p) => problems.push(p),
+        }
+    }
+    if !problems.is_empty() && (!options.skip_bad_frames || frames.is_empty()) {
+        let n = problems.len();
+        let mut e = top.error(
+            "frames",
+            format!(
+                "{n} of {} frames cannot be used{}",
+                n + frames.len(),
+                if frames.is_empty() {
+                    ""
+                } else {
+                    " (--skip-bad-frames trains on the rest)"
+                }
+            ),
+        );
+        e.frames = problems;
+        return Err(e);
+    }
+    let (bounds, bounds_source) = dataset_bounds(top, dialect, &frames, options)?;
+    let mut counts = PixelCounts::default();
+    for f in &frames {
+        counts += f.image.counts;
+    }
+    Ok(Dataset {
+        file,
+        dialect,
+        frames,
+        bounds,
+        bounds_source,
+        counts,
+        skipped: problems,
+    })
+}
+
+/// Which dialect the file is in.
+fn dialect_of(file: &Path, top: Obj) -> Result<Dialect, DatasetError> {
+    if let Some(model) = top.string("camera_model")? {
+        return match model {
+            "PINHOLE" | "OPENCV" => Ok(Dialect::Nerfstudio),
+            other => Err(top.error(
+                "camera_model",
+                format!(
+                    "{other} is not supported: only PINHOLE and OPENCV (k1, k2, p1, p2) are; \
+                     undistort fisheye or other images to a pinhole first (e.g. COLMAP's image_undistorter)"
+                ),
+            )),
+        };
+    }
+    let name = file.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    let blender_name = name.starts_with("transforms_") && name.ends_with(".json");
+    if blender_name && top.has("camera_angle_x") && !top.has("fl_x") {
+        return Ok(Dialect::BlenderSynthetic);
+    }
+    Ok(Dialect::InstantNgp)
+}
+
+/// What a frame's keys say, before its image is read.
+struct FrameSpec {
+    index: usize,
+    key: String,
+    pose: Result<Pose, String>,
+    image: Result<PathBuf, String>,
+    mask: Option<PathBuf>,
+    exposure_time: Option<f64>,
+    camera: CameraKeys,
+}
+
+/// The intrinsics keys a frame sees (its own over the file's).
+#[derive(Debug, Clone, Copy)]
+struct CameraKeys {
+    fl: [Option<f64>; 2],
+    angle: [Option<f64>; 2],
+    centre: [Option<f64>; 2],
+    size: [Option<f64>; 2],
+    distortion: Distortion,
+}
+
+fn frame_spec(
+    index: usize,
+    top: Obj,
+    obj: Obj,
+    dialect: Dialect,
+    folder: &Path,
+) -> Result<FrameSpec, DatasetError> {
+    let pick = |key: &str| -> Result<Option<f64>, DatasetError> {
+        Ok(obj.number(key)?.or(top.number(key)?))
+    };
+    let camera = CameraKeys {
+        fl: [pick("fl_x")?, pick("fl_y")?],
+        angle: [pick("camera_angle_x")?, pick("camera_angle_y")?],
+        centre: [pick("cx")?, pick("cy")?],
+        size: [pick("w")?, pick("h")?],
+        distortion: {
+            let k = [pick("k1")?, pick("k2")?, pick("p1")?, pick("p2")?].map(|v| v.unwrap_or(0.0));
+            let pinhole = dialect == Dialect::BlenderSynthetic
+                || top.string("camera_model")? == Some("PINHOLE");
+            if pinhole || k.iter().all(|&v| v == 0.0) {
+                Distortion::None
+            } else {
+                Distortion::OpenCv {
+                    k1: k[0],
+                    k2: k[1],
+                    p1: k[2],
+                    p2: k[3],
+                }
+            }
+        },
+    };
+    if camera.fl[0].is_none() && camera.angle[0].is_none() {
+        return Err(obj.error(
+            "fl_x",
+            "no focal length: give fl_x (pixels) or camera_angle_x (radians), for the file or the frame",
+        ));
+    }
+    for (k, v) in [
+        ("camera_angle_x", camera.angle[0]),
+        ("camera_angle_y", camera.angle[1]),
+    ] {
+        if v.is_some_and(|a| !(a > 0.0 && a < std::f64::consts::PI)) {
+            return Err(obj.error(k, "must be in (0, π) radians"));
+        }
+    }
+    let path = obj
+        .string("file_path")?
+        .ok_or_else(|| obj.error("file_path", "missing"))?;
+    let matrix = obj
+        .matrix("transform_matrix")?
+        .ok_or_else(|| obj.error("transform_matrix", "missing"))?;
+    let exposure_time = obj.number("exposure_time")?;
+    if exposure_time.is_some_and(|t| t <= 0.0) {
+        return Err(obj.error("exposure_time", "must be positive (seconds)"));
+    }
+    let mask = obj.string("mask_path")?.map(|m| folder.join(m));
+    Ok(FrameSpec {
+        index,
+        key: obj.at.to_string(),
+        pose: Pose::new(matrix).map_err(|e| format!("transform_matrix is not rigid: {e}")),
+        image: image_file(folder, path),
+        mask,
+        exposure_time,
+        camera,
+    })
+}
+
+/// The image a `file_path` names: as written, or with `.png`, `.exr`,
+/// `.jpg` or `.jpeg` added when it has no extension (the Blender synthetic
+/// scenes leave it out).
+fn image_file(folder: &Path, path: &str) -> Result<PathBuf, String> {
+    let p = folder.join(path);
+    if p.extension().is_some() {
+        return if p.is_file() {
+            Ok(p)
+        } else {
+            Err(format!("image {} is missing", p.display()))
+        };
+    }
+    for ext in ["png", "exr", "jpg", "jpeg"] {
+        let q = p.with_extension(ext);
+        if q.is_file() {
+            return Ok(q);
+        }
+    }
+    Err(format!(
+        "image {}(.png|.exr|.jpg|.jpeg) is missing",
+        p.display()
+    ))
+}
+
+/// Reads one frame's image and resolves its intrinsics.
+fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem> {
+    let fail = |problem: String| FrameProblem {
+        index: s.index,
+        key: s.key.clone(),
+        problem,
+    };
+    let pose = s.pose.clone().map_err(&fail)?;
+    let path = s.image.clone().map_err(&fail)?;
+    let (w, h) = pixels::image_size(&path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    if let [Some(fw), Some(fh)] = s.camera.size {
+        if (fw, fh) != (w as f64, h as f64) {
+            return Err(fail(format!(
+                "{} is {w}x{h}, the file says w = {fw}, h = {fh}",
+                path.display()
+            )));
+        }
+    }
+    let intrinsics = intrinsics_for(&s.camera, w, h);
+    if let Some(p) = intrinsics.problem() {
+        return Err(fail(p));
+    }
+    let mut image = pixels::load_image(&path, options.background)
+        .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    if let Some(m) = &s.mask {
+        pixels::apply_mask(&mut image, m).map_err(|e| fail(format!("{}: {e}", m.display())))?;
+    }
+    Ok(Frame {
+        index: s.index,
+        image_path: path,
+        pose,
+        intrinsics,
+        exposure_time: s.exposure_time,
+        image,
+    })
+}
+
+/// The intrinsics `keys` give for an image of `w` × `h`: focal lengths
+/// from `fl_x`/`fl_y` or the view angles (fy = fx when neither vertical key
+/// is given), the principal point at the centre unless given.
+fn intrinsics_for(keys: &CameraKeys, w: u32, h: u32) -> Intrinsics {
+    let (wf, hf) = (w as f64, h as f64);
+    let fx = keys.fl[0].unwrap_or_else(|| 0.5 * wf / (0.5 * keys.angle[0].unwrap_or(1.0)).tan());
+    let fy = keys.fl[1].unwrap_or_else(|| {
+        keys.angle[1]
+            .map(|a| 0.5 * hf / (0.5 * a).tan())
+            .unwrap_or(fx)
+    });
+    Intrinsics {
+        width: w,
+        height: h,
+        fx,
+        fy,
+        cx: keys.centre[0].unwrap_or(0.5 * wf),
+        cy: keys.centre[1].unwrap_or(0.5 * hf),
+        distortion: keys.distortion,
+    }
+}
+
+/// The field's bounds and where they came from.
+fn dataset_bounds(
+    top: Obj,
+    dialect: Dialect,
+    frames: &[Frame],
+    options: &LoadOptions,
+) -> Result<(Aabb, BoundsSource), DatasetError> {
+    let valid = |b: Aabb, key: &str| {
+        if b.is_valid() {
+            Ok(b)
+        } else {
+            Err(top.error(
+                key,
+                format!("bounds {:?} to {:?} are empty or not finite", b.min, b.max),
+            ))
+        }
+    };
+    if let Some(b) = options.bounds {
+        return Ok((valid(b, "--bounds")?, BoundsSource::Given));
+    }
+    if top.has("aabb") {
+        let bad = || top.error("aabb", "expected [[min x, y, z], [max x, y, z]]");
+        let rows = top.map["aabb"]
+            .as_array()
+            .filter(|a| a.len() == 2)
+            .ok_or_else(bad)?;
+        let mut corners = [glam::DVec3::ZERO; 2];
+        for (c, row) in corners.iter_mut().zip(rows) {
+            let r = row.as_array().filter(|a| a.len() == 3).ok_or_else(bad)?;
+            for k in 0..3 {
+                c[k] = r[k].as_f64().filter(|v| v.is_finite()).ok_or_else(bad)?;
+            }
+        }
+        return Ok((
+            valid(Aabb::new(corners[0], corners[1]), "aabb")?,
+            BoundsSource::AabbKey,
+        ));
+    }
+    if dialect == Dialect::InstantNgp {
+        if let Some(a) = top.number("aabb_scale")? {
+            if a <= 0.0 {
+                return Err(top.error("aabb_scale", "must be positive"));
+            }
+            let scale = top.number("scale")?.unwrap_or(bounds::NGP_DEFAULT_SCALE);
+            if scale <= 0.0 {
+                return Err(top.error("scale", "must be positive"));
+            }
+            let offset = match top.numbers("offset", 3)? {
+                Some(o) => [o[0], o[1], o[2]],
+                None => bounds::NGP_DEFAULT_OFFSET,
+            };
+            let b = bounds::ngp_bounds(a, scale, offset);
+            return Ok((valid(b, "aabb_scale")?, BoundsSource::NgpAabbScale));
+        }
+    }
+    let poses: Vec<Pose> = frames.iter().map(|f| f.pose).collect();
+    let half_fovs: Vec<f64> = frames
+        .iter()
+        .map(|f| {
+            let k = &f.intrinsics;
+            (0.5 * k.width as f64 / k.fx)
+                .atan()
+                .min((0.5 * k.height as f64 / k.fy).atan())
+        })
+        .collect();
+    bounds::common_view(&poses, &half_fovs)
+        .map(|b| (b, BoundsSource::Cameras))
+        .ok_or_else(|| {
+            top.error(
+                "aabb",
+                "no bounds: the cameras' axes have no common point; give an `aabb` key or --bounds",
+            )
+        })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,287 @@
+//! The loader on each dialect, written out as small datasets, and on the
+//! committed Cycles training set.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use super::*;
+
+/// A fresh folder for one test's dataset.
+fn folder(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("inlay-dataset-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A camera-to-world matrix looking from `eye` at the origin, as rows.
+fn pose_rows(eye: DVec3) -> Vec<Vec<f64>> {
+    let m = Pose::looking_at(eye, DVec3::ZERO, DVec3::Y).matrix;
+    (0..4).map(|r| m.row(r).to_array().to_vec()).collect()
+}
+
+fn write_png_rgba(path: &Path, w: u32, h: u32, px: impl Fn(u32, u32) -> [u8; 4]) {
+    let mut bytes = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            bytes.extend_from_slice(&px(x, y));
+        }
+    }
+    image::save_buffer(path, &bytes, w, h, image::ExtendedColorType::Rgba8).unwrap();
+}
+
+fn write_exr(path: &Path, w: u32, h: u32, px: impl Fn(u32, u32) -> [f32; 3]) {
+    let img = inlay_engine::HdrImage {
+        width: w,
+        height: h,
+        pixels: (0..w * h)
+            .map(|i| {
+                let c = px(i % w, i / w);
+                [c[0], c[1], c[2], 1.0]
+            })
+            .collect(),
+    };
+    img.write_file(path, 1.0).unwrap();
+}
+
+fn eyes() -> [DVec3; 4] {
+    [
+        DVec3::new(3.0, 1.0, 0.0),
+        DVec3::new(0.0, 1.0, 3.0),
+        DVec3::new(-3.0, 1.0, 0.0),
+        DVec3::new(0.0, 1.5, -3.0),
+    ]
+}
+
+#[test]
+fn the_committed_cycles_training_set_loads() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/cycles/dog/training");
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert_eq!(d.dialect, Dialect::Nerfstudio);
+    assert_eq!(d.frames.len(), 32);
+    assert_eq!(d.bounds_source, BoundsSource::AabbKey);
+    assert!((d.bounds.min - DVec3::new(-0.9, -0.1, -0.9)).length() < 1e-12);
+    let f = &d.frames[0];
+    assert_eq!((f.intrinsics.width, f.intrinsics.height), (96, 96));
+    assert_eq!(f.intrinsics.distortion, Distortion::None);
+    assert_eq!(d.counts, PixelCounts::default());
+    // Every camera looks towards the field.
+    for f in &d.frames {
+        let to_field = (d.bounds.center() - f.pose.origin()).normalize();
+        assert!(f.pose.forward().dot(to_field) > 0.8, "frame {}", f.index);
+    }
+}
+
+#[test]
+fn blender_synthetic_frames_are_composited_and_saturation_is_a_lower_bound() {
+    let dir = folder("blender");
+    std::fs::create_dir_all(dir.join("train")).unwrap();
+    let frames: Vec<_> = eyes()
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            write_png_rgba(&dir.join(format!("train/r_{i}.png")), 8, 6, |x, _| match x {
+                0 => [255, 255, 255, 255],
+                1 => [128, 128, 128, 0],
+                2 => [188, 188, 188, 128],
+                _ => [100, 150, 200, 255],
+            });
+            serde_json::json!({ "file_path": format!("./train/r_{i}"), "transform_matrix": pose_rows(*e) })
+        })
+        .collect();
+    let text = serde_json::json!({ "camera_angle_x": 0.69, "frames": frames }).to_string();
+    std::fs::write(dir.join("transforms_train.json"), text).unwrap();
+    let bg = [0.25f32, 0.5, 0.75];
+    let d = load_dataset(
+        &dir,
+        &LoadOptions {
+            background: bg,
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(d.dialect, Dialect::BlenderSynthetic);
+    assert_eq!(d.frames.len(), 4);
+    assert_eq!(d.bounds_source, BoundsSource::Cameras);
+    let f = &d.frames[0];
+    let k = f.intrinsics;
+    assert!((k.fx - 4.0 / (0.345f64).tan()).abs() < 1e-9 && k.fy == k.fx);
+    assert_eq!((k.cx, k.cy), (4.0, 3.0));
+    let img = &f.image;
+    // Saturated white: a lower bound; transparent: the background; half
+    // covered: the mix in linear light.
+    assert_eq!(img.state[0], PixelState::LowerBound);
+    assert_eq!(img.radiance[1], bg);
+    let a = 128.0 / 255.0;
+    let c = pixels::srgb_to_linear(188.0 / 255.0);
+    for (got, b) in img.radiance[2].iter().zip(bg) {
+        assert!((got - (a * c + (1.0 - a) * b)).abs() < 1e-5);
+    }
+    assert_eq!(d.counts.saturated, 4 * 6);
+    // The cameras look at the origin from 3 m: the common view is there.
+    assert!(d.bounds.center().length() < 1e-6, "{:?}", d.bounds);
+}
+
+#[test]
+fn instant_ngp_exr_frames_mask_bad_pixels_and_take_aabb_scale() {
+    let dir = folder("ngp");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.exr");
+        write_exr(&dir.join(&name), 5, 4, |x, y| match (x, y) {
+            (0, 0) => [f32::NAN, 1.0, 1.0],
+            (1, 0) => [1.0, -0.5, 1.0],
+            (2, 0) => [f32::INFINITY, 0.0, 0.0],
+            _ => [40.0, 2.0, 0.5],
+        });
+        let mut f = serde_json::json!({ "file_path": name, "transform_matrix": pose_rows(*e) });
+        if i == 2 {
+            f["fl_x"] = 9.0.into();
+            f["exposure_time"] = 0.01.into();
+        }
+        frames.push(f);
+    }
+    let text = serde_json::json!({
+        "fl_x": 6.0, "fl_y": 6.5, "cx": 2.4, "cy": 2.1, "w": 5, "h": 4,
+        "aabb_scale": 2, "scale": 0.5, "offset": [0.5, 0.5, 0.5],
+        "frames": frames
+    })
+    .to_string();
+    std::fs::write(dir.join("transforms.json"), text).unwrap();
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert_eq!(d.dialect, Dialect::InstantNgp);
+    assert_eq!(d.bounds_source, BoundsSource::NgpAabbScale);
+    assert!((d.bounds.size() - DVec3::splat(4.0)).length() < 1e-12);
+    assert_eq!(d.counts.non_finite, 2 * 4);
+    assert_eq!(d.counts.negative, 4);
+    assert_eq!(d.frames[0].image.radiance[3], [40.0, 2.0, 0.5]);
+    assert_eq!(d.frames[0].image.state[0], PixelState::Masked);
+    assert_eq!(
+        (d.frames[0].intrinsics.fx, d.frames[2].intrinsics.fx),
+        (6.0, 9.0)
+    );
+    assert_eq!(d.frames[2].intrinsics.fy, 6.5);
+    assert_eq!(d.frames[2].exposure_time, Some(0.01));
+}
+
+#[test]
+fn every_bad_frame_is_reported_and_can_be_skipped() {
+    let dir = folder("bad");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.png");
+        let (w, h) = if i == 2 { (7, 6) } else { (8, 6) };
+        if i != 1 {
+            write_png_rgba(&dir.join(&name), w, h, |_, _| [90, 90, 90, 255]);
+        }
+        let mut rows = pose_rows(*e);
+        if i == 3 {
+            for r in rows.iter_mut().take(3) {
+                r[0] *= 1.5;
+            }
+        }
+        frames.push(serde_json::json!({ "file_path": name, "transform_matrix": rows }));
+    }
+    frames.push(serde_json::json!({ "file_path": "f0.png", "transform_matrix": pose_rows(DVec3::new(2.0, 2.0, 2.0)) }));
+    let text = serde_json::json!({ "fl_x": 8.0, "w": 8, "h": 6, "aabb": [[-1, -1, -1], [1, 1, 1]], "frames": frames }).to_string();
+    std::fs::write(dir.join("transforms.json"), text).unwrap();
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    let keys: Vec<&str> = e.frames.iter().map(|p| p.key.as_str()).collect();
+    assert_eq!(keys, ["frames[1]", "frames[2]", "frames[3]"], "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("transforms.json: frames: 3 of 5 frames cannot be used"),
+        "{text}"
+    );
+    assert!(text.contains("missing") && text.contains("is 7x6, the file says w = 8, h = 6"));
+    assert!(text.contains("not rigid"), "{text}");
+    let d = load_dataset(
+        &dir,
+        &LoadOptions {
+            skip_bad_frames: true,
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(d.frames.iter().map(|f| f.index).collect::<Vec<_>>(), [0, 4]);
+    assert_eq!(d.skipped.len(), 3);
+}
+
+#[test]
+fn nerfstudio_opencv_frames_are_undistorted_and_masked_and_fisheye_is_refused() {
+    let dir = folder("nerfstudio");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.jpg");
+        let img = image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]));
+        img.save(dir.join(&name)).unwrap();
+        let mask = format!("m{i}.png");
+        image::GrayImage::from_fn(8, 6, |x, _| image::Luma([if x < 2 { 0 } else { 255 }]))
+            .save(dir.join(&mask))
+            .unwrap();
+        frames.push(serde_json::json!({
+            "file_path": name, "mask_path": mask, "transform_matrix": pose_rows(*e),
+            "fl_x": 7.0, "fl_y": 7.0, "cx": 4.0, "cy": 3.0, "w": 8, "h": 6,
+            "k1": -0.2, "k2": 0.03, "p1": 0.001, "p2": -0.002
+        }));
+    }
+    let doc = serde_json::json!({ "camera_model": "OPENCV", "frames": frames });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert_eq!(d.dialect, Dialect::Nerfstudio);
+    assert_eq!(d.counts.masked, 4 * 2 * 6);
+    let k = d.frames[0].intrinsics;
+    assert!(matches!(k.distortion, Distortion::OpenCv { .. }));
+    // The corner pixel's ray passes through the lens onto the corner.
+    let dir0 = k.direction(0.5, 0.5).unwrap();
+    let (u, v) = k.project(dir0).unwrap();
+    assert!((u - 0.5).abs() < 1e-9 && (v - 0.5).abs() < 1e-9);
+    let mut fisheye = doc.clone();
+    fisheye["camera_model"] = "OPENCV_FISHEYE".into();
+    std::fs::write(dir.join("transforms.json"), fisheye.to_string()).unwrap();
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.key, "camera_model");
+    assert!(
+        e.to_string().contains("OPENCV_FISHEYE is not supported"),
+        "{e}"
+    );
+}
+
+#[test]
+fn errors_in_the_file_name_the_key() {
+    let dir = folder("keys");
+    let cases = [
+        (r#"{"frames": []}"#, "frames"),
+        (
+            r#"{"frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]}"#,
+            "frames[0].fl_x",
+        ),
+        (
+            r#"{"fl_x": 5, "frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0]]}]}"#,
+            "frames[0].transform_matrix",
+        ),
+        (r#"{"fl_x": "5", "frames": [{}]}"#, "fl_x"),
+        (
+            r#"{"camera_angle_x": 4.0, "frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]}"#,
+            "frames[0].camera_angle_x",
+        ),
+        (
+            r#"{"fl_x": 5, "frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]}"#,
+            "frames[0].file_path",
+        ),
+        (
+            r#"{"fl_x": 5, "frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]], "exposure_time": -1}]}"#,
+            "frames[0].exposure_time",
+        ),
+        (r#"[1, 2]"#, ""),
+    ];
+    for (text, key) in cases {
+        std::fs::write(dir.join("transforms.json"), text).unwrap();
+        let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+        assert_eq!(e.key, key, "{text}: {e}");
+        assert!(e.to_string().contains("transforms.json"), "{e}");
+    }
+    let e = load_dataset(&dir.join("nowhere"), &LoadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("no such file"), "{e}");
+}

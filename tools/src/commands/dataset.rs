@@ -1,0 +1,148 @@
+//! `inlay dataset`: reads a dataset of posed photographs (`transforms.json`
+//! in the Blender synthetic, instant-ngp or nerfstudio dialect) as a
+//! trainer will, and says what it found: the dialect, frames, cameras,
+//! the field's bounds and where they came from, and the pixels that are
+//! not values. Every frame that cannot be used is listed.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use glam::DVec3;
+use inlay_passes::dataset::{load_dataset, Distortion, LoadOptions};
+use inlay_passes::geometry::Aabb;
+
+/// Arguments of `inlay dataset`.
+#[derive(Args, Debug)]
+pub struct DatasetArgs {
+    /// The dataset: a transforms.json, or a folder holding one (or
+    /// transforms_<split>.json).
+    pub path: PathBuf,
+    /// The field's bounds, min x,y,z then max x,y,z (overrides the file's).
+    #[arg(long, value_parser = parse_bounds, allow_hyphen_values = true)]
+    pub bounds: Option<Aabb>,
+    /// Linear RGB that transparent pixels of RGBA images are composited
+    /// over.
+    #[arg(long, value_parser = parse_rgb, default_value = "1,1,1")]
+    pub background: [f32; 3],
+    /// The Blender synthetic split to read.
+    #[arg(long, default_value = "train")]
+    pub split: String,
+    /// Leave out the frames that cannot be used instead of failing.
+    #[arg(long)]
+    pub skip_bad_frames: bool,
+}
+
+/// `x,y,z,X,Y,Z` as a box.
+pub fn parse_bounds(s: &str) -> Result<Aabb, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>().map_err(|e| format!("{t}: {e}")))
+        .collect::<Result<_, _>>()?;
+    if v.len() != 6 {
+        return Err("expected six numbers: min x,y,z,max x,y,z".into());
+    }
+    let b = Aabb::new(DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]));
+    if !b.is_valid() {
+        return Err("each max must exceed its min, all finite".into());
+    }
+    Ok(b)
+}
+
+/// `r,g,b` as linear RGB.
+pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>().map_err(|e| format!("{t}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [r, g, b] if v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([r, g, b]),
+        _ => Err("expected three finite, non-negative numbers r,g,b".into()),
+    }
+}
+
+/// Runs `inlay dataset`.
+pub fn run(args: &DatasetArgs) -> Result<()> {
+    let options = LoadOptions {
+        bounds: args.bounds,
+        background: args.background,
+        split: args.split.clone(),
+        skip_bad_frames: args.skip_bad_frames,
+    };
+    let d = load_dataset(&args.path, &options)?;
+    println!("{}: {} dialect", d.file.display(), d.dialect);
+    println!(
+        "frames: {} usable{}",
+        d.frames.len(),
+        if d.skipped.is_empty() {
+            String::new()
+        } else {
+            format!(", {} left out:", d.skipped.len())
+        }
+    );
+    for p in &d.skipped {
+        println!("  {}: {}", p.key, p.problem);
+    }
+    let mut sizes: Vec<(u32, u32)> = d
+        .frames
+        .iter()
+        .map(|f| (f.intrinsics.width, f.intrinsics.height))
+        .collect();
+    sizes.sort_unstable();
+    sizes.dedup();
+    let sizes: Vec<String> = sizes.iter().map(|(w, h)| format!("{w}x{h}")).collect();
+    let (fmin, fmax) = d.frames.iter().fold((f64::MAX, 0.0f64), |(a, b), f| {
+        (a.min(f.intrinsics.fx), b.max(f.intrinsics.fx))
+    });
+    let distorted = d
+        .frames
+        .iter()
+        .filter(|f| f.intrinsics.distortion != Distortion::None)
+        .count();
+    println!(
+        "images: {}; focal length fx {fmin:.1}–{fmax:.1} px; {distorted} with lens distortion (undistorted exactly)",
+        sizes.join(", ")
+    );
+    let timed = d
+        .frames
+        .iter()
+        .filter(|f| f.exposure_time.is_some())
+        .count();
+    if timed > 0 {
+        println!("exposure_time given for {timed} frames");
+    }
+    let b = d.bounds;
+    println!(
+        "bounds: {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {}",
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z, d.bounds_source
+    );
+    let total: usize = d.frames.iter().map(|f| f.image.state.len()).sum();
+    let c = d.counts;
+    println!(
+        "pixels: {total}; masked: {} NaN or infinite, {} negative, {} by masks; {} saturated (lower bounds)",
+        c.non_finite, c.negative, c.masked, c.saturated
+    );
+    let mut lum: Vec<f32> = d
+        .frames
+        .iter()
+        .flat_map(|f| {
+            f.image
+                .radiance
+                .iter()
+                .zip(&f.image.state)
+                .filter(|(_, s)| **s != inlay_passes::dataset::PixelState::Masked)
+                .map(|(p, _)| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+        })
+        .collect();
+    if !lum.is_empty() {
+        lum.sort_by(f32::total_cmp);
+        let q = |f: f64| lum[((lum.len() - 1) as f64 * f) as usize];
+        println!(
+            "radiance (luminance): median {:.4}, 99th percentile {:.4}, max {:.4}",
+            q(0.5),
+            q(0.99),
+            q(1.0)
+        );
+    }
+    Ok(())
+}

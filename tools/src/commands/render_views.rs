@@ -1,0 +1,165 @@
+//! `inlay render-views SCENE --views N --size WxH --out DIR`: a training
+//! set of a recipe scene, path traced without its objects from cameras
+//! spread over a cap around the field, as a capture would be: linear EXR
+//! frames and a `transforms.json` in instant-ngp's convention (with the
+//! field's bounds as `aabb`), and optionally bracketed sRGB PNGs of the
+//! same views with their `exposure_time` in `DIR/brackets/`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{ensure, Result};
+use clap::Args;
+use inlay_engine::HdrImage;
+use inlay_passes::bake::{render_reference, ReferenceOptions};
+use inlay_passes::camera::CameraFrame;
+use inlay_passes::dataset::capture::{bracket_png, cap_cameras, transforms_json, WrittenFrame};
+use inlay_passes::scene::load_scene;
+
+use crate::field_source::progress_bar;
+use crate::outputs::{check_output, Outputs};
+
+/// Arguments of `inlay render-views`.
+#[derive(Args, Debug)]
+pub struct RenderViewsArgs {
+    /// The scene file (TOML with a `[recipe]`).
+    pub scene: PathBuf,
+    /// Number of views.
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    pub views: u32,
+    /// Image size, WxH.
+    #[arg(long, default_value = "96x96", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// The folder to write (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = 40.0)]
+    pub fov: f64,
+    /// Samples per pixel (jittered over the pixel, as a sensor integrates).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub samples: u32,
+    /// Indirect bounces (default: the scene's `[bake] bounces`).
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// Also write bracketed 8-bit sRGB PNGs at these exposure values
+    /// (stops; exposure_time = 2^EV), e.g. `-4,-2,0,2`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub brackets: Vec<f64>,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// `WxH` as a size.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or("expected WxH, e.g. 96x96")?;
+    let p = |t: &str| t.trim().parse::<u32>().map_err(|e| format!("{t}: {e}"));
+    let (w, h) = (p(w)?, p(h)?);
+    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
+        return Err(format!("{w}x{h} is out of range (1..=8192 per side)"));
+    }
+    Ok((w, h))
+}
+
+/// Runs `inlay render-views`.
+pub fn run(args: &RenderViewsArgs) -> Result<()> {
+    ensure!(
+        args.fov > 0.0 && args.fov < 170.0,
+        "--fov {} is outside (0, 170) degrees",
+        args.fov
+    );
+    ensure!(
+        args.brackets
+            .iter()
+            .all(|e| e.is_finite() && e.abs() <= 20.0),
+        "--brackets: exposure values must be finite stops within ±20"
+    );
+    let scene = load_scene(&args.scene)?;
+    let recipe = scene.recipe().ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: the scene's field is a file, not a [recipe]: there is nothing to path trace",
+            scene.path.display()
+        )
+    })?;
+    let (w, h) = args.size;
+    std::fs::create_dir_all(&args.out)?;
+    let brackets_dir = args.out.join("brackets");
+    if !args.brackets.is_empty() {
+        std::fs::create_dir_all(&brackets_dir)?;
+    }
+    let transforms = args.out.join("transforms.json");
+    check_output("--out", &transforms, &["json"])?;
+    let cameras = cap_cameras(&recipe.bounds, args.views, args.fov, w as f64 / h as f64);
+    let options = ReferenceOptions {
+        samples: args.samples,
+        bounces: args.bounces.unwrap_or(scene.bake.bounces),
+        seed: args.seed,
+        antialias: true,
+    };
+    let started = Instant::now();
+    let bar = progress_bar("views", args.views as u64);
+    let mut outputs = Outputs::new();
+    let mut frames = Vec::new();
+    let mut bracketed = Vec::new();
+    for (i, camera) in cameras.iter().enumerate() {
+        let frame = CameraFrame::new(camera, w, h);
+        let pixels = render_reference(
+            recipe,
+            &scene.environment,
+            &[],
+            &frame,
+            &ReferenceOptions {
+                seed: options.seed.wrapping_add(i as u64),
+                ..options
+            },
+            &|_, _| {},
+        );
+        // Radiance over black where the field does not cover the pixel
+        // (premultiplied), as a camera sees empty space.
+        let image = HdrImage {
+            width: w,
+            height: h,
+            pixels: pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect(),
+        };
+        let file = format!("view-{i:03}.exr");
+        outputs.image(&args.out.join(&file), &image, 1.0)?;
+        frames.push(WrittenFrame {
+            file,
+            camera: camera.clone(),
+            exposure_time: None,
+        });
+        let rgb: Vec<[f32; 3]> = pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        for ev in &args.brackets {
+            let exposure = 2f64.powf(*ev);
+            let file = format!("view-{i:03}-ev{ev:+}.png");
+            outputs.bytes(
+                &brackets_dir.join(&file),
+                &bracket_png(&rgb, w, h, exposure as f32),
+            )?;
+            bracketed.push(WrittenFrame {
+                file,
+                camera: camera.clone(),
+                exposure_time: Some(exposure),
+            });
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    outputs.json(&transforms, &transforms_json(&frames, w, h, &recipe.bounds))?;
+    if !bracketed.is_empty() {
+        outputs.json(
+            &brackets_dir.join("transforms.json"),
+            &transforms_json(&bracketed, w, h, &recipe.bounds),
+        )?;
+    }
+    let written = outputs.commit(None)?;
+    eprintln!(
+        "{} views of {w}x{h} at {} samples per pixel in {:.1} s ({} files)",
+        args.views,
+        args.samples,
+        started.elapsed().as_secs_f64(),
+        written.len()
+    );
+    Ok(())
+}
