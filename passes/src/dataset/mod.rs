@@ -15,7 +15,7 @@
 //!   undistorted exactly); per-frame intrinsics; `mask_path`. Fisheye and
 //!   other models are refused with a message that says so.
 //!
-//! In every dialect: an `aabb` key ([[min], [max]], world units) gives the
+//! In every dialect: an `aabb` key (`[[min], [max]]`, world units) gives the
 //! field's bounds, and a frame's `exposure_time` (seconds) is kept for
 //! exposure brackets. Poses are camera-to-world in the OpenGL convention
 //! (x right, y up, looking along −z) and must be rigid. Frames whose image
