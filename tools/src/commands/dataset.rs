@@ -16,7 +16,7 @@ use inlay_passes::geometry::Aabb;
 #[derive(Args, Debug)]
 pub struct DatasetArgs {
     /// The dataset: a transforms.json, or a folder holding one (or
-    /// transforms_<split>.json).
+    /// `transforms_<split>.json`).
     pub path: PathBuf,
     /// The field's bounds, min x,y,z then max x,y,z (overrides the file's).
     #[arg(long, value_parser = parse_bounds, allow_hyphen_values = true)]
