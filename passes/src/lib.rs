@@ -37,3 +37,4 @@ pub mod shade;
 pub mod shaders;
 pub mod shadow;
 pub mod ssdf;
+pub mod train;

@@ -3,6 +3,8 @@
 // passes/src/field/grid.rs and passes/src/field/occupancy.rs; the layout of
 // `GridInfo` is written by passes/src/field/gpu_grid.rs.
 
+#include "field/trilinear.wgsl"
+
 struct GridInfo {
     bounds_min: vec3<f32>,
     occupancy_block: u32,
@@ -25,14 +27,12 @@ fn grid_node(i: vec3<u32>) -> vec4<f32> {
 
 // Trilinear (r, g, b, σ) at x; zero outside the bounds.
 fn grid_sample(x: vec3<f32>) -> vec4<f32> {
-    if any(x < grid_info.bounds_min) || any(x > grid_info.bounds_max) {
+    let cell = trilinear_cell(x, grid_info.bounds_min, grid_info.bounds_max, grid_info.resolution);
+    if !cell.inside {
         return vec4<f32>(0.0);
     }
-    let cells = vec3<f32>(grid_info.resolution - vec3<u32>(1u));
-    let u = (x - grid_info.bounds_min) / (grid_info.bounds_max - grid_info.bounds_min) * cells;
-    let base = clamp(floor(u), vec3<f32>(0.0), cells - vec3<f32>(1.0));
-    let f = clamp(u - base, vec3<f32>(0.0), vec3<f32>(1.0));
-    let i = vec3<u32>(base);
+    let f = cell.f;
+    let i = cell.base;
     let x00 = mix(grid_node(i), grid_node(i + vec3<u32>(1u, 0u, 0u)), f.x);
     let x10 = mix(grid_node(i + vec3<u32>(0u, 1u, 0u)), grid_node(i + vec3<u32>(1u, 1u, 0u)), f.x);
     let x01 = mix(grid_node(i + vec3<u32>(0u, 0u, 1u)), grid_node(i + vec3<u32>(1u, 0u, 1u)), f.x);

@@ -85,8 +85,11 @@ pub fn common_view(poses: &[Pose], half_fovs: &[f64]) -> Option<Aabb> {
         .collect();
     halves.sort_by(f64::total_cmp);
     let half = halves[halves.len() / 2];
-    (half.is_finite() && half > 0.0)
-        .then(|| Aabb::new(centre - DVec3::splat(half), centre + DVec3::splat(half)))
+    // A box too small to hold a node apart from its neighbours (a camera at
+    // the common point) is no box.
+    let scale = 1.0 + centre.abs().max_element();
+    let b = Aabb::new(centre - DVec3::splat(half), centre + DVec3::splat(half));
+    (half.is_finite() && half > 1e-6 * scale && b.is_valid()).then_some(b)
 }
 
 #[cfg(test)]

@@ -543,14 +543,13 @@ fn dataset_bounds(
                 .min((0.5 * k.height as f64 / k.fy).atan())
         })
         .collect();
-    bounds::common_view(&poses, &half_fovs)
-        .map(|b| (b, BoundsSource::Cameras))
-        .ok_or_else(|| {
-            top.error(
-                "aabb",
-                "no bounds: the cameras' axes have no common point; give an `aabb` key or --bounds",
-            )
-        })
+    let b = bounds::common_view(&poses, &half_fovs).ok_or_else(|| {
+        top.error(
+            "aabb",
+            "no bounds: the cameras' axes have no common point; give an `aabb` key or --bounds",
+        )
+    })?;
+    Ok((valid(b, "aabb")?, BoundsSource::Cameras))
 }
 
 #[cfg(test)]

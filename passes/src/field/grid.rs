@@ -66,26 +66,39 @@ impl GridField {
         (i + self.resolution.x * (j + self.resolution.y * k)) as usize
     }
 
-    /// Trilinear interpolation of the four channels at `x`; zero outside the
-    /// bounds.
-    pub fn interpolate(&self, x: DVec3) -> [f64; 4] {
+    /// The eight nodes around `x` and their trilinear weights (summing to
+    /// 1), or None outside the bounds. The one definition of the grid's
+    /// interpolation: [`Self::interpolate`] reads through it and the
+    /// trainer scatters gradients through it.
+    pub fn corners(&self, x: DVec3) -> Option<[(usize, f64); 8]> {
         if !self.bounds.contains(x) {
-            return [0.0; 4];
+            return None;
         }
         let cells = self.resolution.as_dvec3() - DVec3::ONE;
         let u = (x - self.bounds.min) / self.bounds.size() * cells;
         let base = u.floor().clamp(DVec3::ZERO, cells - DVec3::ONE);
         let f = (u - base).clamp(DVec3::ZERO, DVec3::ONE);
         let (i, j, k) = (base.x as u32, base.y as u32, base.z as u32);
-        let mut out = [0.0; 4];
-        for corner in 0..8u32 {
+        Some(std::array::from_fn(|corner| {
+            let corner = corner as u32;
             let (di, dj, dk) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             let w = (if di == 1 { f.x } else { 1.0 - f.x })
                 * (if dj == 1 { f.y } else { 1.0 - f.y })
                 * (if dk == 1 { f.z } else { 1.0 - f.z });
-            let n = self.nodes[self.index(i + di, j + dj, k + dk)];
-            for c in 0..4 {
-                out[c] += w * n[c] as f64;
+            (self.index(i + di, j + dj, k + dk), w)
+        }))
+    }
+
+    /// Trilinear interpolation of the four channels at `x`; zero outside the
+    /// bounds.
+    pub fn interpolate(&self, x: DVec3) -> [f64; 4] {
+        let mut out = [0.0; 4];
+        if let Some(corners) = self.corners(x) {
+            for (n, w) in corners {
+                let n = self.nodes[n];
+                for c in 0..4 {
+                    out[c] += w * n[c] as f64;
+                }
             }
         }
         out

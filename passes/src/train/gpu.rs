@@ -1,0 +1,291 @@
+//! The trainer on the GPU: `train-rays` (forward, loss and backward of a
+//! batch of rays, gradients scattered atomically) and `train-adam` (one Adam
+//! step over every value), passes of the frame graph over buffers that live
+//! across steps.
+
+use std::sync::Arc;
+
+use glam::{DVec3, UVec3};
+use inlay_engine::graph::{BufferAccess, FrameGraph};
+use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
+
+use super::adam::AdamKnobs;
+use crate::geometry::Aabb;
+use crate::march::MarchKnobs;
+
+inlay_engine::gpu_struct! {
+    /// `TrainPush` of `shaders/train/ray_grad.wgsl`.
+    pub struct TrainPush = "train/ray_grad.wgsl" : "TrainPush" {
+        /// The grid's smallest corner.
+        pub bounds_min: [f32; 3],
+        /// Rays in the batch.
+        pub ray_count: u32,
+        /// The grid's largest corner.
+        pub bounds_max: [f32; 3],
+        /// The march's step.
+        pub step: f32,
+        /// Nodes per axis.
+        pub resolution: [u32; 3],
+        /// The march's termination transmittance.
+        pub termination: f32,
+        /// Radiance behind the field.
+        pub background: [f32; 3],
+        /// The relative loss's floor.
+        pub epsilon: f32,
+    }
+}
+
+inlay_engine::gpu_struct! {
+    /// `TrainRay` of `shaders/train/ray_grad.wgsl`: a ray and what its
+    /// pixel says ([`super::PixelTarget`]).
+    pub struct TrainRay = "train/ray_grad.wgsl" : "TrainRay" {
+        /// Origin.
+        pub origin: [f32; 3],
+        /// 0 value, 1 lower bound, 2 bracket.
+        pub kind: u32,
+        /// Unit direction.
+        pub dir: [f32; 3],
+        /// A bracket's exposure.
+        pub exposure: f32,
+        /// The value, bound or encoded bracket value.
+        pub target_value: [f32; 3],
+        /// The ray's weight in the loss.
+        pub weight: f32,
+    }
+}
+
+inlay_engine::gpu_struct! {
+    /// `AdamPush` of `shaders/train/adam.wgsl`.
+    pub struct AdamPush = "train/adam.wgsl" : "AdamPush" {
+        /// Values (4 per node).
+        pub count: u32,
+        /// Colour step size.
+        pub rate: f32,
+        /// Density step size.
+        pub density_rate: f32,
+        /// Gradient scale (1 / rays in the batch).
+        pub grad_scale: f32,
+        /// First-moment decay.
+        pub beta1: f32,
+        /// Second-moment decay.
+        pub beta2: f32,
+        /// 1 − β1^t.
+        pub correction1: f32,
+        /// 1 − β2^t.
+        pub correction2: f32,
+    }
+}
+
+impl TrainRay {
+    /// The record of `ray` (unit direction) with `target`, weighted
+    /// `weight`.
+    pub fn new(origin: DVec3, dir: DVec3, target: super::PixelTarget, weight: f64) -> Self {
+        let (kind, value, exposure) = match target {
+            super::PixelTarget::Value(v) => (0, v, 1.0),
+            super::PixelTarget::AtLeast(v) => (1, v, 1.0),
+            super::PixelTarget::Bracket { encoded, exposure } => (2, encoded, exposure),
+        };
+        Self {
+            origin: origin.as_vec3().to_array(),
+            kind,
+            dir: dir.as_vec3().to_array(),
+            exposure: exposure as f32,
+            target_value: value.as_vec3().to_array(),
+            weight: weight as f32,
+        }
+    }
+}
+
+/// Name of the batch pass in the frame graph.
+pub const TRAIN_RAYS: &str = "train-rays";
+/// Name of the optimiser pass.
+pub const TRAIN_ADAM: &str = "train-adam";
+
+/// A grid being trained on the GPU: its values, their gradient and Adam's
+/// moments, and the pipelines that step them.
+pub struct GpuTrainer {
+    ray_grad: Arc<ComputePipeline>,
+    adam: Arc<ComputePipeline>,
+    params: Arc<Buffer>,
+    grad: Arc<Buffer>,
+    moments: Arc<Buffer>,
+    /// Nodes per axis.
+    pub resolution: UVec3,
+    /// The region the nodes span.
+    pub bounds: Aabb,
+    /// The march the trainer renders with.
+    pub march: MarchKnobs,
+    /// Adam steps taken.
+    pub steps: u32,
+}
+
+impl GpuTrainer {
+    /// A trainer starting from `nodes` (r, g, b, σ per node, x fastest).
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        resolution: UVec3,
+        bounds: Aabb,
+        nodes: &[[f32; 4]],
+        march: MarchKnobs,
+    ) -> anyhow::Result<Self> {
+        let n = (resolution.x * resolution.y * resolution.z) as usize;
+        anyhow::ensure!(
+            nodes.len() == n,
+            "{} nodes for a {resolution} grid",
+            nodes.len()
+        );
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let bytes = |v: &[f32]| bytemuck::cast_slice::<f32, u8>(v).to_vec();
+        let flat: Vec<f32> = nodes.iter().flatten().copied().collect();
+        crate::field::check_field_fits(ctx.info(), resolution)?;
+        let limit = ctx.info().max_storage_buffer_range as u64;
+        anyhow::ensure!(
+            (n as u64) * 32 <= limit,
+            "training a {resolution} grid needs Adam's moments in one binding of {} MiB, more than {}'s {} MiB; train a smaller grid",
+            (n as u64 * 32) >> 20,
+            ctx.info().name,
+            limit >> 20
+        );
+        Ok(Self {
+            ray_grad: lib.compute_pipeline(ctx, "train/ray_grad.wgsl", "main", &[])?,
+            adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &[])?,
+            params: Arc::new(Buffer::with_data(
+                ctx,
+                "train-params",
+                &bytes(&flat),
+                usage,
+            )?),
+            grad: Arc::new(Buffer::with_data(
+                ctx,
+                "train-grad",
+                &vec![0u8; n * 16],
+                usage,
+            )?),
+            moments: Arc::new(Buffer::with_data(
+                ctx,
+                "train-moments",
+                &vec![0u8; n * 32],
+                usage,
+            )?),
+            resolution,
+            bounds,
+            march,
+            steps: 0,
+        })
+    }
+
+    fn push(&self, rays: u32, background: DVec3, epsilon: f64) -> TrainPush {
+        TrainPush {
+            bounds_min: self.bounds.min.as_vec3().to_array(),
+            ray_count: rays,
+            bounds_max: self.bounds.max.as_vec3().to_array(),
+            step: self.march.step(self.bounds.diagonal()) as f32,
+            resolution: self.resolution.to_array(),
+            termination: self.march.termination as f32,
+            background: background.as_vec3().to_array(),
+            epsilon: epsilon as f32,
+        }
+    }
+
+    /// Values in the grid (4 per node).
+    pub fn values(&self) -> u32 {
+        4 * self.resolution.x * self.resolution.y * self.resolution.z
+    }
+
+    /// Runs one batch: renders `rays` over `background`, adds their loss's
+    /// gradient to the accumulated gradient and, with `adam` given, takes
+    /// an Adam step with the gradient scaled by `grad_scale` (clearing it).
+    /// Returns each ray's pixel and weighted loss.
+    pub fn run_batch(
+        &mut self,
+        renderer: &mut Renderer,
+        rays: &[TrainRay],
+        background: DVec3,
+        epsilon: f64,
+        adam: Option<(&AdamKnobs, f32)>,
+    ) -> anyhow::Result<Vec<[f32; 4]>> {
+        anyhow::ensure!(!rays.is_empty(), "an empty batch");
+        let ctx = renderer.context().clone();
+        let out_bytes = rays.len() as u64 * 16;
+        let readback = BufferReadback::new(&ctx, "train-ray-out (readback)", out_bytes)?;
+        renderer.begin_frame()?;
+        let mut graph = FrameGraph::new();
+        let params = graph.import_buffer(&self.params, None);
+        let grad = graph.import_buffer(&self.grad, None);
+        let moments = graph.import_buffer(&self.moments, None);
+        let batch = graph.upload_buffer("train-batch", bytemuck::cast_slice(rays).to_vec());
+        let out = graph.create_buffer("train-ray-out", out_bytes);
+        let push = self.push(rays.len() as u32, background, epsilon);
+        let mut pass = graph.compute_pass(TRAIN_RAYS);
+        pass.buffer_at("params", params, BufferAccess::StorageRead);
+        pass.buffer_at("rays", batch, BufferAccess::StorageRead);
+        let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+        let out = pass.buffer_at("ray_out", out, BufferAccess::StorageWrite);
+        pass.dispatch(&self.ray_grad)
+            .push(&push)
+            .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
+        pass.finish();
+        if let Some((knobs, grad_scale)) = adam {
+            self.steps += 1;
+            let t = self.steps as i32;
+            let a = AdamPush {
+                count: self.values(),
+                rate: knobs.rate as f32,
+                density_rate: knobs.density_rate as f32,
+                grad_scale,
+                beta1: knobs.beta1 as f32,
+                beta2: knobs.beta2 as f32,
+                correction1: (1.0 - knobs.beta1.powi(t)) as f32,
+                correction2: (1.0 - knobs.beta2.powi(t)) as f32,
+            };
+            let groups = self.values().div_ceil(64);
+            let mut pass = graph.compute_pass(TRAIN_ADAM);
+            pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
+            pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+            pass.buffer_at("moments", moments, BufferAccess::StorageReadWrite);
+            pass.dispatch(&self.adam).push(&a).groups([
+                groups.min(65535),
+                groups.div_ceil(65535),
+                1,
+            ]);
+            pass.finish();
+        }
+        readback.add_to_graph(&mut graph, "train-ray-out-readback", out);
+        renderer.submit(graph, &SubmitSync::none())?;
+        renderer.finish()?;
+        let v = readback.read_f32()?;
+        Ok(v.chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect())
+    }
+
+    /// Reads a persistent buffer back whole.
+    fn read(&self, renderer: &mut Renderer, buffer: &Arc<Buffer>) -> anyhow::Result<Vec<f32>> {
+        let ctx = renderer.context().clone();
+        let readback = BufferReadback::new(&ctx, "train-readback", buffer.size())?;
+        renderer.begin_frame()?;
+        let mut graph = FrameGraph::new();
+        let b = graph.import_buffer(buffer, None);
+        readback.add_to_graph(&mut graph, "train-readback", b);
+        renderer.submit(graph, &SubmitSync::none())?;
+        renderer.finish()?;
+        Ok(readback.read_f32()?)
+    }
+
+    /// The grid's values now (r, g, b, σ per node).
+    pub fn nodes(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<[f32; 4]>> {
+        let v = self.read(renderer, &self.params)?;
+        Ok(v.chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect())
+    }
+
+    /// The accumulated gradient (4 per node).
+    pub fn gradient(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
+        self.read(renderer, &self.grad)
+    }
+}

@@ -1,0 +1,16 @@
+//! Training a grid radiance field from posed photographs (issue 25, in
+//! progress): differentiable volume rendering with exactly the march's
+//! quadrature, its gradient with respect to every node, and the losses
+//! that compare a rendered pixel with what a photograph says of it. This
+//! module holds the f64 CPU reference the GPU trainer is checked against;
+//! the gradient itself is checked by finite differences.
+
+pub mod adam;
+pub mod gpu;
+pub mod loss;
+pub mod render;
+
+pub use adam::{adam_step, AdamKnobs};
+pub use gpu::{GpuTrainer, TrainRay};
+pub use loss::{pixel_loss, PixelTarget};
+pub use render::{render_ray_with_gradient, RayGradient};

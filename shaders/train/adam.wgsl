@@ -1,0 +1,38 @@
+// One Adam step over every trained value (4 per node: r, g, b, σ), the
+// gradient read and cleared, the value kept non-negative (colour and
+// density are physical). Mirrors passes/src/train/adam.rs adam_step.
+
+struct AdamPush {
+    count: u32,
+    rate: f32,
+    density_rate: f32,
+    grad_scale: f32,
+    beta1: f32,
+    beta2: f32,
+    correction1: f32,
+    correction2: f32,
+}
+
+var<immediate> pc: AdamPush;
+@group(0) @binding(0) var<storage, read_write> params: array<f32>;
+@group(0) @binding(1) var<storage, read_write> grad: array<f32>;
+@group(0) @binding(2) var<storage, read_write> moments: array<vec2<f32>>;
+
+const ADAM_EPSILON: f32 = 1e-8;
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x + 65535u * 64u * id.y;
+    if i >= pc.count {
+        return;
+    }
+    let g = grad[i] * pc.grad_scale;
+    grad[i] = 0.0;
+    var m = moments[i];
+    m.x = pc.beta1 * m.x + (1.0 - pc.beta1) * g;
+    m.y = pc.beta2 * m.y + (1.0 - pc.beta2) * g * g;
+    moments[i] = m;
+    let rate = select(pc.rate, pc.density_rate, (i & 3u) == 3u);
+    let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);
+    params[i] = max(params[i] - step, 0.0);
+}

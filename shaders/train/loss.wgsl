@@ -1,0 +1,42 @@
+// The loss of a rendered pixel against what a photograph says of it, and its
+// gradient with respect to the pixel. Mirrors passes/src/train/loss.rs:
+// kind 0, a value (relative squared error, the denominator held); kind 1, a
+// lower bound (the same, only below it); kind 2, a bracket (squared error of
+// srgb(clip(exposure × C)) against the recorded encoded value).
+
+struct PixelLoss {
+    loss: f32,
+    grad: vec3<f32>,
+}
+
+fn train_srgb_encode(v: f32) -> vec2<f32> {
+    if v <= 0.0031308 {
+        return vec2<f32>(12.92 * v, 12.92);
+    }
+    return vec2<f32>(1.055 * pow(v, 1.0 / 2.4) - 0.055, 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
+}
+
+fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, epsilon: f32) -> PixelLoss {
+    var out = PixelLoss(0.0, vec3<f32>(0.0));
+    for (var k = 0u; k < 3u; k++) {
+        if kind == 2u {
+            let v = exposure * c[k];
+            let e = train_srgb_encode(clamp(v, 0.0, 1.0));
+            let r = e.x - target_value[k];
+            out.loss += r * r;
+            if v > 0.0 && v < 1.0 {
+                out.grad[k] = 2.0 * r * e.y * exposure;
+            }
+        } else {
+            var r = c[k] - target_value[k];
+            if kind == 1u {
+                r = min(r, 0.0);
+            }
+            let d = max(c[k], 0.0) + epsilon;
+            let scale = 1.0 / (d * d);
+            out.loss += r * r * scale;
+            out.grad[k] = 2.0 * r * scale;
+        }
+    }
+    return out;
+}

@@ -1,0 +1,136 @@
+// One training ray per invocation: the march's quadrature over the trained
+// grid (no empty-space skipping), the pixel's loss, and the loss's gradient
+// with respect to every node the ray read, scattered into `grad` with
+// atomic float adds (a compare-and-swap loop: core WGSL, every device).
+// Mirrors passes/src/train/render.rs render_ray_with_gradient.
+
+#include "common/ray_box.wgsl"
+#include "field/trilinear.wgsl"
+#include "train/loss.wgsl"
+
+struct TrainPush {
+    bounds_min: vec3<f32>,
+    ray_count: u32,
+    bounds_max: vec3<f32>,
+    step: f32,
+    resolution: vec3<u32>,
+    termination: f32,
+    background: vec3<f32>,
+    epsilon: f32,
+}
+
+// A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
+struct TrainRay {
+    origin: vec3<f32>,
+    kind: u32,
+    dir: vec3<f32>,
+    exposure: f32,
+    target_value: vec3<f32>,
+    weight: f32,
+}
+
+var<immediate> pc: TrainPush;
+@group(0) @binding(0) var<storage, read> params: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> rays: array<TrainRay>;
+@group(0) @binding(2) var<storage, read_write> grad: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> ray_out: array<vec4<f32>>;
+
+fn node_index(i: vec3<u32>) -> u32 {
+    let r = pc.resolution;
+    return i.x + r.x * (i.y + r.y * i.z);
+}
+
+fn sample_at(cell: TrilinearCell) -> vec4<f32> {
+    var v = vec4<f32>(0.0);
+    if !cell.inside {
+        return v;
+    }
+    for (var k = 0u; k < 8u; k++) {
+        v += trilinear_weight(cell.f, k) * params[node_index(cell.base + trilinear_corner(k))];
+    }
+    return v;
+}
+
+fn add_float(i: u32, value: f32) {
+    if value == 0.0 {
+        return;
+    }
+    var old = atomicLoad(&grad[i]);
+    loop {
+        let r = atomicCompareExchangeWeak(&grad[i], old, bitcast<u32>(bitcast<f32>(old) + value));
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.ray_count {
+        return;
+    }
+    let ray = rays[id.x];
+    let tb = ray_box(ray.origin, ray.dir, pc.bounds_min, pc.bounds_max);
+    let t0 = tb.x;
+    let t1 = tb.y;
+    // Forward.
+    var colour = vec3<f32>(0.0);
+    var transmittance = 1.0;
+    var used = 0u;
+    if t1 > t0 {
+        loop {
+            let a = t0 + f32(used) * pc.step;
+            if a >= t1 {
+                break;
+            }
+            let b = min(a + pc.step, t1);
+            let v = sample_at(trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution));
+            let alpha = 1.0 - exp(-v.w * (b - a));
+            colour += transmittance * alpha * v.xyz;
+            transmittance *= 1.0 - alpha;
+            used += 1u;
+            if transmittance < pc.termination {
+                break;
+            }
+        }
+    }
+    let total = colour + transmittance * pc.background;
+    let l = pixel_loss(total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
+    ray_out[id.x] = vec4<f32>(total, ray.weight * l.loss);
+    let g = ray.weight * l.grad;
+    if all(g == vec3<f32>(0.0)) {
+        return;
+    }
+    // Backward, with the running sum.
+    var t_i = 1.0;
+    var so_far = vec3<f32>(0.0);
+    for (var s = 0u; s < used; s++) {
+        let a = t0 + f32(s) * pc.step;
+        let b = min(a + pc.step, t1);
+        let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
+        if !cell.inside {
+            continue;
+        }
+        let v = sample_at(cell);
+        let dt = b - a;
+        let alpha = 1.0 - exp(-v.w * dt);
+        let w = t_i * alpha;
+        let t_next = t_i * (1.0 - alpha);
+        so_far += w * v.xyz;
+        let d_c = g * w;
+        let d_sigma = dt * dot(g, t_next * v.xyz - (colour - so_far) - transmittance * pc.background);
+        for (var k = 0u; k < 8u; k++) {
+            let wk = trilinear_weight(cell.f, k);
+            if wk == 0.0 {
+                continue;
+            }
+            let n = 4u * node_index(cell.base + trilinear_corner(k));
+            add_float(n, d_c.x * wk);
+            add_float(n + 1u, d_c.y * wk);
+            add_float(n + 2u, d_c.z * wk);
+            add_float(n + 3u, d_sigma * wk);
+        }
+        t_i = t_next;
+    }
+}

@@ -1,0 +1,172 @@
+//! The trainer's GPU passes against their f64 CPU reference on lavapipe:
+//! `train-rays` (pixel, loss and the gradient scattered to every node) and
+//! `train-adam`.
+
+mod common;
+
+use glam::{DVec3, UVec3};
+use inlay_engine::Renderer;
+use inlay_passes::field::GridField;
+use inlay_passes::geometry::{Aabb, Ray};
+use inlay_passes::march::MarchKnobs;
+use inlay_passes::rng::Pcg32;
+use inlay_passes::train::{
+    adam_step, pixel_loss, render_ray_with_gradient, AdamKnobs, GpuTrainer, PixelTarget, TrainRay,
+};
+
+fn field() -> GridField {
+    let res = UVec3::new(6, 5, 7);
+    let mut rng = Pcg32::new(9, 1);
+    let nodes = (0..res.x * res.y * res.z)
+        .map(|_| {
+            [
+                2.0 * rng.next_f64() as f32,
+                rng.next_f64() as f32,
+                4.0 * rng.next_f64() as f32,
+                (4.0 * rng.next_f64() * rng.next_f64()) as f32,
+            ]
+        })
+        .collect();
+    GridField::new(
+        res,
+        Aabb::new(DVec3::new(-1.0, -0.4, -0.9), DVec3::new(1.1, 0.8, 1.0)),
+        nodes,
+        2,
+    )
+}
+
+/// Rays through the field from around it, each with a target of every
+/// kind in turn.
+fn rays(field: &GridField, n: usize) -> Vec<(Ray, PixelTarget, f64)> {
+    let mut rng = Pcg32::new(4, 4);
+    let c = field.bounds.center();
+    (0..n)
+        .map(|i| {
+            let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - 1.0;
+            let origin = c + 3.0 * u.normalize();
+            let aim = c + 0.6 * (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5);
+            let value = DVec3::new(rng.next_f64(), 2.0 * rng.next_f64(), rng.next_f64());
+            let target = match i % 3 {
+                0 => PixelTarget::Value(value),
+                1 => PixelTarget::AtLeast(value),
+                _ => PixelTarget::Bracket {
+                    encoded: value * 0.5,
+                    exposure: 0.7,
+                },
+            };
+            let ray = Ray {
+                origin,
+                dir: (aim - origin).normalize(),
+            };
+            (ray, target, 0.5 + rng.next_f64())
+        })
+        .collect()
+}
+
+#[test]
+fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let field = field();
+    let knobs = MarchKnobs {
+        samples_per_ray: 40,
+        termination: 1e-4,
+        skip_empty: false,
+    };
+    let (bg, eps) = (DVec3::new(0.2, 0.1, 0.3), 0.05);
+    let batch = rays(&field, 96);
+    let mut trainer = GpuTrainer::new(
+        &ctx,
+        &lib,
+        field.resolution,
+        field.bounds,
+        &field.nodes,
+        knobs,
+    )
+    .unwrap();
+    let mut renderer = Renderer::new(&ctx, 1).unwrap();
+    let records: Vec<TrainRay> = batch
+        .iter()
+        .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
+        .collect();
+    let out = trainer
+        .run_batch(&mut renderer, &records, bg, eps, None)
+        .unwrap();
+    // The CPU reference: each ray's pixel, weighted loss and gradient.
+    let mut cpu_grad = vec![0.0f64; 4 * field.nodes.len()];
+    for ((ray, target, w), gpu) in batch.iter().zip(&out) {
+        let r = render_ray_with_gradient(&field, ray, &knobs, bg, |c| {
+            *w * pixel_loss(c, *target, eps).1
+        });
+        let loss = w * pixel_loss(r.colour, *target, eps).0;
+        let pixel = DVec3::new(gpu[0] as f64, gpu[1] as f64, gpu[2] as f64);
+        assert!(
+            (pixel - r.colour).abs().max_element() < 1e-4 * (1.0 + r.colour.length()),
+            "{pixel} vs {}",
+            r.colour
+        );
+        assert!(
+            (gpu[3] as f64 - loss).abs() < 2e-3 * (1.0 + loss),
+            "loss {} vs {loss}",
+            gpu[3]
+        );
+        for (n, g) in &r.nodes {
+            for c in 0..4 {
+                cpu_grad[4 * n + c] += g[c];
+            }
+        }
+    }
+    let gpu_grad = trainer.gradient(&mut renderer).unwrap();
+    let scale = cpu_grad.iter().fold(0.0f64, |a, g| a.max(g.abs()));
+    assert!(scale > 0.0);
+    let mut worst = 0.0f64;
+    for (g, c) in gpu_grad.iter().zip(&cpu_grad) {
+        // f32 sums over ~100 rays × 40 samples: 1e-3 of the largest value.
+        worst = worst.max((*g as f64 - c).abs() / scale);
+    }
+    assert!(
+        worst < 1e-3,
+        "gradient differs by {worst} of its largest value"
+    );
+
+    // Adam: the same batch again, then a step; the CPU steps from the GPU's
+    // own accumulated gradient (both batches), the same moments (zero).
+    let adam = AdamKnobs {
+        rate: 0.05,
+        density_rate: 0.2,
+        beta1: 0.9,
+        beta2: 0.99,
+    };
+    let before = trainer.gradient(&mut renderer).unwrap();
+    let scale_g = 1.0 / batch.len() as f32;
+    trainer
+        .run_batch(&mut renderer, &records, bg, eps, Some((&adam, scale_g)))
+        .unwrap();
+    let after = trainer.nodes(&mut renderer).unwrap();
+    let mut params: Vec<f32> = field.nodes.iter().flatten().copied().collect();
+    let mut grad: Vec<f32> = before.iter().map(|g| 2.0 * g).collect();
+    let mut moments = vec![[0.0f32; 2]; params.len()];
+    adam_step(&mut params, &mut grad, &mut moments, &adam, scale_g, 1);
+    let mut moved = 0;
+    for (i, (a, b)) in after.iter().flatten().zip(&params).enumerate() {
+        let orig = field.nodes[i / 4][i % 4];
+        if (a - orig).abs() > 1e-6 {
+            moved += 1;
+        }
+        // At step 1 Adam moves each value by about its rate × sign(g):
+        // where |g| is near zero the two sides' sums may round apart.
+        let tolerance = if before[i].abs() * scale_g < 1e-7 {
+            0.25
+        } else {
+            1e-4
+        };
+        assert!((a - b).abs() < tolerance, "value {i}: {a} vs {b}");
+    }
+    assert!(moved > 100, "Adam moved {moved} values");
+    assert!(trainer
+        .gradient(&mut renderer)
+        .unwrap()
+        .iter()
+        .all(|g| *g == 0.0));
+    common::assert_no_validation_errors(&ctx);
+}
