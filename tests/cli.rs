@@ -200,6 +200,52 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     assert!(o.status.success() && t.contains("frames: 6 usable"), "{t}");
     assert!(t.contains("exposure_time given for 6 frames"), "{t}");
 
+    // `inlay train` takes it: a tiny grid, a few steps, the field written
+    // and readable by `render`.
+    let field = dir.join("views.inlayfield");
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        field.to_str().unwrap(),
+        "--resolution",
+        "8",
+        "--stages",
+        "2",
+        "--iterations",
+        "20",
+        "--batch",
+        "256",
+        "--hold-out",
+        "1",
+    ]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("held-out frame 1: PSNR") && field.is_file(),
+        "{t}"
+    );
+    inlay_passes::field::load_field(&field).unwrap();
+    for (flag, value, says) in [
+        ("--time-budget", "0", "--time-budget"),
+        ("--stages", "9", "--stages"),
+        ("--out", "x.exr", ".inlayfield"),
+    ] {
+        let mut args = vec![
+            "train",
+            out.to_str().unwrap(),
+            "--out",
+            field.to_str().unwrap(),
+        ];
+        if flag == "--out" {
+            args.truncate(2);
+        }
+        args.extend([flag, value]);
+        let o = inlay(&args);
+        assert_eq!(o.status.code(), Some(1), "{flag}: {}", text(&o));
+        assert!(text(&o).contains(says), "{flag}: {}", text(&o));
+    }
+
     // Two frames lose their images: both are named, and nothing panics.
     std::fs::remove_file(out.join("view-000.exr")).unwrap();
     std::fs::write(out.join("view-002.exr"), b"not an exr").unwrap();

@@ -61,6 +61,8 @@ enum Command {
     Dataset(inlay::commands::dataset::DatasetArgs),
     /// Path trace a training set of a recipe scene: EXR views from a cap of cameras and their transforms.json (instant-ngp convention), optionally bracketed sRGB PNGs.
     RenderViews(inlay::commands::render_views::RenderViewsArgs),
+    /// Train a grid radiance field on the GPU from posed photographs (transforms.json) and score held-out views.
+    Train(inlay::commands::train::TrainArgs),
     /// Render a scene's radiance field headless from one of its cameras.
     Render(inlay::commands::render::RenderArgs),
     /// Run N frames with the objects inserted and print the paper's Table 1 (median/p95 per module); writes JSON and a Chrome trace.
@@ -160,6 +162,9 @@ fn main() -> ExitCode {
         Command::BenchShade(args) => inlay::commands::bench_shade::run(args),
         Command::Dataset(args) => inlay::commands::dataset::run(args),
         Command::RenderViews(args) => inlay::commands::render_views::run(args),
+        Command::Train(args) => on_device(&cli.gpu.options(), |ctx| {
+            inlay::commands::train::run(ctx, args)
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,7 +8,9 @@ use std::sync::Arc;
 use glam::{DVec3, UVec3};
 use inlay_engine::graph::{BufferAccess, FrameGraph};
 use inlay_engine::shader::ShaderLibrary;
-use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
+use inlay_engine::{
+    vk, Buffer, BufferLocation, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync,
+};
 
 use super::adam::AdamKnobs;
 use crate::geometry::Aabb;
@@ -217,7 +219,21 @@ impl GpuTrainer {
         let params = graph.import_buffer(&self.params, None);
         let grad = graph.import_buffer(&self.grad, None);
         let moments = graph.import_buffer(&self.moments, None);
-        let batch = graph.upload_buffer("train-batch", bytemuck::cast_slice(rays).to_vec());
+        // A host-visible buffer per batch (a batch outgrows the 64 KiB a
+        // graph upload takes); the frame finishes before the next is made.
+        let bytes: &[u8] = bytemuck::cast_slice(rays);
+        let mut upload = Buffer::new(
+            &ctx,
+            "train-batch",
+            bytes.len() as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            BufferLocation::Upload,
+        )?;
+        upload
+            .mapped_mut()
+            .ok_or_else(|| anyhow::anyhow!("the batch buffer is not host-visible"))?[..bytes.len()]
+            .copy_from_slice(bytes);
+        let batch = graph.import_buffer(&Arc::new(upload), None);
         let out = graph.create_buffer("train-ray-out", out_bytes);
         let push = self.push(rays.len() as u32, background, epsilon);
         let mut pass = graph.compute_pass(TRAIN_RAYS);

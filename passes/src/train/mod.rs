@@ -7,10 +7,15 @@
 
 pub mod adam;
 pub mod gpu;
+pub mod knobs;
 pub mod loss;
+pub mod pixels;
 pub mod render;
+pub mod trainer;
 
 pub use adam::{adam_step, AdamKnobs};
 pub use gpu::{GpuTrainer, TrainRay};
+pub use knobs::TrainKnobs;
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
+pub use trainer::{train, HeldOutView, TrainProgress, Trained};

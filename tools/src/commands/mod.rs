@@ -1,5 +1,5 @@
 //! The field commands of `inlay`: `bake-scene`, `bake-ssdf`, `estimate-env`, `render`,
-//! `reference`, `probe`, `profile`, `dataset`, `render-views` and the benchmarks.
+//! `reference`, `probe`, `profile`, `dataset`, `render-views`, `train` and the benchmarks.
 
 pub mod bake_scene;
 pub mod bake_ssdf;
@@ -15,6 +15,7 @@ pub mod reference;
 pub mod render;
 pub mod render_views;
 pub mod sweep;
+pub mod train;
 
 use std::sync::Arc;
 

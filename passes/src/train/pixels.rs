@@ -1,0 +1,120 @@
+//! The pixels a dataset offers for training: each usable pixel of the
+//! training frames as a ray and what it says ([`PixelTarget`]), drawn at
+//! random per batch; the hold-out frames kept apart.
+
+use glam::DVec3;
+
+use super::loss::PixelTarget;
+use crate::dataset::pixels::{image_kind, ImageKind};
+use crate::dataset::{Dataset, Frame, PixelState};
+use crate::geometry::Ray;
+use crate::rng::Pcg32;
+
+/// One usable pixel: its frame (index into the dataset's frames) and pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelRef {
+    /// Frame index in [`Dataset::frames`].
+    pub frame: u32,
+    /// Pixel index, row-major.
+    pub pixel: u32,
+}
+
+/// sRGB encoding of linear [0, 1] (the inverse of the loader's decoding).
+fn encode(v: f32) -> f64 {
+    let v = v.clamp(0.0, 1.0) as f64;
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Whether `frame` is a bracket: an LDR image with an exposure time.
+pub fn is_bracket(frame: &Frame) -> bool {
+    frame.exposure_time.is_some() && image_kind(&frame.image_path) == Some(ImageKind::Srgb)
+}
+
+/// The ray through pixel `pixel` of `frame` (through its centre), or None
+/// where the lens model cannot be inverted.
+pub fn pixel_ray(frame: &Frame, pixel: u32) -> Option<Ray> {
+    let w = frame.intrinsics.width;
+    let (u, v) = ((pixel % w) as f64 + 0.5, (pixel / w) as f64 + 0.5);
+    let d = frame.intrinsics.direction(u, v)?;
+    Some(Ray {
+        origin: frame.pose.origin(),
+        dir: frame.pose.to_world(d).normalize(),
+    })
+}
+
+/// What pixel `pixel` of `frame` says.
+pub fn pixel_target(frame: &Frame, pixel: u32) -> Option<PixelTarget> {
+    let i = pixel as usize;
+    let c = frame.image.radiance[i];
+    let value = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+    match frame.image.state[i] {
+        PixelState::Masked => None,
+        _ if is_bracket(frame) => Some(PixelTarget::Bracket {
+            encoded: DVec3::new(encode(c[0]), encode(c[1]), encode(c[2])),
+            exposure: frame.exposure_time.unwrap_or(1.0),
+        }),
+        PixelState::LowerBound => Some(PixelTarget::AtLeast(value)),
+        PixelState::Value => Some(PixelTarget::Value(value)),
+    }
+}
+
+/// The training pixels: every usable pixel of the frames not held out.
+#[derive(Debug, Clone)]
+pub struct PixelPool {
+    /// The usable pixels.
+    pub pixels: Vec<PixelRef>,
+    /// The frames held out (indices into the dataset's frames).
+    pub held_out: Vec<u32>,
+}
+
+impl PixelPool {
+    /// The pool of `dataset`, holding out `hold_out` frames spread evenly
+    /// over the list (never all of them).
+    pub fn new(dataset: &Dataset, hold_out: u32) -> Self {
+        let n = dataset.frames.len() as u32;
+        let k = hold_out.min(n.saturating_sub(1));
+        let held_out: Vec<u32> = (0..k).map(|i| (2 * i + 1) * n / (2 * k)).collect();
+        let mut pixels = Vec::new();
+        for (f, frame) in dataset.frames.iter().enumerate() {
+            if held_out.contains(&(f as u32)) {
+                continue;
+            }
+            for (p, s) in frame.image.state.iter().enumerate() {
+                if *s != PixelState::Masked {
+                    pixels.push(PixelRef {
+                        frame: f as u32,
+                        pixel: p as u32,
+                    });
+                }
+            }
+        }
+        Self { pixels, held_out }
+    }
+
+    /// `count` pixels drawn at random (with replacement) for step `step`.
+    pub fn batch(
+        &self,
+        dataset: &Dataset,
+        count: usize,
+        seed: u64,
+        step: u64,
+    ) -> Vec<(Ray, PixelTarget)> {
+        let mut rng = Pcg32::new(seed, 0x7EA1_0000_0000 ^ step);
+        let mut out = Vec::with_capacity(count);
+        let mut tries = 0;
+        while out.len() < count && tries < 4 * count && !self.pixels.is_empty() {
+            tries += 1;
+            let r = self.pixels[rng.next_u32() as usize % self.pixels.len()];
+            let frame = &dataset.frames[r.frame as usize];
+            if let (Some(ray), Some(t)) = (pixel_ray(frame, r.pixel), pixel_target(frame, r.pixel))
+            {
+                out.push((ray, t));
+            }
+        }
+        out
+    }
+}

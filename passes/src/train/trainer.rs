@@ -1,0 +1,295 @@
+//! The training loop: a dense grid trained coarse to fine on the GPU
+//! (`train-rays`, `train-adam`), step sizes decaying exponentially, then the
+//! held-out views rendered with the march and scored.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::{DVec3, UVec3};
+use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::{Context, Renderer};
+use rayon::prelude::*;
+
+use super::adam::AdamKnobs;
+use super::gpu::{GpuTrainer, TrainRay};
+use super::knobs::TrainKnobs;
+use super::pixels::{is_bracket, pixel_ray, PixelPool};
+use crate::dataset::{Dataset, PixelState};
+use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
+use crate::march::{march_ray, MarchKnobs};
+use crate::sgfit::model::luminance;
+
+/// Where a run is, for progress reports.
+#[derive(Debug, Clone, Copy)]
+pub struct TrainProgress {
+    /// Steps done.
+    pub step: u32,
+    /// Steps in the run.
+    pub steps: u32,
+    /// The last batch's mean loss.
+    pub loss: f64,
+    /// Rays per second so far.
+    pub rays_per_second: f64,
+    /// The grid's nodes per axis now.
+    pub resolution: UVec3,
+}
+
+/// A held-out view rendered from the trained field and scored.
+#[derive(Debug, Clone)]
+pub struct HeldOutView {
+    /// Its index in the dataset's frames.
+    pub frame: u32,
+    /// PSNR in dB of the rendered view against the photograph, on
+    /// sRGB-encoded values clipped at 1 (brackets at their exposure).
+    pub psnr: f64,
+    /// Σ|L_field − L_photo| / Σ L_photo in luminance over the usable
+    /// pixels (linear radiance; brackets at their exposure, clipped).
+    pub relative_error: f64,
+    /// The photograph (linear, brackets at their exposure and clipped).
+    pub truth: Vec<[f32; 3]>,
+    /// The field's rendering of it, the same way.
+    pub rendered: Vec<[f32; 3]>,
+    /// Width and height.
+    pub size: (u32, u32),
+}
+
+/// A finished run.
+#[derive(Debug, Clone)]
+pub struct Trained {
+    /// The trained field.
+    pub field: GridField,
+    /// (step, mean batch loss) every few steps.
+    pub history: Vec<(u32, f64)>,
+    /// The held-out views.
+    pub held_out: Vec<HeldOutView>,
+    /// Steps taken (fewer than asked when the time budget ran out).
+    pub steps: u32,
+    /// The mean luminance of the training pixels (the loss's scale).
+    pub mean_radiance: f64,
+}
+
+/// Nodes per axis for `nodes` along the bounds' longest axis.
+pub fn grid_size(size: DVec3, nodes: u32) -> UVec3 {
+    let m = size.max_element();
+    UVec3::new(
+        ((nodes as f64 * size.x / m).round() as u32).max(2),
+        ((nodes as f64 * size.y / m).round() as u32).max(2),
+        ((nodes as f64 * size.z / m).round() as u32).max(2),
+    )
+}
+
+/// `field`'s values at the nodes of a `resolution` grid over the same
+/// bounds (trilinear: a finer grid holds the same field).
+pub fn resample(field: &GridField, resolution: UVec3) -> Vec<[f32; 4]> {
+    let b = field.bounds;
+    let cells = (resolution - UVec3::ONE).as_dvec3();
+    let mut out = Vec::with_capacity((resolution.x * resolution.y * resolution.z) as usize);
+    for k in 0..resolution.z {
+        for j in 0..resolution.y {
+            for i in 0..resolution.x {
+                let f = DVec3::new(i as f64, j as f64, k as f64) / cells;
+                let x = (b.min + f * b.size()).clamp(b.min, b.max);
+                out.push(field.interpolate(x).map(|v| v as f32));
+            }
+        }
+    }
+    out
+}
+
+/// The training pixels' mean luminance (the loss's and the colours' scale;
+/// a median would be zero where most pixels see empty space).
+fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
+    let step = (pool.pixels.len() / 20000).max(1);
+    let (mut sum, mut n) = (0.0, 0usize);
+    for r in pool.pixels.iter().step_by(step) {
+        let c = dataset.frames[r.frame as usize].image.radiance[r.pixel as usize];
+        sum += luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
+        n += 1;
+    }
+    (sum / n.max(1) as f64).max(1e-6)
+}
+
+/// Trains a grid on `dataset` (holding out `hold_out` frames), over
+/// `background`; stops early when `budget` runs out.
+#[allow(clippy::too_many_arguments)]
+pub fn train(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    dataset: &Dataset,
+    knobs: &TrainKnobs,
+    hold_out: u32,
+    background: DVec3,
+    budget: Option<Duration>,
+    progress: &dyn Fn(&TrainProgress),
+) -> anyhow::Result<Trained> {
+    if let Err((k, m)) = knobs.check() {
+        anyhow::bail!("train knob {k}: {m}");
+    }
+    let started = Instant::now();
+    let pool = PixelPool::new(dataset, hold_out);
+    anyhow::ensure!(!pool.pixels.is_empty(), "no usable pixel to train on");
+    let scale = mean_luminance(dataset, &pool);
+    let bounds = dataset.bounds;
+    let diag = bounds.diagonal();
+    let march = MarchKnobs {
+        samples_per_ray: knobs.samples_per_ray,
+        termination: 1e-4,
+        skip_empty: false,
+    };
+    let final_res = grid_size(bounds.size(), knobs.resolution);
+    crate::field::check_field_fits(ctx.info(), final_res)?;
+    let stage_res = |s: u32| {
+        let shift = knobs.stages - 1 - s;
+        (final_res.as_dvec3() / (1u32 << shift) as f64)
+            .ceil()
+            .as_uvec3()
+            .max(UVec3::splat(2))
+    };
+    // Start grey at the mean radiance, half transparent across the box.
+    let first = stage_res(0);
+    let grey = scale as f32;
+    let mut nodes =
+        vec![[grey, grey, grey, (1.0 / diag) as f32]; (first.x * first.y * first.z) as usize];
+    let mut renderer = Renderer::new(ctx, 1)?;
+    let mut history = Vec::new();
+    let mut rays_done = 0u64;
+    let mut step = 0u32;
+    let mut res = first;
+    'stages: for s in 0..knobs.stages {
+        let target = stage_res(s);
+        if target != res {
+            let coarse = GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK);
+            nodes = resample(&coarse, target);
+            res = target;
+        }
+        let mut gpu = GpuTrainer::new(ctx, lib, res, bounds, &nodes, march)?;
+        let end = (knobs.iterations as u64 * (s as u64 + 1) / knobs.stages as u64) as u32;
+        while step < end {
+            if budget.is_some_and(|b| started.elapsed() >= b) {
+                nodes = gpu.nodes(&mut renderer)?;
+                break 'stages;
+            }
+            let batch = pool.batch(dataset, knobs.batch as usize, knobs.seed, step as u64);
+            let records: Vec<TrainRay> = batch
+                .iter()
+                .map(|(r, t)| TrainRay::new(r.origin, r.dir, *t, 1.0))
+                .collect();
+            let decay = knobs.rate_decay.powf(step as f64 / knobs.iterations as f64);
+            let adam = AdamKnobs {
+                rate: knobs.rate * scale * decay,
+                density_rate: knobs.density_rate / diag * decay,
+                beta1: 0.9,
+                beta2: 0.99,
+            };
+            let out = gpu.run_batch(
+                &mut renderer,
+                &records,
+                background,
+                knobs.epsilon * scale,
+                Some((&adam, 1.0 / records.len() as f32)),
+            )?;
+            rays_done += records.len() as u64;
+            step += 1;
+            let loss = out.iter().map(|o| o[3] as f64).sum::<f64>() / out.len() as f64;
+            if step % 10 == 0 || step == knobs.iterations {
+                history.push((step, loss));
+                progress(&TrainProgress {
+                    step,
+                    steps: knobs.iterations,
+                    loss,
+                    rays_per_second: rays_done as f64 / started.elapsed().as_secs_f64().max(1e-9),
+                    resolution: res,
+                });
+            }
+        }
+        nodes = gpu.nodes(&mut renderer)?;
+    }
+    let field = GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK);
+    let view_march = MarchKnobs {
+        skip_empty: true,
+        ..march
+    };
+    let held_out = pool
+        .held_out
+        .iter()
+        .map(|&f| score_view(dataset, f, &field, &view_march, background))
+        .collect();
+    Ok(Trained {
+        field,
+        history,
+        held_out,
+        steps: step,
+        mean_radiance: scale,
+    })
+}
+
+/// Renders frame `f` of `dataset` from `field` and scores it.
+pub fn score_view(
+    dataset: &Dataset,
+    f: u32,
+    field: &GridField,
+    march: &MarchKnobs,
+    background: DVec3,
+) -> HeldOutView {
+    let frame = &dataset.frames[f as usize];
+    let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
+    let exposure = if is_bracket(frame) {
+        frame.exposure_time
+    } else {
+        None
+    };
+    let show = |c: DVec3| -> [f32; 3] {
+        match exposure {
+            Some(e) => (c * e).clamp(DVec3::ZERO, DVec3::ONE).as_vec3().to_array(),
+            None => c.as_vec3().to_array(),
+        }
+    };
+    let rendered: Vec<[f32; 3]> = (0..w * h)
+        .into_par_iter()
+        .map(|p| match pixel_ray(frame, p) {
+            Some(ray) => {
+                let r = march_ray(field, &ray, f64::INFINITY, march);
+                show(r.colour + (1.0 - r.opacity) * background)
+            }
+            None => [0.0; 3],
+        })
+        .collect();
+    let truth: Vec<[f32; 3]> = frame.image.radiance.clone();
+    let (mut se, mut n, mut diff, mut total) = (0.0, 0usize, 0.0, 0.0);
+    for (i, (a, b)) in rendered.iter().zip(&truth).enumerate() {
+        if frame.image.state[i] == PixelState::Masked {
+            continue;
+        }
+        let (la, lb) = (
+            luminance(DVec3::from_array(a.map(|v| v as f64))),
+            luminance(DVec3::from_array(b.map(|v| v as f64))),
+        );
+        diff += (la - lb).abs();
+        total += lb;
+        for k in 0..3 {
+            let e = |v: f32| {
+                let v = v.clamp(0.0, 1.0) as f64;
+                if v <= 0.003_130_8 {
+                    12.92 * v
+                } else {
+                    1.055 * v.powf(1.0 / 2.4) - 0.055
+                }
+            };
+            se += (e(a[k]) - e(b[k])).powi(2);
+        }
+        n += 3;
+    }
+    let mse = se / n.max(1) as f64;
+    HeldOutView {
+        frame: f,
+        psnr: -10.0 * mse.max(1e-12).log10(),
+        relative_error: if total > 0.0 {
+            diff / total
+        } else {
+            f64::INFINITY
+        },
+        truth,
+        rendered,
+        size: (w, h),
+    }
+}

@@ -1,0 +1,202 @@
+//! `inlay train DATASET --out FIELD.inlayfield`: trains a grid radiance
+//! field on the GPU from posed photographs (`transforms.json`, see
+//! `docs/datasets.md`), coarse to fine, and scores the views it held out.
+//! A time budget ends the run early with a valid field; the field and the
+//! hold-out picture are put in place only when the run completes.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use clap::Args;
+use glam::DVec3;
+use inlay_engine::{Context, HdrImage};
+use inlay_passes::dataset::{load_dataset, LoadOptions};
+use inlay_passes::field::field_bytes;
+use inlay_passes::geometry::Aabb;
+use inlay_passes::train::{train, TrainKnobs};
+
+use crate::commands::dataset::{parse_bounds, parse_rgb};
+use crate::field_source::progress_bar;
+use crate::outputs::{check_image_output, check_output, Outputs};
+
+/// Arguments of `inlay train`.
+#[derive(Args, Debug)]
+pub struct TrainArgs {
+    /// The dataset: a transforms.json, or a folder holding one.
+    pub dataset: PathBuf,
+    /// The field file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Nodes along the field's longest axis.
+    #[arg(long, default_value_t = TrainKnobs::default().resolution)]
+    pub resolution: u32,
+    /// Coarse-to-fine stages (the grid doubles between them).
+    #[arg(long, default_value_t = TrainKnobs::default().stages)]
+    pub stages: u32,
+    /// Optimiser steps.
+    #[arg(long, default_value_t = TrainKnobs::default().iterations)]
+    pub iterations: u32,
+    /// Rays per step.
+    #[arg(long, default_value_t = TrainKnobs::default().batch)]
+    pub batch: u32,
+    /// March samples along the field's diagonal.
+    #[arg(long, default_value_t = TrainKnobs::default().samples_per_ray)]
+    pub samples_per_ray: u32,
+    /// Colour step size (fraction of the mean radiance).
+    #[arg(long, default_value_t = TrainKnobs::default().rate)]
+    pub rate: f64,
+    /// Density step size (per field diagonal).
+    #[arg(long, default_value_t = TrainKnobs::default().density_rate)]
+    pub density_rate: f64,
+    /// The relative loss's floor (fraction of the mean radiance): below
+    /// it errors count absolutely, above it relatively.
+    #[arg(long, default_value_t = TrainKnobs::default().epsilon)]
+    pub epsilon: f64,
+    /// Views never trained on, scored at the end.
+    #[arg(long, default_value_t = 2)]
+    pub hold_out: u32,
+    /// Stop after this many seconds (the field so far is written).
+    #[arg(long)]
+    pub time_budget: Option<f64>,
+    /// Picture of the held-out views: photograph | field | difference.
+    #[arg(long)]
+    pub picture: Option<PathBuf>,
+    /// The field's bounds, min x,y,z then max x,y,z (overrides the dataset's).
+    #[arg(long, value_parser = parse_bounds, allow_hyphen_values = true)]
+    pub bounds: Option<Aabb>,
+    /// Radiance behind the field (linear RGB), and what transparent pixels
+    /// of RGBA images are composited over.
+    #[arg(long, value_parser = parse_rgb, default_value = "0,0,0")]
+    pub background: [f32; 3],
+    /// Leave out the frames that cannot be used instead of failing.
+    #[arg(long)]
+    pub skip_bad_frames: bool,
+    /// Seed of every random choice.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Runs `inlay train`.
+pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
+    check_output("--out", &args.out, &["inlayfield"])?;
+    if let Some(p) = &args.picture {
+        check_image_output("--picture", p)?;
+    }
+    let knobs = TrainKnobs {
+        resolution: args.resolution,
+        stages: args.stages,
+        iterations: args.iterations,
+        batch: args.batch,
+        samples_per_ray: args.samples_per_ray,
+        rate: args.rate,
+        density_rate: args.density_rate,
+        epsilon: args.epsilon,
+        seed: args.seed,
+        ..TrainKnobs::default()
+    };
+    if let Err((k, m)) = knobs.check() {
+        anyhow::bail!("--{}: {m}", k.replace('_', "-"));
+    }
+    let budget = match args.time_budget {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            anyhow::bail!("--time-budget {s}: must be positive seconds")
+        }
+        Some(s) => Some(Duration::from_secs_f64(s)),
+        None => None,
+    };
+    let options = LoadOptions {
+        bounds: args.bounds,
+        background: args.background,
+        skip_bad_frames: args.skip_bad_frames,
+        ..LoadOptions::default()
+    };
+    let dataset = load_dataset(&args.dataset, &options)?;
+    let b = dataset.bounds;
+    eprintln!(
+        "{}: {} frames ({} dialect); bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3} from {}",
+        dataset.file.display(),
+        dataset.frames.len(),
+        dataset.dialect,
+        b.min.x,
+        b.min.y,
+        b.min.z,
+        b.max.x,
+        b.max.y,
+        b.max.z,
+        dataset.bounds_source
+    );
+    let started = Instant::now();
+    let bar = progress_bar("training", knobs.iterations as u64);
+    let background = DVec3::from_array(args.background.map(|v| v as f64));
+    let trained = train(
+        ctx,
+        &inlay_passes::shaders::library()?,
+        &dataset,
+        &knobs,
+        args.hold_out,
+        background,
+        budget,
+        &|p| {
+            bar.set_position(p.step as u64);
+            bar.set_message(format!(
+                "loss {:.3e}, {:.0} rays/s, {}x{}x{}",
+                p.loss, p.rays_per_second, p.resolution.x, p.resolution.y, p.resolution.z
+            ));
+        },
+    )?;
+    bar.finish_and_clear();
+    let f = &trained.field;
+    eprintln!(
+        "trained {} of {} steps in {:.1} s: a {}x{}x{} field; last loss {:.4e}",
+        trained.steps,
+        knobs.iterations,
+        started.elapsed().as_secs_f64(),
+        f.resolution.x,
+        f.resolution.y,
+        f.resolution.z,
+        trained.history.last().map_or(f64::NAN, |h| h.1)
+    );
+    for v in &trained.held_out {
+        println!(
+            "held-out frame {}: PSNR {:.2} dB, relative error {:.3}",
+            v.frame, v.psnr, v.relative_error
+        );
+    }
+    let mut outputs = Outputs::new();
+    outputs.bytes(&args.out, &field_bytes(f))?;
+    if let (Some(path), false) = (&args.picture, trained.held_out.is_empty()) {
+        outputs.image(path, &held_out_picture(&trained.held_out), 1.0)?;
+    }
+    outputs.commit(Some(ctx))?;
+    Ok(())
+}
+
+/// The held-out views one under another: photograph | field | |difference|.
+fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
+    let w = views.iter().map(|v| v.size.0).max().unwrap_or(1);
+    let h: u32 = views.iter().map(|v| v.size.1).sum();
+    let mut pixels = vec![[0.0f32, 0.0, 0.0, 1.0]; (3 * w * h) as usize];
+    let mut y0 = 0;
+    for v in views {
+        let (vw, vh) = v.size;
+        for y in 0..vh {
+            for x in 0..vw {
+                let i = (y * vw + x) as usize;
+                let (a, b) = (v.truth[i], v.rendered[i]);
+                let d = [0, 1, 2].map(|k| (a[k] - b[k]).abs());
+                for (panel, c) in [a, b, d].into_iter().enumerate() {
+                    let o = ((y0 + y) * 3 * w + panel as u32 * w + x) as usize;
+                    pixels[o] = [c[0], c[1], c[2], 1.0];
+                }
+            }
+        }
+        y0 += vh;
+    }
+    HdrImage {
+        width: 3 * w,
+        height: h,
+        pixels,
+    }
+}
