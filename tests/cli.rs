@@ -225,7 +225,46 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         t.contains("held-out frame 1: PSNR") && field.is_file(),
         "{t}"
     );
-    inlay_passes::field::load_field(&field).unwrap();
+    let trained = inlay_passes::field::load_field(&field).unwrap();
+    // A run stopped at once (time budget) still writes a valid field, and
+    // `--resume` continues from a field at its resolution.
+    let stopped = dir.join("stopped.inlayfield");
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        stopped.to_str().unwrap(),
+        "--resolution",
+        "8",
+        "--time-budget",
+        "1e-6",
+        "--hold-out",
+        "0",
+    ]);
+    let t = text(&o);
+    assert!(
+        o.status.success() && t.contains("stopped at step 0 (time budget)"),
+        "{t}"
+    );
+    inlay_passes::field::load_field(&stopped).unwrap();
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        stopped.to_str().unwrap(),
+        "--resume",
+        field.to_str().unwrap(),
+        "--iterations",
+        "5",
+        "--batch",
+        "128",
+        "--hold-out",
+        "0",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let resumed = inlay_passes::field::load_field(&stopped).unwrap();
+    assert_eq!(resumed.resolution, trained.resolution);
+    assert_ne!(resumed.nodes, trained.nodes);
     for (flag, value, says) in [
         ("--time-budget", "0", "--time-budget"),
         ("--stages", "9", "--stages"),

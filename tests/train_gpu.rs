@@ -251,7 +251,18 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
         samples_per_ray: 128,
         ..TrainKnobs::default()
     };
-    let trained = train(&ctx, &lib, &dataset, &knobs, 2, DVec3::ZERO, None, &|_| {}).unwrap();
+    let control = inlay_passes::train::TrainControl::default();
+    let trained = train(
+        &ctx,
+        &lib,
+        &dataset,
+        &knobs,
+        2,
+        DVec3::ZERO,
+        &control,
+        &|_| {},
+    )
+    .unwrap();
     common::assert_no_validation_errors(&ctx);
     let first = trained.history.first().unwrap().1;
     let last = trained.history.last().unwrap().1;

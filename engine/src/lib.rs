@@ -11,6 +11,7 @@ pub mod device_choice;
 mod error;
 pub mod graph;
 mod image_io;
+pub mod interrupt;
 mod memory;
 pub mod output;
 mod pipeline;

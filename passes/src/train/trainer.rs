@@ -109,8 +109,30 @@ fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
     (sum / n.max(1) as f64).max(1e-6)
 }
 
+/// How a run begins and when it stops early.
+pub struct TrainControl<'a> {
+    /// A field to continue from (its nodes, resolution and bounds; one
+    /// stage at its resolution) instead of a grey grid.
+    pub resume: Option<&'a GridField>,
+    /// Stop once this much time has passed.
+    pub budget: Option<Duration>,
+    /// Stop when this says so (Ctrl-C).
+    pub stop: &'a dyn Fn() -> bool,
+}
+
+impl Default for TrainControl<'_> {
+    fn default() -> Self {
+        Self {
+            resume: None,
+            budget: None,
+            stop: &|| false,
+        }
+    }
+}
+
 /// Trains a grid on `dataset` (holding out `hold_out` frames), over
-/// `background`; stops early when `budget` runs out.
+/// `background`; `control` says where to start and when to stop early (the
+/// field so far is the result then).
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     ctx: &Arc<Context>,
@@ -119,7 +141,7 @@ pub fn train(
     knobs: &TrainKnobs,
     hold_out: u32,
     background: DVec3,
-    budget: Option<Duration>,
+    control: &TrainControl,
     progress: &dyn Fn(&TrainProgress),
 ) -> anyhow::Result<Trained> {
     if let Err((k, m)) = knobs.check() {
@@ -129,17 +151,24 @@ pub fn train(
     let pool = PixelPool::new(dataset, hold_out);
     anyhow::ensure!(!pool.pixels.is_empty(), "no usable pixel to train on");
     let scale = mean_luminance(dataset, &pool);
-    let bounds = dataset.bounds;
+    let bounds = control.resume.map_or(dataset.bounds, |f| f.bounds);
     let diag = bounds.diagonal();
     let march = MarchKnobs {
         samples_per_ray: knobs.samples_per_ray,
         termination: 1e-4,
         skip_empty: false,
     };
-    let final_res = grid_size(bounds.size(), knobs.resolution);
+    let final_res = control
+        .resume
+        .map_or(grid_size(bounds.size(), knobs.resolution), |f| f.resolution);
+    let stages = if control.resume.is_some() {
+        1
+    } else {
+        knobs.stages
+    };
     crate::field::check_field_fits(ctx.info(), final_res)?;
     let stage_res = |s: u32| {
-        let shift = knobs.stages - 1 - s;
+        let shift = stages - 1 - s;
         (final_res.as_dvec3() / (1u32 << shift) as f64)
             .ceil()
             .as_uvec3()
@@ -148,14 +177,18 @@ pub fn train(
     // Start grey at the mean radiance, half transparent across the box.
     let first = stage_res(0);
     let grey = scale as f32;
-    let mut nodes =
-        vec![[grey, grey, grey, (1.0 / diag) as f32]; (first.x * first.y * first.z) as usize];
+    let mut nodes = match control.resume {
+        Some(f) => f.nodes.clone(),
+        None => {
+            vec![[grey, grey, grey, (1.0 / diag) as f32]; (first.x * first.y * first.z) as usize]
+        }
+    };
     let mut renderer = Renderer::new(ctx, 1)?;
     let mut history = Vec::new();
     let mut rays_done = 0u64;
     let mut step = 0u32;
     let mut res = first;
-    'stages: for s in 0..knobs.stages {
+    'stages: for s in 0..stages {
         let target = stage_res(s);
         if target != res {
             let coarse = GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK);
@@ -163,9 +196,9 @@ pub fn train(
             res = target;
         }
         let mut gpu = GpuTrainer::new(ctx, lib, res, bounds, &nodes, march)?;
-        let end = (knobs.iterations as u64 * (s as u64 + 1) / knobs.stages as u64) as u32;
+        let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
         while step < end {
-            if budget.is_some_and(|b| started.elapsed() >= b) {
+            if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {
                 nodes = gpu.nodes(&mut renderer)?;
                 break 'stages;
             }

@@ -1,7 +1,8 @@
 //! `inlay train DATASET --out FIELD.inlayfield`: trains a grid radiance
 //! field on the GPU from posed photographs (`transforms.json`, see
 //! `docs/datasets.md`), coarse to fine, and scores the views it held out.
-//! A time budget ends the run early with a valid field; the field and the
+//! A time budget or Ctrl-C ends the run early with a valid field (a second
+//! Ctrl-C kills it); `--resume` continues from a field. The field and the
 //! hold-out picture are put in place only when the run completes.
 
 use std::path::PathBuf;
@@ -15,7 +16,7 @@ use inlay_engine::{Context, HdrImage};
 use inlay_passes::dataset::{load_dataset, LoadOptions};
 use inlay_passes::field::field_bytes;
 use inlay_passes::geometry::Aabb;
-use inlay_passes::train::{train, TrainKnobs};
+use inlay_passes::train::{train, TrainControl, TrainKnobs};
 
 use crate::commands::dataset::{parse_bounds, parse_rgb};
 use crate::field_source::progress_bar;
@@ -60,6 +61,10 @@ pub struct TrainArgs {
     /// Stop after this many seconds (the field so far is written).
     #[arg(long)]
     pub time_budget: Option<f64>,
+    /// Continue from this field (its resolution and bounds, one stage)
+    /// instead of a grey grid.
+    #[arg(long)]
+    pub resume: Option<PathBuf>,
     /// Picture of the held-out views: photograph | field | difference.
     #[arg(long)]
     pub picture: Option<PathBuf>,
@@ -112,6 +117,10 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         skip_bad_frames: args.skip_bad_frames,
         ..LoadOptions::default()
     };
+    let resume = match &args.resume {
+        Some(p) => Some(inlay_passes::field::load_field(p)?),
+        None => None,
+    };
     let dataset = load_dataset(&args.dataset, &options)?;
     let b = dataset.bounds;
     eprintln!(
@@ -130,6 +139,13 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     let started = Instant::now();
     let bar = progress_bar("training", knobs.iterations as u64);
     let background = DVec3::from_array(args.background.map(|v| v as f64));
+    // Ctrl-C ends the run with the field so far (a second one kills it).
+    inlay_engine::interrupt::catch_interrupts()?;
+    let control = TrainControl {
+        resume: resume.as_ref(),
+        budget,
+        stop: &inlay_engine::interrupt::interrupted,
+    };
     let trained = train(
         ctx,
         &inlay_passes::shaders::library()?,
@@ -137,7 +153,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         &knobs,
         args.hold_out,
         background,
-        budget,
+        &control,
         &|p| {
             bar.set_position(p.step as u64);
             bar.set_message(format!(
@@ -148,6 +164,17 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     )?;
     bar.finish_and_clear();
     let f = &trained.field;
+    if trained.steps < knobs.iterations {
+        eprintln!(
+            "stopped at step {} ({}): the field so far is written",
+            trained.steps,
+            if inlay_engine::interrupt::interrupted() {
+                "Ctrl-C"
+            } else {
+                "time budget"
+            }
+        );
+    }
     eprintln!(
         "trained {} of {} steps in {:.1} s: a {}x{}x{} field; last loss {:.4e}",
         trained.steps,
