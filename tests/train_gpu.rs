@@ -299,3 +299,38 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
         .flatten()
         .all(|v| v.is_finite() && *v >= 0.0));
 }
+
+/// `train-tv` adds the total variation's gradient of the CPU reference
+/// (rays of zero weight: nothing else is added).
+#[test]
+fn the_tv_pass_adds_the_cpu_gradient() {
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let field = field();
+    let knobs = MarchKnobs::default();
+    let mut trainer = GpuTrainer::new(
+        &ctx,
+        &lib,
+        field.resolution,
+        field.bounds,
+        &field.nodes,
+        knobs,
+    )
+    .unwrap();
+    trainer.tv_weights = (0.3, 1.7);
+    let mut renderer = Renderer::new(&ctx, 1).unwrap();
+    let (ray, target, _) = rays(&field, 1)[0];
+    let records = [TrainRay::new(ray.origin, ray.dir, target, 0.0)];
+    trainer
+        .run_batch(&mut renderer, &records, DVec3::ZERO, 0.05, None)
+        .unwrap();
+    let gpu = trainer.gradient(&mut renderer).unwrap();
+    let cpu = inlay_passes::train::tv::tv_gradient(&field.nodes, field.resolution, 0.3, 1.7);
+    for (i, (g, c)) in gpu.iter().zip(cpu.iter().flatten()).enumerate() {
+        assert!(
+            (*g as f64 - c).abs() < 1e-5 * (1.0 + c.abs()),
+            "value {i}: {g} vs {c}"
+        );
+    }
+    common::assert_no_validation_errors(&ctx);
+}

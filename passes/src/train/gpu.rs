@@ -79,6 +79,24 @@ inlay_engine::gpu_struct! {
     }
 }
 
+inlay_engine::gpu_struct! {
+    /// `TvPush` of `shaders/train/tv.wgsl`.
+    pub struct TvPush = "train/tv.wgsl" : "TvPush" {
+        /// Nodes per axis.
+        pub resolution: [u32; 3],
+        /// Nodes.
+        pub count: u32,
+        /// Weight of the colour channels' differences.
+        pub colour_weight: f32,
+        /// Weight of the density's differences.
+        pub density_weight: f32,
+        /// 1 / Adam's gradient scale.
+        pub unscale: f32,
+        /// Padding.
+        pub pad: u32,
+    }
+}
+
 impl TrainRay {
     /// The record of `ray` (unit direction) with `target`, weighted
     /// `weight`.
@@ -103,12 +121,15 @@ impl TrainRay {
 pub const TRAIN_RAYS: &str = "train-rays";
 /// Name of the optimiser pass.
 pub const TRAIN_ADAM: &str = "train-adam";
+/// Name of the total-variation pass.
+pub const TRAIN_TV: &str = "train-tv";
 
 /// A grid being trained on the GPU: its values, their gradient and Adam's
 /// moments, and the pipelines that step them.
 pub struct GpuTrainer {
     ray_grad: Arc<ComputePipeline>,
     adam: Arc<ComputePipeline>,
+    tv: Arc<ComputePipeline>,
     params: Arc<Buffer>,
     grad: Arc<Buffer>,
     moments: Arc<Buffer>,
@@ -120,6 +141,9 @@ pub struct GpuTrainer {
     pub march: MarchKnobs,
     /// Adam steps taken.
     pub steps: u32,
+    /// Total variation's weights (colour, density) added before each Adam
+    /// step ([`super::tv`]); zero leaves the pass out.
+    pub tv_weights: (f32, f32),
 }
 
 impl GpuTrainer {
@@ -155,6 +179,7 @@ impl GpuTrainer {
         Ok(Self {
             ray_grad: lib.compute_pipeline(ctx, "train/ray_grad.wgsl", "main", &[])?,
             adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &[])?,
+            tv: lib.compute_pipeline(ctx, "train/tv.wgsl", "main", &[])?,
             params: Arc::new(Buffer::with_data(
                 ctx,
                 "train-params",
@@ -177,6 +202,7 @@ impl GpuTrainer {
             bounds,
             march,
             steps: 0,
+            tv_weights: (0.0, 0.0),
         })
     }
 
@@ -199,8 +225,10 @@ impl GpuTrainer {
     }
 
     /// Runs one batch: renders `rays` over `background`, adds their loss's
-    /// gradient to the accumulated gradient and, with `adam` given, takes
-    /// an Adam step with the gradient scaled by `grad_scale` (clearing it).
+    /// gradient to the accumulated gradient, adds total variation's (with
+    /// [`Self::tv_weights`] not zero; at its weight after Adam's scale) and,
+    /// with `adam` given, takes an Adam step with the gradient scaled by
+    /// `grad_scale` (clearing it).
     /// Returns each ray's pixel and weighted loss.
     pub fn run_batch(
         &mut self,
@@ -245,6 +273,27 @@ impl GpuTrainer {
             .push(&push)
             .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
         pass.finish();
+        let nodes = self.values() / 4;
+        let mut grad = grad;
+        if self.tv_weights != (0.0, 0.0) {
+            let unscale = adam.map_or(1.0, |(_, scale)| 1.0 / scale);
+            let t = TvPush {
+                resolution: self.resolution.to_array(),
+                count: nodes,
+                colour_weight: self.tv_weights.0,
+                density_weight: self.tv_weights.1,
+                unscale,
+                pad: 0,
+            };
+            let groups = nodes.div_ceil(64);
+            let mut pass = graph.compute_pass(TRAIN_TV);
+            pass.buffer_at("params", params, BufferAccess::StorageRead);
+            grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+            pass.dispatch(&self.tv)
+                .push(&t)
+                .groups([groups.min(65535), groups.div_ceil(65535), 1]);
+            pass.finish();
+        }
         if let Some((knobs, grad_scale)) = adam {
             self.steps += 1;
             let t = self.steps as i32;

@@ -27,6 +27,13 @@ pub struct TrainKnobs {
     pub rate_decay: f64,
     /// The relative loss's floor, as a fraction of the mean radiance.
     pub epsilon: f64,
+    /// Total variation's weight on colour differences between neighbouring
+    /// nodes (over the mean radiance, squared) per unit of the batch's mean
+    /// loss.
+    pub tv_colour: f64,
+    /// Total variation's weight on density differences between neighbouring
+    /// nodes (times the node spacing: optical depth per cell, squared).
+    pub tv_density: f64,
     /// Seed of every random choice.
     pub seed: u64,
 }
@@ -43,6 +50,8 @@ impl Default for TrainKnobs {
             density_rate: 5.0,
             rate_decay: 0.1,
             epsilon: 4.0,
+            tv_colour: 0.0,
+            tv_density: 0.0,
             seed: 1,
         }
     }
@@ -72,6 +81,14 @@ impl TrainKnobs {
                 "iterations",
                 "iterations and batch must be positive, samples_per_ray in 4..=8192".into(),
             );
+        }
+        for (k, v) in [
+            ("tv_colour", self.tv_colour),
+            ("tv_density", self.tv_density),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(k, format!("{v} must be non-negative and finite"));
+            }
         }
         for (k, v) in [
             ("rate", self.rate),

@@ -12,6 +12,7 @@ pub mod loss;
 pub mod pixels;
 pub mod render;
 pub mod trainer;
+pub mod tv;
 
 pub use adam::{adam_step, AdamKnobs};
 pub use gpu::{GpuTrainer, TrainRay};

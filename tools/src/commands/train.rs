@@ -55,6 +55,12 @@ pub struct TrainArgs {
     /// it errors count absolutely, above it relatively.
     #[arg(long, default_value_t = TrainKnobs::default().epsilon)]
     pub epsilon: f64,
+    /// Total variation's weight on neighbouring nodes' colour differences.
+    #[arg(long, default_value_t = TrainKnobs::default().tv_colour)]
+    pub tv_colour: f64,
+    /// Total variation's weight on neighbouring nodes' density differences.
+    #[arg(long, default_value_t = TrainKnobs::default().tv_density)]
+    pub tv_density: f64,
     /// Views never trained on, scored at the end.
     #[arg(long, default_value_t = 2)]
     pub hold_out: u32,
@@ -98,6 +104,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         rate: args.rate,
         density_rate: args.density_rate,
         epsilon: args.epsilon,
+        tv_colour: args.tv_colour,
+        tv_density: args.tv_density,
         seed: args.seed,
         ..TrainKnobs::default()
     };
