@@ -40,6 +40,7 @@ pub fn gpu_layout_errors(lib: &ShaderLibrary, defines: &[Define]) -> Vec<String>
         check::<crate::train::gpu::TrainRay>(lib, defines),
         check::<crate::train::gpu::AdamPush>(lib, defines),
         check::<crate::train::gpu::TvPush>(lib, defines),
+        check::<crate::train::gpu::DescendPush>(lib, defines),
         check::<crate::sgfit::pass::FitState>(lib, defines),
         check::<crate::camera::CameraRays>(lib, defines),
         check::<crate::march::pass::MarchPush>(lib, defines),

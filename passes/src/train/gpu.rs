@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use glam::{DVec3, UVec3};
-use inlay_engine::graph::{BufferAccess, FrameGraph};
+use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{
     vk, Buffer, BufferLocation, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync,
@@ -97,6 +97,20 @@ inlay_engine::gpu_struct! {
     }
 }
 
+inlay_engine::gpu_struct! {
+    /// `DescendPush` of `shaders/train/descend.wgsl`.
+    pub struct DescendPush = "train/descend.wgsl" : "DescendPush" {
+        /// Values (4 per node).
+        pub count: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
+    }
+}
+
 impl TrainRay {
     /// The record of `ray` (unit direction) with `target`, weighted
     /// `weight`.
@@ -123,6 +137,8 @@ pub const TRAIN_RAYS: &str = "train-rays";
 pub const TRAIN_ADAM: &str = "train-adam";
 /// Name of the total-variation pass.
 pub const TRAIN_TV: &str = "train-tv";
+/// Name of the pass stepping along total variation's gradient.
+pub const TRAIN_DESCEND: &str = "train-descend";
 
 /// A grid being trained on the GPU: its values, their gradient and Adam's
 /// moments, and the pipelines that step them.
@@ -130,6 +146,7 @@ pub struct GpuTrainer {
     ray_grad: Arc<ComputePipeline>,
     adam: Arc<ComputePipeline>,
     tv: Arc<ComputePipeline>,
+    descend: Arc<ComputePipeline>,
     params: Arc<Buffer>,
     grad: Arc<Buffer>,
     moments: Arc<Buffer>,
@@ -141,8 +158,8 @@ pub struct GpuTrainer {
     pub march: MarchKnobs,
     /// Adam steps taken.
     pub steps: u32,
-    /// Total variation's weights (colour, density) added before each Adam
-    /// step ([`super::tv`]); zero leaves the pass out.
+    /// Total variation's weights (colour, density): a step of it after
+    /// each Adam step ([`super::tv::tv_step`]); zero leaves it out.
     pub tv_weights: (f32, f32),
 }
 
@@ -180,6 +197,7 @@ impl GpuTrainer {
             ray_grad: lib.compute_pipeline(ctx, "train/ray_grad.wgsl", "main", &[])?,
             adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &[])?,
             tv: lib.compute_pipeline(ctx, "train/tv.wgsl", "main", &[])?,
+            descend: lib.compute_pipeline(ctx, "train/descend.wgsl", "main", &[])?,
             params: Arc::new(Buffer::with_data(
                 ctx,
                 "train-params",
@@ -225,10 +243,9 @@ impl GpuTrainer {
     }
 
     /// Runs one batch: renders `rays` over `background`, adds their loss's
-    /// gradient to the accumulated gradient, adds total variation's (with
-    /// [`Self::tv_weights`] not zero; at its weight after Adam's scale) and,
-    /// with `adam` given, takes an Adam step with the gradient scaled by
-    /// `grad_scale` (clearing it).
+    /// gradient to the accumulated gradient and, with `adam` given, takes
+    /// an Adam step with the gradient scaled by `grad_scale` (clearing it),
+    /// then a total-variation step ([`Self::tv_weights`] not zero).
     /// Returns each ray's pixel and weighted loss.
     pub fn run_batch(
         &mut self,
@@ -273,27 +290,6 @@ impl GpuTrainer {
             .push(&push)
             .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
         pass.finish();
-        let nodes = self.values() / 4;
-        let mut grad = grad;
-        if self.tv_weights != (0.0, 0.0) {
-            let unscale = adam.map_or(1.0, |(_, scale)| 1.0 / scale);
-            let t = TvPush {
-                resolution: self.resolution.to_array(),
-                count: nodes,
-                colour_weight: self.tv_weights.0,
-                density_weight: self.tv_weights.1,
-                unscale,
-                pad: 0,
-            };
-            let groups = nodes.div_ceil(64);
-            let mut pass = graph.compute_pass(TRAIN_TV);
-            pass.buffer_at("params", params, BufferAccess::StorageRead);
-            grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
-            pass.dispatch(&self.tv)
-                .push(&t)
-                .groups([groups.min(65535), groups.div_ceil(65535), 1]);
-            pass.finish();
-        }
         if let Some((knobs, grad_scale)) = adam {
             self.steps += 1;
             let t = self.steps as i32;
@@ -309,8 +305,8 @@ impl GpuTrainer {
             };
             let groups = self.values().div_ceil(64);
             let mut pass = graph.compute_pass(TRAIN_ADAM);
-            pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
-            pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+            let params = pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
+            let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
             pass.buffer_at("moments", moments, BufferAccess::StorageReadWrite);
             pass.dispatch(&self.adam).push(&a).groups([
                 groups.min(65535),
@@ -318,6 +314,9 @@ impl GpuTrainer {
                 1,
             ]);
             pass.finish();
+            if self.tv_weights != (0.0, 0.0) {
+                self.add_tv_step(&mut graph, params, grad);
+            }
         }
         readback.add_to_graph(&mut graph, "train-ray-out-readback", out);
         renderer.submit(graph, &SubmitSync::none())?;
@@ -326,6 +325,44 @@ impl GpuTrainer {
         Ok(v.chunks_exact(4)
             .map(|c| [c[0], c[1], c[2], c[3]])
             .collect())
+    }
+
+    /// Adds `train-tv` (the total variation's gradient into `grad`, empty
+    /// after Adam) and `train-descend` (one plain step along it).
+    fn add_tv_step(&self, graph: &mut FrameGraph, params: BufferHandle, grad: BufferHandle) {
+        let nodes = self.values() / 4;
+        let t = TvPush {
+            resolution: self.resolution.to_array(),
+            count: nodes,
+            colour_weight: self.tv_weights.0,
+            density_weight: self.tv_weights.1,
+            unscale: 1.0,
+            pad: 0,
+        };
+        let groups = nodes.div_ceil(64);
+        let mut pass = graph.compute_pass(TRAIN_TV);
+        pass.buffer_at("params", params, BufferAccess::StorageRead);
+        let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+        pass.dispatch(&self.tv)
+            .push(&t)
+            .groups([groups.min(65535), groups.div_ceil(65535), 1]);
+        pass.finish();
+        let d = DescendPush {
+            count: self.values(),
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        };
+        let groups = self.values().div_ceil(64);
+        let mut pass = graph.compute_pass(TRAIN_DESCEND);
+        pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
+        pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+        pass.dispatch(&self.descend).push(&d).groups([
+            groups.min(65535),
+            groups.div_ceil(65535),
+            1,
+        ]);
+        pass.finish();
     }
 
     /// Reads a persistent buffer back whole.

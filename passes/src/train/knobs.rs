@@ -27,12 +27,11 @@ pub struct TrainKnobs {
     pub rate_decay: f64,
     /// The relative loss's floor, as a fraction of the mean radiance.
     pub epsilon: f64,
-    /// Total variation's weight on colour differences between neighbouring
-    /// nodes (over the mean radiance, squared) per unit of the batch's mean
-    /// loss.
+    /// Total variation's step on colour after each Adam step: each value
+    /// moves by 2 × this × its differences to its six neighbours (at most
+    /// [`super::tv::MAX_TV_WEIGHT`]).
     pub tv_colour: f64,
-    /// Total variation's weight on density differences between neighbouring
-    /// nodes (times the node spacing: optical depth per cell, squared).
+    /// The same for density.
     pub tv_density: f64,
     /// Seed of every random choice.
     pub seed: u64,

@@ -196,11 +196,7 @@ pub fn train(
             res = target;
         }
         let mut gpu = GpuTrainer::new(ctx, lib, res, bounds, &nodes, march)?;
-        let spacing = (bounds.size() / (res - UVec3::ONE).as_dvec3()).min_element();
-        gpu.tv_weights = (
-            (knobs.tv_colour / (scale * scale)) as f32,
-            (knobs.tv_density * spacing * spacing) as f32,
-        );
+        gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
         let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
         while step < end {
             if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {

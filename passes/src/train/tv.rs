@@ -1,7 +1,10 @@
 //! Total variation over the grid: the sum over neighbouring node pairs of
 //! their squared differences, per channel group weighted (colour, density).
-//! It smooths what the views do not pin down, floaters above all.
-//! Mirrored by `shaders/train/tv.wgsl`.
+//! It smooths what the views do not pin down, floaters above all. It is
+//! applied as a plain gradient step after Adam's ([`tv_step`]): through
+//! Adam, whose step is normalised per value, any weight moved the values no
+//! ray reads by a full step. Mirrored by `shaders/train/tv.wgsl` (the
+//! gradient) and `shaders/train/descend.wgsl` (the step).
 
 use glam::UVec3;
 
@@ -60,6 +63,21 @@ pub fn tv_gradient(nodes: &[[f32; 4]], res: UVec3, colour: f64, density: f64) ->
         }
     }
     out
+}
+
+/// Largest weight for which the step is stable: a node has six neighbours,
+/// so a step of weight w moves it by up to 12·w of its difference to them.
+pub const MAX_TV_WEIGHT: f64 = 1.0 / 12.0;
+
+/// One total-variation step over `nodes`: each value minus the gradient of
+/// [`tv_loss`], kept non-negative.
+pub fn tv_step(nodes: &mut [[f32; 4]], res: UVec3, colour: f64, density: f64) {
+    let g = tv_gradient(nodes, res, colour, density);
+    for (n, g) in nodes.iter_mut().zip(g) {
+        for c in 0..4 {
+            n[c] = (n[c] - g[c] as f32).max(0.0);
+        }
+    }
 }
 
 #[cfg(test)]
