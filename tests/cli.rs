@@ -285,6 +285,64 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         assert!(text(&o).contains(says), "{flag}: {}", text(&o));
     }
 
+    // A scene file names the trained field and the dataset's cameras:
+    // they are the cameras render-views placed, and `render` takes one.
+    let scene_file = dir.join("trained.toml");
+    std::fs::write(
+        &scene_file,
+        "name = \"trained\"\nfield = \"views.inlayfield\"\ncameras_from = \"dog-views\"\n",
+    )
+    .unwrap();
+    let trained_scene = inlay_passes::scene::load_scene(&scene_file).unwrap();
+    let dog = inlay_passes::scene::load_scene(std::path::Path::new(scene)).unwrap();
+    let placed = inlay_passes::dataset::capture::cap_cameras(
+        &dog.recipe().unwrap().bounds,
+        3,
+        40.0,
+        16.0 / 12.0,
+    );
+    assert_eq!(trained_scene.cameras.len(), 3);
+    for (a, b) in trained_scene.cameras.iter().zip(&placed) {
+        let (da, db) = (
+            (a.look_at - a.position).normalize(),
+            (b.look_at - b.position).normalize(),
+        );
+        assert!((a.position - b.position).length() < 1e-5 && (da - db).length() < 1e-5);
+        assert!(
+            (a.fov_y - b.fov_y).abs() < 1e-6,
+            "{} vs {}",
+            a.fov_y,
+            b.fov_y
+        );
+    }
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "field = \"views.inlayfield\"\ncameras_from = \"nowhere\"\n",
+    )
+    .unwrap();
+    let err = inlay_passes::scene::load_scene(&bad)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cameras_from") && err.contains("nowhere"),
+        "{err}"
+    );
+    let picture = dir.join("trained.png");
+    let o = inlay(&[
+        "render",
+        scene_file.to_str().unwrap(),
+        "--camera",
+        "view-001",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--out",
+        picture.to_str().unwrap(),
+    ]);
+    assert!(o.status.success() && picture.is_file(), "{}", text(&o));
+
     // Two frames lose their images: both are named, and nothing panics.
     std::fs::remove_file(out.join("view-000.exr")).unwrap();
     std::fs::write(out.join("view-002.exr"), b"not an exr").unwrap();

@@ -285,6 +285,85 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
     })
 }
 
+/// The cameras of the dataset at `path`, one per frame (its image's file
+/// stem as its name), without reading any pixels (an image's header gives
+/// its size where the file does not). Every frame must be usable.
+pub fn load_cameras(
+    path: &Path,
+    split: &str,
+) -> Result<Vec<(String, Pose, Intrinsics)>, DatasetError> {
+    let file = transforms_file(path, split)?;
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| DatasetError::at(&file, "", format!("unreadable: {e}")))?;
+    let map = json::parse_object(&file, &text)?;
+    let top = Obj {
+        map: &map,
+        file: &file,
+        at: "",
+    };
+    let dialect = dialect_of(&file, top)?;
+    let folder = file.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let frames = map
+        .get("frames")
+        .and_then(|v| v.as_array())
+        .filter(|f| !f.is_empty())
+        .ok_or_else(|| top.error("frames", "expected a non-empty list of frames"))?;
+    let mut out = Vec::with_capacity(frames.len());
+    let mut problems = Vec::new();
+    for (i, v) in frames.iter().enumerate() {
+        let key = format!("frames[{i}]");
+        let Some(m) = v.as_object() else {
+            return Err(top.error(&key, "expected an object"));
+        };
+        let obj = Obj {
+            map: m,
+            file: &file,
+            at: &key,
+        };
+        let s = frame_spec(i, top, obj, dialect, &folder)?;
+        let fail = |problem: String| FrameProblem {
+            index: i,
+            key: key.clone(),
+            problem,
+        };
+        let camera = (|| {
+            let pose = s.pose.clone()?;
+            let image = s.image.clone()?;
+            let (w, h) = match s.camera.size {
+                [Some(w), Some(h)] if w >= 1.0 && h >= 1.0 => (w as u32, h as u32),
+                _ => pixels::image_size(&image).map_err(|e| format!("{}: {e}", image.display()))?,
+            };
+            let k = intrinsics_for(&s.camera, w, h);
+            if let Some(p) = k.problem() {
+                return Err(p);
+            }
+            let name = image
+                .file_stem()
+                .and_then(|n| n.to_str())
+                .unwrap_or("frame")
+                .to_string();
+            Ok((name, pose, k))
+        })();
+        match camera {
+            Ok(c) => out.push(c),
+            Err(p) => problems.push(fail(p)),
+        }
+    }
+    if !problems.is_empty() {
+        let mut e = top.error(
+            "frames",
+            format!(
+                "{} of {} frames' cameras cannot be used",
+                problems.len(),
+                frames.len()
+            ),
+        );
+        e.frames = problems;
+        return Err(e);
+    }
+    Ok(out)
+}
+
 /// Which dialect the file is in.
 fn dialect_of(file: &Path, top: Obj) -> Result<Dialect, DatasetError> {
     if let Some(model) = top.string("camera_model")? {

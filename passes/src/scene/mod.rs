@@ -340,7 +340,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         message,
     };
     let text = std::fs::read_to_string(path).map_err(|x| e("file", x.to_string()))?;
-    let spec: SceneSpec = toml::from_str(&text).map_err(|x| {
+    let mut spec: SceneSpec = toml::from_str(&text).map_err(|x| {
         let at = x
             .span()
             .map(|s| {
@@ -417,10 +417,33 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             }
         }
     };
+    let mut cameras = std::mem::take(&mut spec.cameras);
+    if let Some(from) = &spec.cameras_from {
+        let found = crate::dataset::load_cameras(&dir.join(from), "train")
+            .map_err(|d| e("cameras_from", d.to_string()))?;
+        for (name, pose, k) in found {
+            if (k.cx - 0.5 * k.width as f64).abs() > 1.0
+                || (k.cy - 0.5 * k.height as f64).abs() > 1.0
+            {
+                log::warn!(
+                    "{}: camera `{name}` of cameras_from has its principal point off centre; it is used centred",
+                    path.display()
+                );
+            }
+            cameras.push(crate::camera::CameraSpec {
+                name: Some(name),
+                position: pose.origin(),
+                look_at: pose.origin() + pose.forward(),
+                up: pose.to_world(glam::DVec3::Y),
+                fov_y: 2.0 * (0.5 * k.height as f64 / k.fy).atan().to_degrees(),
+            });
+        }
+    }
+    spec.cameras = cameras;
     if spec.cameras.is_empty() {
         return Err(e(
             "cameras",
-            "a scene needs at least one [[cameras]] entry".into(),
+            "a scene needs at least one [[cameras]] entry (or `cameras_from`)".into(),
         ));
     }
     for (i, c) in spec.cameras.iter().enumerate() {

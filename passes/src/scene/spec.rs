@@ -21,6 +21,10 @@ pub(crate) struct SceneSpec {
     pub environment: Option<EnvironmentSpec>,
     #[serde(default)]
     pub cameras: Vec<CameraSpec>,
+    /// A dataset (transforms.json or its folder, relative to the scene
+    /// file) whose frames' cameras join `cameras`.
+    #[serde(default)]
+    pub cameras_from: Option<String>,
     #[serde(default)]
     pub bake: Option<BakeSpec>,
     #[serde(default)]
