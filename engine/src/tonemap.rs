@@ -14,14 +14,21 @@ pub fn aces_filmic(x: f32) -> f32 {
     ((x * (a * x + b)) / (x * (c * x + d) + e)).clamp(0.0, 1.0)
 }
 
-/// The sRGB opto-electronic transfer function for a value in [0, 1].
-pub fn srgb_encode(x: f32) -> f32 {
+/// The sRGB opto-electronic transfer function for a value in [0, 1]
+/// (clipped to it first), in f64: the one definition, for the trainer's
+/// losses and references as for display.
+pub fn srgb_encode_f64(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     if x <= 0.003_130_8 {
         12.92 * x
     } else {
         1.055 * x.powf(1.0 / 2.4) - 0.055
     }
+}
+
+/// [`srgb_encode_f64`] in f32.
+pub fn srgb_encode(x: f32) -> f32 {
+    srgb_encode_f64(x as f64) as f32
 }
 
 /// Linear HDR RGB → 8-bit sRGB after `exposure` (a multiplier).

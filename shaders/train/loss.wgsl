@@ -4,16 +4,19 @@
 // lower bound (the same, only below it); kind 2, a bracket (squared error of
 // srgb(clip(exposure × C)) against the recorded encoded value).
 
+#include "common/tonemap.wgsl"
+
 struct PixelLoss {
     loss: f32,
     grad: vec3<f32>,
 }
 
+// srgb_encode (common/tonemap.wgsl) and its derivative.
 fn train_srgb_encode(v: f32) -> vec2<f32> {
     if v <= 0.0031308 {
-        return vec2<f32>(12.92 * v, 12.92);
+        return vec2<f32>(srgb_encode(v), 12.92);
     }
-    return vec2<f32>(1.055 * pow(v, 1.0 / 2.4) - 0.055, 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
+    return vec2<f32>(srgb_encode(v), 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
 }
 
 fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, epsilon: f32) -> PixelLoss {

@@ -108,13 +108,7 @@ pub fn transforms_json(
 
 /// Linear [0, 1] to 8-bit sRGB (values outside clip).
 pub fn linear_to_srgb8(v: f32) -> u8 {
-    let v = v.clamp(0.0, 1.0);
-    let s = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
+    (super::pixels::srgb_encode(v as f64) * 255.0 + 0.5) as u8
 }
 
 /// A bracketed LDR frame as PNG bytes: clip(`exposure` × radiance) through

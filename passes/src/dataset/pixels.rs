@@ -90,6 +90,11 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), String> {
     }
 }
 
+/// Linear to sRGB-encoded, clipped to [0, 1] first (the engine's one
+/// definition): what the training sets' PNGs, the trainer's bracket loss and
+/// every PSNR use.
+pub use inlay_engine::tonemap::srgb_encode_f64 as srgb_encode;
+
 /// sRGB-encoded [0, 1] to linear.
 pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {

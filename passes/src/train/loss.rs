@@ -31,15 +31,14 @@ pub enum PixelTarget {
     },
 }
 
-/// sRGB encoding of linear [0, 1] and its derivative.
+/// sRGB encoding of linear [0, 1] ([`crate::dataset::pixels::srgb_encode`])
+/// and its derivative.
 fn srgb_encode(v: f64) -> (f64, f64) {
+    let e = crate::dataset::pixels::srgb_encode(v);
     if v <= 0.003_130_8 {
-        (12.92 * v, 12.92)
+        (e, 12.92)
     } else {
-        (
-            1.055 * v.powf(1.0 / 2.4) - 0.055,
-            1.055 / 2.4 * v.powf(1.0 / 2.4 - 1.0),
-        )
+        (e, 1.055 / 2.4 * v.powf(1.0 / 2.4 - 1.0))
     }
 }
 

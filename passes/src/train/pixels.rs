@@ -19,14 +19,9 @@ pub struct PixelRef {
     pub pixel: u32,
 }
 
-/// sRGB encoding of linear [0, 1] (the inverse of the loader's decoding).
+/// sRGB encoding (the inverse of the loader's decoding).
 fn encode(v: f32) -> f64 {
-    let v = v.clamp(0.0, 1.0) as f64;
-    if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    }
+    crate::dataset::pixels::srgb_encode(v as f64)
 }
 
 /// Whether `frame` is a bracket: an LDR image with an exposure time.

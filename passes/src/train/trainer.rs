@@ -14,6 +14,7 @@ use super::adam::AdamKnobs;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::pixels::{is_bracket, pixel_ray, PixelPool};
+use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::march::{march_ray, MarchKnobs};
@@ -28,6 +29,9 @@ pub struct TrainProgress {
     pub steps: u32,
     /// The last batch's mean loss.
     pub loss: f64,
+    /// The last batch's PSNR in dB, as the held-out views are scored
+    /// ([`batch_psnr`]).
+    pub psnr: f64,
     /// Rays per second so far.
     pub rays_per_second: f64,
     /// The grid's nodes per axis now.
@@ -231,6 +235,7 @@ pub fn train(
                     step,
                     steps: knobs.iterations,
                     loss,
+                    psnr: batch_psnr(&batch, &out),
                     rays_per_second: rays_done as f64 / started.elapsed().as_secs_f64().max(1e-9),
                     resolution: res,
                 });
@@ -255,6 +260,32 @@ pub fn train(
         steps: step,
         mean_radiance: scale,
     })
+}
+
+/// The PSNR of a batch's pixels `out` (r, g, b, loss per ray) against what
+/// its photographs say, on sRGB values clipped at 1 as the held-out views
+/// are scored: a bracket at its exposure, a lower bound only where the
+/// pixel falls below it.
+pub fn batch_psnr(batch: &[(crate::geometry::Ray, super::PixelTarget)], out: &[[f32; 4]]) -> f64 {
+    use super::PixelTarget;
+    let mut se = 0.0;
+    let mut n = 0usize;
+    for ((_, target), o) in batch.iter().zip(out) {
+        let c = DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64);
+        for k in 0..3 {
+            let (a, b) = match *target {
+                PixelTarget::Value(y) => (encoded(c[k]), encoded(y[k])),
+                PixelTarget::AtLeast(y) => (encoded(c[k].min(y[k])), encoded(y[k])),
+                PixelTarget::Bracket {
+                    encoded: y,
+                    exposure,
+                } => (encoded(exposure * c[k]), y[k]),
+            };
+            se += (a - b).powi(2);
+            n += 1;
+        }
+    }
+    -10.0 * (se / n.max(1) as f64).max(1e-12).log10()
 }
 
 /// Renders frame `f` of `dataset` from `field` and scores it.
@@ -301,15 +332,7 @@ pub fn score_view(
         diff += (la - lb).abs();
         total += lb;
         for k in 0..3 {
-            let e = |v: f32| {
-                let v = v.clamp(0.0, 1.0) as f64;
-                if v <= 0.003_130_8 {
-                    12.92 * v
-                } else {
-                    1.055 * v.powf(1.0 / 2.4) - 0.055
-                }
-            };
-            se += (e(a[k]) - e(b[k])).powi(2);
+            se += (encoded(a[k] as f64) - encoded(b[k] as f64)).powi(2);
         }
         n += 3;
     }

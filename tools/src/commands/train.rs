@@ -165,8 +165,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         &|p| {
             bar.set_position(p.step as u64);
             bar.set_message(format!(
-                "loss {:.3e}, {:.0} rays/s, {}x{}x{}",
-                p.loss, p.rays_per_second, p.resolution.x, p.resolution.y, p.resolution.z
+                "loss {:.3e}, PSNR {:.1} dB, {:.0} rays/s, {}x{}x{}",
+                p.loss, p.psnr, p.rays_per_second, p.resolution.x, p.resolution.y, p.resolution.z
             ));
         },
     )?;
