@@ -36,7 +36,7 @@ pub struct EnvEstimateKnobs {
     /// Not on by default: where the hidden light is distant it costs
     /// (DOG 4 → 38 %, CUPS 5 → 31 %, BOOKS 20 → 36 %), and the surface
     /// points cannot tell the two cases apart (the fit's loss is within
-    /// ±5 % either way; docs/fidelity.md, "Ninth pass").
+    /// ±8 % either way; docs/fidelity.md, "Ninth pass").
     pub near_lights: u32,
     /// Width of the albedo MLP's hidden layers (6 layers, as the paper).
     pub albedo_width: u32,
