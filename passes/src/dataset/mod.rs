@@ -205,41 +205,17 @@ pub fn transforms_file(path: &Path, split: &str) -> Result<PathBuf, DatasetError
 /// Reads the dataset at `path` (a `transforms.json`, or a folder holding
 /// one).
 pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, DatasetError> {
-    let file = transforms_file(path, &options.split)?;
-    let text = std::fs::read_to_string(&file)
-        .map_err(|e| DatasetError::at(&file, "", format!("unreadable: {e}")))?;
-    let map = json::parse_object(&file, &text)?;
+    let Transforms {
+        file,
+        map,
+        dialect,
+        specs,
+    } = read_transforms(path, &options.split)?;
     let top = Obj {
         map: &map,
         file: &file,
         at: "",
     };
-    let dialect = dialect_of(&file, top)?;
-    let folder = file.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let frames_value = map
-        .get("frames")
-        .and_then(|v| v.as_array())
-        .ok_or_else(|| top.error("frames", "expected a list of frames"))?;
-    if frames_value.is_empty() {
-        return Err(top.error("frames", "no frames"));
-    }
-    // Read each frame's keys first (errors in the file stop everything),
-    // then its image (problems are collected).
-    let keys: Vec<String> = (0..frames_value.len())
-        .map(|i| format!("frames[{i}]"))
-        .collect();
-    let mut specs = Vec::with_capacity(frames_value.len());
-    for (i, v) in frames_value.iter().enumerate() {
-        let Some(m) = v.as_object() else {
-            return Err(top.error(&keys[i], "expected an object"));
-        };
-        let obj = Obj {
-            map: m,
-            file: &file,
-            at: &keys[i],
-        };
-        specs.push(frame_spec(i, top, obj, dialect, &folder)?);
-    }
     let results: Vec<Result<Frame, FrameProblem>> = specs
         .into_par_iter()
         .map(|s| read_frame(s, options))
@@ -285,13 +261,18 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
     })
 }
 
-/// The cameras of the dataset at `path`, one per frame (its image's file
-/// stem as its name), without reading any pixels (an image's header gives
-/// its size where the file does not). Every frame must be usable.
-pub fn load_cameras(
-    path: &Path,
-    split: &str,
-) -> Result<Vec<(String, Pose, Intrinsics)>, DatasetError> {
+/// A `transforms.json` read and its frames' keys checked: the file, its
+/// top-level object, its dialect and each frame's spec (errors in the file
+/// stop everything; problems with frames travel in the specs).
+struct Transforms {
+    file: PathBuf,
+    map: serde_json::Map<String, serde_json::Value>,
+    dialect: Dialect,
+    specs: Vec<FrameSpec>,
+}
+
+/// Reads the `transforms.json` `path` names ([`transforms_file`]).
+fn read_transforms(path: &Path, split: &str) -> Result<Transforms, DatasetError> {
     let file = transforms_file(path, split)?;
     let text = std::fs::read_to_string(&file)
         .map_err(|e| DatasetError::at(&file, "", format!("unreadable: {e}")))?;
@@ -306,10 +287,11 @@ pub fn load_cameras(
     let frames = map
         .get("frames")
         .and_then(|v| v.as_array())
-        .filter(|f| !f.is_empty())
-        .ok_or_else(|| top.error("frames", "expected a non-empty list of frames"))?;
-    let mut out = Vec::with_capacity(frames.len());
-    let mut problems = Vec::new();
+        .ok_or_else(|| top.error("frames", "expected a list of frames"))?;
+    if frames.is_empty() {
+        return Err(top.error("frames", "no frames"));
+    }
+    let mut specs = Vec::with_capacity(frames.len());
     for (i, v) in frames.iter().enumerate() {
         let key = format!("frames[{i}]");
         let Some(m) = v.as_object() else {
@@ -320,7 +302,36 @@ pub fn load_cameras(
             file: &file,
             at: &key,
         };
-        let s = frame_spec(i, top, obj, dialect, &folder)?;
+        specs.push(frame_spec(i, top, obj, dialect, &folder)?);
+    }
+    Ok(Transforms {
+        file,
+        map,
+        dialect,
+        specs,
+    })
+}
+
+/// The cameras of the dataset at `path`, one per frame (its image's file
+/// stem as its name), without reading any pixels (an image's header gives
+/// its size where the file does not). Every frame must be usable.
+pub fn load_cameras(
+    path: &Path,
+    split: &str,
+) -> Result<Vec<(String, Pose, Intrinsics)>, DatasetError> {
+    let Transforms {
+        file, map, specs, ..
+    } = read_transforms(path, split)?;
+    let top = Obj {
+        map: &map,
+        file: &file,
+        at: "",
+    };
+    let total = specs.len();
+    let mut out = Vec::with_capacity(total);
+    let mut problems = Vec::new();
+    for s in specs {
+        let (i, key) = (s.index, s.key.clone());
         let fail = |problem: String| FrameProblem {
             index: i,
             key: key.clone(),
@@ -355,7 +366,7 @@ pub fn load_cameras(
             format!(
                 "{} of {} frames' cameras cannot be used",
                 problems.len(),
-                frames.len()
+                total
             ),
         );
         e.frames = problems;
