@@ -94,6 +94,17 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
             vec![
                 "estimate-env".into(),
                 dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.toml")).into(),
+                "--views-from".into(),
+                s(&missing.with_file_name("transforms.json")).into(),
+            ],
+            vec!["--views-from", "transforms.json", "no such file"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
                 "--picture".into(),
                 s(&missing).into(),
             ],

@@ -28,6 +28,7 @@ fn near_field_kernels_match_the_cpu_mirror() {
         &gpu,
         scene.march,
         &knobs,
+        &Default::default(),
         &|_, _, _, _| {},
     )
     .unwrap();
@@ -110,4 +111,67 @@ fn near_field_sums_many_rays_per_point() {
     let off = (near.irradiance[0] - e).abs().max_element() / e.max_element();
     assert!(off < 0.02, "E_nerf {} vs mirror {e}", near.irradiance[0]);
     assert!((near.covered[0] - covered).abs() < 0.01);
+}
+
+/// `--views-from`: with cameras as the source, every view is one of them
+/// (each once before any repeats), a camera that covers little of its
+/// view is kept, and every point lies in front of its view's camera,
+/// inside its image.
+#[test]
+fn views_from_cameras_draw_points_those_cameras_see() {
+    use inlay_passes::camera::{CameraFrame, CameraSpec};
+    use inlay_passes::envest::ViewSource;
+    let ctx = common::gpu();
+    let scene = common::bundled_scene("plants.toml");
+    let field = common::bake_small(&scene, 32, 2, 0);
+    let lib = inlay_passes::shaders::embedded_library();
+    let gpu = GpuGridField::upload(&ctx, &field).unwrap();
+    let centre = field.bounds.center();
+    let far = CameraSpec {
+        name: Some("far".into()),
+        position: centre + glam::DVec3::new(0.0, 2.0, 6.0) * field.bounds.size().max_element(),
+        look_at: centre,
+        up: glam::DVec3::Y,
+        fov_y: 40.0,
+    };
+    let mut cameras = scene.cameras.clone();
+    cameras.push(far);
+    let source = ViewSource::Cameras(cameras.clone());
+    let knobs = EnvEstimateKnobs {
+        views: cameras.len() as u32,
+        view_size: 32,
+        pixels_per_view: 8,
+        ..EnvEstimateKnobs::default()
+    };
+    let surface = sample_surface(
+        &ctx,
+        &lib,
+        &field,
+        &gpu,
+        scene.march,
+        &knobs,
+        &source,
+        &|_, _, _, _| {},
+    )
+    .unwrap();
+    common::assert_no_validation_errors(&ctx);
+    assert_eq!(surface.views_kept as usize, cameras.len());
+    assert!(surface
+        .scores
+        .iter()
+        .any(|(s, kept)| *kept && s.empty > 50.0));
+    let mut views: Vec<u32> = surface.points.iter().map(|p| p.view).collect();
+    views.dedup();
+    assert_eq!(views.len(), cameras.len(), "points from every camera");
+    for p in &surface.points {
+        let spec = source.view(&field.bounds, knobs.seed, p.view as u64);
+        assert!(cameras.contains(&spec));
+        let frame = CameraFrame::new(&spec, knobs.view_size, knobs.view_size);
+        let (u, v) = frame.project(p.position).expect("in front of its camera");
+        assert!(
+            (-0.5..=32.5).contains(&u) && (-0.5..=32.5).contains(&v),
+            "({u}, {v})"
+        );
+        assert!(p.normal.dot(frame.origin - p.position) > 0.0);
+    }
 }

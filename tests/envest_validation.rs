@@ -42,8 +42,16 @@ fn validate_with(name: &str, rays_per_point: u32, near_lights: u32) -> Validatio
         near_lights,
         ..EnvEstimateKnobs::default()
     };
-    let est =
-        estimate_environment(&ctx, &lib, &field, scene.march, &knobs, &|_, _, _, _| {}).unwrap();
+    let est = estimate_environment(
+        &ctx,
+        &lib,
+        &field,
+        scene.march,
+        &knobs,
+        &Default::default(),
+        &|_, _, _, _| {},
+    )
+    .unwrap();
     common::assert_no_validation_errors(&ctx);
     let v = Validation::with_lights(
         &scene,

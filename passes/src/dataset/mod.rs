@@ -375,6 +375,35 @@ pub fn load_cameras(
     Ok(out)
 }
 
+/// A dataset camera as a scene camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneCamera {
+    /// Its pose, and the vertical field of view of its focal length.
+    pub spec: crate::camera::CameraSpec,
+    /// Its principal point is more than a pixel off the image's centre
+    /// (a scene camera is centred, so its view is shifted by that much).
+    pub off_centre: bool,
+}
+
+/// The cameras of the dataset at `path` as scene cameras, one per frame
+/// ([`load_cameras`]).
+pub fn scene_cameras(path: &Path, split: &str) -> Result<Vec<SceneCamera>, DatasetError> {
+    Ok(load_cameras(path, split)?
+        .into_iter()
+        .map(|(name, pose, k)| SceneCamera {
+            off_centre: (k.cx - 0.5 * k.width as f64).abs() > 1.0
+                || (k.cy - 0.5 * k.height as f64).abs() > 1.0,
+            spec: crate::camera::CameraSpec {
+                name: Some(name),
+                position: pose.origin(),
+                look_at: pose.origin() + pose.forward(),
+                up: pose.to_world(glam::DVec3::Y),
+                fov_y: 2.0 * (0.5 * k.height as f64 / k.fy).atan().to_degrees(),
+            },
+        })
+        .collect())
+}
+
 /// Which dialect the file is in.
 fn dialect_of(file: &Path, top: Obj) -> Result<Dialect, DatasetError> {
     if let Some(model) = top.string("camera_model")? {

@@ -50,3 +50,4 @@ pub use truth::{
     field_light_irradiance, hidden_light_lobes, hidden_light_lobes_except, light_irradiance,
     lobes_irradiance, point_lights_irradiance, test_points, Lights, Validation,
 };
+pub use views::ViewSource;

@@ -419,25 +419,18 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     };
     let mut cameras = std::mem::take(&mut spec.cameras);
     if let Some(from) = &spec.cameras_from {
-        let found = crate::dataset::load_cameras(&dir.join(from), "train")
+        let found = crate::dataset::scene_cameras(&dir.join(from), "train")
             .map_err(|d| e("cameras_from", d.to_string()))?;
-        for (name, pose, k) in found {
-            if (k.cx - 0.5 * k.width as f64).abs() > 1.0
-                || (k.cy - 0.5 * k.height as f64).abs() > 1.0
-            {
+        for c in &found {
+            if c.off_centre {
                 log::warn!(
-                    "{}: camera `{name}` of cameras_from has its principal point off centre; it is used centred",
-                    path.display()
+                    "{}: camera `{}` of cameras_from has its principal point off centre; it is used centred",
+                    path.display(),
+                    c.spec.name.as_deref().unwrap_or("?")
                 );
             }
-            cameras.push(crate::camera::CameraSpec {
-                name: Some(name),
-                position: pose.origin(),
-                look_at: pose.origin() + pose.forward(),
-                up: pose.to_world(glam::DVec3::Y),
-                fov_y: 2.0 * (0.5 * k.height as f64 / k.fy).atan().to_degrees(),
-            });
         }
+        cameras.extend(found.into_iter().map(|c| c.spec));
     }
     spec.cameras = cameras;
     if spec.cameras.is_empty() {

@@ -16,7 +16,7 @@ use inlay_passes::envest::recovery::SEARCH_CONE_DEGREES;
 use inlay_passes::envest::PointLight;
 use inlay_passes::envest::{
     emitter_recovery, environment_file_text, estimate_environment, field_light_irradiance,
-    hidden_light_lobes, EnvEstimateKnobs, Stage, Validation,
+    hidden_light_lobes, EnvEstimateKnobs, Stage, Validation, ViewSource,
 };
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
 use inlay_passes::march::MarchPass;
@@ -51,6 +51,13 @@ pub struct EstimateEnvArgs {
     /// `field::Perturbation`): to test the estimate on fields it did not make.
     #[arg(long, value_parser = Perturbation::parse)]
     pub perturb: Option<Perturbation>,
+    /// Where the views come from: `sphere` (random directions around the
+    /// field, the paper's), `scene` (the scene's cameras), or a dataset's
+    /// transforms.json (its photographs' cameras, views a trained field is
+    /// right from; on DOG, whose photographs all look down, they
+    /// constrained the light less than the sphere).
+    #[arg(long, default_value = "sphere")]
+    pub views_from: String,
     /// Views kept after the quality check (paper: 100).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().views)]
     pub views: u32,
@@ -142,6 +149,29 @@ impl EstimateEnvArgs {
     }
 }
 
+/// The views `--views-from` asks for, and words saying what they are.
+fn view_source(scene: &Scene, views_from: &str) -> anyhow::Result<(ViewSource, String)> {
+    match views_from {
+        "sphere" => Ok((
+            ViewSource::Sphere,
+            "random directions around the field".into(),
+        )),
+        "scene" => Ok((
+            ViewSource::Cameras(scene.cameras.clone()),
+            format!("the scene's {} cameras", scene.cameras.len()),
+        )),
+        path => {
+            let cameras = inlay_passes::dataset::scene_cameras(Path::new(path), "train")
+                .map_err(|e| anyhow::anyhow!("--views-from: {e}"))?;
+            let words = format!("the {} cameras of {path}", cameras.len());
+            Ok((
+                ViewSource::Cameras(cameras.into_iter().map(|c| c.spec).collect()),
+                words,
+            ))
+        }
+    }
+}
+
 /// Runs `estimate-env`.
 pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     let knobs = args.knobs();
@@ -162,6 +192,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     if let Some(compare) = &args.compare {
         check_image_output("--compare", compare)?;
     }
+    let (source, source_words) = view_source(&scene, &args.views_from)?;
     let mut field = scene_field(
         &scene,
         args.field.as_deref(),
@@ -189,7 +220,9 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             bar.set_message(format!("fit {l:.3e}"));
         }
     };
-    let estimate = estimate_environment(ctx, &lib, &field, scene.march, &knobs, &progress)?;
+    println!("views from {source_words}");
+    let estimate =
+        estimate_environment(ctx, &lib, &field, scene.march, &knobs, &source, &progress)?;
     bars.iter().for_each(|b| b.finish_and_clear());
     let s = &estimate.surface;
     println!(
