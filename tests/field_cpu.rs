@@ -256,6 +256,14 @@ fn bad_scene_files_name_the_key() {
             "shadows.cast_scale",
         ),
         (
+            format!("{base}\n[shadows]\ncast_refine = -0.5\n"),
+            "shadows.cast_refine",
+        ),
+        (
+            format!("{base}\n[shadows]\ncast_refine = nan\n"),
+            "shadows.cast_refine",
+        ),
+        (
             base.replace("max = [0.9, 0.9, 0.9]", "max = [-2.0, 0.9, 0.9]"),
             "recipe.bounds",
         ),

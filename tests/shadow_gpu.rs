@@ -353,7 +353,7 @@ fn compare_cast_shadow(
     let (w, h) = (48u32, 36u32);
     let cam = CameraFrame::new(&spec, w, h);
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
-    let cast = CastShadowPass::new(&ctx, &lib, march_knobs, 1).unwrap();
+    let cast = CastShadowPass::new(&ctx, &lib, march_knobs, 1, 1.0).unwrap();
     let desc = |format| ImageDesc {
         width: w,
         height: h,
@@ -473,7 +473,11 @@ fn compare_cast_shadow(
 /// At half resolution (`[shadows] cast_scale = 2`): each block's ρ is the
 /// full-resolution pass's at the block's source pixel (the same kernel at
 /// the same point: 1e-6), and `shadow-upsample` is its f64 mirror
-/// (`shadow::upsample_shadow`, 1e-5: f32 weights).
+/// (`shadow::upsample_shadow`, 1e-5: f32 weights). With `cast_refine`,
+/// `shadow-refine` gives the full-resolution pass's ρ at the pixels the
+/// mirror flags (`upsample_with_flags`) and the upsampled ρ elsewhere; a
+/// pixel whose flag f32 decides otherwise (a spread or depth gap at the
+/// threshold) may take the other, and only that.
 #[test]
 fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
     use inlay_passes::shadow::upsample::{low_size, source_pixel};
@@ -494,9 +498,12 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
     let (lw, lh) = low_size(w, h, 2);
     let cam = CameraFrame::new(&spec, w, h);
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
-    let full = CastShadowPass::new(&ctx, &lib, march_knobs, 1).unwrap();
-    let half = CastShadowPass::new(&ctx, &lib, march_knobs, 2).unwrap();
-    assert!(CastShadowPass::new(&ctx, &lib, march_knobs, 9).is_err());
+    let full = CastShadowPass::new(&ctx, &lib, march_knobs, 1, 1.0).unwrap();
+    let half = CastShadowPass::new(&ctx, &lib, march_knobs, 2, 1.0).unwrap();
+    let spread = 0.02;
+    let refined = CastShadowPass::new(&ctx, &lib, march_knobs, 2, spread).unwrap();
+    assert!(!half.refines() && refined.refines());
+    assert!(CastShadowPass::new(&ctx, &lib, march_knobs, 9, 1.0).is_err());
     let desc = |width, height, format| ImageDesc {
         width,
         height,
@@ -507,6 +514,7 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
         Readback::new(&ctx, desc(w, h, MARCH_DEPTH_FORMAT)).unwrap(),
         Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
         Readback::new(&ctx, desc(lw, lh, SHADOW_FORMAT)).unwrap(),
+        Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
         Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
     ];
     common::run_frame(&ctx, |graph| {
@@ -521,14 +529,22 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
         let s = ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct);
         let reference = full.add(graph, &gpu_field, &cam, &m, light, table, s, None);
         let low = half.add(graph, &gpu_field, &cam, &m, light, table, s, None);
-        let up = half.finish(graph, &cam, &m, low);
+        let up = half.finish(graph, &gpu_field, &cam, &m, low, &[]);
+        let inputs = inlay_passes::shadow::cast::CastInputs {
+            lobes: light,
+            fh_table: table,
+            ssdf: s,
+        };
+        let low2 = refined.add(graph, &gpu_field, &cam, &m, light, table, s, None);
+        let fine = refined.finish(graph, &gpu_field, &cam, &m, low2, &[inputs]);
         rb[0].add_to_graph(graph, m.colour_opacity);
         rb[1].add_to_graph(graph, m.depth);
         rb[2].add_to_graph(graph, reference);
         rb[3].add_to_graph(graph, low);
         rb[4].add_to_graph(graph, up);
+        rb[5].add_to_graph(graph, fine);
     });
-    let [colour, depth, reference, low, up] = rb.map(|r| r.read().unwrap());
+    let [colour, depth, reference, low, up, fine] = rb.map(|r| r.read().unwrap());
     let rgb = |p: &[f32; 4]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
     let mut shadowed = 0;
     for y in 0..lh {
@@ -553,6 +569,33 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
         let g = rgb(&up.pixels[i]);
         assert!((g - *m).abs().max_element() < 1e-5, "pixel {i}: {g} vs {m}");
     }
+    let flags = inlay_passes::shadow::upsample::upsample_with_flags(&low_rho, &z, w, h, 2, spread);
+    let (mut flagged, mut other) = (0, 0);
+    for (i, (m, flag)) in flags.iter().enumerate() {
+        let g = rgb(&fine.pixels[i]);
+        let exact = rgb(&reference.pixels[i]);
+        let near = |a: DVec3, b: DVec3, tol: f64| (a - b).abs().max_element() < tol;
+        let (expect, alternative) = if *flag { (exact, *m) } else { (*m, exact) };
+        flagged += *flag as u32;
+        if !near(g, expect, 1e-5) {
+            assert!(
+                near(g, alternative, 1e-5),
+                "pixel {i}: {g}, flag {flag}, exact {exact}, upsampled {m}"
+            );
+            other += 1;
+        }
+    }
+    let n = (w * h) as usize;
+    assert!(
+        other * 100 <= n,
+        "{other} pixels flagged otherwise than the mirror"
+    );
+    // The shadow's edges are refined, not the whole image.
+    assert!(
+        flagged >= 5 && (flagged as usize) * 2 < n,
+        "{flagged} of {n} pixels refined"
+    );
+    eprintln!("refined {flagged} of {n} pixels ({other} by f32 otherwise than the mirror)");
     common::assert_no_validation_errors(&ctx);
 }
 

@@ -58,6 +58,9 @@ var<immediate> pc: CastPush;
 @group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
 @group(0) @binding(10) var previous: texture_2d<f32>;
 @group(0) @binding(11) var out_shadow: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(17) var refined: texture_storage_2d<rgba32float, read_write>;
+@group(0) @binding(18) var<storage, read> refine_count: u32;
+@group(0) @binding(19) var<storage, read> refine_list: array<u32>;
 @group(0) @binding(15) var<storage, read> objects: array<ObjectRecord>;
 
 #include "shadow/fh.wgsl"
@@ -245,6 +248,34 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
 fn cast_source(id: vec2<u32>) -> vec2<i32> {
     let p = min(id * pc.scale + vec2<u32>(pc.scale / 2u), vec2<u32>(pc.camera.width - 1u, pc.camera.height - 1u));
     return vec2<i32>(p);
+}
+
+// The including shader's `main_refine` calls this (pc.scale 1, one
+// invocation per listed pixel, in workgroups of 64 — REFINE_WORKGROUP of
+// shadow/upsample.wgsl — dispatched indirectly): ρ taken exactly, for this
+// the first object, at the pixels shadow-upsample listed, in place in the
+// upsampled image.
+fn cast_main_refine(id: vec3<u32>) {
+    let i = id.x;
+    if i >= refine_count {
+        return;
+    }
+    let p = refine_list[i];
+    let pixel = vec2<i32>(vec2<u32>(p % pc.camera.width, p / pc.camera.width));
+    textureStore(refined, pixel, vec4<f32>(pixel_factor(pixel), 1.0));
+}
+
+// `main_refine_chained`: at the listed pixels, this object's exact ρ times
+// the previous objects' there.
+fn cast_main_refine_chained(id: vec3<u32>) {
+    let i = id.x;
+    if i >= refine_count {
+        return;
+    }
+    let p = refine_list[i];
+    let pixel = vec2<i32>(vec2<u32>(p % pc.camera.width, p / pc.camera.width));
+    let before = textureLoad(refined, pixel).rgb;
+    textureStore(refined, pixel, vec4<f32>(before * pixel_factor(pixel), 1.0));
 }
 
 // The including shader's `main` calls this: ρ alone.

@@ -3,13 +3,21 @@
 // each pixel blends the four nearest blocks bilinearly, each weighted down
 // as the depth at its source pixel departs from the pixel's (to zero at
 // UPSAMPLE_DEPTH_FALLOFF relative), or takes the block nearest in depth
-// where none lies on its surface; ρ = 1 where the field is empty.
+// where none lies on its surface; ρ = 1 where the field is empty. A pixel
+// is flagged for shadow-refine (ρ taken exactly) where fewer than two of
+// the corners it blends lie on its surface or their ρ spread by more than
+// pc.refine_spread in some channel (upsample_with_flags); `main_listed`
+// also appends each flagged pixel's index (y·width + x) to refine_list,
+// counting them in refine_count and their workgroups of
+// REFINE_WORKGROUP in refine_args (shadow-refine's indirect dispatch,
+// which so runs over those pixels alone).
 
 struct UpsamplePush {
     width: u32,
     height: u32,
     scale: u32,
-    pad: u32,
+    // Largest spread of the blocks' ρ a pixel blends (≥ 1: refine none).
+    refine_spread: f32,
 }
 
 var<immediate> pc: UpsamplePush;
@@ -17,6 +25,12 @@ var<immediate> pc: UpsamplePush;
 @group(0) @binding(1) var field_depth: texture_2d<f32>;
 @group(0) @binding(2) var low_shadow: texture_2d<f32>;
 @group(0) @binding(3) var out_shadow: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(4) var<storage, read_write> refine_count: atomic<u32>;
+@group(0) @binding(5) var<storage, read_write> refine_list: array<u32>;
+@group(0) @binding(6) var<storage, read_write> refine_args: array<atomic<u32>, 3>;
+
+// Invocations per workgroup of shadow-refine (shadow/cast_body.wgsl).
+const REFINE_WORKGROUP: u32 = 64u;
 
 const UPSAMPLE_DEPTH_FALLOFF: f32 = 0.05;
 
@@ -33,15 +47,42 @@ fn upsample_source(c: vec2<u32>) -> vec2<u32> {
     return min(c * pc.scale + vec2<u32>(pc.scale / 2u), vec2<u32>(pc.width - 1u, pc.height - 1u));
 }
 
+// ρ at full-resolution pixel p, and whether shadow-refine takes it again.
+struct Upsampled {
+    rho: vec3<f32>,
+    refine: bool,
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= pc.width || id.y >= pc.height {
         return;
     }
+    let u = upsample_pixel(id.xy);
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(u.rho, 1.0));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main_listed(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= pc.width || id.y >= pc.height {
+        return;
+    }
+    let u = upsample_pixel(id.xy);
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(u.rho, 1.0));
+    if u.refine {
+        let i = atomicAdd(&refine_count, 1u);
+        refine_list[i] = id.y * pc.width + id.x;
+        if i % REFINE_WORKGROUP == 0u {
+            atomicAdd(&refine_args[0], 1u);
+        }
+    }
+}
+
+fn upsample_pixel(p: vec2<u32>) -> Upsampled {
+    let id = vec3<u32>(p, 0u);
     let z = upsample_depth(id.xy);
     if z < 0.0 {
-        textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(1.0));
-        return;
+        return Upsampled(vec3<f32>(1.0), false);
     }
     let low = vec2<u32>((pc.width + pc.scale - 1u) / pc.scale, (pc.height + pc.scale - 1u) / pc.scale);
     let t = max((vec2<f32>(id.xy) + vec2<f32>(0.5)) / f32(pc.scale) - vec2<f32>(0.5), vec2<f32>(0.0));
@@ -52,6 +93,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var weight = 0.0;
     var nearest = vec3<f32>(1.0);
     var nearest_gap = 3.0e38;
+    var lo = vec3<f32>(1.0);
+    var hi = vec3<f32>(0.0);
+    var on_surface = 0u;
     for (var k = 0u; k < 4u; k++) {
         let c = vec2<u32>(select(i0.x, i1.x, (k & 1u) != 0u), select(i0.y, i1.y, (k & 2u) != 0u));
         let wx = select(1.0 - f.x, f.x, (k & 1u) != 0u);
@@ -66,6 +110,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             nearest = rho;
             nearest_gap = gap;
         }
+        if gap < UPSAMPLE_DEPTH_FALLOFF {
+            on_surface += 1u;
+            lo = min(lo, rho);
+            hi = max(hi, rho);
+        }
         let w = wx * wy * max(1.0 - gap / UPSAMPLE_DEPTH_FALLOFF, 0.0);
         sum += w * rho;
         weight += w;
@@ -74,5 +123,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if weight > 1e-6 {
         rho = sum / weight;
     }
-    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(rho, 1.0));
+    let d = hi - lo;
+    let refine = pc.refine_spread < 1.0 && (on_surface < 2u || max(d.x, max(d.y, d.z)) > pc.refine_spread);
+    return Upsampled(rho, refine);
 }

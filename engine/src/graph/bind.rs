@@ -258,6 +258,13 @@ enum Recorded {
         push: Vec<u8>,
         groups: [u32; 3],
     },
+    DispatchIndirect {
+        pipeline: Arc<ComputePipeline>,
+        bindings: Vec<Binding>,
+        push: Vec<u8>,
+        args: BufferHandle,
+        offset: u64,
+    },
     Draw {
         pipeline: Arc<GraphicsPipeline>,
         bindings: Vec<Binding>,
@@ -392,6 +399,13 @@ impl<'g> BoundPass<'g> {
                         push,
                         groups,
                     } => ctx.dispatch(pipeline, bindings, push, *groups)?,
+                    Recorded::DispatchIndirect {
+                        pipeline,
+                        bindings,
+                        push,
+                        args,
+                        offset,
+                    } => ctx.dispatch_indirect(pipeline, bindings, push, *args, *offset)?,
                     Recorded::Draw {
                         pipeline,
                         bindings,
@@ -633,6 +647,28 @@ impl Dispatch<'_, '_> {
     pub fn threads(self, threads: [u32; 3]) {
         let groups = self.pipeline.groups_for(threads);
         self.groups(groups);
+    }
+
+    /// Ends the dispatch with the workgroup counts an earlier pass wrote
+    /// into `args` at byte `offset` (three u32; see
+    /// [`super::PassContext::dispatch_indirect`]).
+    pub fn indirect(mut self, args: BufferHandle, offset: u64) {
+        let args = match self.pass.get().declare(
+            Resource::Buffer(args),
+            Access::Buffer(BufferAccess::Indirect),
+        ) {
+            Resource::Buffer(b) => b,
+            _ => args,
+        };
+        let (bindings, push) = self.complete();
+        let pipeline = self.pipeline.clone();
+        self.end(Recorded::DispatchIndirect {
+            pipeline,
+            bindings,
+            push,
+            args,
+            offset,
+        });
     }
 
     /// Ends the dispatch with `groups` workgroups.

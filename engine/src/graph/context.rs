@@ -348,6 +348,51 @@ impl PassContext<'_> {
         Ok(())
     }
 
+    /// Records a dispatch whose workgroup counts a previous pass wrote
+    /// into `args` (three u32 at byte `offset`, declared with
+    /// [`BufferAccess::Indirect`]): work sized on the device, read back by
+    /// nobody.
+    pub fn dispatch_indirect(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[Binding],
+        push: &[u8],
+        args: BufferHandle,
+        offset: u64,
+    ) -> Result<()> {
+        if self.pass.kind != PassKind::Compute {
+            return Err(self.error("dispatch outside a compute pass".into()));
+        }
+        let a = self.buffer(
+            args,
+            |a| a == BufferAccess::Indirect,
+            "indirect dispatch arguments",
+        )?;
+        if offset % 4 != 0 || offset + 12 > a.size {
+            return Err(self.error(format!(
+                "indirect dispatch arguments at byte {offset} of a {}-byte buffer",
+                a.size
+            )));
+        }
+        let buffer = a.buffer;
+        self.bind(
+            &pipeline.core,
+            vk::PipelineBindPoint::COMPUTE,
+            bindings,
+            push,
+        )?;
+        if self.dispatches > 0 && self.writes_storage() {
+            self.order_after_previous_dispatch();
+        }
+        self.dispatches += 1;
+        unsafe {
+            self.ctx
+                .device
+                .cmd_dispatch_indirect(self.cmd, buffer, offset)
+        };
+        Ok(())
+    }
+
     /// Records a dispatch whose bindings are looked up by binding number in
     /// `table` (`table[n]` for `@binding(n)`), taking only those the entry
     /// point uses, and the first bytes of `push` it takes: one table and one

@@ -519,3 +519,28 @@ fn cycles_through_stale_handles_are_reported() {
         "{e}"
     );
 }
+
+/// Arguments a compute pass writes and a later dispatch reads indirectly:
+/// the reader waits at the indirect-command stage.
+#[test]
+fn indirect_arguments_wait_for_their_writer_at_the_indirect_stage() {
+    let mut g = FrameGraph::new();
+    let args = g.create_buffer("args", 12);
+    let mut p = g.add_pass("count", PassKind::Compute);
+    let written = p.buffer(args, BufferAccess::StorageWrite);
+    let mut p = g.add_pass("refine", PassKind::Compute);
+    p.buffer(written, BufferAccess::Indirect);
+    p.keep();
+    let plan = Plan::new(&g).unwrap();
+    assert_eq!(names(&g, &plan.order), ["count", "refine"]);
+    let b = buffer_barrier(&plan, &g, "refine", 0).unwrap();
+    assert_eq!(
+        (b.src_stage, b.dst_stage, b.dst_access),
+        (
+            S::COMPUTE_SHADER,
+            S::DRAW_INDIRECT,
+            A::INDIRECT_COMMAND_READ
+        )
+    );
+    assert!(b.src_access.contains(A::SHADER_STORAGE_WRITE));
+}

@@ -95,7 +95,7 @@ pub struct PassInfo {
 }
 
 /// The frame's passes, in the order a frame runs them.
-pub const FRAME_PASSES: [PassInfo; 10] = [
+pub const FRAME_PASSES: [PassInfo; 11] = [
     probe::PROBE_TRACE_INFO,
     sgfit::SG_FIT_INFO,
     lighting::DIRECT_LIGHT_INFO,
@@ -104,6 +104,7 @@ pub const FRAME_PASSES: [PassInfo; 10] = [
     shade::OBJECT_SHADE_INFO,
     shadow::CAST_SHADOW_INFO,
     shadow::SHADOW_UPSAMPLE_INFO,
+    shadow::SHADOW_REFINE_INFO,
     composite::COMPOSITE_INFO,
     edge_aa::OBJECT_EDGE_AA_INFO,
 ];
@@ -164,7 +165,14 @@ mod tests {
         assert_eq!(t[0], ("NeRF rendering", vec![march::NERF_MARCH]));
         assert_eq!(
             t[5],
-            ("Shadow", vec![shadow::CAST_SHADOW, shadow::SHADOW_UPSAMPLE])
+            (
+                "Shadow",
+                vec![
+                    shadow::CAST_SHADOW,
+                    shadow::SHADOW_UPSAMPLE,
+                    shadow::SHADOW_REFINE
+                ]
+            )
         );
         let count: usize = t.iter().map(|(_, p)| p.len()).sum();
         assert_eq!(count, FRAME_PASSES.len());

@@ -35,6 +35,7 @@ use crate::probe::PROBE_TRACE;
 use crate::scene::{Scene as SceneFile, ShadowKnobs};
 use crate::sgfit::SG_FIT;
 use crate::shade::{SelfShadow, ShadePass, OBJECT_SHADE};
+use crate::shadow::cast::CastInputs;
 use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, CAST_SHADOW};
 use crate::ssdf::SsdfField;
 
@@ -209,6 +210,7 @@ impl InsertionFrame {
                     lib,
                     *march.knobs(),
                     scene.shadows.cast_scale,
+                    scene.shadows.cast_refine,
                 )?)
             } else {
                 None
@@ -396,12 +398,29 @@ impl InsertionFrame {
         fh: Option<inlay_engine::graph::BufferHandle>,
     ) -> Option<ImageHandle> {
         let (cast, fh_table) = (self.cast.as_ref()?, fh?);
+        let inputs: Vec<CastInputs> = (0..casts.len())
+            .filter_map(|i| match (casts[i], ssdf[i], lobes[i]) {
+                (true, Some(ssdf), Some(lobes)) => Some(CastInputs {
+                    lobes,
+                    fh_table,
+                    ssdf,
+                }),
+                _ => None,
+            })
+            .collect();
         let mut shadow = None;
-        for i in 0..casts.len() {
-            if let (true, Some(s), Some(l)) = (casts[i], ssdf[i], lobes[i]) {
-                shadow = Some(cast.add(graph, &self.field, frame, field, l, fh_table, s, shadow));
-            }
+        for o in &inputs {
+            shadow = Some(cast.add(
+                graph,
+                &self.field,
+                frame,
+                field,
+                o.lobes,
+                fh_table,
+                o.ssdf,
+                shadow,
+            ));
         }
-        shadow.map(|low| cast.finish(graph, frame, field, low))
+        shadow.map(|low| cast.finish(graph, &self.field, frame, field, low, &inputs))
     }
 }

@@ -198,8 +198,16 @@ pub struct ShadowKnobs {
     pub bake: crate::ssdf::SsdfKnobs,
     /// The cast shadow is taken at one pixel of each `cast_scale` ×
     /// `cast_scale` block and brought back to full resolution (1: every
-    /// pixel, the paper; [`crate::shadow::upsample`]).
+    /// pixel, the paper; [`crate::shadow::upsample`]). The default, 2 with
+    /// `cast_refine` 0.02, keeps ρ within 0.01 of the full resolution's on
+    /// all but 0–21 pixels of a 640 × 360 view of each bundled scene
+    /// (docs/benchmarks.md, "Issue 26, third pass").
     pub cast_scale: u32,
+    /// Above 1 `cast_scale`, a pixel whose neighbouring blocks' ρ spread
+    /// by more than this (or of which fewer than two blocks lie on its
+    /// surface) is taken at full resolution (`shadow-refine`); ≥ 1 refines
+    /// none.
+    pub cast_refine: f64,
 }
 
 impl Default for ShadowKnobs {
@@ -209,10 +217,14 @@ impl Default for ShadowKnobs {
             cast: true,
             outside: crate::ssdf::OutsideMode::Correct,
             bake: crate::ssdf::SsdfKnobs::default(),
-            cast_scale: 1,
+            cast_scale: 2,
+            cast_refine: DEFAULT_CAST_REFINE,
         }
     }
 }
+
+/// The default `[shadows] cast_refine`.
+pub const DEFAULT_CAST_REFINE: f64 = 0.02;
 
 impl ShadowKnobs {
     /// Whether any shadow is drawn.
@@ -504,12 +516,20 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
                 ),
             ));
         }
+        let cast_refine = sp.and_then(|s| s.cast_refine).unwrap_or(d.cast_refine);
+        if !(cast_refine.is_finite() && cast_refine >= 0.0) {
+            return Err(e(
+                "shadows.cast_refine",
+                format!("{cast_refine} must be a number ≥ 0 (≥ 1 refines no pixel)"),
+            ));
+        }
         ShadowKnobs {
             self_shadow: sp.and_then(|s| s.self_shadow).unwrap_or(d.self_shadow),
             cast: sp.and_then(|s| s.cast).unwrap_or(d.cast),
             outside: sp.and_then(|s| s.outside).unwrap_or(d.outside),
             bake,
             cast_scale,
+            cast_refine,
         }
     };
     if spec.objects.len() > MAX_OBJECTS {

@@ -52,6 +52,7 @@ pub(crate) struct ShadowsSpec {
     pub directions: Option<u32>,
     pub components: Option<u32>,
     pub cast_scale: Option<u32>,
+    pub cast_refine: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

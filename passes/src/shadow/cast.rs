@@ -61,8 +61,9 @@ inlay_engine::gpu_struct! {
         pub height: u32,
         /// The cast shadow's scale.
         pub scale: u32,
-        /// Padding.
-        pub pad: u32,
+        /// Largest spread of the blocks' ρ a pixel blends before
+        /// `shadow-refine` takes it exactly (≥ 1: none).
+        pub refine_spread: f32,
     }
 }
 
@@ -76,6 +77,17 @@ pub const SHADOW_UPSAMPLE_INFO: PassInfo = PassInfo {
 
 /// The upsampling pass's name in the frame graph.
 pub const SHADOW_UPSAMPLE: &str = SHADOW_UPSAMPLE_INFO.name;
+
+/// The pass taking ρ exactly, at full resolution, where `shadow-upsample`
+/// flagged a pixel ([`super::upsample::upsample_with_flags`]).
+pub const SHADOW_REFINE_INFO: PassInfo = PassInfo {
+    name: "shadow-refine",
+    module: Table1Module::Shadow,
+    switch: Some(CAST_SHADOW_SWITCH),
+};
+
+/// The refining pass's name in the frame graph.
+pub const SHADOW_REFINE: &str = SHADOW_REFINE_INFO.name;
 
 /// The cast-shadow pass: its name, Table 1 module and effect switch.
 pub const CAST_SHADOW_INFO: PassInfo = PassInfo {
@@ -97,28 +109,73 @@ pub const CAST_SHADOW_SWITCH: EffectSwitch = EffectSwitch {
 /// Format of the ρ image (rgb: per-channel factor).
 pub const SHADOW_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
-/// The cast-shadow pipelines: first or chained, without or with direct
-/// lobes.
-pub struct CastShadowPass {
+/// The cast-shadow pipelines of one kind: first or chained, without or
+/// with direct lobes.
+struct CastPipelines {
     first: Arc<ComputePipeline>,
     chained: Arc<ComputePipeline>,
     first_direct: Arc<ComputePipeline>,
     chained_direct: Arc<ComputePipeline>,
+}
+
+impl CastPipelines {
+    fn pick(&self, chained: bool, direct: bool) -> &Arc<ComputePipeline> {
+        match (chained, direct) {
+            (false, false) => &self.first,
+            (true, false) => &self.chained,
+            (false, true) => &self.first_direct,
+            (true, true) => &self.chained_direct,
+        }
+    }
+}
+
+/// What one object's cast shadow reads (its light, the f_h table, its
+/// SSDF).
+#[derive(Debug, Clone, Copy)]
+pub struct CastInputs {
+    /// The lobes that light the object.
+    pub lobes: LightLobes,
+    /// The f_h table.
+    pub fh_table: BufferHandle,
+    /// The object's SSDF.
+    pub ssdf: SsdfBindings,
+}
+
+/// The cast-shadow pipelines: at the cast scale (first or chained,
+/// without or with direct lobes), the upsampling, and the refinement.
+pub struct CastShadowPass {
+    cast: CastPipelines,
+    refine: CastPipelines,
     upsample: Arc<ComputePipeline>,
+    upsample_listed: Arc<ComputePipeline>,
     march: MarchKnobs,
     scale: u32,
+    refine_spread: f64,
+}
+
+/// The list of pixels `shadow-upsample` flagged for `shadow-refine`: their
+/// count, their indices (y · width + x), and the refinement's indirect
+/// dispatch arguments (one workgroup per 64 of them).
+#[derive(Debug, Clone, Copy)]
+struct RefineList {
+    count: BufferHandle,
+    pixels: BufferHandle,
+    args: BufferHandle,
 }
 
 impl CastShadowPass {
     /// Compiles the pass; a pixel whose point lies off any surface is
     /// marched again with `march` ([`super::shadow_point`]); ρ is taken at
     /// one pixel of each `scale` × `scale` block (1: every pixel) and
-    /// brought back by [`Self::finish`].
+    /// brought back by [`Self::finish`], which takes it exactly where the
+    /// blocks a pixel blends spread by more than `refine_spread` (≥ 1:
+    /// nowhere).
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
         march: MarchKnobs,
         scale: u32,
+        refine_spread: f64,
     ) -> anyhow::Result<Self> {
         anyhow::ensure!(
             (1..=super::MAX_CAST_SCALE).contains(&scale),
@@ -133,14 +190,28 @@ impl CastShadowPass {
         let build = |file: &str, entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
             Ok(lib.compute_pipeline(ctx, file, entry, &defines)?)
         };
+        let pipelines = |first: &str, chained: &str| -> anyhow::Result<CastPipelines> {
+            Ok(CastPipelines {
+                first: build("shadow/cast.wgsl", first)?,
+                chained: build("shadow/cast.wgsl", chained)?,
+                first_direct: build("shadow/cast_direct.wgsl", first)?,
+                chained_direct: build("shadow/cast_direct.wgsl", chained)?,
+            })
+        };
+        let refining = scale > 1 && refine_spread < 1.0;
         Ok(Self {
             march,
-            first: build("shadow/cast.wgsl", "main")?,
-            chained: build("shadow/cast.wgsl", "main_chained")?,
-            first_direct: build("shadow/cast_direct.wgsl", "main")?,
-            chained_direct: build("shadow/cast_direct.wgsl", "main_chained")?,
+            cast: pipelines("main", "main_chained")?,
+            // Without refinement the cast pipelines stand in (never used).
+            refine: if refining {
+                pipelines("main_refine", "main_refine_chained")?
+            } else {
+                pipelines("main", "main_chained")?
+            },
             upsample: build("shadow/upsample.wgsl", "main")?,
+            upsample_listed: build("shadow/upsample.wgsl", "main_listed")?,
             scale,
+            refine_spread,
         })
     }
 
@@ -149,20 +220,29 @@ impl CastShadowPass {
         self.scale
     }
 
+    /// Whether [`Self::finish`] refines.
+    pub fn refines(&self) -> bool {
+        self.scale > 1 && self.refine_spread < 1.0
+    }
+
     /// The full-resolution ρ from the last [`Self::add`]'s `low` image: as
-    /// it is at scale 1, else through `shadow-upsample`.
+    /// it is at scale 1, else through `shadow-upsample` and, when the pass
+    /// refines, one `shadow-refine` per object of `objects` (those `low`
+    /// chained, in order).
     pub fn finish(
         &self,
         graph: &mut FrameGraph,
+        field: &GpuGridField,
         camera: &CameraFrame,
         march: &MarchOutputs,
         low: ImageHandle,
+        objects: &[CastInputs],
     ) -> ImageHandle {
         if self.scale == 1 {
             return low;
         }
         let (width, height) = (camera.width, camera.height);
-        let mut out = graph.create_image(
+        let mut up = graph.create_image(
             "shadow-full",
             ImageDesc {
                 width,
@@ -174,17 +254,51 @@ impl CastShadowPass {
             width,
             height,
             scale: self.scale,
-            pad: 0,
+            refine_spread: self.refine_spread.min(1.0) as f32,
         };
+        if !self.refines() {
+            graph
+                .compute(SHADOW_UPSAMPLE, &self.upsample)
+                .read("field_colour", march.colour_opacity)
+                .read("field_depth", march.depth)
+                .read("low_shadow", low)
+                .write("out_shadow", &mut up)
+                .push(&push)
+                .threads([width, height, 1]);
+            return up;
+        }
+        let mut count = graph.upload_buffer("shadow-refine-count", vec![0; 4]);
+        let mut args = graph.upload_buffer(
+            "shadow-refine-args",
+            [0u32, 1, 1].iter().flat_map(|v| v.to_le_bytes()).collect(),
+        );
+        let mut pixels =
+            graph.create_buffer("shadow-refine-list", 4 * width as u64 * height as u64);
         graph
-            .compute(SHADOW_UPSAMPLE, &self.upsample)
+            .compute(SHADOW_UPSAMPLE, &self.upsample_listed)
             .read("field_colour", march.colour_opacity)
             .read("field_depth", march.depth)
             .read("low_shadow", low)
-            .write("out_shadow", &mut out)
+            .write("out_shadow", &mut up)
+            .read_write("refine_count", &mut count)
+            .write("refine_list", &mut pixels)
+            .read_write("refine_args", &mut args)
             .push(&push)
             .threads([width, height, 1]);
-        out
+        let list = RefineList {
+            count,
+            pixels,
+            args,
+        };
+        for (i, o) in objects.iter().enumerate() {
+            let target = Target::Refine {
+                image: up,
+                list,
+                chained: i > 0,
+            };
+            up = self.dispatch(graph, field, camera, march, *o, target);
+        }
+        up
     }
 
     /// Adds `cast-shadow` for one object lit by `lobes`, multiplying
@@ -201,17 +315,55 @@ impl CastShadowPass {
         ssdf: SsdfBindings,
         previous: Option<ImageHandle>,
     ) -> ImageHandle {
-        let (width, height) = super::upsample::low_size(camera.width, camera.height, self.scale);
+        let inputs = CastInputs {
+            lobes,
+            fh_table,
+            ssdf,
+        };
+        self.dispatch(
+            graph,
+            field,
+            camera,
+            march,
+            inputs,
+            Target::Cast { previous },
+        )
+    }
+
+    /// One object's `cast-shadow` (at the cast scale) or `shadow-refine`
+    /// (at full resolution, in place), as `target` says.
+    fn dispatch(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        camera: &CameraFrame,
+        march: &MarchOutputs,
+        inputs: CastInputs,
+        target: Target,
+    ) -> ImageHandle {
+        let scale = match target {
+            Target::Cast { .. } => self.scale,
+            Target::Refine { .. } => 1,
+        };
+        let (width, height) = super::upsample::low_size(camera.width, camera.height, scale);
         let grid = field.import(graph);
-        let out = graph.create_image(
-            "shadow",
-            ImageDesc {
-                width,
-                height,
-                format: SHADOW_FORMAT,
-            },
-        );
+        let created = match target {
+            Target::Cast { .. } => Some(graph.create_image(
+                "shadow",
+                ImageDesc {
+                    width,
+                    height,
+                    format: SHADOW_FORMAT,
+                },
+            )),
+            Target::Refine { .. } => None,
+        };
         let step = (field.bounds.size() / (field.resolution.as_dvec3() - 1.0)).min_element() as f32;
+        let CastInputs {
+            lobes,
+            fh_table,
+            ssdf,
+        } = inputs;
         let direct = lobes.direct;
         let push = CastPush {
             camera: camera.rays(),
@@ -223,19 +375,22 @@ impl CastShadowPass {
             local_side: direct.map_or(1, |d| d.local.side),
             march_step: self.march.step(field.diagonal) as f32,
             march_termination: self.march.termination as f32,
-            scale: self.scale,
+            scale,
             pad0: 0,
             pad1: 0,
             pad2: 0,
         };
-        let pipeline = match (previous.is_some(), direct.is_some()) {
-            (false, false) => &self.first,
-            (true, false) => &self.chained,
-            (false, true) => &self.first_direct,
-            (true, true) => &self.chained_direct,
+        let (name, pipeline) = match target {
+            Target::Cast { previous } => (
+                CAST_SHADOW,
+                self.cast.pick(previous.is_some(), direct.is_some()),
+            ),
+            Target::Refine { chained, .. } => {
+                (SHADOW_REFINE, self.refine.pick(chained, direct.is_some()))
+            }
         };
-        let mut out = out;
-        grid.bind(graph.compute(CAST_SHADOW, pipeline))
+        let pass = grid
+            .bind(graph.compute(name, pipeline))
             .read("field_colour", march.colour_opacity)
             .read("field_depth", march.depth)
             .read("light_lobes", lobes.buffer)
@@ -244,14 +399,42 @@ impl CastShadowPass {
             .read("objects", ssdf.records)
             .read("ssdf_rows", ssdf.rows)
             .read("ssdf_coefs", ssdf.coefs)
-            .read_opt("previous", previous)
             .read("bvh_nodes", ssdf.bvh_nodes)
             .read("bvh_triangles", ssdf.bvh_triangles)
             .read_opt("sharp_rays", direct.map(|d| d.rays))
             .read_opt("local_lights", direct.map(|d| d.local.lights))
-            .write("out_shadow", &mut out)
-            .push(&push)
-            .threads([width, height, 1]);
-        out
+            .push(&push);
+        match target {
+            Target::Cast { previous } => {
+                let mut out = created.expect("created above for a cast");
+                pass.read_opt("previous", previous)
+                    .write("out_shadow", &mut out)
+                    .threads([width, height, 1]);
+                out
+            }
+            Target::Refine {
+                mut image, list, ..
+            } => {
+                pass.read("refine_count", list.count)
+                    .read("refine_list", list.pixels)
+                    .read_write("refined", &mut image)
+                    .indirect(list.args, 0);
+                image
+            }
+        }
     }
+}
+
+/// What [`CastShadowPass::dispatch`] writes.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    /// ρ at the cast scale, times `previous` (another object's) if given.
+    Cast { previous: Option<ImageHandle> },
+    /// ρ taken again at the pixels of `list`, in place in `image` (the
+    /// upsampled ρ), times what is there when `chained`.
+    Refine {
+        image: ImageHandle,
+        list: RefineList,
+        chained: bool,
+    },
 }

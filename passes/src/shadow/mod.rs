@@ -16,7 +16,7 @@ pub mod upsample;
 pub use bounce::{bounce_irradiance, ObjectReflectance};
 pub use cast::{
     CastShadowPass, CAST_SHADOW, CAST_SHADOW_INFO, CAST_SHADOW_SWITCH, SHADOW_FORMAT,
-    SHADOW_UPSAMPLE, SHADOW_UPSAMPLE_INFO,
+    SHADOW_REFINE, SHADOW_REFINE_INFO, SHADOW_UPSAMPLE, SHADOW_UPSAMPLE_INFO,
 };
 pub use direct::{DirectOcclusion, DIRECT_RAY_OFFSET};
 pub use fh::{fh_exact, hemisphere_integral, FhTable};

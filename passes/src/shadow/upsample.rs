@@ -6,7 +6,12 @@
 //! nearest blocks bilinearly, each weighted down as its depth departs from
 //! the pixel's (a block seen on another surface does not bleed across a
 //! silhouette); where no block lies on the pixel's surface, the block
-//! nearest in depth stands.
+//! nearest in depth stands. Beyond that, `shadow-refine` takes ρ exactly
+//! at the pixels the blocks cannot stand for ([`upsample_with_flags`]:
+//! fewer than two blocks on the pixel's surface, or blocks whose ρ spread
+//! by more than `[shadows] cast_refine`), so a shadow's edges and small
+//! shadows keep the full resolution's ρ at about the half resolution's
+//! cost.
 
 use glam::DVec3;
 
@@ -41,13 +46,33 @@ pub fn upsample_shadow(
     height: u32,
     scale: u32,
 ) -> Vec<DVec3> {
+    upsample_with_flags(low, depth, width, height, scale, f64::INFINITY)
+        .into_iter()
+        .map(|(rho, _)| rho)
+        .collect()
+}
+
+/// [`upsample_shadow`] with, per pixel, whether it is to be taken exactly
+/// (`shadow-refine`): fewer than two of the four corners it blends lie on
+/// its surface (at the image's border a block can be two corners), or
+/// the ρ of those that do spread by more than `spread` in some channel (a
+/// penumbra or a shadow's edge the blocks straddle). Where the field is
+/// empty nothing is refined.
+pub fn upsample_with_flags(
+    low: &[DVec3],
+    depth: &[Option<f64>],
+    width: u32,
+    height: u32,
+    scale: u32,
+    spread: f64,
+) -> Vec<(DVec3, bool)> {
     let (lw, lh) = low_size(width, height, scale);
     let depth_at = |x: u32, y: u32| depth[(y * width + x) as usize];
     let mut out = Vec::with_capacity((width * height) as usize);
     for y in 0..height {
         for x in 0..width {
             let Some(z) = depth_at(x, y) else {
-                out.push(DVec3::ONE);
+                out.push((DVec3::ONE, false));
                 continue;
             };
             let f = |p: u32, n: u32| {
@@ -65,6 +90,7 @@ pub fn upsample_shadow(
             ];
             let (mut sum, mut weight) = (DVec3::ZERO, 0.0);
             let (mut nearest, mut nearest_gap) = (DVec3::ONE, f64::INFINITY);
+            let (mut lo, mut hi, mut on_surface) = (DVec3::ONE, DVec3::ZERO, 0);
             for (cx, cy, bilinear) in corners {
                 let (sx, sy) = source_pixel(cx, cy, scale, width, height);
                 let rho = low[(cy * lw + cx) as usize];
@@ -75,11 +101,18 @@ pub fn upsample_shadow(
                 if gap < nearest_gap {
                     (nearest, nearest_gap) = (rho, gap);
                 }
+                if gap < DEPTH_FALLOFF {
+                    on_surface += 1;
+                    lo = lo.min(rho);
+                    hi = hi.max(rho);
+                }
                 let w = bilinear * (1.0 - gap / DEPTH_FALLOFF).max(0.0);
                 sum += w * rho;
                 weight += w;
             }
-            out.push(if weight > 1e-6 { sum / weight } else { nearest });
+            let rho = if weight > 1e-6 { sum / weight } else { nearest };
+            let refine = spread < 1.0 && (on_surface < 2 || (hi - lo).max_element() > spread);
+            out.push((rho, refine));
         }
     }
     out
@@ -131,5 +164,44 @@ mod tests {
                 assert_eq!(r, DVec3::splat(expect), "({x}, {y})");
             }
         }
+    }
+
+    /// Pixels are flagged for refinement where the blocks they blend
+    /// disagree by more than the spread or fewer than two lie on their
+    /// surface; never where the field is empty, nor at spread ≥ 1; the
+    /// values are upsample_shadow's.
+    #[test]
+    fn refinement_flags_edges_and_silhouettes_only() {
+        let (w, h) = (12u32, 8u32);
+        let depth: Vec<Option<f64>> = (0..w * h)
+            .map(|i| match (i % w, i / w) {
+                (0, 0) => None,
+                (10, 3) => Some(9.0),
+                _ => Some(1.0),
+            })
+            .collect();
+        let (lw, lh) = low_size(w, h, 2);
+        // ρ steps from 1 to 0.5 between blocks 2 and 3 (pixels 5 and 6).
+        let low: Vec<DVec3> = (0..lw * lh)
+            .map(|i| DVec3::splat(if i % lw < 3 { 1.0 } else { 0.5 }))
+            .collect();
+        let flags = upsample_with_flags(&low, &depth, w, h, 2, 0.02);
+        let plain = upsample_shadow(&low, &depth, w, h, 2);
+        for (i, ((rho, flag), p)) in flags.iter().zip(&plain).enumerate() {
+            assert_eq!(rho, p, "{i}");
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            let expect = match (x, y) {
+                (0, 0) => false,
+                // Blends block 2 (ρ 1) with block 3 (ρ 0.5).
+                (5 | 6, _) => true,
+                // A far pixel among near blocks: none lies on its surface.
+                (10, 3) => true,
+                _ => false,
+            };
+            assert_eq!(*flag, expect, "pixel ({x}, {y})");
+        }
+        assert!(upsample_with_flags(&low, &depth, w, h, 2, 1.0)
+            .iter()
+            .all(|(_, f)| !f));
     }
 }

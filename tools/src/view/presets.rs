@@ -3,14 +3,14 @@
 //! trading accuracy for speed. `Scene` keeps what the scene file says.
 
 use clap::ValueEnum;
-use inlay_passes::scene::Scene;
+use inlay_passes::scene::{Scene, DEFAULT_CAST_REFINE};
 
 /// A quality preset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Preset {
     /// 128 samples per ray, a 16×16 probe, 8 lobes, 20 cold and 2 warm
-    /// LM iterations, the cast shadow at half resolution: interactive on a
-    /// CPU device at small sizes.
+    /// LM iterations, the cast shadow at half resolution without
+    /// refinement: interactive on a CPU device at small sizes.
     Fast,
     /// 256 samples per ray, a 32×32 probe, 16 lobes, 40 cold and 4 warm
     /// iterations, the cast shadow at half resolution.
@@ -42,9 +42,9 @@ impl Preset {
     /// scene file asks for).
     pub fn apply(self, authored: &Scene) -> Scene {
         let mut s = authored.clone();
-        let (samples, probe, lobes, cold, warm, cast_scale) = match self {
-            Preset::Fast => (128, 16, 8, 20, 2, 2),
-            Preset::Balanced => (256, 32, 16, 40, 4, 2),
+        let (samples, probe, lobes, cold, warm, cast_scale, cast_refine) = match self {
+            Preset::Fast => (128, 16, 8, 20, 2, 2, 1.0),
+            Preset::Balanced => (256, 32, 16, 40, 4, 2, DEFAULT_CAST_REFINE),
             Preset::Scene => return s,
         };
         s.march.samples_per_ray = s.march.samples_per_ray.min(samples);
@@ -53,6 +53,7 @@ impl Preset {
         s.lighting.fit.cold_iterations = s.lighting.fit.cold_iterations.min(cold);
         s.lighting.fit.warm_iterations = s.lighting.fit.warm_iterations.min(warm);
         s.shadows.cast_scale = s.shadows.cast_scale.max(cast_scale);
+        s.shadows.cast_refine = s.shadows.cast_refine.max(cast_refine);
         s
     }
 }
