@@ -66,6 +66,7 @@ var<immediate> pc: CastPush;
 #include "shadow/fh.wgsl"
 #include "ssdf/ssdf.wgsl"
 #include "shadow/bounce.wgsl"
+#include "shadow/refine_list.wgsl"
 
 const CAST_HALF_PI: f32 = 1.57079632679490;
 
@@ -251,8 +252,8 @@ fn cast_source(id: vec2<u32>) -> vec2<i32> {
 }
 
 // The including shader's `main_refine` calls this (pc.scale 1, one
-// invocation per listed pixel, in workgroups of 64 — REFINE_WORKGROUP of
-// shadow/upsample.wgsl — dispatched indirectly): ρ taken exactly, for this
+// invocation per listed pixel, in workgroups of REFINE_WORKGROUP,
+// dispatched indirectly): ρ taken exactly, for this
 // the first object, at the pixels shadow-upsample listed, in place in the
 // upsampled image.
 fn cast_main_refine(id: vec3<u32>) {

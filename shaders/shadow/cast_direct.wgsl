@@ -36,12 +36,12 @@ fn main_chained(@builtin(global_invocation_id) id: vec3<u32>) {
     cast_main_chained(id);
 }
 
-@compute @workgroup_size(64, 1, 1)
+@compute @workgroup_size(REFINE_WORKGROUP, 1, 1)
 fn main_refine(@builtin(global_invocation_id) id: vec3<u32>) {
     cast_main_refine(id);
 }
 
-@compute @workgroup_size(64, 1, 1)
+@compute @workgroup_size(REFINE_WORKGROUP, 1, 1)
 fn main_refine_chained(@builtin(global_invocation_id) id: vec3<u32>) {
     cast_main_refine_chained(id);
 }

@@ -29,8 +29,7 @@ var<immediate> pc: UpsamplePush;
 @group(0) @binding(5) var<storage, read_write> refine_list: array<u32>;
 @group(0) @binding(6) var<storage, read_write> refine_args: array<atomic<u32>, 3>;
 
-// Invocations per workgroup of shadow-refine (shadow/cast_body.wgsl).
-const REFINE_WORKGROUP: u32 = 64u;
+#include "shadow/refine_list.wgsl"
 
 const UPSAMPLE_DEPTH_FALLOFF: f32 = 0.05;
 
