@@ -18,10 +18,10 @@ fn main_chained(@builtin(global_invocation_id) id: vec3<u32>) {
 
 @compute @workgroup_size(REFINE_WORKGROUP, 1, 1)
 fn main_refine(@builtin(global_invocation_id) id: vec3<u32>) {
-    cast_main_refine(id);
+    refine_listed(id.x, false);
 }
 
 @compute @workgroup_size(REFINE_WORKGROUP, 1, 1)
 fn main_refine_chained(@builtin(global_invocation_id) id: vec3<u32>) {
-    cast_main_refine_chained(id);
+    refine_listed(id.x, true);
 }

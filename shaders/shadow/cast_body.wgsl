@@ -15,7 +15,8 @@
 // from its rays instead of the SSDF; the light the object sends back
 // (shadow/bounce.wgsl) offsets the blocked light, never beyond it. Mirrors
 // passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
-// multiplies the previous object's ρ image (cast_main_chained). Output: ρ in rgb.
+// multiplies the previous object's ρ image; `main_refine*` take ρ again at
+// the pixels shadow-upsample listed. Output: ρ in rgb.
 // Needs: the shadow defines (passes/src/shadow/gpu.rs).
 #include "common/ray_box.wgsl"
 #include "field/grid.wgsl"
@@ -251,32 +252,22 @@ fn cast_source(id: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(p);
 }
 
-// The including shader's `main_refine` calls this (pc.scale 1, one
-// invocation per listed pixel, in workgroups of REFINE_WORKGROUP,
-// dispatched indirectly): ρ taken exactly, for this
-// the first object, at the pixels shadow-upsample listed, in place in the
-// upsampled image.
-fn cast_main_refine(id: vec3<u32>) {
-    let i = id.x;
+// The including shader's `main_refine` and `main_refine_chained` call
+// this (pc.scale 1, one invocation per
+// listed pixel, in workgroups of REFINE_WORKGROUP, dispatched indirectly):
+// at the i-th pixel shadow-upsample listed, ρ taken exactly, in place in
+// the upsampled image; `chained` multiplies the previous objects' ρ there.
+fn refine_listed(i: u32, chained: bool) {
     if i >= refine_count {
         return;
     }
     let p = refine_list[i];
     let pixel = vec2<i32>(vec2<u32>(p % pc.camera.width, p / pc.camera.width));
-    textureStore(refined, pixel, vec4<f32>(pixel_factor(pixel), 1.0));
-}
-
-// `main_refine_chained`: at the listed pixels, this object's exact ρ times
-// the previous objects' there.
-fn cast_main_refine_chained(id: vec3<u32>) {
-    let i = id.x;
-    if i >= refine_count {
-        return;
+    var rho = pixel_factor(pixel);
+    if chained {
+        rho *= textureLoad(refined, pixel).rgb;
     }
-    let p = refine_list[i];
-    let pixel = vec2<i32>(vec2<u32>(p % pc.camera.width, p / pc.camera.width));
-    let before = textureLoad(refined, pixel).rgb;
-    textureStore(refined, pixel, vec4<f32>(before * pixel_factor(pixel), 1.0));
+    textureStore(refined, pixel, vec4<f32>(rho, 1.0));
 }
 
 // The including shader's `main` calls this: ρ alone.
@@ -288,7 +279,7 @@ fn cast_main(id: vec3<u32>) {
 }
 
 // The including shader's `main_chained` calls this: ρ times the previous
-// object's.
+// object's (a function of its own: `main` binds no previous image).
 fn cast_main_chained(id: vec3<u32>) {
     if camera_outside(pc.camera, id.xy * pc.scale) {
         return;

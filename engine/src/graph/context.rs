@@ -317,13 +317,14 @@ impl PassContext<'_> {
         Ok(())
     }
 
-    /// Records a compute dispatch of `groups` workgroups.
-    pub fn dispatch(
+    /// What every dispatch records first: its pipeline, bindings and push
+    /// constants, and, after an earlier dispatch of the pass that wrote
+    /// storage, the barrier that orders them.
+    fn begin_dispatch(
         &mut self,
         pipeline: &ComputePipeline,
         bindings: &[Binding],
         push: &[u8],
-        groups: [u32; 3],
     ) -> Result<()> {
         if self.pass.kind != PassKind::Compute {
             return Err(self.error("dispatch outside a compute pass".into()));
@@ -338,6 +339,18 @@ impl PassContext<'_> {
             self.order_after_previous_dispatch();
         }
         self.dispatches += 1;
+        Ok(())
+    }
+
+    /// Records a compute dispatch of `groups` workgroups.
+    pub fn dispatch(
+        &mut self,
+        pipeline: &ComputePipeline,
+        bindings: &[Binding],
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> Result<()> {
+        self.begin_dispatch(pipeline, bindings, push)?;
         if groups.iter().all(|&g| g > 0) {
             unsafe {
                 self.ctx
@@ -360,9 +373,6 @@ impl PassContext<'_> {
         args: BufferHandle,
         offset: u64,
     ) -> Result<()> {
-        if self.pass.kind != PassKind::Compute {
-            return Err(self.error("dispatch outside a compute pass".into()));
-        }
         let a = self.buffer(
             args,
             |a| a == BufferAccess::Indirect,
@@ -375,16 +385,7 @@ impl PassContext<'_> {
             )));
         }
         let buffer = a.buffer;
-        self.bind(
-            &pipeline.core,
-            vk::PipelineBindPoint::COMPUTE,
-            bindings,
-            push,
-        )?;
-        if self.dispatches > 0 && self.writes_storage() {
-            self.order_after_previous_dispatch();
-        }
-        self.dispatches += 1;
+        self.begin_dispatch(pipeline, bindings, push)?;
         unsafe {
             self.ctx
                 .device

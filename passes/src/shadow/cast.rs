@@ -256,35 +256,39 @@ impl CastShadowPass {
             scale: self.scale,
             refine_spread: self.refine_spread.min(1.0) as f32,
         };
-        if !self.refines() {
-            graph
-                .compute(SHADOW_UPSAMPLE, &self.upsample)
-                .read("field_colour", march.colour_opacity)
-                .read("field_depth", march.depth)
-                .read("low_shadow", low)
-                .write("out_shadow", &mut up)
-                .push(&push)
-                .threads([width, height, 1]);
-            return up;
-        }
-        let mut count = graph.upload_buffer("shadow-refine-count", vec![0; 4]);
-        let mut args = graph.upload_buffer(
-            "shadow-refine-args",
-            [0u32, 1, 1].iter().flat_map(|v| v.to_le_bytes()).collect(),
-        );
-        let mut pixels =
-            graph.create_buffer("shadow-refine-list", 4 * width as u64 * height as u64);
-        graph
-            .compute(SHADOW_UPSAMPLE, &self.upsample_listed)
+        // The list shadow-refine runs over: its count, its pixels, and the
+        // indirect dispatch's arguments.
+        let mut buffers = self.refines().then(|| {
+            (
+                graph.upload_buffer("shadow-refine-count", vec![0; 4]),
+                graph.create_buffer("shadow-refine-list", 4 * width as u64 * height as u64),
+                graph.upload_buffer(
+                    "shadow-refine-args",
+                    [0u32, 1, 1].iter().flat_map(|v| v.to_le_bytes()).collect(),
+                ),
+            )
+        });
+        let pipeline = match buffers {
+            Some(_) => &self.upsample_listed,
+            None => &self.upsample,
+        };
+        let mut upsample = graph
+            .compute(SHADOW_UPSAMPLE, pipeline)
             .read("field_colour", march.colour_opacity)
             .read("field_depth", march.depth)
             .read("low_shadow", low)
             .write("out_shadow", &mut up)
-            .read_write("refine_count", &mut count)
-            .write("refine_list", &mut pixels)
-            .read_write("refine_args", &mut args)
-            .push(&push)
-            .threads([width, height, 1]);
+            .push(&push);
+        if let Some((count, pixels, args)) = buffers.as_mut() {
+            upsample = upsample
+                .read_write("refine_count", count)
+                .write("refine_list", pixels)
+                .read_write("refine_args", args);
+        }
+        upsample.threads([width, height, 1]);
+        let Some((count, pixels, args)) = buffers else {
+            return up;
+        };
         let list = RefineList {
             count,
             pixels,
