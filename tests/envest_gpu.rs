@@ -8,57 +8,80 @@ use inlay_passes::envest::near_field_reference::{irradiance_reference, opacity_m
 use inlay_passes::envest::{sample_surface, EnvEstimateKnobs, NearFieldTracer};
 use inlay_passes::field::GpuGridField;
 
+/// PLANTS baked small, on the GPU.
+struct Plants {
+    ctx: std::sync::Arc<inlay_engine::Context>,
+    scene: inlay_passes::scene::Scene,
+    field: inlay_passes::field::GridField,
+    lib: inlay_engine::shader::ShaderLibrary,
+    gpu: GpuGridField,
+}
+
+impl Plants {
+    fn bake() -> Self {
+        let ctx = common::gpu();
+        let scene = common::bundled_scene("plants.toml");
+        let field = common::bake_small(&scene, 32, 2, 0);
+        let lib = inlay_passes::shaders::embedded_library();
+        let gpu = GpuGridField::upload(&ctx, &field).unwrap();
+        Self {
+            ctx,
+            scene,
+            field,
+            lib,
+            gpu,
+        }
+    }
+
+    /// Surface points from `source`'s views.
+    fn surface(
+        &self,
+        knobs: &EnvEstimateKnobs,
+        source: &inlay_passes::envest::ViewSource,
+    ) -> inlay_passes::envest::SurfaceSample {
+        sample_surface(
+            &self.ctx,
+            &self.lib,
+            &self.field,
+            &self.gpu,
+            self.scene.march,
+            knobs,
+            source,
+            &|_, _, _, _| {},
+        )
+        .unwrap()
+    }
+}
+
 #[test]
 fn near_field_kernels_match_the_cpu_mirror() {
-    let ctx = common::gpu();
-    let scene = common::bundled_scene("plants.toml");
-    let field = common::bake_small(&scene, 32, 2, 0);
-    let lib = inlay_passes::shaders::embedded_library();
-    let gpu = GpuGridField::upload(&ctx, &field).unwrap();
+    let p = Plants::bake();
+    let (ctx, scene, field, lib, gpu) = (&p.ctx, &p.scene, &p.field, &p.lib, &p.gpu);
     let knobs = EnvEstimateKnobs {
         views: 3,
         view_size: 32,
         pixels_per_view: 4,
         ..EnvEstimateKnobs::default()
     };
-    let surface = sample_surface(
-        &ctx,
-        &lib,
-        &field,
-        &gpu,
-        scene.march,
-        &knobs,
-        &Default::default(),
-        &|_, _, _, _| {},
-    )
-    .unwrap();
+    let surface = p.surface(&knobs, &Default::default());
     assert_eq!(surface.views_kept, 3);
     assert!(surface.points.len() >= 6, "{} points", surface.points.len());
     for p in &surface.points {
         assert!(field.bounds.contains(p.position) && (p.normal.length() - 1.0).abs() < 1e-9);
     }
     let (rays, side) = (256, 8);
-    let near = NearFieldTracer::new(&ctx, &lib, scene.march)
+    let near = NearFieldTracer::new(ctx, lib, scene.march)
         .unwrap()
-        .trace(
-            &ctx,
-            &field,
-            &gpu,
-            &surface.points,
-            rays,
-            side,
-            7,
-            &|_, _| {},
-        )
+        .trace(ctx, field, gpu, &surface.points, rays, side, 7, &|_, _| {})
         .unwrap();
-    common::assert_no_validation_errors(&ctx);
+    common::assert_no_validation_errors(ctx);
     // The same rays in f32 and f64: they part only where a ray grazes the
     // density's edge and an f32 rounding moves a sample across a cell, so
     // sums over 256 rays agree to a few per mille of the brightest one.
     let mut worst_e: f64 = 0.0;
     let mut opacity_off = 0;
     for (i, p) in surface.points.iter().enumerate() {
-        let (e, covered) = irradiance_reference(&field, &scene.march, p, i as u32, rays, 7);
+        let (e, covered) = irradiance_reference(field, &scene.march, p, i as u32, rays, 7);
         let scale = e.max_element().max(1e-3);
         worst_e = worst_e.max((near.irradiance[i] - e).abs().max_element() / scale);
         assert!(
@@ -66,7 +89,7 @@ fn near_field_kernels_match_the_cpu_mirror() {
             "point {i}: Ô {} vs {covered}",
             near.covered[i]
         );
-        let map = opacity_map_reference(&field, &scene.march, p, side);
+        let map = opacity_map_reference(field, &scene.march, p, side);
         let texels = (side * side) as usize;
         for (t, o) in map.iter().enumerate() {
             if (near.opacity[i * texels + t] as f64 - o).abs() > 0.02 {
@@ -121,11 +144,8 @@ fn near_field_sums_many_rays_per_point() {
 fn views_from_cameras_draw_points_those_cameras_see() {
     use inlay_passes::camera::{CameraFrame, CameraSpec};
     use inlay_passes::envest::ViewSource;
-    let ctx = common::gpu();
-    let scene = common::bundled_scene("plants.toml");
-    let field = common::bake_small(&scene, 32, 2, 0);
-    let lib = inlay_passes::shaders::embedded_library();
-    let gpu = GpuGridField::upload(&ctx, &field).unwrap();
+    let p = Plants::bake();
+    let (ctx, scene, field) = (&p.ctx, &p.scene, &p.field);
     let centre = field.bounds.center();
     let far = CameraSpec {
         name: Some("far".into()),
@@ -143,18 +163,8 @@ fn views_from_cameras_draw_points_those_cameras_see() {
         pixels_per_view: 8,
         ..EnvEstimateKnobs::default()
     };
-    let surface = sample_surface(
-        &ctx,
-        &lib,
-        &field,
-        &gpu,
-        scene.march,
-        &knobs,
-        &source,
-        &|_, _, _, _| {},
-    )
-    .unwrap();
-    common::assert_no_validation_errors(&ctx);
+    let surface = p.surface(&knobs, &source);
+    common::assert_no_validation_errors(ctx);
     assert_eq!(surface.views_kept as usize, cameras.len());
     assert!(surface
         .scores

@@ -14,6 +14,24 @@ use inlay_passes::train::{
     adam_step, pixel_loss, render_ray_with_gradient, AdamKnobs, GpuTrainer, PixelTarget, TrainRay,
 };
 
+/// A trainer starting from `field`'s nodes.
+fn trainer_of(
+    ctx: &std::sync::Arc<inlay_engine::Context>,
+    lib: &inlay_engine::shader::ShaderLibrary,
+    field: &GridField,
+    knobs: MarchKnobs,
+) -> GpuTrainer {
+    GpuTrainer::new(
+        ctx,
+        lib,
+        field.resolution,
+        field.bounds,
+        &field.nodes,
+        knobs,
+    )
+    .unwrap()
+}
+
 fn field() -> GridField {
     let res = UVec3::new(6, 5, 7);
     let mut rng = Pcg32::new(9, 1);
@@ -75,15 +93,7 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
     };
     let (bg, eps) = (DVec3::new(0.2, 0.1, 0.3), 0.05);
     let batch = rays(&field, 96);
-    let mut trainer = GpuTrainer::new(
-        &ctx,
-        &lib,
-        field.resolution,
-        field.bounds,
-        &field.nodes,
-        knobs,
-    )
-    .unwrap();
+    let mut trainer = trainer_of(&ctx, &lib, &field, knobs);
     let mut renderer = Renderer::new(&ctx, 1).unwrap();
     let records: Vec<TrainRay> = batch
         .iter()
@@ -309,15 +319,7 @@ fn the_tv_step_matches_the_cpu_step() {
     let lib = common::test_library();
     let field = field();
     let knobs = MarchKnobs::default();
-    let mut trainer = GpuTrainer::new(
-        &ctx,
-        &lib,
-        field.resolution,
-        field.bounds,
-        &field.nodes,
-        knobs,
-    )
-    .unwrap();
+    let mut trainer = trainer_of(&ctx, &lib, &field, knobs);
     trainer.tv_weights = (0.03, 0.07);
     let mut renderer = Renderer::new(&ctx, 1).unwrap();
     let (ray, target, _) = rays(&field, 1)[0];
