@@ -260,14 +260,41 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "128",
         "--hold-out",
         "0",
+        "--sh-degree",
+        "1",
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    // Resumed with view-dependent colour: the file carries it, trained.
     let resumed = inlay_passes::field::load_field(&stopped).unwrap();
     assert_eq!(resumed.resolution, trained.resolution);
     assert_ne!(resumed.nodes, trained.nodes);
+    assert_eq!(resumed.sh_degree, 1);
+    assert!(resumed.sh.iter().flatten().any(|c| *c != 0.0));
+    // Resumed again without the flag, it keeps its degree.
+    let again = dir.join("again.inlayfield");
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+        "--resume",
+        stopped.to_str().unwrap(),
+        "--iterations",
+        "1",
+        "--batch",
+        "16",
+        "--hold-out",
+        "0",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(
+        inlay_passes::field::load_field(&again).unwrap().sh_degree,
+        1
+    );
     for (flag, value, says) in [
         ("--time-budget", "0", "--time-budget"),
         ("--stages", "9", "--stages"),
+        ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
         ("--out", "x.exr", ".inlayfield"),
     ] {
         let mut args = vec![

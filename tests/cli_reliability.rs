@@ -449,7 +449,7 @@ fn bake_scene_refuses_a_field_the_device_cannot_render() {
     let scene =
         inlay_passes::scene::load_scene(std::path::Path::new(&scene_path("dog.toml"))).unwrap();
     let res = inlay_passes::bake::grid_resolution(scene.recipe().unwrap(), 512);
-    if inlay_passes::field::check_field_fits(&info, res).is_ok() {
+    if inlay_passes::field::check_field_fits(&info, res, 0).is_ok() {
         eprintln!(
             "{} renders a 512-node field: nothing to refuse here",
             info.name

@@ -27,9 +27,10 @@ fn small_field(scene: &Scene, resolution: u32, samples: u32) -> GridField {
     common::bake_small(scene, resolution, samples, 0)
 }
 
-/// Runs the march pass once; with `clip = Some((near, mid))`, an object-depth
-/// image holds `near` in the left third, `mid` in the middle third and no
-/// object on the right. Returns (Ĉ, Ô) and D̂.
+/// Runs the march pass once, compiled for the field
+/// ([`GpuGridField::library`]); with `clip = Some((near, mid))`, an
+/// object-depth image holds `near` in the left third, `mid` in the middle
+/// third and no object on the right. Returns (Ĉ, Ô) and D̂.
 fn gpu_march(
     ctx: &Arc<Context>,
     field: &GridField,
@@ -37,7 +38,27 @@ fn gpu_march(
     knobs: MarchKnobs,
     clip: Option<(f32, f32)>,
 ) -> (HdrImage, HdrImage) {
-    let lib = common::test_library();
+    let gpu_field = GpuGridField::upload(ctx, field).unwrap();
+    gpu_march_with(
+        ctx,
+        &gpu_field.library(&common::test_library()),
+        field,
+        camera,
+        knobs,
+        clip,
+    )
+}
+
+/// [`gpu_march`] with the passes compiled from `lib`.
+fn gpu_march_with(
+    ctx: &Arc<Context>,
+    lib: &inlay_engine::shader::ShaderLibrary,
+    field: &GridField,
+    camera: &CameraFrame,
+    knobs: MarchKnobs,
+    clip: Option<(f32, f32)>,
+) -> (HdrImage, HdrImage) {
+    let lib = lib.clone();
     let march = MarchPass::new(ctx, &lib, knobs).unwrap();
     let gpu_field = GpuGridField::upload(ctx, field).unwrap();
     let pattern = std::sync::Arc::new(
@@ -186,17 +207,104 @@ fn gpu_march_matches_the_cpu_reference_with_and_without_skipping() {
             termination: 1e-4,
             skip_empty,
         };
-        let (colour, depth) = gpu_march(&ctx, &field, &camera, knobs, None);
-        let d = compare(
+        march_matches_cpu(
+            &ctx,
             &field,
             &camera,
-            &knobs,
-            &|_, _| f64::INFINITY,
-            &colour,
-            &depth,
+            knobs,
+            &format!("skip_empty = {skip_empty}"),
         );
-        assert_within_tolerance(&d, &format!("skip_empty = {skip_empty}"));
     }
+}
+
+/// Marches `field` unclipped on the GPU, checks it against the CPU within
+/// [`assert_within_tolerance`], and returns (Ĉ, Ô) and the largest colour.
+fn march_matches_cpu(
+    ctx: &Arc<Context>,
+    field: &GridField,
+    camera: &CameraFrame,
+    knobs: MarchKnobs,
+    what: &str,
+) -> (HdrImage, f64) {
+    let (colour, depth) = gpu_march(ctx, field, camera, knobs, None);
+    let d = compare(
+        field,
+        camera,
+        &knobs,
+        &|_, _| f64::INFINITY,
+        &colour,
+        &depth,
+    );
+    assert_within_tolerance(&d, what);
+    (colour, d.max_colour)
+}
+
+/// A field with view-dependent colour (degree 1 and 2, coefficients of
+/// the size of the node's colour, so that the clamp at zero holds in some
+/// samples) marches on the GPU as on the CPU, and its image differs from
+/// the same field's without them: the coefficients are read.
+#[test]
+fn gpu_march_matches_the_cpu_reference_with_view_dependent_colour() {
+    use inlay_passes::field::sh_extra_coefficients;
+    use inlay_passes::rng::Pcg32;
+    let ctx = common::gpu();
+    let s = scene("plants.toml");
+    let plain = small_field(&s, 24, 4);
+    let camera = CameraFrame::new(&s.cameras[0], 48, 32);
+    let knobs = MarchKnobs {
+        samples_per_ray: 256,
+        termination: 1e-4,
+        skip_empty: true,
+    };
+    let (base, _) = gpu_march(&ctx, &plain, &camera, knobs, None);
+    for degree in [1, 2] {
+        let k = sh_extra_coefficients(degree);
+        let mut rng = Pcg32::new(degree as u64, 7);
+        let sh = (0..plain.nodes.len() * k)
+            .map(|i| {
+                let c = plain.nodes[i / k];
+                std::array::from_fn(|ch| (3.0 * (rng.next_f64() - 0.5)) as f32 * c[ch])
+            })
+            .collect();
+        let field = plain.clone().with_sh(degree, sh);
+        let (colour, max_colour) =
+            march_matches_cpu(&ctx, &field, &camera, knobs, &format!("degree {degree}"));
+        let moved = (0..camera.height)
+            .flat_map(|y| (0..camera.width).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let (a, b) = (colour.at(x, y), base.at(x, y));
+                (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max)
+            })
+            .fold(0.0f32, f32::max);
+        assert!(
+            moved as f64 > 0.05 * max_colour,
+            "degree {degree}: the view-dependent colour changed the image by only {moved}"
+        );
+        // Compiled for any field (the default library: the degree read
+        // per ray), the same image.
+        let (general, _) =
+            gpu_march_with(&ctx, &common::test_library(), &field, &camera, knobs, None);
+        assert_eq!(general.pixels, colour.pixels, "degree {degree}");
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// A pass compiled for fields without view-dependent colour refuses one
+/// that has it (its colour would be read as the mean).
+#[test]
+#[should_panic(expected = "compiled for fields without view-dependent colour")]
+fn a_pass_for_plain_fields_refuses_view_dependent_colour() {
+    let ctx = common::gpu();
+    let s = scene("plants.toml");
+    let plain = small_field(&s, 8, 1);
+    let k = inlay_passes::field::sh_extra_coefficients(1);
+    let sh = vec![[0.1, 0.0, 0.0]; plain.nodes.len() * k];
+    let lib = GpuGridField::upload(&ctx, &plain)
+        .unwrap()
+        .library(&common::test_library());
+    let field = plain.clone().with_sh(1, sh);
+    let camera = CameraFrame::new(&s.cameras[0], 8, 8);
+    gpu_march_with(&ctx, &lib, &field, &camera, MarchKnobs::default(), None);
 }
 
 #[test]

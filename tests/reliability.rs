@@ -105,11 +105,15 @@ fn limits_come_from_the_device_and_say_what_fits() {
     assert!(e.to_string().contains("simplify the mesh"), "{e}");
     // A field: the binding first, then the heap.
     let res = glam::UVec3::new(64, 64, 64);
-    check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res).unwrap();
-    let e = check_field_fits(&small_device(&real, (16 << 18) - 16, 1 << 40), res).unwrap_err();
+    check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 0).unwrap();
+    let e = check_field_fits(&small_device(&real, (16 << 18) - 16, 1 << 40), res, 0).unwrap_err();
     assert!(e.to_string().contains("largest storage binding"), "{e}");
-    let e = check_field_fits(&small_device(&real, u32::MAX, 1 << 20), res).unwrap_err();
+    let e = check_field_fits(&small_device(&real, u32::MAX, 1 << 20), res, 0).unwrap_err();
     assert!(e.to_string().contains("largest memory heap"), "{e}");
+    // View-dependent colour of degree 1 takes four times the bytes a node.
+    let e = check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 1).unwrap_err();
+    assert!(e.to_string().contains("degree 1"), "{e}");
+    check_field_fits(&small_device(&real, 64 << 18, 1 << 40), res, 1).unwrap();
 }
 
 /// A frame of far more passes than the timer's first pool holds (a scene of

@@ -14,22 +14,25 @@ use inlay_passes::train::{
     adam_step, pixel_loss, render_ray_with_gradient, AdamKnobs, GpuTrainer, PixelTarget, TrainRay,
 };
 
-/// A trainer starting from `field`'s nodes.
+/// A trainer starting from `field`.
 fn trainer_of(
     ctx: &std::sync::Arc<inlay_engine::Context>,
     lib: &inlay_engine::shader::ShaderLibrary,
     field: &GridField,
     knobs: MarchKnobs,
 ) -> GpuTrainer {
-    GpuTrainer::new(
-        ctx,
-        lib,
-        field.resolution,
-        field.bounds,
-        &field.nodes,
-        knobs,
-    )
-    .unwrap()
+    GpuTrainer::new(ctx, lib, field, knobs).unwrap()
+}
+
+/// `field()` with view-dependent colour of `degree`, its coefficients
+/// large enough that the clamp at zero holds in some samples.
+fn sh_field(degree: u32) -> GridField {
+    let f = field();
+    let mut rng = Pcg32::new(11, 2);
+    let sh = (0..f.nodes.len() * inlay_passes::field::sh_extra_coefficients(degree))
+        .map(|_| std::array::from_fn(|_| (2.0 * (rng.next_f64() - 0.5)) as f32))
+        .collect();
+    f.with_sh(degree, sh)
 }
 
 fn field() -> GridField {
@@ -81,11 +84,22 @@ fn rays(field: &GridField, n: usize) -> Vec<(Ray, PixelTarget, f64)> {
         .collect()
 }
 
+/// For a field without view-dependent colour and one of degree 2 (every
+/// coefficient's path): the batch's pixels, losses and gradient, then an
+/// Adam step, against the CPU.
 #[test]
 fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
+    for degree in [0, 2] {
+        gradient_and_adam_match(degree);
+    }
+}
+
+fn gradient_and_adam_match(degree: u32) {
     let ctx = common::gpu();
     let lib = common::test_library();
-    let field = field();
+    let field = sh_field(degree);
+    let values = inlay_passes::field::device_values(&field);
+    let base_values = 4 * field.nodes.len();
     let knobs = MarchKnobs {
         samples_per_ray: 40,
         termination: 1e-4,
@@ -103,7 +117,7 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
         .run_batch(&mut renderer, &records, bg, eps, None)
         .unwrap();
     // The CPU reference: each ray's pixel, weighted loss and gradient.
-    let mut cpu_grad = vec![0.0f64; 4 * field.nodes.len()];
+    let mut cpu_grad = vec![0.0f64; 4 * values.len()];
     for ((ray, target, w), gpu) in batch.iter().zip(&out) {
         let r = render_ray_with_gradient(&field, ray, &knobs, bg, |c| {
             *w * pixel_loss(c, *target, eps).1
@@ -120,7 +134,7 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
             "loss {} vs {loss}",
             gpu[3]
         );
-        for (n, g) in &r.nodes {
+        for (n, g) in &r.values {
             for c in 0..4 {
                 cpu_grad[4 * n + c] += g[c];
             }
@@ -136,7 +150,7 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
     }
     assert!(
         worst < 1e-3,
-        "gradient differs by {worst} of its largest value"
+        "degree {degree}: gradient differs by {worst} of its largest value"
     );
 
     // Adam: the same batch again, then a step; the CPU steps from the GPU's
@@ -152,14 +166,22 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
     trainer
         .run_batch(&mut renderer, &records, bg, eps, Some((&adam, scale_g)))
         .unwrap();
-    let after = trainer.nodes(&mut renderer).unwrap();
-    let mut params: Vec<f32> = field.nodes.iter().flatten().copied().collect();
+    let after = trainer.values(&mut renderer).unwrap();
+    let original: Vec<f32> = values.iter().flatten().copied().collect();
+    let mut params = original.clone();
     let mut grad: Vec<f32> = before.iter().map(|g| 2.0 * g).collect();
     let mut moments = vec![[0.0f32; 2]; params.len()];
-    adam_step(&mut params, &mut grad, &mut moments, &adam, scale_g, 1);
+    adam_step(
+        &mut params,
+        &mut grad,
+        &mut moments,
+        &adam,
+        (scale_g, base_values),
+        1,
+    );
     let mut moved = 0;
-    for (i, (a, b)) in after.iter().flatten().zip(&params).enumerate() {
-        let orig = field.nodes[i / 4][i % 4];
+    for (i, (a, b)) in after.iter().zip(&params).enumerate() {
+        let orig = original[i];
         if (a - orig).abs() > 1e-6 {
             moved += 1;
         }
@@ -170,9 +192,21 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
         } else {
             1e-4
         };
-        assert!((a - b).abs() < tolerance, "value {i}: {a} vs {b}");
+        assert!(
+            (a - b).abs() < tolerance,
+            "degree {degree} value {i}: {a} vs {b}"
+        );
     }
     assert!(moved > 100, "Adam moved {moved} values");
+    if degree > 0 {
+        // The coefficients moved too, and some went below zero (they are
+        // not clamped as the nodes' values are).
+        assert!(after[base_values..].iter().any(|v| *v < 0.0));
+        assert!(after[base_values..]
+            .iter()
+            .zip(&original[base_values..])
+            .any(|(a, b)| (a - b).abs() > 1e-6));
+    }
     assert!(trainer
         .gradient(&mut renderer)
         .unwrap()
@@ -339,7 +373,7 @@ fn the_tv_step_matches_the_cpu_step() {
             Some((&still, 1.0)),
         )
         .unwrap();
-    let gpu = trainer.nodes(&mut renderer).unwrap();
+    let gpu = trainer.field(&mut renderer).unwrap().nodes;
     let mut cpu = field.nodes.clone();
     inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, 0.03, 0.07);
     for (i, (g, c)) in gpu.iter().flatten().zip(cpu.iter().flatten()).enumerate() {

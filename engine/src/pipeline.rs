@@ -179,6 +179,7 @@ fn module(ctx: &Context, shader: &CompiledShader) -> Result<vk::ShaderModule> {
 pub struct ComputePipeline {
     pub(crate) core: PipelineCore,
     workgroup: [u32; 3],
+    defines: Vec<crate::shader::Define>,
 }
 
 impl ComputePipeline {
@@ -223,7 +224,19 @@ impl ComputePipeline {
         Ok(Self {
             core,
             workgroup: shader.workgroup_size,
+            defines: Vec::new(),
         })
+    }
+
+    /// The same pipeline, recording the defines it was compiled with.
+    pub fn with_defines(mut self, defines: &[crate::shader::Define]) -> Self {
+        self.defines = defines.to_vec();
+        self
+    }
+
+    /// The define of `name` the pipeline was compiled with, if recorded.
+    pub fn define(&self, name: &str) -> Option<&crate::shader::Define> {
+        self.defines.iter().find(|d| d.name() == name)
     }
 
     /// The shader's workgroup size, to turn a thread count into groups.

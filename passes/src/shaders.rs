@@ -11,17 +11,22 @@ mod embedded {
 /// embedded copy.
 pub const SHADER_DIR_ENV: &str = "INLAY_SHADER_DIR";
 
-/// The shader library: from `INLAY_SHADER_DIR` when set, else embedded.
+/// The shader library: from `INLAY_SHADER_DIR` when set, else embedded;
+/// with the defines every pass's shaders may read
+/// ([`crate::field::general_field_library`]).
 pub fn library() -> anyhow::Result<ShaderLibrary> {
     match std::env::var_os(SHADER_DIR_ENV) {
-        Some(dir) => Ok(ShaderLibrary::from_dir(std::path::Path::new(&dir))?),
+        Some(dir) => Ok(crate::field::general_field_library(
+            &ShaderLibrary::from_dir(std::path::Path::new(&dir))?,
+        )),
         None => Ok(embedded_library()),
     }
 }
 
-/// The shaders embedded in this binary.
+/// The shaders embedded in this binary (with the defines of
+/// [`library`]).
 pub fn embedded_library() -> ShaderLibrary {
-    ShaderLibrary::from_pairs(embedded::FILES.iter().copied())
+    crate::field::general_field_library(&ShaderLibrary::from_pairs(embedded::FILES.iter().copied()))
 }
 
 /// Every host mirror of a WGSL struct in this crate checked against the

@@ -1,15 +1,17 @@
-// The voxel-grid radiance field: trilinear lookup of (r, g, b, σ) nodes and
-// the coarse occupancy grid for empty-space skipping. Mirrors
+// The voxel-grid radiance field: trilinear lookup of (r, g, b, σ) nodes,
+// the view-dependent colour's further coefficients where the field has
+// them, and the coarse occupancy grid for empty-space skipping. Mirrors
 // passes/src/field/grid.rs and passes/src/field/occupancy.rs; the layout of
-// `GridInfo` is written by passes/src/field/gpu_grid.rs.
+// `GridInfo` and of `grid_nodes` is written by passes/src/field/gpu_grid.rs.
 
 #include "field/trilinear.wgsl"
+#include "field/sh.wgsl"
 
 struct GridInfo {
     bounds_min: vec3<f32>,
     occupancy_block: u32,
     bounds_max: vec3<f32>,
-    _pad0: u32,
+    sh_degree: u32,
     resolution: vec3<u32>,
     _pad1: u32,
     occupancy_dims: vec3<u32>,
@@ -19,6 +21,8 @@ struct GridInfo {
 @group(0) @binding(0) var<uniform> grid_info: GridInfo;
 @group(0) @binding(1) var<storage, read> grid_nodes: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> grid_occupancy: array<u32>;
+
+#include "field/sh_trilinear.wgsl"
 
 fn grid_node(i: vec3<u32>) -> vec4<f32> {
     let r = grid_info.resolution;
@@ -38,6 +42,21 @@ fn grid_sample(x: vec3<f32>) -> vec4<f32> {
     let x01 = mix(grid_node(i + vec3<u32>(0u, 0u, 1u)), grid_node(i + vec3<u32>(1u, 0u, 1u)), f.x);
     let x11 = mix(grid_node(i + vec3<u32>(0u, 1u, 1u)), grid_node(i + vec3<u32>(1u, 1u, 1u)), f.x);
     return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+}
+
+// The colour at x along a ray whose direction's basis is `basis`
+// (sh_basis), given the base colour `base` that grid_sample(x) returned:
+// base + Σ_k Y_k·coefficient_k(x), clamped at zero; `base` itself when
+// the field has no view-dependent colour.
+fn grid_view_colour(x: vec3<f32>, basis: array<f32, 8>, base: vec3<f32>) -> vec3<f32> {
+    if grid_info.sh_degree == 0u {
+        return base;
+    }
+    let cell = trilinear_cell(x, grid_info.bounds_min, grid_info.bounds_max, grid_info.resolution);
+    if !cell.inside {
+        return base;
+    }
+    return max(base + sh_trilinear(cell, grid_info.resolution, grid_info.sh_degree, basis), vec3<f32>(0.0));
 }
 
 // When the coarse cell holding x is empty: the distance along dir from x to

@@ -1,6 +1,7 @@
-// One Adam step over every trained value (4 per node: r, g, b, σ), the
-// gradient read and cleared, the value kept non-negative (colour and
-// density are physical). Mirrors passes/src/train/adam.rs adam_step.
+// One Adam step over every trained value (4 per node: r, g, b, σ, then the
+// view-dependent colour's coefficients), the gradient read and cleared; a
+// node's values kept non-negative (colour and density are physical), the
+// coefficients free. Mirrors passes/src/train/adam.rs adam_step.
 
 struct AdamPush {
     count: u32,
@@ -11,6 +12,10 @@ struct AdamPush {
     beta2: f32,
     correction1: f32,
     correction2: f32,
+    base_values: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 var<immediate> pc: AdamPush;
@@ -32,7 +37,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     m.x = pc.beta1 * m.x + (1.0 - pc.beta1) * g;
     m.y = pc.beta2 * m.y + (1.0 - pc.beta2) * g * g;
     moments[i] = m;
-    let rate = select(pc.rate, pc.density_rate, (i & 3u) == 3u);
+    let base = i < pc.base_values;
+    let rate = select(pc.rate, pc.density_rate, base && (i & 3u) == 3u);
     let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);
-    params[i] = max(params[i] - step, 0.0);
+    params[i] = select(params[i] - step, max(params[i] - step, 0.0), base);
 }

@@ -2,10 +2,13 @@
 // grid (no empty-space skipping), the pixel's loss, and the loss's gradient
 // with respect to every node the ray read, scattered into `grad` with
 // atomic float adds (a compare-and-swap loop: core WGSL, every device).
+// The trained values are laid out as a field's on the device: the nodes,
+// then the view-dependent colour's coefficients (field/sh_trilinear.wgsl).
 // Mirrors passes/src/train/render.rs render_ray_with_gradient.
 
 #include "common/ray_box.wgsl"
 #include "field/trilinear.wgsl"
+#include "field/sh.wgsl"
 #include "train/loss.wgsl"
 
 struct TrainPush {
@@ -17,6 +20,10 @@ struct TrainPush {
     termination: f32,
     background: vec3<f32>,
     epsilon: f32,
+    sh_degree: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -30,10 +37,12 @@ struct TrainRay {
 }
 
 var<immediate> pc: TrainPush;
-@group(0) @binding(0) var<storage, read> params: array<vec4<f32>>;
+@group(0) @binding(0) var<storage, read> grid_nodes: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read> rays: array<TrainRay>;
 @group(0) @binding(2) var<storage, read_write> grad: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> ray_out: array<vec4<f32>>;
+
+#include "field/sh_trilinear.wgsl"
 
 fn node_index(i: vec3<u32>) -> u32 {
     let r = pc.resolution;
@@ -46,9 +55,24 @@ fn sample_at(cell: TrilinearCell) -> vec4<f32> {
         return v;
     }
     for (var k = 0u; k < 8u; k++) {
-        v += trilinear_weight(cell.f, k) * params[node_index(cell.base + trilinear_corner(k))];
+        v += trilinear_weight(cell.f, k) * grid_nodes[node_index(cell.base + trilinear_corner(k))];
     }
     return v;
+}
+
+// The colour along dir before the clamp at zero: the base, plus the
+// view-dependent part where the grid has one.
+fn unclamped_colour(cell: TrilinearCell, base: vec3<f32>, basis: array<f32, 8>) -> vec3<f32> {
+    if pc.sh_degree == 0u || !cell.inside {
+        return base;
+    }
+    return base + sh_trilinear(cell, pc.resolution, pc.sh_degree, basis);
+}
+
+// The colour seen: clamped at zero where the grid has view-dependent
+// colour, the base itself where it has not (as grid_view_colour).
+fn seen_colour(u: vec3<f32>) -> vec3<f32> {
+    return select(u, max(u, vec3<f32>(0.0)), pc.sh_degree > 0u);
 }
 
 fn add_float(i: u32, value: f32) {
@@ -74,6 +98,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let tb = ray_box(ray.origin, ray.dir, pc.bounds_min, pc.bounds_max);
     let t0 = tb.x;
     let t1 = tb.y;
+    var y = sh_basis(ray.dir);
     // Forward.
     var colour = vec3<f32>(0.0);
     var transmittance = 1.0;
@@ -85,9 +110,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 break;
             }
             let b = min(a + pc.step, t1);
-            let v = sample_at(trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution));
+            let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
+            let v = sample_at(cell);
             let alpha = 1.0 - exp(-v.w * (b - a));
-            colour += transmittance * alpha * v.xyz;
+            colour += transmittance * alpha * seen_colour(unclamped_colour(cell, v.xyz, y));
             transmittance *= 1.0 - alpha;
             used += 1u;
             if transmittance < pc.termination {
@@ -103,6 +129,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     // Backward, with the running sum.
+    let count = select(0u, sh_count(pc.sh_degree), pc.sh_degree > 0u);
     var t_i = 1.0;
     var so_far = vec3<f32>(0.0);
     for (var s = 0u; s < used; s++) {
@@ -113,23 +140,37 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         let v = sample_at(cell);
+        let u = unclamped_colour(cell, v.xyz, y);
+        let c = seen_colour(u);
+        // Channels the clamp at zero holds get no colour gradient.
+        let open = select(vec3<f32>(1.0), select(vec3<f32>(0.0), vec3<f32>(1.0), u > vec3<f32>(0.0)), count > 0u);
         let dt = b - a;
         let alpha = 1.0 - exp(-v.w * dt);
         let w = t_i * alpha;
         let t_next = t_i * (1.0 - alpha);
-        so_far += w * v.xyz;
-        let d_c = g * w;
-        let d_sigma = dt * dot(g, t_next * v.xyz - (colour - so_far) - transmittance * pc.background);
+        so_far += w * c;
+        let d_c = g * w * open;
+        let d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * pc.background);
         for (var k = 0u; k < 8u; k++) {
             let wk = trilinear_weight(cell.f, k);
             if wk == 0.0 {
                 continue;
             }
-            let n = 4u * node_index(cell.base + trilinear_corner(k));
+            let corner = cell.base + trilinear_corner(k);
+            let n = 4u * node_index(corner);
             add_float(n, d_c.x * wk);
             add_float(n + 1u, d_c.y * wk);
             add_float(n + 2u, d_c.z * wk);
             add_float(n + 3u, d_sigma * wk);
+            if count > 0u {
+                let s = 4u * sh_first(corner, pc.resolution, pc.sh_degree);
+                for (var j = 0u; j < count; j++) {
+                    let e = d_c * (wk * y[j]);
+                    add_float(s + 4u * j, e.x);
+                    add_float(s + 4u * j + 1u, e.y);
+                    add_float(s + 4u * j + 2u, e.z);
+                }
+            }
         }
         t_i = t_next;
     }

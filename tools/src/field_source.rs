@@ -82,7 +82,7 @@ fn cache_entry(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBu
 fn check_file_fits(path: &Path, device: Option<&DeviceInfo>) -> anyhow::Result<()> {
     let header = read_field_header(path)?;
     if let Some(info) = device {
-        check_field_fits(info, header.resolution)
+        check_field_fits(info, header.resolution, header.sh_degree)
             .with_context(|| format!("{}: resolution", path.display()))?;
     }
     Ok(())
@@ -110,7 +110,7 @@ pub fn scene_field(
         FieldSource::Recipe(recipe) => {
             if let Some(info) = device {
                 let res = inlay_passes::bake::grid_resolution(recipe, scene.bake.resolution);
-                check_field_fits(info, res).with_context(|| {
+                check_field_fits(info, res, 0).with_context(|| {
                     format!(
                         "{}: [bake] resolution {}",
                         scene.path.display(),

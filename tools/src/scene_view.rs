@@ -65,6 +65,7 @@ pub fn view_over_gpu_field(
     knobs
         .check()
         .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
+    let lib = &field.library(lib);
     InsertionView::new(
         ctx,
         lib,

@@ -520,6 +520,11 @@ impl<'p, 'g, P: BoundPipeline> Call<'p, 'g, P> {
         }
     }
 
+    /// The pipeline this call runs.
+    pub fn pipeline(&self) -> &Arc<P> {
+        &self.pipeline
+    }
+
     /// Binds `resource` at `slot` for reading (sampled, storage or uniform,
     /// as the shader declares it there); nothing if the shader has no such
     /// binding.

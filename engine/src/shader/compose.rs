@@ -21,6 +21,13 @@ pub enum Define {
 }
 
 impl Define {
+    /// The constant's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Define::U32(n, _) | Define::I32(n, _) | Define::F32(n, _) | Define::Bool(n, _) => n,
+        }
+    }
+
     fn to_wgsl(&self) -> String {
         match self {
             Define::U32(n, v) => format!("const {n}: u32 = {v}u;"),
@@ -55,8 +62,10 @@ impl Composed {
     }
 }
 
-/// Composes `entry` from `library`: defines first, then the file with its
-/// includes expanded depth-first, each included file once.
+/// Composes `entry` from `library`: defines first (the library's own,
+/// [`ShaderLibrary::with_defines`], then `defines`, which replace those of
+/// the same names), then the file with its includes expanded depth-first,
+/// each included file once.
 pub fn compose(
     library: &ShaderLibrary,
     entry: &str,
@@ -66,7 +75,7 @@ pub fn compose(
         source: String::new(),
         origins: Vec::new(),
     };
-    for d in defines {
+    for d in &library.merged_defines(defines) {
         out.source.push_str(&d.to_wgsl());
         out.source.push('\n');
         out.origins.push(("<knob defines>".into(), 0));
@@ -146,6 +155,25 @@ mod tests {
 
     fn lib(files: &[(&str, &str)]) -> ShaderLibrary {
         ShaderLibrary::from_pairs(files.iter().copied())
+    }
+
+    /// A library's own defines come first; a shader's define of the same
+    /// name replaces the library's, and a later `with_defines` replaces an
+    /// earlier one.
+    #[test]
+    fn library_defines_are_merged_under_the_shader_s() {
+        let l = lib(&[("a.wgsl", "fn a() {}")])
+            .with_defines(&[Define::Bool("V", true), Define::U32("N", 1)])
+            .with_defines(&[Define::Bool("V", false)]);
+        assert_eq!(l.define("V"), Some(&Define::Bool("V", false)));
+        let c = compose(&l, "a.wgsl", &[Define::U32("N", 4)]).unwrap();
+        let lines: Vec<&str> = c.source.lines().collect();
+        assert_eq!(
+            &lines[..2],
+            &["const V: bool = false;", "const N: u32 = 4u;"],
+            "{}",
+            c.source
+        );
     }
 
     #[test]

@@ -12,12 +12,14 @@ use crate::error::{EngineError, Result};
 use crate::pipeline::ComputePipeline;
 
 /// WGSL source files by path relative to the library root (`common/x.wgsl`),
-/// and the compute pipelines compiled from them that are still in use
-/// (shared by the library's clones until one of them changes a file).
+/// the compute pipelines compiled from them that are still in use (shared
+/// by the library's clones until one of them changes a file), and defines
+/// every pipeline of this library gets ([`Self::with_defines`]).
 #[derive(Debug, Clone, Default)]
 pub struct ShaderLibrary {
     files: BTreeMap<String, String>,
     pipelines: Arc<PipelineCache>,
+    defines: Vec<Define>,
 }
 
 impl ShaderLibrary {
@@ -29,7 +31,26 @@ impl ShaderLibrary {
                 .map(|(p, s)| (p.to_owned(), s.to_owned()))
                 .collect(),
             pipelines: Arc::default(),
+            defines: Vec::new(),
         }
+    }
+
+    /// The same library (its files and pipeline cache shared) with
+    /// `defines` given to every pipeline it compiles, replacing its own of
+    /// the same names; a pipeline's own defines replace these in turn. For
+    /// a constant that depends on data every pass of a frame shares (so a
+    /// shader can leave out code that data never needs).
+    pub fn with_defines(&self, defines: &[Define]) -> Self {
+        let mut out = self.clone();
+        out.defines
+            .retain(|d| defines.iter().all(|n| n.name() != d.name()));
+        out.defines.extend_from_slice(defines);
+        out
+    }
+
+    /// The library's own define of `name`, if any.
+    pub fn define(&self, name: &str) -> Option<&Define> {
+        self.defines.iter().find(|d| d.name() == name)
     }
 
     /// Every `.wgsl` file below `root`, keyed by its path relative to `root`.
@@ -67,6 +88,7 @@ impl ShaderLibrary {
         Ok(Self {
             files,
             pipelines: Arc::default(),
+            defines: Vec::new(),
         })
     }
 
@@ -77,11 +99,11 @@ impl ShaderLibrary {
         self.pipelines = Arc::default();
     }
 
-    /// The compute pipeline of `entry` in `file` with `defines` on `ctx`'s
-    /// device: compiled on first use, the same pipeline for every later
-    /// request with the same key (device, file, entry point, defines) as
-    /// long as someone still holds it (the library does not keep a device
-    /// alive).
+    /// The compute pipeline of `entry` in `file` with the library's defines
+    /// and `defines` on `ctx`'s device: compiled on first use, the same
+    /// pipeline for every later request with the same key (device, file,
+    /// entry point, defines) as long as someone still holds it (the library
+    /// does not keep a device alive).
     pub fn compute_pipeline(
         &self,
         ctx: &Arc<Context>,
@@ -89,7 +111,21 @@ impl ShaderLibrary {
         entry: &str,
         defines: &[Define],
     ) -> Result<Arc<ComputePipeline>> {
-        self.pipelines.compute(self, ctx, file, entry, defines)
+        let all = self.merged_defines(defines);
+        self.pipelines.compute(self, ctx, file, entry, &all)
+    }
+
+    /// The library's defines that `defines` do not name, then `defines`:
+    /// what a shader of this library is compiled with.
+    pub fn merged_defines(&self, defines: &[Define]) -> Vec<Define> {
+        let mut all: Vec<Define> = self
+            .defines
+            .iter()
+            .filter(|d| defines.iter().all(|n| n.name() != d.name()))
+            .cloned()
+            .collect();
+        all.extend_from_slice(defines);
+        all
     }
 
     /// How many compute pipelines [`Self::compute_pipeline`] has compiled

@@ -67,7 +67,7 @@ impl PipelineCache {
         // meanwhile. Two threads asking for the same new kernel at once
         // both compile it, and the first one stored is kept.
         let shader = compile(library, file, entry, ShaderStage::Compute, defines)?;
-        let pipeline = Arc::new(ComputePipeline::new(ctx, &shader)?);
+        let pipeline = Arc::new(ComputePipeline::new(ctx, &shader)?.with_defines(defines));
         self.compiled.fetch_add(1, Ordering::Relaxed);
         let mut map = self.lock();
         if let Some(p) = map.get(&key).and_then(Weak::upgrade) {

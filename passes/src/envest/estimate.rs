@@ -107,6 +107,7 @@ pub fn sample_surface(
     source: &ViewSource,
     progress: Progress,
 ) -> anyhow::Result<SurfaceSample> {
+    let lib = &gpu.library(lib);
     let pass = MarchPass::new(ctx, lib, march)?;
     let mut renderer = Renderer::new(ctx, 1)?;
     let distance = 0.5 * field.bounds.size().max_element();
@@ -193,6 +194,7 @@ pub fn estimate_environment(
         anyhow::bail!("estimate knob `{k}`: {m}");
     }
     let gpu = GpuGridField::upload(ctx, field)?;
+    let lib = &gpu.library(lib);
     let t0 = Instant::now();
     let surface = sample_surface(ctx, lib, field, &gpu, march, knobs, source, progress)?;
     let t1 = Instant::now();

@@ -22,7 +22,7 @@ use glam::DVec3;
 
 use super::quality::ViewImage;
 use crate::camera::CameraFrame;
-use crate::field::GridField;
+use crate::field::{GridField, RadianceField};
 use crate::rng::Pcg32;
 use crate::sgfit::model::luminance;
 
@@ -66,12 +66,12 @@ pub struct ViewPoints {
     pub mixed: usize,
 }
 
-/// Whether a pixel of `radiance` whose surface point is `x` mixes light
-/// from elsewhere: its luminance and the field's colour at `x` differ by
-/// more than [`MAX_MIXED_DIFFERENCE`] of the larger.
-fn is_mixed(field: &GridField, x: DVec3, radiance: DVec3) -> bool {
-    let c = field.interpolate(x);
-    let own = luminance(DVec3::new(c[0], c[1], c[2]));
+/// Whether a pixel of `radiance` whose surface point is `x`, seen along
+/// `dir`, mixes light from elsewhere: its luminance and the field's colour
+/// at `x` along `dir` differ by more than [`MAX_MIXED_DIFFERENCE`] of the
+/// larger.
+fn is_mixed(field: &GridField, x: DVec3, dir: DVec3, radiance: DVec3) -> bool {
+    let own = luminance(field.colour(x, dir));
     let seen = luminance(radiance);
     (seen - own).abs() > MAX_MIXED_DIFFERENCE * seen.max(own)
 }
@@ -103,7 +103,7 @@ pub fn view_candidates(
             out.not_surface += 1;
             continue;
         }
-        if is_mixed(field, x, radiance) {
+        if is_mixed(field, x, ray.dir, radiance) {
             out.mixed += 1;
             continue;
         }

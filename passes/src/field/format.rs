@@ -5,14 +5,19 @@
 //! | --- | --- | --- |
 //! | 0 | 8 | magic `INLAYFLD` |
 //! | 8 | 4 | format version, u32 = 1 |
-//! | 12 | 4 | colour model, u32: 0 = view-independent linear RGB |
+//! | 12 | 4 | colour model, u32: 0 = view-independent linear RGB; 1 or 2 = view-dependent, spherical harmonics of that degree |
 //! | 16 | 12 | nodes per axis x, y, z, u32 each, 2..=1024 |
 //! | 28 | 24 | bounds: min x, y, z then max x, y, z, f32 each |
 //! | 52 | 4 | flags, u32, must be 0 |
 //! | 56 | 16·N | N = x·y·z nodes, x fastest: r, g, b, σ as f32 |
+//! | 56 + 16·N | 12·K·N | colour models 1 and 2: K = 3 or 8 further coefficients per node, node-major, r, g, b as f32 each |
 //!
-//! Colours are linear HDR radiance (finite, ≥ 0); σ is density per unit
-//! length (finite, ≥ 0). Node (0,0,0) lies at `min`, the last at `max`.
+//! Colours are linear HDR radiance (finite, ≥ 0); with view-dependent
+//! colour the node's r, g, b are its mean over directions and the further
+//! coefficients (finite, of magnitude within the radiance limit) weigh
+//! the real spherical harmonics of bands 1 and 2 (`super::sh`). σ is
+//! density per unit length (finite, ≥ 0). Node (0,0,0) lies at `min`, the
+//! last at `max`.
 //! Loading checks every field and names the first bad one.
 
 use std::path::{Path, PathBuf};
@@ -21,6 +26,7 @@ use glam::{DVec3, UVec3};
 
 use super::grid::GridField;
 use super::occupancy::DEFAULT_OCCUPANCY_BLOCK;
+use super::sh::{sh_extra_coefficients, MAX_SH_DEGREE};
 use crate::geometry::Aabb;
 
 /// The file's first eight bytes.
@@ -65,12 +71,16 @@ pub struct FieldHeader {
     pub resolution: UVec3,
     /// The grid's bounds.
     pub bounds: Aabb,
+    /// Degree of the view-dependent colour (the colour model; 0: none).
+    pub sh_degree: u32,
 }
 
 impl FieldHeader {
-    /// Bytes of the node array (what the GPU binds).
+    /// Bytes of the node data after the header: the nodes and the
+    /// view-dependent colour's coefficients.
     pub fn node_bytes(&self) -> u64 {
-        16 * self.resolution.as_u64vec3().element_product()
+        let n = self.resolution.as_u64vec3().element_product();
+        16 * n + 12 * sh_extra_coefficients(self.sh_degree) as u64 * n
     }
 }
 
@@ -128,11 +138,14 @@ fn parse_header(path: &Path, bytes: &[u8], len: u64) -> Result<FieldHeader, Fiel
         ));
     }
     let model = u32_at(bytes, 12);
-    if model != 0 {
+    if model > MAX_SH_DEGREE {
         return Err(err(
             path,
             "colour model",
-            format!("unknown colour model {model} (0 = view-independent RGB)"),
+            format!(
+                "unknown colour model {model} (0 = view-independent RGB, 1..={MAX_SH_DEGREE} = \
+                 spherical harmonics of that degree)"
+            ),
         ));
     }
     let res = UVec3::new(u32_at(bytes, 16), u32_at(bytes, 20), u32_at(bytes, 24));
@@ -170,6 +183,7 @@ fn parse_header(path: &Path, bytes: &[u8], len: u64) -> Result<FieldHeader, Fiel
     let header = FieldHeader {
         resolution: res,
         bounds,
+        sh_degree: model,
     };
     let expected = HEADER_BYTES as u64 + header.node_bytes();
     if len != expected {
@@ -200,16 +214,17 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
     let res = header.resolution;
     let count = (res.x as usize) * (res.y as usize) * (res.z as usize);
     let mut nodes = Vec::with_capacity(count);
-    for (n, chunk) in bytes[HEADER_BYTES..].chunks_exact(16).enumerate() {
+    let node_end = HEADER_BYTES + 16 * count;
+    let node_name = |n: usize| {
+        let n = n as u32;
+        (n % res.x, (n / res.x) % res.y, n / (res.x * res.y))
+    };
+    for (n, chunk) in bytes[HEADER_BYTES..node_end].chunks_exact(16).enumerate() {
         let v: [f32; 4] = std::array::from_fn(|c| f32_at(chunk, 4 * c));
         for (c, name) in ["r", "g", "b", "density"].iter().enumerate() {
             let too_bright = c < 3 && v[c] as f64 > crate::scene::RADIANCE_LIMIT;
             if !v[c].is_finite() || v[c] < 0.0 || too_bright {
-                let (i, j, k) = (
-                    n as u32 % res.x,
-                    (n as u32 / res.x) % res.y,
-                    n as u32 / (res.x * res.y),
-                );
+                let (i, j, k) = node_name(n);
                 return Err(err(
                     path,
                     &format!("node ({i}, {j}, {k}).{name}"),
@@ -227,20 +242,42 @@ pub fn parse_field(path: &Path, bytes: &[u8]) -> Result<GridField, FieldFormatEr
         }
         nodes.push(v);
     }
-    Ok(GridField::new(
-        res,
-        header.bounds,
-        nodes,
-        DEFAULT_OCCUPANCY_BLOCK,
-    ))
+    let per_node = sh_extra_coefficients(header.sh_degree);
+    let mut sh = Vec::with_capacity(count * per_node);
+    for (at, chunk) in bytes[node_end..].chunks_exact(12).enumerate() {
+        let v: [f32; 3] = std::array::from_fn(|c| f32_at(chunk, 4 * c));
+        if let Some(c) = (0..3)
+            .find(|&c| !(v[c].is_finite() && v[c].abs() as f64 <= crate::scene::RADIANCE_LIMIT))
+        {
+            let (i, j, k) = node_name(at / per_node);
+            return Err(err(
+                path,
+                &format!(
+                    "node ({i}, {j}, {k}).sh[{}].{}",
+                    at % per_node + 1,
+                    ["r", "g", "b"][c]
+                ),
+                format!(
+                    "{} is not a finite number within the radiance limit {:e}",
+                    v[c],
+                    crate::scene::RADIANCE_LIMIT
+                ),
+            ));
+        }
+        sh.push(v);
+    }
+    Ok(
+        GridField::new(res, header.bounds, nodes, DEFAULT_OCCUPANCY_BLOCK)
+            .with_sh(header.sh_degree, sh),
+    )
 }
 
 /// The bytes of `field` in the file format.
 pub fn field_bytes(field: &GridField) -> Vec<u8> {
-    let mut out = Vec::with_capacity(HEADER_BYTES + 16 * field.nodes.len());
+    let mut out = Vec::with_capacity(HEADER_BYTES + 16 * field.nodes.len() + 12 * field.sh.len());
     out.extend_from_slice(FIELD_MAGIC);
     out.extend_from_slice(&FIELD_VERSION.to_le_bytes());
-    out.extend_from_slice(&0u32.to_le_bytes());
+    out.extend_from_slice(&field.sh_degree.to_le_bytes());
     for v in field.resolution.to_array() {
         out.extend_from_slice(&v.to_le_bytes());
     }
@@ -255,6 +292,11 @@ pub fn field_bytes(field: &GridField) -> Vec<u8> {
     }
     out.extend_from_slice(&0u32.to_le_bytes());
     for n in &field.nodes {
+        for c in n {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for n in &field.sh {
         for c in n {
             out.extend_from_slice(&c.to_le_bytes());
         }
@@ -295,6 +337,39 @@ mod tests {
         assert_eq!(g.nodes, f.nodes);
         assert_eq!(g.resolution, f.resolution);
         assert_eq!(g.bounds, f.bounds);
+        assert_eq!(g.sh_degree, 0);
+    }
+
+    /// View-dependent colour of each degree round-trips; a bad coefficient
+    /// is named by node, coefficient and channel; an unknown colour model
+    /// is refused.
+    #[test]
+    fn view_dependent_colour_round_trips_and_is_checked() {
+        for degree in 1..=MAX_SH_DEGREE {
+            let k = sh_extra_coefficients(degree);
+            let sh: Vec<[f32; 3]> = (0..8 * k)
+                .map(|i| [i as f32 * 0.1, -(i as f32), 0.5])
+                .collect();
+            let f = small().with_sh(degree, sh.clone());
+            let bytes = field_bytes(&f);
+            assert_eq!(bytes.len(), HEADER_BYTES + 16 * 8 + 12 * 8 * k);
+            let g = parse(&bytes).unwrap();
+            assert_eq!((g.sh_degree, &g.sh), (degree, &sh));
+            let mut bad = bytes.clone();
+            let at = HEADER_BYTES + 16 * 8 + 12 * (k + 1) + 4;
+            bad[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+            let e = parse(&bad).unwrap_err().to_string();
+            assert!(e.contains("node (1, 0, 0).sh[2].g"), "{e}");
+            let e = parse(&bytes[..bytes.len() - 12]).unwrap_err().to_string();
+            assert!(e.contains("truncated"), "{e}");
+        }
+        let mut b = field_bytes(&small());
+        b[12] = 3;
+        let e = parse(&b).unwrap_err().to_string();
+        assert!(
+            e.contains("colour model") && e.contains("unknown colour model 3"),
+            "{e}"
+        );
     }
 
     #[test]

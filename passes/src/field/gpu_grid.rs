@@ -1,11 +1,13 @@
 //! A grid field uploaded to the GPU, laid out for `shaders/field/grid.wgsl`:
-//! a uniform block of bounds and sizes, the nodes as `vec4<f32>`, and the
-//! occupancy cells as u32.
+//! a uniform block of bounds and sizes, the nodes as `vec4<f32>` (r, g, b, σ;
+//! then, with view-dependent colour, each node's further coefficients as
+//! (r, g, b, 0), node-major), and the occupancy cells as u32.
 
 use std::sync::Arc;
 
 use glam::UVec3;
 use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph};
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, Context, DeviceInfo};
 
 use super::grid::GridField;
@@ -19,8 +21,8 @@ inlay_engine::gpu_struct! {
         pub occupancy_block: u32,
         /// The bounds' largest corner.
         pub bounds_max: [f32; 3],
-        /// Padding.
-        pub _pad0: u32,
+        /// Degree of the view-dependent colour (0: none).
+        pub sh_degree: u32,
         /// Nodes per axis.
         pub resolution: [u32; 3],
         /// Padding.
@@ -30,6 +32,18 @@ inlay_engine::gpu_struct! {
         /// Padding.
         pub _pad2: u32,
     }
+}
+
+/// The define (bool) that tells the march whether the field it reads may
+/// have view-dependent colour: false leaves the code that evaluates it out
+/// of every pipeline, so a field without it costs nothing for it.
+pub const VIEW_DEPENDENT_DEFINE: &str = "FIELD_VIEW_DEPENDENT";
+
+/// `lib` for passes over any field: the march evaluates view-dependent
+/// colour where the field has it (checked per sample). What
+/// [`crate::shaders::library`] gives.
+pub fn general_field_library(lib: &ShaderLibrary) -> ShaderLibrary {
+    lib.with_defines(&[Define::Bool(VIEW_DEPENDENT_DEFINE, true)])
 }
 
 /// Device copies of a grid field's data (bindings 0, 1, 2 of set 0).
@@ -48,6 +62,8 @@ pub struct GpuGridField {
     /// The light sources inside the field, brightest first
     /// ([`super::find_emitters`], found once at upload).
     pub emitters: Vec<super::FieldEmitter>,
+    /// Degree of the view-dependent colour (0: none).
+    pub sh_degree: u32,
 }
 
 /// The field's buffers as imported into one frame's graph.
@@ -59,12 +75,25 @@ pub struct GridBindings {
     pub nodes: BufferHandle,
     /// `grid_occupancy` (storage, read).
     pub occupancy: BufferHandle,
+    /// Degree of the field's view-dependent colour.
+    pub sh_degree: u32,
 }
 
 impl GridBindings {
     /// Binds the three buffers for reading on a dispatch (by their names in
     /// `shaders/field/grid.wgsl`).
+    ///
+    /// Panics if the dispatch's pipeline was compiled for fields without
+    /// view-dependent colour ([`GpuGridField::library`] of another field)
+    /// and this field has it: its colour would be read wrong.
     pub fn bind<'p, 'g>(&self, dispatch: Dispatch<'p, 'g>) -> Dispatch<'p, 'g> {
+        assert!(
+            self.sh_degree == 0
+                || dispatch.pipeline().define(VIEW_DEPENDENT_DEFINE)
+                    != Some(&Define::Bool(VIEW_DEPENDENT_DEFINE, false)),
+            "a pass compiled for fields without view-dependent colour was given one of degree {}",
+            self.sh_degree
+        );
         dispatch
             .read("grid_info", self.info)
             .read("grid_nodes", self.nodes)
@@ -72,12 +101,23 @@ impl GridBindings {
     }
 }
 
+/// Bytes a node takes on the device: 16 for (r, g, b, σ) and 16 for each
+/// further colour coefficient of view-dependent colour of `sh_degree`.
+pub fn node_bytes_on_device(sh_degree: u32) -> u64 {
+    16 * (1 + super::sh_extra_coefficients(sh_degree) as u64)
+}
+
 /// Fails, naming the limit and what to change, unless a field of
-/// `resolution` nodes fits the device: its node array (16 bytes a node) in
-/// one storage binding and in the largest device heap. For checks before a
-/// bake or a file is read.
-pub fn check_field_fits(info: &DeviceInfo, resolution: UVec3) -> anyhow::Result<()> {
-    let node_bytes = 16 * resolution.as_u64vec3().element_product();
+/// `resolution` nodes with colour of `sh_degree` fits the device: its node
+/// array ([`node_bytes_on_device`] a node) in one storage binding and in
+/// the largest device heap. For checks before a bake or a file is read.
+pub fn check_field_fits(
+    info: &DeviceInfo,
+    resolution: UVec3,
+    sh_degree: u32,
+) -> anyhow::Result<()> {
+    let per_node = node_bytes_on_device(sh_degree);
+    let node_bytes = per_node * resolution.as_u64vec3().element_product();
     let (limit, what) = (
         info.max_storage_buffer_range as u64,
         "largest storage binding",
@@ -86,44 +126,56 @@ pub fn check_field_fits(info: &DeviceInfo, resolution: UVec3) -> anyhow::Result<
     for (limit, what) in [(limit, what), (heap, heap_what)] {
         if node_bytes > limit {
             anyhow::bail!(
-                "the field's {}x{}x{} nodes take {} MiB, more than {}'s {what} ({} MiB); \
+                "the field's {}x{}x{} nodes{} take {} MiB, more than {}'s {what} ({} MiB); \
                  use a field of at most {} nodes",
                 resolution.x,
                 resolution.y,
                 resolution.z,
+                if sh_degree > 0 {
+                    format!(" with view-dependent colour of degree {sh_degree}")
+                } else {
+                    String::new()
+                },
                 node_bytes >> 20,
                 info.name,
                 limit >> 20,
-                limit / 16
+                limit / per_node
             );
         }
     }
     Ok(())
 }
 
+/// The field's node array as the device holds it (and as the trainer
+/// trains it): (r, g, b, σ) per node, then each node's further colour
+/// coefficients as (r, g, b, 0).
+pub fn device_values(field: &GridField) -> Vec<[f32; 4]> {
+    field
+        .nodes
+        .iter()
+        .copied()
+        .chain(field.sh.iter().map(|c| [c[0], c[1], c[2], 0.0]))
+        .collect()
+}
+
 impl GpuGridField {
     /// Uploads `field`. Fails with a clear message when the node array is
     /// larger than the device can bind ([`check_field_fits`]).
     pub fn upload(ctx: &Arc<Context>, field: &GridField) -> anyhow::Result<Self> {
-        check_field_fits(ctx.info(), field.resolution)?;
+        check_field_fits(ctx.info(), field.resolution, field.sh_degree)?;
         let b = field.bounds;
         let occ = &field.occupancy;
         let info = GridInfo {
             bounds_min: b.min.as_vec3().to_array(),
             occupancy_block: occ.block,
             bounds_max: b.max.as_vec3().to_array(),
-            _pad0: 0,
+            sh_degree: field.sh_degree,
             resolution: field.resolution.to_array(),
             _pad1: 0,
             occupancy_dims: occ.dims.to_array(),
             _pad2: 0,
         };
-        let nodes: Vec<u8> = field
-            .nodes
-            .iter()
-            .flatten()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
+        let nodes: Vec<u8> = bytemuck::cast_slice(&device_values(field)).to_vec();
         let cells: Vec<u8> = occ.cells.iter().flat_map(|v| v.to_le_bytes()).collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
@@ -139,7 +191,15 @@ impl GpuGridField {
             bounds: field.bounds,
             resolution: field.resolution,
             emitters: super::find_emitters(field),
+            sh_degree: field.sh_degree,
         })
+    }
+
+    /// `lib` for the passes that read this field: with
+    /// [`VIEW_DEPENDENT_DEFINE`] false when it has no view-dependent
+    /// colour (the march leaves that code out), true when it has.
+    pub fn library(&self, lib: &ShaderLibrary) -> ShaderLibrary {
+        lib.with_defines(&[Define::Bool(VIEW_DEPENDENT_DEFINE, self.sh_degree > 0)])
     }
 
     /// Imports the buffers into a frame's graph (read-only).
@@ -148,6 +208,7 @@ impl GpuGridField {
             info: graph.import_buffer(&self.info, None),
             nodes: graph.import_buffer(&self.nodes, None),
             occupancy: graph.import_buffer(&self.occupancy, None),
+            sh_degree: self.sh_degree,
         }
     }
 }

@@ -1,10 +1,12 @@
-//! The voxel-grid radiance field: density and view-independent HDR RGB at
-//! the nodes of a regular grid spanning the bounds, read with trilinear
-//! interpolation. Mirrored in `shaders/field/grid.wgsl`.
+//! The voxel-grid radiance field: density and HDR RGB at the nodes of a
+//! regular grid spanning the bounds, read with trilinear interpolation; the
+//! colour optionally view-dependent ([`super::sh`]). Mirrored in
+//! `shaders/field/grid.wgsl`.
 
 use glam::{DVec3, UVec3};
 
 use super::occupancy::Occupancy;
+use super::sh::{sh_colour_unclamped, sh_extra_coefficients, MAX_SH_DEGREE};
 use super::RadianceField;
 use crate::geometry::Aabb;
 
@@ -17,7 +19,15 @@ pub struct GridField {
     /// The region the nodes span.
     pub bounds: Aabb,
     /// Linear HDR colour and density per node, x fastest, then y, then z.
+    /// With view-dependent colour the colour is the mean over directions.
     pub nodes: Vec<[f32; 4]>,
+    /// Degree of the view-dependent colour's spherical harmonics (0: the
+    /// colour is the same in every direction).
+    pub sh_degree: u32,
+    /// The further RGB coefficients of each node
+    /// ([`sh_extra_coefficients`] of them, node-major): coefficient k of
+    /// node n at `n · count + k`. Empty at degree 0.
+    pub sh: Vec<[f32; 3]>,
     /// Empty-space structure built from the nodes.
     pub occupancy: Occupancy,
 }
@@ -44,8 +54,60 @@ impl GridField {
             resolution,
             bounds,
             nodes,
+            sh_degree: 0,
+            sh: Vec::new(),
             occupancy,
         }
+    }
+
+    /// The same field with view-dependent colour of `degree`, `sh` holding
+    /// each node's further coefficients ([`Self::sh`]).
+    ///
+    /// Panics if the degree is above [`MAX_SH_DEGREE`] or `sh` has the
+    /// wrong length (the loader checks both before calling).
+    pub fn with_sh(mut self, degree: u32, sh: Vec<[f32; 3]>) -> Self {
+        assert!(degree <= MAX_SH_DEGREE, "degree {degree}");
+        assert_eq!(
+            sh.len(),
+            self.nodes.len() * sh_extra_coefficients(degree),
+            "coefficient count does not match the nodes"
+        );
+        self.sh_degree = degree;
+        self.sh = sh;
+        self
+    }
+
+    /// Coefficients beyond the base per node.
+    pub fn sh_count(&self) -> usize {
+        sh_extra_coefficients(self.sh_degree)
+    }
+
+    /// Trilinear interpolation of the further coefficients at `x` (empty at
+    /// degree 0, zeros outside the bounds).
+    pub fn interpolate_sh(&self, x: DVec3) -> Vec<DVec3> {
+        let k = self.sh_count();
+        let mut out = vec![DVec3::ZERO; k];
+        if k == 0 {
+            return out;
+        }
+        if let Some(corners) = self.corners(x) {
+            for (n, w) in corners {
+                for (o, c) in out.iter_mut().zip(&self.sh[n * k..(n + 1) * k]) {
+                    *o += w * DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+                }
+            }
+        }
+        out
+    }
+
+    /// The colour seen along `d` of interpolated values `v` at `x`
+    /// (their base when the field has no view-dependent colour).
+    fn view_colour(&self, v: [f64; 4], x: DVec3, d: DVec3) -> DVec3 {
+        let base = DVec3::new(v[0], v[1], v[2]);
+        if self.sh_degree == 0 {
+            return base;
+        }
+        sh_colour_unclamped(base, &self.interpolate_sh(x), d).max(DVec3::ZERO)
     }
 
     /// Distance between neighbouring nodes along each axis.
@@ -114,14 +176,13 @@ impl RadianceField for GridField {
         self.interpolate(x)[3]
     }
 
-    fn colour(&self, x: DVec3, _d: DVec3) -> DVec3 {
-        let v = self.interpolate(x);
-        DVec3::new(v[0], v[1], v[2])
+    fn colour(&self, x: DVec3, d: DVec3) -> DVec3 {
+        self.view_colour(self.interpolate(x), x, d)
     }
 
-    fn sample(&self, x: DVec3, _d: DVec3) -> (f64, DVec3) {
+    fn sample(&self, x: DVec3, d: DVec3) -> (f64, DVec3) {
         let v = self.interpolate(x);
-        (v[3], DVec3::new(v[0], v[1], v[2]))
+        (v[3], self.view_colour(v, x, d))
     }
 
     fn empty_until(&self, origin: DVec3, dir: DVec3) -> Option<f64> {

@@ -2,7 +2,8 @@
 //! colour c(x, d) inside axis-aligned bounds), and the kinds the engine has.
 //!
 //! The first kind is [`GridField`], a voxel grid read with trilinear
-//! interpolation; fields trained from photos and instant-ngp snapshots are
+//! interpolation, its colour optionally view-dependent (spherical
+//! harmonics of degree ≤ 2, [`sh_basis`]); fields trained from photos and instant-ngp snapshots are
 //! later kinds behind the same trait.
 
 mod emitters;
@@ -11,16 +12,21 @@ pub(crate) mod gpu_grid;
 mod grid;
 mod occupancy;
 mod perturb;
+mod sh;
 
 pub use emitters::{find_emitters, FieldEmitter, MAX_FIELD_EMITTERS, MIN_EMITTER_RATIO};
 pub use format::{
     field_bytes, load_field, parse_field, read_field_header, save_field, FieldFormatError,
     FieldHeader, FIELD_MAGIC, FIELD_VERSION,
 };
-pub use gpu_grid::{check_field_fits, GpuGridField, GridBindings};
+pub use gpu_grid::{
+    check_field_fits, device_values, general_field_library, node_bytes_on_device, GpuGridField,
+    GridBindings, VIEW_DEPENDENT_DEFINE,
+};
 pub use grid::GridField;
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
 pub use perturb::{perturb, Perturbation};
+pub use sh::{sh_basis, sh_colour_unclamped, sh_extra_coefficients, MAX_SH_DEGREE};
 
 use glam::DVec3;
 

@@ -78,7 +78,8 @@ fn gaussian(rng: &mut Pcg32) -> f64 {
     (-2.0 * (1.0 - u).ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
 }
 
-/// `field` with the defects of `p` (occupancy rebuilt).
+/// `field` with the defects of `p` (occupancy rebuilt; view-dependent
+/// colour kept as it was).
 pub fn perturb(field: &GridField, p: &Perturbation) -> GridField {
     let mut nodes = field.nodes.clone();
     let mut rng = Pcg32::new(p.seed, 0x9E27);
@@ -143,6 +144,7 @@ pub fn perturb(field: &GridField, p: &Perturbation) -> GridField {
         nodes,
         DEFAULT_OCCUPANCY_BLOCK,
     )
+    .with_sh(field.sh_degree, field.sh.clone())
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! Adam over the trained values with a separate step size for density, each
-//! value kept non-negative (`shaders/train/adam.wgsl` mirrors it).
+//! node's values kept non-negative, the view-dependent colour's
+//! coefficients free (`shaders/train/adam.wgsl` mirrors it).
 
 /// Adam's knobs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,7 +18,8 @@ pub struct AdamKnobs {
 /// Adam's ε (`ADAM_EPSILON` in the shader).
 pub const ADAM_EPSILON: f64 = 1e-8;
 
-/// One step (number `t`, from 1) over `params` (4 per node: r, g, b, σ)
+/// One step (number `t`, from 1) over `params` (the first `base_values`
+/// 4 per node: r, g, b, σ; the rest view-dependent colour coefficients)
 /// with gradient `grad` × `grad_scale` (cleared), moments `moments` (first,
 /// second per value).
 pub fn adam_step(
@@ -25,7 +27,7 @@ pub fn adam_step(
     grad: &mut [f32],
     moments: &mut [[f32; 2]],
     knobs: &AdamKnobs,
-    grad_scale: f32,
+    (grad_scale, base_values): (f32, usize),
     t: u32,
 ) {
     let c1 = (1.0 - knobs.beta1.powi(t as i32)) as f32;
@@ -37,12 +39,17 @@ pub fn adam_step(
         let m = &mut moments[i];
         m[0] = b1 * m[0] + (1.0 - b1) * g;
         m[1] = b2 * m[1] + (1.0 - b2) * g * g;
-        let rate = if i % 4 == 3 {
+        let base = i < base_values;
+        let rate = if base && i % 4 == 3 {
             knobs.density_rate
         } else {
             knobs.rate
         } as f32;
         let step = rate * (m[0] / c1) / ((m[1] / c2).sqrt() + ADAM_EPSILON as f32);
-        params[i] = (params[i] - step).max(0.0);
+        params[i] = if base {
+            (params[i] - step).max(0.0)
+        } else {
+            params[i] - step
+        };
     }
 }

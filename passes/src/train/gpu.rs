@@ -13,6 +13,7 @@ use inlay_engine::{
 };
 
 use super::adam::AdamKnobs;
+use crate::field::{device_values, GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
 
@@ -35,6 +36,14 @@ inlay_engine::gpu_struct! {
         pub background: [f32; 3],
         /// The relative loss's floor.
         pub epsilon: f32,
+        /// Degree of the view-dependent colour (0: none).
+        pub sh_degree: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
@@ -60,7 +69,7 @@ inlay_engine::gpu_struct! {
 inlay_engine::gpu_struct! {
     /// `AdamPush` of `shaders/train/adam.wgsl`.
     pub struct AdamPush = "train/adam.wgsl" : "AdamPush" {
-        /// Values (4 per node).
+        /// Values (4 per node, then the view-dependent colour's).
         pub count: u32,
         /// Colour step size.
         pub rate: f32,
@@ -76,6 +85,15 @@ inlay_engine::gpu_struct! {
         pub correction1: f32,
         /// 1 − β2^t.
         pub correction2: f32,
+        /// Values of the nodes (4 per node), kept non-negative; the rest
+        /// are view-dependent colour coefficients.
+        pub base_values: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
@@ -100,7 +118,7 @@ inlay_engine::gpu_struct! {
 inlay_engine::gpu_struct! {
     /// `DescendPush` of `shaders/train/descend.wgsl`.
     pub struct DescendPush = "train/descend.wgsl" : "DescendPush" {
-        /// Values (4 per node).
+        /// Values (4 per node; the nodes only).
         pub count: u32,
         /// Padding.
         pub pad0: u32,
@@ -140,8 +158,9 @@ pub const TRAIN_TV: &str = "train-tv";
 /// Name of the pass stepping along total variation's gradient.
 pub const TRAIN_DESCEND: &str = "train-descend";
 
-/// A grid being trained on the GPU: its values, their gradient and Adam's
-/// moments, and the pipelines that step them.
+/// A grid being trained on the GPU: its values (laid out as a field's on
+/// the device, [`device_values`]), their gradient and Adam's moments, and
+/// the pipelines that step them.
 pub struct GpuTrainer {
     ray_grad: Arc<ComputePipeline>,
     adam: Arc<ComputePipeline>,
@@ -154,6 +173,8 @@ pub struct GpuTrainer {
     pub resolution: UVec3,
     /// The region the nodes span.
     pub bounds: Aabb,
+    /// Degree of the view-dependent colour being trained (0: none).
+    pub sh_degree: u32,
     /// The march the trainer renders with.
     pub march: MarchKnobs,
     /// Adam steps taken.
@@ -164,31 +185,28 @@ pub struct GpuTrainer {
 }
 
 impl GpuTrainer {
-    /// A trainer starting from `nodes` (r, g, b, σ per node, x fastest).
+    /// A trainer starting from `field` (its nodes and view-dependent
+    /// colour; its occupancy is not used).
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
-        resolution: UVec3,
-        bounds: Aabb,
-        nodes: &[[f32; 4]],
+        field: &GridField,
         march: MarchKnobs,
     ) -> anyhow::Result<Self> {
-        let n = (resolution.x * resolution.y * resolution.z) as usize;
-        anyhow::ensure!(
-            nodes.len() == n,
-            "{} nodes for a {resolution} grid",
-            nodes.len()
-        );
+        let resolution = field.resolution;
+        let values = device_values(field);
+        let n = values.len();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
         let bytes = |v: &[f32]| bytemuck::cast_slice::<f32, u8>(v).to_vec();
-        let flat: Vec<f32> = nodes.iter().flatten().copied().collect();
-        crate::field::check_field_fits(ctx.info(), resolution)?;
+        let flat: Vec<f32> = values.iter().flatten().copied().collect();
+        crate::field::check_field_fits(ctx.info(), resolution, field.sh_degree)?;
         let limit = ctx.info().max_storage_buffer_range as u64;
         anyhow::ensure!(
             (n as u64) * 32 <= limit,
-            "training a {resolution} grid needs Adam's moments in one binding of {} MiB, more than {}'s {} MiB; train a smaller grid",
+            "training a {resolution} grid (view-dependent colour of degree {}) needs Adam's moments in one binding of {} MiB, more than {}'s {} MiB; train a smaller grid",
+            field.sh_degree,
             (n as u64 * 32) >> 20,
             ctx.info().name,
             limit >> 20
@@ -217,7 +235,8 @@ impl GpuTrainer {
                 usage,
             )?),
             resolution,
-            bounds,
+            bounds: field.bounds,
+            sh_degree: field.sh_degree,
             march,
             steps: 0,
             tv_weights: (0.0, 0.0),
@@ -234,12 +253,22 @@ impl GpuTrainer {
             termination: self.march.termination as f32,
             background: background.as_vec3().to_array(),
             epsilon: epsilon as f32,
+            sh_degree: self.sh_degree,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         }
     }
 
-    /// Values in the grid (4 per node).
-    pub fn values(&self) -> u32 {
-        4 * self.resolution.x * self.resolution.y * self.resolution.z
+    /// Nodes in the grid.
+    pub fn node_count(&self) -> u32 {
+        self.resolution.x * self.resolution.y * self.resolution.z
+    }
+
+    /// Values trained: 4 per node and 4 per view-dependent colour
+    /// coefficient (r, g, b and an unused fourth).
+    pub fn value_count(&self) -> u32 {
+        4 * self.node_count() * (1 + crate::field::sh_extra_coefficients(self.sh_degree) as u32)
     }
 
     /// Runs one batch: renders `rays` over `background`, adds their loss's
@@ -282,7 +311,7 @@ impl GpuTrainer {
         let out = graph.create_buffer("train-ray-out", out_bytes);
         let push = self.push(rays.len() as u32, background, epsilon);
         let mut pass = graph.compute_pass(TRAIN_RAYS);
-        pass.buffer_at("params", params, BufferAccess::StorageRead);
+        pass.buffer_at("grid_nodes", params, BufferAccess::StorageRead);
         pass.buffer_at("rays", batch, BufferAccess::StorageRead);
         let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
         let out = pass.buffer_at("ray_out", out, BufferAccess::StorageWrite);
@@ -294,7 +323,7 @@ impl GpuTrainer {
             self.steps += 1;
             let t = self.steps as i32;
             let a = AdamPush {
-                count: self.values(),
+                count: self.value_count(),
                 rate: knobs.rate as f32,
                 density_rate: knobs.density_rate as f32,
                 grad_scale,
@@ -302,8 +331,12 @@ impl GpuTrainer {
                 beta2: knobs.beta2 as f32,
                 correction1: (1.0 - knobs.beta1.powi(t)) as f32,
                 correction2: (1.0 - knobs.beta2.powi(t)) as f32,
+                base_values: 4 * self.node_count(),
+                pad0: 0,
+                pad1: 0,
+                pad2: 0,
             };
-            let groups = self.values().div_ceil(64);
+            let groups = self.value_count().div_ceil(64);
             let mut pass = graph.compute_pass(TRAIN_ADAM);
             let params = pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
             let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
@@ -330,7 +363,7 @@ impl GpuTrainer {
     /// Adds `train-tv` (the total variation's gradient into `grad`, empty
     /// after Adam) and `train-descend` (one plain step along it).
     fn add_tv_step(&self, graph: &mut FrameGraph, params: BufferHandle, grad: BufferHandle) {
-        let nodes = self.values() / 4;
+        let nodes = self.node_count();
         let t = TvPush {
             resolution: self.resolution.to_array(),
             count: nodes,
@@ -348,12 +381,12 @@ impl GpuTrainer {
             .groups([groups.min(65535), groups.div_ceil(65535), 1]);
         pass.finish();
         let d = DescendPush {
-            count: self.values(),
+            count: 4 * nodes,
             pad0: 0,
             pad1: 0,
             pad2: 0,
         };
-        let groups = self.values().div_ceil(64);
+        let groups = (4 * nodes).div_ceil(64);
         let mut pass = graph.compute_pass(TRAIN_DESCEND);
         pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
         pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
@@ -378,15 +411,28 @@ impl GpuTrainer {
         Ok(readback.read_f32()?)
     }
 
-    /// The grid's values now (r, g, b, σ per node).
-    pub fn nodes(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<[f32; 4]>> {
-        let v = self.read(renderer, &self.params)?;
-        Ok(v.chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect())
+    /// Every value now, as laid out on the device ([`device_values`]).
+    pub fn values(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
+        self.read(renderer, &self.params)
     }
 
-    /// The accumulated gradient (4 per node).
+    /// The grid now, as a field (occupancy built from its densities).
+    pub fn field(&self, renderer: &mut Renderer) -> anyhow::Result<GridField> {
+        let v = self.values(renderer)?;
+        let n = self.node_count() as usize;
+        let (nodes, sh) = v.split_at(4 * n);
+        let nodes = nodes
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect();
+        let sh = sh.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect();
+        Ok(
+            GridField::new(self.resolution, self.bounds, nodes, DEFAULT_OCCUPANCY_BLOCK)
+                .with_sh(self.sh_degree, sh),
+        )
+    }
+
+    /// The accumulated gradient (as [`Self::values`]).
     pub fn gradient(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
         self.read(renderer, &self.grad)
     }

@@ -33,6 +33,9 @@ pub struct TrainKnobs {
     pub tv_colour: f64,
     /// The same for density.
     pub tv_density: f64,
+    /// Degree of the view-dependent colour trained (spherical harmonics,
+    /// 0..=2; 0: one colour per node, as a bake's).
+    pub sh_degree: u32,
     /// Seed of every random choice.
     pub seed: u64,
 }
@@ -51,6 +54,7 @@ impl Default for TrainKnobs {
             epsilon: 4.0,
             tv_colour: 0.0,
             tv_density: 0.0,
+            sh_degree: 0,
             seed: 1,
         }
     }
@@ -79,6 +83,16 @@ impl TrainKnobs {
             return bad(
                 "iterations",
                 "iterations and batch must be positive, samples_per_ray in 4..=8192".into(),
+            );
+        }
+        if self.sh_degree > crate::field::MAX_SH_DEGREE {
+            return bad(
+                "sh_degree",
+                format!(
+                    "{} must be in 0..={}",
+                    self.sh_degree,
+                    crate::field::MAX_SH_DEGREE
+                ),
             );
         }
         for (k, v) in [

@@ -19,4 +19,6 @@ pub use gpu::{GpuTrainer, TrainRay};
 pub use knobs::TrainKnobs;
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
-pub use trainer::{train, HeldOutView, TrainControl, TrainProgress, Trained};
+pub use trainer::{
+    resample, train, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
+};

@@ -13,10 +13,15 @@
 //! Σ_{j≤i}, so that Σ_{j>i} = C − Σ_{j≤i} (Plenoxels' scheme). The march
 //! stops where T falls under the termination threshold; the gradient
 //! treats that stop as fixed.
+//!
+//! With view-dependent colour, c_i = max(0, base_i + Σ_k Y_k(d)·s_{k,i})
+//! (`crate::field::sh_basis`): ∂C/∂base_i = T_i α_i and ∂C/∂s_{k,i} =
+//! T_i α_i Y_k(d) in each channel where the sum is positive, zero where
+//! the clamp holds.
 
 use glam::DVec3;
 
-use crate::field::GridField;
+use crate::field::{sh_basis, sh_colour_unclamped, GridField, RadianceField};
 use crate::geometry::{ray_box, Ray};
 use crate::march::MarchKnobs;
 
@@ -28,8 +33,11 @@ pub struct RayGradient {
     pub colour: DVec3,
     /// Opacity 1 − T_N.
     pub opacity: f64,
-    /// ∂loss/∂node for each node the ray read: (index, [r, g, b, σ]).
-    pub nodes: Vec<(usize, [f64; 4])>,
+    /// ∂loss/∂value for each value the ray read, indexed as the device
+    /// holds the field (`crate::field::device_values`): a node n as
+    /// (n, [r, g, b, σ]), its further colour coefficient k as
+    /// (N + n·K + k, [r, g, b, 0]).
+    pub values: Vec<(usize, [f64; 4])>,
 }
 
 /// The step midpoints (t_i, Δ_i) of `ray` through `field` (unit direction).
@@ -68,9 +76,9 @@ pub fn render_ray_with_gradient(
     let mut transmittance = 1.0;
     let mut used = 0;
     for &(t, dt) in &steps {
-        let v = field.interpolate(ray.at(t));
-        let alpha = 1.0 - (-v[3] * dt).exp();
-        colour += transmittance * alpha * DVec3::new(v[0], v[1], v[2]);
+        let (sigma, c) = field.sample(ray.at(t), ray.dir);
+        let alpha = 1.0 - (-sigma * dt).exp();
+        colour += transmittance * alpha * c;
         transmittance *= 1.0 - alpha;
         used += 1;
         if transmittance < knobs.termination {
@@ -80,29 +88,45 @@ pub fn render_ray_with_gradient(
     let total = colour + transmittance * background;
     let g = d_colour(total);
     // Backward: walk again with the running sum.
+    let count = field.sh_count();
+    let first = field.nodes.len();
+    let basis = sh_basis(ray.dir);
     let mut grads: Vec<(usize, [f64; 4])> = Vec::new();
+    let mut add = |i: usize, d: [f64; 4]| match grads.iter_mut().find(|(m, _)| *m == i) {
+        Some((_, acc)) => acc.iter_mut().zip(d).for_each(|(a, b)| *a += b),
+        None => grads.push((i, d)),
+    };
     let mut t_i = 1.0;
     let mut so_far = DVec3::ZERO;
     for &(t, dt) in &steps[..used] {
-        let Some(corners) = field.corners(ray.at(t)) else {
+        let x = ray.at(t);
+        let Some(corners) = field.corners(x) else {
             continue;
         };
-        let v = field.interpolate(ray.at(t));
-        let c = DVec3::new(v[0], v[1], v[2]);
+        let v = field.interpolate(x);
+        let c = field.colour(x, ray.dir);
+        // Channels the clamp at zero holds get no colour gradient.
+        let open = if count == 0 {
+            DVec3::ONE
+        } else {
+            let base = DVec3::new(v[0], v[1], v[2]);
+            let u = sh_colour_unclamped(base, &field.interpolate_sh(x), ray.dir);
+            DVec3::select(u.cmpgt(DVec3::ZERO), DVec3::ONE, DVec3::ZERO)
+        };
         let alpha = 1.0 - (-v[3] * dt).exp();
         let w = t_i * alpha;
         let t_next = t_i * (1.0 - alpha);
         so_far += w * c;
-        let d_c = g * w;
+        let d_c = g * w * open;
         let d_sigma = dt * g.dot(t_next * c - (colour - so_far) - transmittance * background);
         for (n, wn) in corners {
             if wn == 0.0 {
                 continue;
             }
-            let d = [d_c.x * wn, d_c.y * wn, d_c.z * wn, d_sigma * wn];
-            match grads.iter_mut().find(|(m, _)| *m == n) {
-                Some((_, acc)) => acc.iter_mut().zip(d).for_each(|(a, b)| *a += b),
-                None => grads.push((n, d)),
+            add(n, [d_c.x * wn, d_c.y * wn, d_c.z * wn, d_sigma * wn]);
+            for (k, yk) in basis.iter().take(count).enumerate() {
+                let e = d_c * wn * *yk;
+                add(first + n * count + k, [e.x, e.y, e.z, 0.0]);
             }
         }
         t_i = t_next;
@@ -110,7 +134,7 @@ pub fn render_ray_with_gradient(
     RayGradient {
         colour: total,
         opacity: 1.0 - transmittance,
-        nodes: grads,
+        values: grads,
     }
 }
 
@@ -143,10 +167,22 @@ mod tests {
         )
     }
 
+    /// `small_field` with view-dependent colour of `degree`: coefficients
+    /// large enough that the clamp at zero holds in some samples.
+    fn small_sh_field(seed: u64, degree: u32) -> GridField {
+        let f = small_field(seed);
+        let mut rng = Pcg32::new(seed, 5);
+        let sh = (0..f.nodes.len() * crate::field::sh_extra_coefficients(degree))
+            .map(|_| std::array::from_fn(|_| (3.0 * (rng.next_f64() - 0.5)) as f32))
+            .collect();
+        f.with_sh(degree, sh)
+    }
+
     /// The pixel equals the march's (no skipping, black background), and
     /// the gradient of a weighted sum of the pixel matches central
-    /// differences of the rendered pixel in every node it reads, density
-    /// and colour, over a background.
+    /// differences of the rendered pixel in every value it reads, density,
+    /// colour and (degrees 1 and 2) the view-dependent coefficients, over a
+    /// background.
     #[test]
     fn the_gradient_matches_finite_differences() {
         let knobs = MarchKnobs {
@@ -156,43 +192,55 @@ mod tests {
         };
         let weights = DVec3::new(0.7, -0.2, 0.4);
         let bg = DVec3::new(0.3, 0.6, 0.9);
-        let field = small_field(1);
-        let mut checked = 0;
-        for (o, d) in [
-            (DVec3::new(-2.0, 0.1, -1.5), DVec3::new(1.0, 0.05, 0.8)),
-            (DVec3::new(0.2, 2.0, 0.3), DVec3::new(-0.1, -1.0, 0.2)),
-            (DVec3::new(1.5, -0.3, 2.0), DVec3::new(-0.6, 0.1, -1.0)),
-        ] {
-            let ray = Ray {
-                origin: o,
-                dir: d.normalize(),
-            };
-            let black = render_ray_with_gradient(&field, &ray, &knobs, DVec3::ZERO, |_| weights);
-            let march = crate::march::march_ray(&field, &ray, f64::INFINITY, &knobs);
-            assert!((black.colour - march.colour).length() < 1e-12);
-            assert!((black.opacity - march.opacity).abs() < 1e-12);
-            let r = render_ray_with_gradient(&field, &ray, &knobs, bg, |_| weights);
-            assert!(!r.nodes.is_empty());
-            for &(n, grad) in &r.nodes {
-                for (ch, &analytic) in grad.iter().enumerate() {
-                    let h = 1e-4;
-                    let eval = |delta: f32| {
-                        let mut f = field.clone();
-                        f.nodes[n][ch] += delta;
-                        render_ray_with_gradient(&f, &ray, &knobs, bg, |_| weights)
-                            .colour
-                            .dot(weights)
-                    };
-                    let numeric = (eval(h as f32) - eval(-h as f32)) / (2.0 * h);
-                    // f32 nodes: the perturbation is exact only to ~1e-7.
-                    assert!(
-                        (numeric - analytic).abs() < 2e-3 * (1.0 + analytic.abs()),
-                        "node {n} channel {ch}: {numeric} vs {analytic}"
-                    );
-                    checked += 1;
+        for degree in 0..=crate::field::MAX_SH_DEGREE {
+            let field = small_sh_field(1, degree);
+            let first = field.nodes.len();
+            let mut checked = 0;
+            for (o, d) in [
+                (DVec3::new(-2.0, 0.1, -1.5), DVec3::new(1.0, 0.05, 0.8)),
+                (DVec3::new(0.2, 2.0, 0.3), DVec3::new(-0.1, -1.0, 0.2)),
+                (DVec3::new(1.5, -0.3, 2.0), DVec3::new(-0.6, 0.1, -1.0)),
+            ] {
+                let ray = Ray {
+                    origin: o,
+                    dir: d.normalize(),
+                };
+                let black =
+                    render_ray_with_gradient(&field, &ray, &knobs, DVec3::ZERO, |_| weights);
+                let march = crate::march::march_ray(&field, &ray, f64::INFINITY, &knobs);
+                assert!((black.colour - march.colour).length() < 1e-12);
+                assert!((black.opacity - march.opacity).abs() < 1e-12);
+                let r = render_ray_with_gradient(&field, &ray, &knobs, bg, |_| weights);
+                assert!(!r.values.is_empty());
+                for &(n, grad) in &r.values {
+                    for (ch, &analytic) in grad.iter().enumerate() {
+                        if n >= first && ch == 3 {
+                            assert_eq!(analytic, 0.0);
+                            continue;
+                        }
+                        let h = 1e-4;
+                        let eval = |delta: f32| {
+                            let mut f = field.clone();
+                            if n < first {
+                                f.nodes[n][ch] += delta;
+                            } else {
+                                f.sh[n - first][ch] += delta;
+                            }
+                            render_ray_with_gradient(&f, &ray, &knobs, bg, |_| weights)
+                                .colour
+                                .dot(weights)
+                        };
+                        let numeric = (eval(h as f32) - eval(-h as f32)) / (2.0 * h);
+                        // f32 values: the perturbation is exact only to ~1e-7.
+                        assert!(
+                            (numeric - analytic).abs() < 2e-3 * (1.0 + analytic.abs()),
+                            "degree {degree} value {n} channel {ch}: {numeric} vs {analytic}"
+                        );
+                        checked += 1;
+                    }
                 }
             }
+            assert!(checked > 100 * (1 + degree as usize), "{checked}");
         }
-        assert!(checked > 100, "{checked}");
     }
 }

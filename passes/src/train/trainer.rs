@@ -82,22 +82,54 @@ pub fn grid_size(size: DVec3, nodes: u32) -> UVec3 {
     )
 }
 
-/// `field`'s values at the nodes of a `resolution` grid over the same
-/// bounds (trilinear: a finer grid holds the same field).
-pub fn resample(field: &GridField, resolution: UVec3) -> Vec<[f32; 4]> {
+/// `field` at the nodes of a `resolution` grid over the same bounds, its
+/// view-dependent colour included (trilinear: a finer grid holds the same
+/// field).
+pub fn resample(field: &GridField, resolution: UVec3) -> GridField {
     let b = field.bounds;
     let cells = (resolution - UVec3::ONE).as_dvec3();
-    let mut out = Vec::with_capacity((resolution.x * resolution.y * resolution.z) as usize);
+    let count = (resolution.x * resolution.y * resolution.z) as usize;
+    let mut nodes = Vec::with_capacity(count);
+    let mut sh = Vec::with_capacity(count * field.sh_count());
     for k in 0..resolution.z {
         for j in 0..resolution.y {
             for i in 0..resolution.x {
                 let f = DVec3::new(i as f64, j as f64, k as f64) / cells;
                 let x = (b.min + f * b.size()).clamp(b.min, b.max);
-                out.push(field.interpolate(x).map(|v| v as f32));
+                nodes.push(field.interpolate(x).map(|v| v as f32));
+                sh.extend(
+                    field
+                        .interpolate_sh(x)
+                        .iter()
+                        .map(|c| c.as_vec3().to_array()),
+                );
             }
         }
     }
-    out
+    GridField::new(resolution, b, nodes, DEFAULT_OCCUPANCY_BLOCK).with_sh(field.sh_degree, sh)
+}
+
+/// `field` with view-dependent colour of `degree`: the coefficients it has
+/// up to that degree (the bands are nested), zeros beyond.
+pub fn with_sh_degree(field: GridField, degree: u32) -> GridField {
+    let (from, to) = (
+        field.sh_count(),
+        crate::field::sh_extra_coefficients(degree),
+    );
+    if from == to {
+        return field;
+    }
+    let sh = (0..field.nodes.len())
+        .flat_map(|n| (0..to).map(move |k| (n, k)))
+        .map(|(n, k)| {
+            if k < from {
+                field.sh[n * from + k]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    field.with_sh(degree, sh)
 }
 
 /// The training pixels' mean luminance (the loss's and the colours' scale;
@@ -116,7 +148,8 @@ fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
 /// How a run begins and when it stops early.
 pub struct TrainControl<'a> {
     /// A field to continue from (its nodes, resolution and bounds; one
-    /// stage at its resolution) instead of a grey grid.
+    /// stage at its resolution; its view-dependent colour brought to the
+    /// knobs' degree) instead of a grey grid.
     pub resume: Option<&'a GridField>,
     /// Stop once this much time has passed.
     pub budget: Option<Duration>,
@@ -170,7 +203,7 @@ pub fn train(
     } else {
         knobs.stages
     };
-    crate::field::check_field_fits(ctx.info(), final_res)?;
+    crate::field::check_field_fits(ctx.info(), final_res, knobs.sh_degree)?;
     let stage_res = |s: u32| {
         let shift = stages - 1 - s;
         (final_res.as_dvec3() / (1u32 << shift) as f64)
@@ -181,30 +214,32 @@ pub fn train(
     // Start grey at the mean radiance, half transparent across the box.
     let first = stage_res(0);
     let grey = scale as f32;
-    let mut nodes = match control.resume {
-        Some(f) => f.nodes.clone(),
-        None => {
-            vec![[grey, grey, grey, (1.0 / diag) as f32]; (first.x * first.y * first.z) as usize]
-        }
+    let start = match control.resume {
+        Some(f) => f.clone(),
+        None => GridField::new(
+            first,
+            bounds,
+            vec![[grey, grey, grey, (1.0 / diag) as f32]; (first.x * first.y * first.z) as usize],
+            DEFAULT_OCCUPANCY_BLOCK,
+        ),
     };
+    let mut field = with_sh_degree(start, knobs.sh_degree);
     let mut renderer = Renderer::new(ctx, 1)?;
     let mut history = Vec::new();
     let mut rays_done = 0u64;
     let mut step = 0u32;
-    let mut res = first;
     'stages: for s in 0..stages {
         let target = stage_res(s);
-        if target != res {
-            let coarse = GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK);
-            nodes = resample(&coarse, target);
-            res = target;
+        if target != field.resolution {
+            field = resample(&field, target);
         }
-        let mut gpu = GpuTrainer::new(ctx, lib, res, bounds, &nodes, march)?;
+        let res = field.resolution;
+        let mut gpu = GpuTrainer::new(ctx, lib, &field, march)?;
         gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
         let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
         while step < end {
             if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {
-                nodes = gpu.nodes(&mut renderer)?;
+                field = gpu.field(&mut renderer)?;
                 break 'stages;
             }
             let batch = pool.batch(dataset, knobs.batch as usize, knobs.seed, step as u64);
@@ -241,9 +276,8 @@ pub fn train(
                 });
             }
         }
-        nodes = gpu.nodes(&mut renderer)?;
+        field = gpu.field(&mut renderer)?;
     }
-    let field = GridField::new(res, bounds, nodes, DEFAULT_OCCUPANCY_BLOCK);
     let view_march = MarchKnobs {
         skip_empty: true,
         ..march

@@ -50,7 +50,7 @@ pub fn run(device: &DeviceInfo, args: &BakeSceneArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from(format!("{}.inlayfield", scene.name)));
     check_output("--out", &out, &["inlayfield"])?;
     if let Some(recipe) = scene.recipe() {
-        check_field_fits(device, grid_resolution(recipe, knobs.resolution))
+        check_field_fits(device, grid_resolution(recipe, knobs.resolution), 0)
             .with_context(|| format!("--resolution {}", knobs.resolution))?;
     }
     let field = bake_with_progress(&scene, &knobs)?;

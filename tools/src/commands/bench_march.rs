@@ -54,8 +54,8 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
     let scene = load_scene(&args.scene)?;
     let spec = scene.camera(&args.camera)?.clone();
     let field = scene_field(&scene, args.field.as_deref(), true, Some(ctx.info()))?;
-    let library = inlay_passes::shaders::library()?;
     let gpu_field = GpuGridField::upload(ctx, &field)?;
+    let library = gpu_field.library(&inlay_passes::shaders::library()?);
     let knobs = scene.march;
     println!(
         "Device: {} ({:?}); field {}x{}x{}; samples_per_ray {}, termination {:e}, skip_empty {}\n",

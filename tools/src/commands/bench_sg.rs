@@ -96,7 +96,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchSgArgs) -> anyhow::Result<()> {
     let field = scene_field(&scene, args.field.as_deref(), true, Some(ctx.info()))?;
     let gpu_field = GpuGridField::upload(ctx, &field)?;
     let env = environment_lobes(&scene.environment);
-    let library = inlay_passes::shaders::library()?;
+    let library = gpu_field.library(&inlay_passes::shaders::library()?);
     let map = args.placement.map_or(scene.lighting.probe.map);
     let max_iterations = args.iterations.iter().copied().max().unwrap_or(0);
     println!(

@@ -427,14 +427,15 @@ fn render_with(
         lobes,
         lights,
     });
-    let library = inlay_passes::shaders::library()?;
+    let gpu_field = GpuGridField::upload(ctx, field)?;
+    let library = gpu_field.library(&inlay_passes::shaders::library()?);
     let camera = scene.camera(&args.camera)?.clone();
     let mut view = InsertionView::new(
         ctx,
         &library,
         &scene,
         MarchPass::new(ctx, &library, scene.march)?,
-        GpuGridField::upload(ctx, field)?,
+        gpu_field,
         camera,
         !args.no_cache,
     )?;

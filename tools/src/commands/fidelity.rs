@@ -133,6 +133,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     let library = inlay_passes::shaders::library()?;
     // Probe irradiance per object.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
+    let library = gpu_field.library(&library);
     writeln!(md, "Irradiance at each object's centre (luminance; Cycles: a 1 mm white sensor per axis, two seeds):\n")?;
     writeln!(
         md,

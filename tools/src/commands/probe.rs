@@ -246,7 +246,7 @@ pub fn trace_and_fit(
     march: MarchKnobs,
     env: &[Sg64],
 ) -> anyhow::Result<TracedProbe> {
-    let library = inlay_passes::shaders::library()?;
+    let library = field.library(&inlay_passes::shaders::library()?);
     let light = IncidentLight::new(ctx, &library, probe_knobs, fit_knobs, march, env, &[], 1)?;
     let map = light.probe.map();
     let readback = Readback::new(

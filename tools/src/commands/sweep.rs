@@ -189,7 +189,7 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
     )?;
     // One upload serves every configuration.
     let gpu_field = GpuGridField::upload(ctx, &field)?;
-    let library = inlay_passes::shaders::library()?;
+    let library = gpu_field.library(&inlay_passes::shaders::library()?);
     eprintln!(
         "sweep: {} configurations ({:?} grid) of {} on {}",
         configs.len(),

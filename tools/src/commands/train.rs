@@ -61,6 +61,12 @@ pub struct TrainArgs {
     /// Total variation's weight on neighbouring nodes' density differences.
     #[arg(long, default_value_t = TrainKnobs::default().tv_density)]
     pub tv_density: f64,
+    /// Degree of view-dependent colour (spherical harmonics, 0..=2; 0 is
+    /// one colour per node). Degree 1 adds 3 RGB coefficients a node,
+    /// degree 2 8, to the file and to the device's memory. Default: the
+    /// `--resume` field's degree, else 0.
+    #[arg(long)]
+    pub sh_degree: Option<u32>,
     /// Views never trained on, scored at the end.
     #[arg(long, default_value_t = 2)]
     pub hold_out: u32,
@@ -95,6 +101,10 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     if let Some(p) = &args.picture {
         check_image_output("--picture", p)?;
     }
+    let resume = match &args.resume {
+        Some(p) => Some(inlay_passes::field::load_field(p)?),
+        None => None,
+    };
     let knobs = TrainKnobs {
         resolution: args.resolution,
         stages: args.stages,
@@ -106,6 +116,11 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         epsilon: args.epsilon,
         tv_colour: args.tv_colour,
         tv_density: args.tv_density,
+        sh_degree: args.sh_degree.unwrap_or(
+            resume
+                .as_ref()
+                .map_or(TrainKnobs::default().sh_degree, |f| f.sh_degree),
+        ),
         seed: args.seed,
         ..TrainKnobs::default()
     };
@@ -124,10 +139,6 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         background: args.background,
         skip_bad_frames: args.skip_bad_frames,
         ..LoadOptions::default()
-    };
-    let resume = match &args.resume {
-        Some(p) => Some(inlay_passes::field::load_field(p)?),
-        None => None,
     };
     let dataset = load_dataset(&args.dataset, &options)?;
     let b = dataset.bounds;
