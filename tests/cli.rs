@@ -295,6 +295,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         ("--time-budget", "0", "--time-budget"),
         ("--stages", "9", "--stages"),
         ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
+        ("--prune", "nan", "--prune: NaN must be non-negative"),
         ("--out", "x.exr", ".inlayfield"),
     ] {
         let mut args = vec![

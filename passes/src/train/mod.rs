@@ -10,6 +10,7 @@ pub mod gpu;
 pub mod knobs;
 pub mod loss;
 pub mod pixels;
+pub mod prune;
 pub mod render;
 pub mod trainer;
 pub mod tv;

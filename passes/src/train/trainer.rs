@@ -70,6 +70,8 @@ pub struct Trained {
     pub steps: u32,
     /// The mean luminance of the training pixels (the loss's scale).
     pub mean_radiance: f64,
+    /// Nodes whose density pruning took ([`TrainKnobs::prune`]).
+    pub pruned: usize,
 }
 
 /// Nodes per axis for `nodes` along the bounds' longest axis.
@@ -282,6 +284,12 @@ pub fn train(
         skip_empty: true,
         ..march
     };
+    let mut pruned = 0;
+    if knobs.prune > 0.0 {
+        let rays = super::prune::training_rays(dataset, &pool);
+        let visibility = super::prune::node_visibility(&field, &rays, &view_march);
+        (field, pruned) = super::prune::prune(&field, &visibility, knobs.prune);
+    }
     let held_out = pool
         .held_out
         .iter()
@@ -293,6 +301,7 @@ pub fn train(
         held_out,
         steps: step,
         mean_radiance: scale,
+        pruned,
     })
 }
 

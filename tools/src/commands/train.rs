@@ -67,6 +67,11 @@ pub struct TrainArgs {
     /// `--resume` field's degree, else 0.
     #[arg(long)]
     pub sh_degree: Option<u32>,
+    /// At the end, the density of every node whose largest rendering
+    /// weight in any training ray is below this is set to zero: what no
+    /// photograph sees (0 keeps every node).
+    #[arg(long, default_value_t = TrainKnobs::default().prune)]
+    pub prune: f64,
     /// Views never trained on, scored at the end.
     #[arg(long, default_value_t = 2)]
     pub hold_out: u32,
@@ -121,6 +126,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                 .as_ref()
                 .map_or(TrainKnobs::default().sh_degree, |f| f.sh_degree),
         ),
+        prune: args.prune,
         seed: args.seed,
         ..TrainKnobs::default()
     };
@@ -204,6 +210,14 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         f.resolution.z,
         trained.history.last().map_or(f64::NAN, |h| h.1)
     );
+    if knobs.prune > 0.0 {
+        eprintln!(
+            "pruned the density of {} of {} nodes (largest weight in any training ray below {})",
+            trained.pruned,
+            f.nodes.len(),
+            knobs.prune
+        );
+    }
     for v in &trained.held_out {
         println!(
             "held-out frame {}: PSNR {:.2} dB, relative error {:.3}",

@@ -1,0 +1,182 @@
+//! Pruning what no photograph sees. A node's visibility is the largest
+//! rendering weight it takes in any training ray: over the ray's samples
+//! (the march's quadrature, with skipping of empty space, as the field
+//! will be rendered), the sample's weight T·α times the node's trilinear
+//! weight at the sample. A node below the threshold lies outside every
+//! camera's view, or behind what every camera sees first: nothing in the
+//! photographs constrains it, and what the trainer left there (floaters
+//! in the space around the scene, haze) is seen only by views the
+//! photographs did not have: an estimate's views from around the field,
+//! a probe, a cast shadow's rays. Pruning sets its density to zero.
+
+use rayon::prelude::*;
+
+use super::pixels::{pixel_ray, PixelPool};
+use crate::dataset::Dataset;
+use crate::field::{GridField, RadianceField, DEFAULT_OCCUPANCY_BLOCK};
+use crate::geometry::{ray_box, Ray};
+use crate::march::MarchKnobs;
+
+/// Each node's largest weight along `ray`, folded into `out` (max).
+fn ray_visibility(field: &GridField, ray: &Ray, knobs: &MarchKnobs, out: &mut [f32]) {
+    let Some((t0, t1)) = ray_box(ray, &field.bounds) else {
+        return;
+    };
+    let step = knobs.step(field.bounds.diagonal());
+    let mut transmittance = 1.0;
+    let mut k = 0u64;
+    loop {
+        let a = t0 + k as f64 * step;
+        if a >= t1 {
+            break;
+        }
+        let b = (a + step).min(t1);
+        let t = 0.5 * (a + b);
+        let x = ray.at(t);
+        if knobs.skip_empty {
+            if let Some(s) = field.empty_until(x, ray.dir) {
+                k = (k + 1).max(((t + s - t0) / step - 0.5).ceil() as u64);
+                continue;
+            }
+        }
+        let sigma = field.density(x);
+        let attenuation = (-sigma * (b - a)).exp();
+        let w = transmittance * (1.0 - attenuation);
+        if w > 0.0 {
+            if let Some(corners) = field.corners(x) {
+                for (n, wn) in corners {
+                    out[n] = out[n].max((w * wn) as f32);
+                }
+            }
+        }
+        transmittance *= attenuation;
+        if transmittance < knobs.termination {
+            break;
+        }
+        k += 1;
+    }
+}
+
+/// Every node's visibility over `rays` (unit directions).
+pub fn node_visibility(field: &GridField, rays: &[Ray], knobs: &MarchKnobs) -> Vec<f32> {
+    let n = field.nodes.len();
+    let chunk = rays.len().div_ceil(4 * rayon::current_num_threads()).max(1);
+    rays.par_chunks(chunk)
+        .map(|rays| {
+            let mut out = vec![0.0f32; n];
+            for ray in rays {
+                ray_visibility(field, ray, knobs, &mut out);
+            }
+            out
+        })
+        .reduce(
+            || vec![0.0f32; n],
+            |mut a, b| {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x = x.max(y));
+                a
+            },
+        )
+}
+
+/// The rays of the training pixels of `pool`.
+pub fn training_rays(dataset: &Dataset, pool: &PixelPool) -> Vec<Ray> {
+    pool.pixels
+        .iter()
+        .filter_map(|p| pixel_ray(&dataset.frames[p.frame as usize], p.pixel))
+        .collect()
+}
+
+/// `field` with the density of every node whose visibility is below
+/// `threshold` set to zero (occupancy rebuilt), and how many nodes that
+/// took density from.
+pub fn prune(field: &GridField, visibility: &[f32], threshold: f64) -> (GridField, usize) {
+    let mut nodes = field.nodes.clone();
+    let mut pruned = 0;
+    for (node, v) in nodes.iter_mut().zip(visibility) {
+        if (*v as f64) < threshold && node[3] > 0.0 {
+            node[3] = 0.0;
+            pruned += 1;
+        }
+    }
+    let out = GridField::new(
+        field.resolution,
+        field.bounds,
+        nodes,
+        DEFAULT_OCCUPANCY_BLOCK,
+    )
+    .with_sh(field.sh_degree, field.sh.clone());
+    (out, pruned)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Aabb;
+    use glam::{DVec3, UVec3};
+
+    /// A slab the cameras see, a blob outside every ray and a blob behind
+    /// the slab: both blobs are pruned, the slab's front is kept, and the
+    /// training rays' pixels hardly change.
+    #[test]
+    fn what_no_ray_sees_is_pruned_and_the_rays_do_not_change() {
+        let res = UVec3::new(17, 17, 17);
+        let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        let h = 2.0 / 16.0;
+        let at = |i: u32| -1.0 + i as f64 * h;
+        let mut nodes = Vec::new();
+        for k in 0..17 {
+            for j in 0..17 {
+                for i in 0..17 {
+                    let (x, y, z) = (at(i), at(j), at(k));
+                    let slab = z.abs() < 0.15 && x.abs() < 0.6 && y.abs() < 0.6;
+                    let outside =
+                        (DVec3::new(x, y, z) - DVec3::new(0.85, 0.0, -0.6)).length() < 0.15;
+                    let behind = (DVec3::new(x, y, z) - DVec3::new(0.0, 0.0, 0.7)).length() < 0.2;
+                    let sigma = if slab {
+                        40.0
+                    } else if outside || behind {
+                        10.0
+                    } else {
+                        0.0
+                    };
+                    nodes.push([0.5, 0.4, 0.3, sigma]);
+                }
+            }
+        }
+        let field = GridField::new(res, bounds, nodes, 2);
+        // Parallel rays along +z over |x|, |y| < 0.5.
+        let rays: Vec<Ray> = (0..21)
+            .flat_map(|a| (0..21).map(move |b| (a, b)))
+            .map(|(a, b)| Ray {
+                origin: DVec3::new(-0.5 + a as f64 * 0.05, -0.5 + b as f64 * 0.05, -3.0),
+                dir: DVec3::Z,
+            })
+            .collect();
+        let knobs = MarchKnobs {
+            samples_per_ray: 256,
+            termination: 1e-4,
+            skip_empty: true,
+        };
+        let vis = node_visibility(&field, &rays, &knobs);
+        let (pruned, count) = prune(&field, &vis, 0.01);
+        let density = |f: &GridField, x: DVec3| {
+            let n = ((x - bounds.min) / h).round().as_uvec3();
+            f.nodes[f.index(n.x, n.y, n.z)][3]
+        };
+        assert_eq!(density(&pruned, DVec3::new(0.875, 0.0, -0.625)), 0.0);
+        assert_eq!(density(&pruned, DVec3::new(0.0, 0.0, 0.75)), 0.0);
+        assert!(density(&pruned, DVec3::new(0.0, 0.0, -0.125)) > 0.0);
+        assert!(density(&field, DVec3::new(0.875, 0.0, -0.625)) > 0.0);
+        assert!(count > 10, "{count}");
+        for ray in &rays {
+            let a = crate::march::march_ray(&field, ray, f64::INFINITY, &knobs);
+            let b = crate::march::march_ray(&pruned, ray, f64::INFINITY, &knobs);
+            assert!(
+                (a.colour - b.colour).abs().max_element() < 0.01,
+                "{} vs {}",
+                a.colour,
+                b.colour
+            );
+        }
+    }
+}
