@@ -11,4 +11,4 @@ pub use pass::{
     MarchOutputs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT, NERF_MARCH, NERF_MARCH_INFO,
     OCCLUSION_SWITCH,
 };
-pub use reference::{march_image, march_ray, MarchResult};
+pub use reference::{march_image, march_ray, march_samples, MarchResult, MarchSample};

@@ -39,22 +39,46 @@ impl Default for MarchResult {
     }
 }
 
-/// Marches `ray` (unit direction) through `field`, clipped at distance
-/// `t_object` (`f64::INFINITY` when no object is in the way).
-pub fn march_ray(
+/// One sample of the march's quadrature: the segment [a, b] of the ray,
+/// sampled at its midpoint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarchSample {
+    /// The sample point.
+    pub x: DVec3,
+    /// Its distance along the ray (the segment's midpoint).
+    pub t: f64,
+    /// The segment's start.
+    pub a: f64,
+    /// The segment's end.
+    pub b: f64,
+    /// Density at the point.
+    pub sigma: f64,
+    /// Colour at the point, seen along the ray.
+    pub colour: DVec3,
+    /// Transmittance from the ray's start to the segment's start.
+    pub transmittance: f64,
+    /// The sample's weight T·(1 − e^{−σ(b−a)}).
+    pub weight: f64,
+}
+
+/// Walks the march's quadrature along `ray` (unit direction) through
+/// `field`, clipped at distance `t_object`, handing each sample evaluated
+/// to `visit` (skipped empty space is not visited); stops where the march
+/// stops. The one definition of the samples `march_ray` sums.
+pub fn march_samples(
     field: &dyn RadianceField,
     ray: &Ray,
     t_object: f64,
     knobs: &MarchKnobs,
-) -> MarchResult {
-    let mut r = MarchResult::default();
+    mut visit: impl FnMut(&MarchSample),
+) {
     let bounds = field.bounds();
     let Some((t_near, t_far)) = ray_box(ray, &bounds) else {
-        return r;
+        return;
     };
     let (t0, t1) = (t_object.min(t_near), t_object.min(t_far));
     if t1 <= t0 {
-        return r;
+        return;
     }
     let step = knobs.step(bounds.diagonal());
     let mut transmittance = 1.0;
@@ -73,24 +97,47 @@ pub fn march_ray(
                 continue;
             }
         }
-        let (sigma, c) = field.sample(x, ray.dir);
-        r.samples += 1;
+        let (sigma, colour) = field.sample(x, ray.dir);
         let attenuation = (-sigma * (b - a)).exp();
-        let w = transmittance * (1.0 - attenuation);
-        if r.half_depth < 0.0 && r.opacity + w >= 0.5 {
-            // T(s) = transmittance·e^{−σs} = 1/2 within [a, b].
-            let s = (2.0 * transmittance).ln() / sigma.max(1e-30);
-            r.half_depth = a + s.clamp(0.0, b - a);
-        }
-        r.colour += w * c;
-        r.opacity += w;
-        r.depth += w * t;
+        visit(&MarchSample {
+            x,
+            t,
+            a,
+            b,
+            sigma,
+            colour,
+            transmittance,
+            weight: transmittance * (1.0 - attenuation),
+        });
         transmittance *= attenuation;
         if transmittance < knobs.termination {
             break;
         }
         k += 1;
     }
+}
+
+/// Marches `ray` (unit direction) through `field`, clipped at distance
+/// `t_object` (`f64::INFINITY` when no object is in the way).
+pub fn march_ray(
+    field: &dyn RadianceField,
+    ray: &Ray,
+    t_object: f64,
+    knobs: &MarchKnobs,
+) -> MarchResult {
+    let mut r = MarchResult::default();
+    march_samples(field, ray, t_object, knobs, |s| {
+        r.samples += 1;
+        let w = s.weight;
+        if r.half_depth < 0.0 && r.opacity + w >= 0.5 {
+            // T(s) = transmittance·e^{−σs} = 1/2 within [a, b].
+            let d = (2.0 * s.transmittance).ln() / s.sigma.max(1e-30);
+            r.half_depth = s.a + d.clamp(0.0, s.b - s.a);
+        }
+        r.colour += w * s.colour;
+        r.opacity += w;
+        r.depth += w * s.t;
+    });
     r
 }
 

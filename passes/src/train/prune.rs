@@ -13,48 +13,19 @@ use rayon::prelude::*;
 
 use super::pixels::{pixel_ray, PixelPool};
 use crate::dataset::Dataset;
-use crate::field::{GridField, RadianceField, DEFAULT_OCCUPANCY_BLOCK};
-use crate::geometry::{ray_box, Ray};
-use crate::march::MarchKnobs;
+use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
+use crate::geometry::Ray;
+use crate::march::{march_samples, MarchKnobs};
 
 /// Each node's largest weight along `ray`, folded into `out` (max).
 fn ray_visibility(field: &GridField, ray: &Ray, knobs: &MarchKnobs, out: &mut [f32]) {
-    let Some((t0, t1)) = ray_box(ray, &field.bounds) else {
-        return;
-    };
-    let step = knobs.step(field.bounds.diagonal());
-    let mut transmittance = 1.0;
-    let mut k = 0u64;
-    loop {
-        let a = t0 + k as f64 * step;
-        if a >= t1 {
-            break;
-        }
-        let b = (a + step).min(t1);
-        let t = 0.5 * (a + b);
-        let x = ray.at(t);
-        if knobs.skip_empty {
-            if let Some(s) = field.empty_until(x, ray.dir) {
-                k = (k + 1).max(((t + s - t0) / step - 0.5).ceil() as u64);
-                continue;
+    march_samples(field, ray, f64::INFINITY, knobs, |s| {
+        if s.weight > 0.0 {
+            for (n, wn) in field.corners(s.x).into_iter().flatten() {
+                out[n] = out[n].max((s.weight * wn) as f32);
             }
         }
-        let sigma = field.density(x);
-        let attenuation = (-sigma * (b - a)).exp();
-        let w = transmittance * (1.0 - attenuation);
-        if w > 0.0 {
-            if let Some(corners) = field.corners(x) {
-                for (n, wn) in corners {
-                    out[n] = out[n].max((w * wn) as f32);
-                }
-            }
-        }
-        transmittance *= attenuation;
-        if transmittance < knobs.termination {
-            break;
-        }
-        k += 1;
-    }
+    });
 }
 
 /// Every node's visibility over `rays` (unit directions).
