@@ -262,8 +262,10 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "0",
         "--sh-degree",
         "1",
+        "--learn-exposure",
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("learnt exposure gains"), "{}", text(&o));
     // Resumed with view-dependent colour: the file carries it, trained.
     let resumed = inlay_passes::field::load_field(&stopped).unwrap();
     assert_eq!(resumed.resolution, trained.resolution);

@@ -4,6 +4,9 @@
 // atomic float adds (a compare-and-swap loop: core WGSL, every device).
 // The trained values are laid out as a field's on the device: the nodes,
 // then the view-dependent colour's coefficients (field/sh_trilinear.wgsl).
+// A photograph records its frame's exposure gain (RGB) times the pixel
+// (1 unless learnt); with learn_gains, the loss's gradient with respect
+// to the gain of every frame but the first is scattered too.
 // Mirrors passes/src/train/render.rs render_ray_with_gradient.
 
 #include "common/ray_box.wgsl"
@@ -21,7 +24,7 @@ struct TrainPush {
     background: vec3<f32>,
     epsilon: f32,
     sh_degree: u32,
-    pad0: u32,
+    learn_gains: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -34,6 +37,10 @@ struct TrainRay {
     exposure: f32,
     target_value: vec3<f32>,
     weight: f32,
+    frame: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 var<immediate> pc: TrainPush;
@@ -41,6 +48,8 @@ var<immediate> pc: TrainPush;
 @group(0) @binding(1) var<storage, read> rays: array<TrainRay>;
 @group(0) @binding(2) var<storage, read_write> grad: array<atomic<u32>>;
 @group(0) @binding(3) var<storage, read_write> ray_out: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> gains: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> gain_grad: array<atomic<u32>>;
 
 #include "field/sh_trilinear.wgsl"
 
@@ -89,6 +98,22 @@ fn add_float(i: u32, value: f32) {
     }
 }
 
+// add_float into gain_grad (a second array: WGSL takes no pointer to a
+// storage array as an argument).
+fn add_gain_float(i: u32, value: f32) {
+    if value == 0.0 {
+        return;
+    }
+    var old = atomicLoad(&gain_grad[i]);
+    loop {
+        let r = atomicCompareExchangeWeak(&gain_grad[i], old, bitcast<u32>(bitcast<f32>(old) + value));
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= pc.ray_count {
@@ -122,9 +147,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let total = colour + transmittance * pc.background;
-    let l = pixel_loss(total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
-    ray_out[id.x] = vec4<f32>(total, ray.weight * l.loss);
-    let g = ray.weight * l.grad;
+    let gain = gains[ray.frame].xyz;
+    let l = pixel_loss(gain * total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
+    ray_out[id.x] = vec4<f32>(gain * total, ray.weight * l.loss);
+    if pc.learn_gains != 0u && ray.frame != 0u {
+        let gg = ray.weight * l.grad * total;
+        add_gain_float(4u * ray.frame, gg.x);
+        add_gain_float(4u * ray.frame + 1u, gg.y);
+        add_gain_float(4u * ray.frame + 2u, gg.z);
+    }
+    let g = ray.weight * l.grad * gain;
     if all(g == vec3<f32>(0.0)) {
         return;
     }

@@ -38,8 +38,8 @@ inlay_engine::gpu_struct! {
         pub epsilon: f32,
         /// Degree of the view-dependent colour (0: none).
         pub sh_degree: u32,
-        /// Padding.
-        pub pad0: u32,
+        /// 1: scatter the gradient of the frames' exposure gains.
+        pub learn_gains: u32,
         /// Padding.
         pub pad1: u32,
         /// Padding.
@@ -63,6 +63,14 @@ inlay_engine::gpu_struct! {
         pub target_value: [f32; 3],
         /// The ray's weight in the loss.
         pub weight: f32,
+        /// The ray's frame (its exposure gain's index).
+        pub frame: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
@@ -129,6 +137,15 @@ inlay_engine::gpu_struct! {
     }
 }
 
+/// Gains as the shader reads them: (r, g, b, 0) per frame.
+fn gain_bytes(gains: &[DVec3]) -> Vec<u8> {
+    gains
+        .iter()
+        .flat_map(|g| [g.x as f32, g.y as f32, g.z as f32, 0.0])
+        .flat_map(f32::to_le_bytes)
+        .collect()
+}
+
 impl TrainRay {
     /// The record of `ray` (unit direction) with `target`, weighted
     /// `weight`.
@@ -145,7 +162,17 @@ impl TrainRay {
             exposure: exposure as f32,
             target_value: value.as_vec3().to_array(),
             weight: weight as f32,
+            frame: 0,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         }
+    }
+
+    /// The same ray, from frame `frame` (whose exposure gain scales it).
+    pub fn in_frame(mut self, frame: u32) -> Self {
+        self.frame = frame;
+        self
     }
 }
 
@@ -153,6 +180,8 @@ impl TrainRay {
 pub const TRAIN_RAYS: &str = "train-rays";
 /// Name of the optimiser pass.
 pub const TRAIN_ADAM: &str = "train-adam";
+/// Name of the exposure gains' optimiser pass.
+pub const TRAIN_GAINS: &str = "train-gains";
 /// Name of the total-variation pass.
 pub const TRAIN_TV: &str = "train-tv";
 /// Name of the pass stepping along total variation's gradient.
@@ -169,6 +198,9 @@ pub struct GpuTrainer {
     params: Arc<Buffer>,
     grad: Arc<Buffer>,
     moments: Arc<Buffer>,
+    gains: Arc<Buffer>,
+    gain_grad: Arc<Buffer>,
+    gain_moments: Arc<Buffer>,
     /// Nodes per axis.
     pub resolution: UVec3,
     /// The region the nodes span.
@@ -182,6 +214,9 @@ pub struct GpuTrainer {
     /// Total variation's weights (colour, density): a step of it after
     /// each Adam step ([`super::tv::tv_step`]); zero leaves it out.
     pub tv_weights: (f32, f32),
+    /// The step size of the frames' exposure gains when they are learnt
+    /// (Adam, after each of the grid's steps); None keeps them fixed.
+    pub gain_rate: Option<f32>,
 }
 
 impl GpuTrainer {
@@ -234,13 +269,74 @@ impl GpuTrainer {
                 &vec![0u8; n * 32],
                 usage,
             )?),
+            gains: Arc::new(Buffer::with_data(
+                ctx,
+                "train-gains",
+                &gain_bytes(&[DVec3::ONE]),
+                usage,
+            )?),
+            gain_grad: Arc::new(Buffer::with_data(
+                ctx,
+                "train-gain-grad",
+                &[0u8; 16],
+                usage,
+            )?),
+            gain_moments: Arc::new(Buffer::with_data(
+                ctx,
+                "train-gain-moments",
+                &[0u8; 32],
+                usage,
+            )?),
             resolution,
             bounds: field.bounds,
             sh_degree: field.sh_degree,
             march,
             steps: 0,
             tv_weights: (0.0, 0.0),
+            gain_rate: None,
         })
+    }
+
+    /// Sets each frame's exposure gain (a ray of frame f records gain f
+    /// times its pixel; frame 0's stays as given when gains are learnt),
+    /// their gradient and moments cleared.
+    pub fn set_gains(&mut self, ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<()> {
+        anyhow::ensure!(!gains.is_empty(), "no frame");
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        self.gains = Arc::new(Buffer::with_data(
+            ctx,
+            "train-gains",
+            &gain_bytes(gains),
+            usage,
+        )?);
+        self.gain_grad = Arc::new(Buffer::with_data(
+            ctx,
+            "train-gain-grad",
+            &vec![0u8; 16 * gains.len()],
+            usage,
+        )?);
+        self.gain_moments = Arc::new(Buffer::with_data(
+            ctx,
+            "train-gain-moments",
+            &vec![0u8; 32 * gains.len()],
+            usage,
+        )?);
+        Ok(())
+    }
+
+    /// The frames' exposure gains now.
+    pub fn gains(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<DVec3>> {
+        let v = self.read(renderer, &self.gains)?;
+        Ok(v.chunks_exact(4)
+            .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
+            .collect())
+    }
+
+    /// The accumulated gradient of the exposure gains (4 per frame).
+    pub fn gain_gradient(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
+        self.read(renderer, &self.gain_grad)
     }
 
     fn push(&self, rays: u32, background: DVec3, epsilon: f64) -> TrainPush {
@@ -254,7 +350,7 @@ impl GpuTrainer {
             background: background.as_vec3().to_array(),
             epsilon: epsilon as f32,
             sh_degree: self.sh_degree,
-            pad0: 0,
+            learn_gains: self.gain_rate.is_some() as u32,
             pad1: 0,
             pad2: 0,
         }
@@ -293,6 +389,9 @@ impl GpuTrainer {
         let params = graph.import_buffer(&self.params, None);
         let grad = graph.import_buffer(&self.grad, None);
         let moments = graph.import_buffer(&self.moments, None);
+        let graph_gains = graph.import_buffer(&self.gains, None);
+        let gain_grad = graph.import_buffer(&self.gain_grad, None);
+        let gain_moments = graph.import_buffer(&self.gain_moments, None);
         // A host-visible buffer per batch (a batch outgrows the 64 KiB a
         // graph upload takes); the frame finishes before the next is made.
         let bytes: &[u8] = bytemuck::cast_slice(rays);
@@ -315,6 +414,9 @@ impl GpuTrainer {
         pass.buffer_at("rays", batch, BufferAccess::StorageRead);
         let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
         let out = pass.buffer_at("ray_out", out, BufferAccess::StorageWrite);
+        let gains = graph_gains;
+        pass.buffer_at("gains", gains, BufferAccess::StorageRead);
+        let gain_grad = pass.buffer_at("gain_grad", gain_grad, BufferAccess::StorageReadWrite);
         pass.dispatch(&self.ray_grad)
             .push(&push)
             .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
@@ -349,6 +451,24 @@ impl GpuTrainer {
             pass.finish();
             if self.tv_weights != (0.0, 0.0) {
                 self.add_tv_step(&mut graph, params, grad);
+            }
+            if let Some(rate) = self.gain_rate {
+                let count = (self.gains.size() / 4) as u32;
+                let g = AdamPush {
+                    count,
+                    rate,
+                    density_rate: 0.0,
+                    base_values: count,
+                    ..a
+                };
+                let mut pass = graph.compute_pass(TRAIN_GAINS);
+                pass.buffer_at("params", gains, BufferAccess::StorageReadWrite);
+                pass.buffer_at("grad", gain_grad, BufferAccess::StorageReadWrite);
+                pass.buffer_at("moments", gain_moments, BufferAccess::StorageReadWrite);
+                pass.dispatch(&self.adam)
+                    .push(&g)
+                    .groups([count.div_ceil(64), 1, 1]);
+                pass.finish();
             }
         }
         readback.add_to_graph(&mut graph, "train-ray-out-readback", out);

@@ -36,6 +36,10 @@ pub struct TrainKnobs {
     /// Degree of the view-dependent colour trained (spherical harmonics,
     /// 0..=2; 0: one colour per node, as a bake's).
     pub sh_degree: u32,
+    /// Learn an RGB exposure gain per frame (the first frame's fixed at
+    /// 1): for photographs whose exposure is not known. Held-out frames
+    /// are scored at the gain that fits them best.
+    pub learn_exposure: bool,
     /// After the last step, the density of every node whose largest
     /// rendering weight in any training ray is below this is set to zero
     /// ([`super::prune`]); 0 keeps every node. The default, 0.01, raised
@@ -61,6 +65,7 @@ impl Default for TrainKnobs {
             tv_colour: 0.0,
             tv_density: 0.0,
             sh_degree: 0,
+            learn_exposure: false,
             prune: 0.01,
             seed: 1,
         }

@@ -90,14 +90,15 @@ impl PixelPool {
         Self { pixels, held_out }
     }
 
-    /// `count` pixels drawn at random (with replacement) for step `step`.
+    /// `count` pixels drawn at random (with replacement) for step `step`:
+    /// each one's ray, what it says, and its frame.
     pub fn batch(
         &self,
         dataset: &Dataset,
         count: usize,
         seed: u64,
         step: u64,
-    ) -> Vec<(Ray, PixelTarget)> {
+    ) -> Vec<(Ray, PixelTarget, u32)> {
         let mut rng = Pcg32::new(seed, 0x7EA1_0000_0000 ^ step);
         let mut out = Vec::with_capacity(count);
         let mut tries = 0;
@@ -107,7 +108,7 @@ impl PixelPool {
             let frame = &dataset.frames[r.frame as usize];
             if let (Some(ray), Some(t)) = (pixel_ray(frame, r.pixel), pixel_target(frame, r.pixel))
             {
-                out.push((ray, t));
+                out.push((ray, t, r.frame));
             }
         }
         out

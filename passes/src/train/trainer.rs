@@ -72,6 +72,9 @@ pub struct Trained {
     pub mean_radiance: f64,
     /// Nodes whose density pruning took ([`TrainKnobs::prune`]).
     pub pruned: usize,
+    /// Each frame's exposure gain (all 1 unless
+    /// [`TrainKnobs::learn_exposure`]; held-out frames' stay 1).
+    pub gains: Vec<DVec3>,
 }
 
 /// Nodes per axis for `nodes` along the bounds' longest axis.
@@ -226,6 +229,7 @@ pub fn train(
         ),
     };
     let mut field = with_sh_degree(start, knobs.sh_degree);
+    let mut gains = vec![DVec3::ONE; dataset.frames.len().max(1)];
     let mut renderer = Renderer::new(ctx, 1)?;
     let mut history = Vec::new();
     let mut rays_done = 0u64;
@@ -238,18 +242,21 @@ pub fn train(
         let res = field.resolution;
         let mut gpu = GpuTrainer::new(ctx, lib, &field, march)?;
         gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
+        gpu.set_gains(ctx, &gains)?;
         let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
         while step < end {
             if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {
                 field = gpu.field(&mut renderer)?;
+                gains = gpu.gains(&mut renderer)?;
                 break 'stages;
             }
             let batch = pool.batch(dataset, knobs.batch as usize, knobs.seed, step as u64);
             let records: Vec<TrainRay> = batch
                 .iter()
-                .map(|(r, t)| TrainRay::new(r.origin, r.dir, *t, 1.0))
+                .map(|(r, t, f)| TrainRay::new(r.origin, r.dir, *t, 1.0).in_frame(*f))
                 .collect();
             let decay = knobs.rate_decay.powf(step as f64 / knobs.iterations as f64);
+            gpu.gain_rate = knobs.learn_exposure.then_some((GAIN_RATE * decay) as f32);
             let adam = AdamKnobs {
                 rate: knobs.rate * scale * decay,
                 density_rate: knobs.density_rate / diag * decay,
@@ -279,6 +286,7 @@ pub fn train(
             }
         }
         field = gpu.field(&mut renderer)?;
+        gains = gpu.gains(&mut renderer)?;
     }
     let view_march = MarchKnobs {
         skip_empty: true,
@@ -293,7 +301,16 @@ pub fn train(
     let held_out = pool
         .held_out
         .iter()
-        .map(|&f| score_view(dataset, f, &field, &view_march, background))
+        .map(|&f| {
+            score_view(
+                dataset,
+                f,
+                &field,
+                &view_march,
+                background,
+                knobs.learn_exposure,
+            )
+        })
         .collect();
     Ok(Trained {
         field,
@@ -302,18 +319,26 @@ pub fn train(
         steps: step,
         mean_radiance: scale,
         pruned,
+        gains,
     })
 }
+
+/// The exposure gains' Adam step size (the gains are near 1: a step of
+/// 1 % at most, decaying with the grid's).
+pub const GAIN_RATE: f64 = 0.03;
 
 /// The PSNR of a batch's pixels `out` (r, g, b, loss per ray) against what
 /// its photographs say, on sRGB values clipped at 1 as the held-out views
 /// are scored: a bracket at its exposure, a lower bound only where the
 /// pixel falls below it.
-pub fn batch_psnr(batch: &[(crate::geometry::Ray, super::PixelTarget)], out: &[[f32; 4]]) -> f64 {
+pub fn batch_psnr(
+    batch: &[(crate::geometry::Ray, super::PixelTarget, u32)],
+    out: &[[f32; 4]],
+) -> f64 {
     use super::PixelTarget;
     let mut se = 0.0;
     let mut n = 0usize;
-    for ((_, target), o) in batch.iter().zip(out) {
+    for ((_, target, _), o) in batch.iter().zip(out) {
         let c = DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64);
         for k in 0..3 {
             let (a, b) = match *target {
@@ -331,13 +356,33 @@ pub fn batch_psnr(batch: &[(crate::geometry::Ray, super::PixelTarget)], out: &[[
     -10.0 * (se / n.max(1) as f64).max(1e-12).log10()
 }
 
-/// Renders frame `f` of `dataset` from `field` and scores it.
+/// The RGB gain g minimising Σ (g·recorded − photograph)² over `frame`'s
+/// usable pixels (a bracket's saturated ones left out), per channel.
+fn fitted_gain(frame: &crate::dataset::Frame, recorded: &[DVec3]) -> DVec3 {
+    let (mut rt, mut rr) = (DVec3::ZERO, DVec3::ZERO);
+    for (i, r) in recorded.iter().enumerate() {
+        let t = DVec3::from_array(frame.image.radiance[i].map(|v| v as f64));
+        if frame.image.state[i] != PixelState::Value
+            || (is_bracket(frame) && t.max_element() >= 1.0)
+        {
+            continue;
+        }
+        rt += *r * t;
+        rr += *r * *r;
+    }
+    DVec3::select(rr.cmpgt(DVec3::ZERO), rt / rr, DVec3::ONE)
+}
+
+/// Renders frame `f` of `dataset` from `field` and scores it; with
+/// `fit_exposure`, at the RGB gain that fits the photograph best (least
+/// squares over its usable pixels: a frame of unknown exposure).
 pub fn score_view(
     dataset: &Dataset,
     f: u32,
     field: &GridField,
     march: &MarchKnobs,
     background: DVec3,
+    fit_exposure: bool,
 ) -> HeldOutView {
     let frame = &dataset.frames[f as usize];
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
@@ -346,20 +391,33 @@ pub fn score_view(
     } else {
         None
     };
-    let show = |c: DVec3| -> [f32; 3] {
-        match exposure {
-            Some(e) => (c * e).clamp(DVec3::ZERO, DVec3::ONE).as_vec3().to_array(),
-            None => c.as_vec3().to_array(),
-        }
-    };
-    let rendered: Vec<[f32; 3]> = (0..w * h)
+    // What the sensor records of radiance c, before clipping.
+    let recorded = |c: DVec3| c * exposure.unwrap_or(1.0);
+    let radiance: Vec<DVec3> = (0..w * h)
         .into_par_iter()
         .map(|p| match pixel_ray(frame, p) {
             Some(ray) => {
                 let r = march_ray(field, &ray, f64::INFINITY, march);
-                show(r.colour + (1.0 - r.opacity) * background)
+                recorded(r.colour + (1.0 - r.opacity) * background)
             }
-            None => [0.0; 3],
+            None => DVec3::ZERO,
+        })
+        .collect();
+    let gain = if fit_exposure {
+        fitted_gain(frame, &radiance)
+    } else {
+        DVec3::ONE
+    };
+    let rendered: Vec<[f32; 3]> = radiance
+        .iter()
+        .map(|c| {
+            let c = gain * *c;
+            match exposure {
+                Some(_) => c.clamp(DVec3::ZERO, DVec3::ONE),
+                None => c,
+            }
+            .as_vec3()
+            .to_array()
         })
         .collect();
     let truth: Vec<[f32; 3]> = frame.image.radiance.clone();

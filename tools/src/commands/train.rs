@@ -67,6 +67,11 @@ pub struct TrainArgs {
     /// `--resume` field's degree, else 0.
     #[arg(long)]
     pub sh_degree: Option<u32>,
+    /// Learn an RGB exposure gain per frame (the first frame's fixed):
+    /// for photographs whose exposure is unknown. Held-out views are
+    /// scored at the gain that fits them best.
+    #[arg(long)]
+    pub learn_exposure: bool,
     /// At the end, the density of every node whose largest rendering
     /// weight in any training ray is below this is set to zero: what no
     /// photograph sees (0 keeps every node).
@@ -127,6 +132,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                 .map_or(TrainKnobs::default().sh_degree, |f| f.sh_degree),
         ),
         prune: args.prune,
+        learn_exposure: args.learn_exposure,
         seed: args.seed,
         ..TrainKnobs::default()
     };
@@ -210,6 +216,18 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         f.resolution.z,
         trained.history.last().map_or(f64::NAN, |h| h.1)
     );
+    if knobs.learn_exposure {
+        let luma: Vec<f64> = trained
+            .gains
+            .iter()
+            .map(|g| inlay_passes::sgfit::model::luminance(*g))
+            .collect();
+        eprintln!(
+            "learnt exposure gains (luminance, frame 0 = 1): {:.3} to {:.3}",
+            luma.iter().copied().fold(f64::INFINITY, f64::min),
+            luma.iter().copied().fold(0.0, f64::max)
+        );
+    }
     if knobs.prune > 0.0 {
         eprintln!(
             "pruned the density of {} of {} nodes (largest weight in any training ray below {})",
