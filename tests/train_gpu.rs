@@ -328,6 +328,7 @@ fn cups_dataset() -> inlay_passes::dataset::Dataset {
                     distortion: Distortion::None,
                 },
                 exposure_time: None,
+                exposure_from_exif: false,
                 image: FrameImage {
                     width: w,
                     height: h,

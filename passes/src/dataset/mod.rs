@@ -25,6 +25,7 @@
 
 pub mod bounds;
 pub mod capture;
+pub mod exif;
 pub mod intrinsics;
 mod json;
 pub mod pixels;
@@ -100,8 +101,11 @@ pub struct Frame {
     pub pose: Pose,
     /// The camera's intrinsics.
     pub intrinsics: Intrinsics,
-    /// Exposure time in seconds, where given (`exposure_time`).
+    /// Exposure time in seconds, where given (`exposure_time`), else
+    /// where an LDR image's EXIF block records it.
     pub exposure_time: Option<f64>,
+    /// Whether [`Self::exposure_time`] came from the image's EXIF block.
+    pub exposure_from_exif: bool,
     /// Its pixels.
     pub image: FrameImage,
 }
@@ -565,12 +569,19 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
     if let Some(m) = &s.mask {
         pixels::apply_mask(&mut image, m).map_err(|e| fail(format!("{}: {e}", m.display())))?;
     }
+    // The file's key first; an LDR photograph's own record where it has
+    // none (an EXR frame is radiance: no exposure applies).
+    let exif = match (s.exposure_time, pixels::image_kind(&path)) {
+        (None, Some(pixels::ImageKind::Srgb)) => exif::exposure_time_of(&path),
+        _ => None,
+    };
     Ok(Frame {
         index: s.index,
         image_path: path,
         pose,
         intrinsics,
-        exposure_time: s.exposure_time,
+        exposure_time: s.exposure_time.or(exif),
+        exposure_from_exif: exif.is_some(),
         image,
     })
 }

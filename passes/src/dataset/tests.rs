@@ -248,6 +248,65 @@ fn nerfstudio_opencv_frames_are_undistorted_and_masked_and_fisheye_is_refused() 
     );
 }
 
+/// `path`'s JPEG with an EXIF block recording `seconds` as num/den (an
+/// APP1 segment after the start-of-image marker, as cameras write it).
+fn add_exif(path: &Path, num: u32, den: u32) {
+    let jpeg = std::fs::read(path).unwrap();
+    assert_eq!(&jpeg[..2], &[0xFF, 0xD8]);
+    let payload = [
+        b"Exif\0\0".as_slice(),
+        &super::exif::tests::exif_block(false, num, den),
+    ]
+    .concat();
+    let mut out = jpeg[..2].to_vec();
+    out.extend_from_slice(&[0xFF, 0xE1]);
+    out.extend_from_slice(&((payload.len() + 2) as u16).to_be_bytes());
+    out.extend_from_slice(&payload);
+    out.extend_from_slice(&jpeg[2..]);
+    std::fs::write(path, out).unwrap();
+}
+
+/// JPEG frames whose EXIF records their exposure time take it when the
+/// file gives none (and become brackets); the file's key wins over EXIF;
+/// a frame with neither has none.
+#[test]
+fn exposure_times_come_from_exif_where_the_file_gives_none() {
+    let dir = folder("exif");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.jpg");
+        image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
+            .save(dir.join(&name))
+            .unwrap();
+        if i < 3 {
+            add_exif(&dir.join(&name), 1, [250, 60, 30][i]);
+        }
+        let mut f = serde_json::json!({ "file_path": name, "transform_matrix": pose_rows(*e) });
+        if i == 2 {
+            f["exposure_time"] = 0.5.into();
+        }
+        frames.push(f);
+    }
+    let doc = serde_json::json!({ "fl_x": 7.0, "frames": frames });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    let got: Vec<(Option<f64>, bool)> = d
+        .frames
+        .iter()
+        .map(|f| (f.exposure_time, f.exposure_from_exif))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (Some(0.004), true),
+            (Some(1.0 / 60.0), true),
+            (Some(0.5), false),
+            (None, false)
+        ]
+    );
+    assert!(crate::train::pixels::is_bracket(&d.frames[0]));
+}
+
 #[test]
 fn errors_in_the_file_name_the_key() {
     let dir = folder("keys");

@@ -109,7 +109,8 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         .filter(|f| f.exposure_time.is_some())
         .count();
     if timed > 0 {
-        println!("exposure_time given for {timed} frames");
+        let exif = d.frames.iter().filter(|f| f.exposure_from_exif).count();
+        println!("exposure_time given for {timed} frames ({exif} from the images' EXIF)");
     }
     let b = d.bounds;
     println!(
