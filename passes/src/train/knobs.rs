@@ -42,7 +42,7 @@ pub struct TrainKnobs {
     pub learn_exposure: bool,
     /// After the last step, the density of every node whose largest
     /// rendering weight in any training ray is below this is set to zero
-    /// ([`super::prune`]); 0 keeps every node. The default, 0.01, raised
+    /// ([`super::prune`]; not after Ctrl-C); 0 keeps every node. The default, 0.01, raised
     /// CUPS' held-out views by 0.2 dB and left DOG's within 0.2 dB
     /// (`docs/benchmarks.md`, "Pruning").
     pub prune: f64,

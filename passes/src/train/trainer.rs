@@ -292,8 +292,9 @@ pub fn train(
         skip_empty: true,
         ..march
     };
+    // Pruned unless Ctrl-C ended the run (the field so far, at once).
     let mut pruned = 0;
-    if knobs.prune > 0.0 {
+    if knobs.prune > 0.0 && !(control.stop)() {
         let rays = super::prune::training_rays(dataset, &pool);
         let visibility = super::prune::node_visibility(&field, &rays, &view_march);
         (field, pruned) = super::prune::prune(&field, &visibility, knobs.prune);
