@@ -11,7 +11,8 @@ use inlay_passes::geometry::{Aabb, Ray};
 use inlay_passes::march::MarchKnobs;
 use inlay_passes::rng::Pcg32;
 use inlay_passes::train::{
-    adam_step, pixel_loss, render_ray_with_gradient, AdamKnobs, GpuTrainer, PixelTarget, TrainRay,
+    adam_step, pixel_loss, render_ray_with_gradient, AdamKnobs, GpuTrainer, GradientScatter,
+    PixelTarget, TrainRay,
 };
 
 /// A trainer starting from `field`.
@@ -88,15 +89,28 @@ fn rays(field: &GridField, n: usize) -> Vec<(Ray, PixelTarget, f64)> {
 /// coefficient's path), rays from three frames of different exposure
 /// gains, learnt: the batch's pixels, losses, the gradient of the values
 /// and of the gains (frame 0's fixed), then an Adam step of both, against
-/// the CPU.
+/// the CPU; with the gradients scattered by compare-and-swap and, where the
+/// device has it (lavapipe does), by atomic float adds.
 #[test]
 fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
-    for degree in [0, 2] {
-        gradient_and_adam_match(degree);
+    let ctx = common::gpu();
+    let mut scatters = vec![GradientScatter::CompareAndSwap];
+    if ctx.info().float_atomic_add {
+        scatters.push(GradientScatter::FloatAdd);
+    } else {
+        eprintln!(
+            "{} has no atomic float add: compare-and-swap only",
+            ctx.info().name
+        );
+    }
+    for scatter in scatters {
+        for degree in [0, 2] {
+            gradient_and_adam_match(degree, scatter);
+        }
     }
 }
 
-fn gradient_and_adam_match(degree: u32) {
+fn gradient_and_adam_match(degree: u32, scatter: GradientScatter) {
     let ctx = common::gpu();
     let lib = common::test_library();
     let field = sh_field(degree);
@@ -109,7 +123,9 @@ fn gradient_and_adam_match(degree: u32) {
     };
     let (bg, eps) = (DVec3::new(0.2, 0.1, 0.3), 0.05);
     let batch = rays(&field, 96);
-    let mut trainer = trainer_of(&ctx, &lib, &field, knobs);
+    let mut trainer = trainer_of(&ctx, &lib, &field, knobs)
+        .with_scatter(&ctx, &lib, scatter)
+        .unwrap();
     let gains = [
         DVec3::ONE,
         DVec3::new(0.7, 1.2, 0.9),

@@ -66,6 +66,10 @@ pub struct DeviceInfo {
     pub max_image_dimension_2d: u32,
     /// Size of the largest device-local memory heap in bytes.
     pub device_heap_bytes: u64,
+    /// Whether shaders may add 32-bit floats atomically in storage buffers
+    /// (VK_EXT_shader_atomic_float's shaderBufferFloat32AtomicAdd, enabled
+    /// when the device has it).
+    pub float_atomic_add: bool,
 }
 
 /// A surface and its loader, present when the context was made for a window.
@@ -136,7 +140,13 @@ impl Context {
             .or_else(|| std::env::var(DEVICE_ENV).ok());
         let (physical, queue_family, info) =
             pick_physical(&instance, surface.as_ref(), wanted.as_deref())?;
-        let device = create_device(&instance, physical, queue_family, surface.is_some())?;
+        let device = create_device(
+            &instance,
+            physical,
+            queue_family,
+            surface.is_some(),
+            info.float_atomic_add,
+        )?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
@@ -384,8 +394,29 @@ fn pick_physical(
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
         max_image_dimension_2d: props.limits.max_image_dimension2_d,
         device_heap_bytes: largest_device_heap(instance, pd),
+        float_atomic_add: has_float_atomic_add(instance, pd),
     };
     Ok((pd, family.unwrap_or(0), info))
+}
+
+/// Whether `pd` has VK_EXT_shader_atomic_float with
+/// shaderBufferFloat32AtomicAdd.
+fn has_float_atomic_add(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    // SAFETY: `pd` was enumerated from `instance`, which is alive.
+    let extensions =
+        unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let listed = extensions.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .is_ok_and(|n| n == ash::ext::shader_atomic_float::NAME)
+    });
+    if !listed {
+        return false;
+    }
+    let mut atomic = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomic);
+    // SAFETY: as above; the chain lives until the call returns.
+    unsafe { instance.get_physical_device_features2(pd, &mut features) };
+    atomic.shader_buffer_float32_atomic_add == vk::TRUE
 }
 
 /// The size of the largest device-local heap (on a CPU device, its only
@@ -448,6 +479,7 @@ fn create_device(
     pd: vk::PhysicalDevice,
     family: u32,
     swapchain: bool,
+    float_atomic_add: bool,
 ) -> Result<ash::Device> {
     let priorities = [1.0f32];
     let queues = [vk::DeviceQueueCreateInfo::default()
@@ -457,15 +489,21 @@ fn create_device(
         .dynamic_rendering(true)
         .synchronization2(true);
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default().host_query_reset(true);
-    let extensions: Vec<*const c_char> = if swapchain {
+    let mut extensions: Vec<*const c_char> = if swapchain {
         vec![ash::khr::swapchain::NAME.as_ptr()]
     } else {
         vec![]
     };
-    let info = vk::DeviceCreateInfo::default()
+    let mut atomic = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
+        .shader_buffer_float32_atomic_add(true);
+    let mut info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
-        .enabled_extension_names(&extensions)
         .push_next(&mut f13)
         .push_next(&mut f12);
+    if float_atomic_add {
+        extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
+        info = info.push_next(&mut atomic);
+    }
+    let info = info.enabled_extension_names(&extensions);
     unsafe { instance.create_device(pd, &info, None) }.vk("vkCreateDevice")
 }

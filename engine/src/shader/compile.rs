@@ -87,7 +87,10 @@ pub fn compile(
         let loc = e.location(&composed.source);
         located(&composed, loc, e.message().to_owned())
     })?;
-    let mut validator = Validator::new(ValidationFlags::all(), Capabilities::IMMEDIATES);
+    let mut validator = Validator::new(
+        ValidationFlags::all(),
+        Capabilities::IMMEDIATES | Capabilities::SHADER_FLOAT32_ATOMIC,
+    );
     let info = validator.validate(&module).map_err(|e| {
         let loc = e.location(&composed.source);
         located(&composed, loc, error_chain(e.as_inner()))

@@ -176,6 +176,35 @@ impl TrainRay {
     }
 }
 
+/// How `train-rays` adds gradients into the shared arrays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GradientScatter {
+    /// A compare-and-swap loop on the float's bits (core WGSL, every
+    /// device): `train/ray_grad.wgsl`.
+    CompareAndSwap,
+    /// One atomic float add (VK_EXT_shader_atomic_float):
+    /// `train/ray_grad_float.wgsl`.
+    FloatAdd,
+}
+
+impl GradientScatter {
+    /// The fastest the device has.
+    pub fn best(info: &inlay_engine::DeviceInfo) -> Self {
+        if info.float_atomic_add {
+            Self::FloatAdd
+        } else {
+            Self::CompareAndSwap
+        }
+    }
+
+    fn file(self) -> &'static str {
+        match self {
+            Self::CompareAndSwap => "train/ray_grad.wgsl",
+            Self::FloatAdd => "train/ray_grad_float.wgsl",
+        }
+    }
+}
+
 /// Name of the batch pass in the frame graph.
 pub const TRAIN_RAYS: &str = "train-rays";
 /// Name of the optimiser pass.
@@ -247,7 +276,12 @@ impl GpuTrainer {
             limit >> 20
         );
         Ok(Self {
-            ray_grad: lib.compute_pipeline(ctx, "train/ray_grad.wgsl", "main", &[])?,
+            ray_grad: lib.compute_pipeline(
+                ctx,
+                GradientScatter::best(ctx.info()).file(),
+                "main",
+                &[],
+            )?,
             adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &[])?,
             tv: lib.compute_pipeline(ctx, "train/tv.wgsl", "main", &[])?,
             descend: lib.compute_pipeline(ctx, "train/descend.wgsl", "main", &[])?,
@@ -295,6 +329,23 @@ impl GpuTrainer {
             tv_weights: (0.0, 0.0),
             gain_rate: None,
         })
+    }
+
+    /// The same trainer scattering its gradients the `scatter` way (by
+    /// default the fastest the device has). Fails where the device cannot.
+    pub fn with_scatter(
+        mut self,
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        scatter: GradientScatter,
+    ) -> anyhow::Result<Self> {
+        anyhow::ensure!(
+            scatter != GradientScatter::FloatAdd || ctx.info().float_atomic_add,
+            "{} cannot add floats atomically (VK_EXT_shader_atomic_float)",
+            ctx.info().name
+        );
+        self.ray_grad = lib.compute_pipeline(ctx, scatter.file(), "main", &[])?;
+        Ok(self)
     }
 
     /// Sets each frame's exposure gain (a ray of frame f records gain f

@@ -16,7 +16,7 @@ pub mod trainer;
 pub mod tv;
 
 pub use adam::{adam_step, AdamKnobs};
-pub use gpu::{GpuTrainer, TrainRay};
+pub use gpu::{GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::TrainKnobs;
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};

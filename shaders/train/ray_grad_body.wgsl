@@ -1,0 +1,181 @@
+// The body of the training kernel: one training ray per invocation, the
+// march's quadrature over the trained grid (no empty-space skipping), the
+// pixel's loss, and the loss's gradient with respect to every value the
+// ray read. The trained values are laid out as a field's on the device:
+// the nodes, then the view-dependent colour's coefficients
+// (field/sh_trilinear.wgsl). A photograph records its frame's exposure gain
+// (RGB) times the pixel (1 unless learnt); with learn_gains, the loss's
+// gradient with respect to the gain of every frame but the first is
+// scattered too. Mirrors passes/src/train/render.rs
+// render_ray_with_gradient.
+// Needs from the includer: the bindings `grad` (2) and `gain_grad` (5) and
+// `add_float(i, v)`, `add_gain_float(i, v)` that add v to their element i
+// atomically (train/ray_grad.wgsl: a compare-and-swap loop, core WGSL;
+// train/ray_grad_float.wgsl: atomicAdd on f32, VK_EXT_shader_atomic_float).
+
+#include "common/ray_box.wgsl"
+#include "field/trilinear.wgsl"
+#include "field/sh.wgsl"
+#include "train/loss.wgsl"
+
+struct TrainPush {
+    bounds_min: vec3<f32>,
+    ray_count: u32,
+    bounds_max: vec3<f32>,
+    step: f32,
+    resolution: vec3<u32>,
+    termination: f32,
+    background: vec3<f32>,
+    epsilon: f32,
+    sh_degree: u32,
+    learn_gains: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
+struct TrainRay {
+    origin: vec3<f32>,
+    kind: u32,
+    dir: vec3<f32>,
+    exposure: f32,
+    target_value: vec3<f32>,
+    weight: f32,
+    frame: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+var<immediate> pc: TrainPush;
+@group(0) @binding(0) var<storage, read> grid_nodes: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> rays: array<TrainRay>;
+@group(0) @binding(3) var<storage, read_write> ray_out: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> gains: array<vec4<f32>>;
+
+#include "field/sh_trilinear.wgsl"
+
+fn node_index(i: vec3<u32>) -> u32 {
+    let r = pc.resolution;
+    return i.x + r.x * (i.y + r.y * i.z);
+}
+
+fn sample_at(cell: TrilinearCell) -> vec4<f32> {
+    var v = vec4<f32>(0.0);
+    if !cell.inside {
+        return v;
+    }
+    for (var k = 0u; k < 8u; k++) {
+        v += trilinear_weight(cell.f, k) * grid_nodes[node_index(cell.base + trilinear_corner(k))];
+    }
+    return v;
+}
+
+// The colour along dir before the clamp at zero: the base, plus the
+// view-dependent part where the grid has one.
+fn unclamped_colour(cell: TrilinearCell, base: vec3<f32>, basis: array<f32, 8>) -> vec3<f32> {
+    if pc.sh_degree == 0u || !cell.inside {
+        return base;
+    }
+    return base + sh_trilinear(cell, pc.resolution, pc.sh_degree, basis);
+}
+
+// The colour seen: clamped at zero where the grid has view-dependent
+// colour, the base itself where it has not (as grid_view_colour).
+fn seen_colour(u: vec3<f32>) -> vec3<f32> {
+    return select(u, max(u, vec3<f32>(0.0)), pc.sh_degree > 0u);
+}
+
+// Renders ray `index` of the batch, its loss and gradient.
+fn train_ray(index: u32) {
+    if index >= pc.ray_count {
+        return;
+    }
+    let ray = rays[index];
+    let tb = ray_box(ray.origin, ray.dir, pc.bounds_min, pc.bounds_max);
+    let t0 = tb.x;
+    let t1 = tb.y;
+    var y = sh_basis(ray.dir);
+    // Forward.
+    var colour = vec3<f32>(0.0);
+    var transmittance = 1.0;
+    var used = 0u;
+    if t1 > t0 {
+        loop {
+            let a = t0 + f32(used) * pc.step;
+            if a >= t1 {
+                break;
+            }
+            let b = min(a + pc.step, t1);
+            let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
+            let v = sample_at(cell);
+            let alpha = 1.0 - exp(-v.w * (b - a));
+            colour += transmittance * alpha * seen_colour(unclamped_colour(cell, v.xyz, y));
+            transmittance *= 1.0 - alpha;
+            used += 1u;
+            if transmittance < pc.termination {
+                break;
+            }
+        }
+    }
+    let total = colour + transmittance * pc.background;
+    let gain = gains[ray.frame].xyz;
+    let l = pixel_loss(gain * total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
+    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss);
+    if pc.learn_gains != 0u && ray.frame != 0u {
+        let gg = ray.weight * l.grad * total;
+        add_gain_float(4u * ray.frame, gg.x);
+        add_gain_float(4u * ray.frame + 1u, gg.y);
+        add_gain_float(4u * ray.frame + 2u, gg.z);
+    }
+    let g = ray.weight * l.grad * gain;
+    if all(g == vec3<f32>(0.0)) {
+        return;
+    }
+    // Backward, with the running sum.
+    let count = select(0u, sh_count(pc.sh_degree), pc.sh_degree > 0u);
+    var t_i = 1.0;
+    var so_far = vec3<f32>(0.0);
+    for (var s = 0u; s < used; s++) {
+        let a = t0 + f32(s) * pc.step;
+        let b = min(a + pc.step, t1);
+        let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
+        if !cell.inside {
+            continue;
+        }
+        let v = sample_at(cell);
+        let u = unclamped_colour(cell, v.xyz, y);
+        let c = seen_colour(u);
+        // Channels the clamp at zero holds get no colour gradient.
+        let open = select(vec3<f32>(1.0), select(vec3<f32>(0.0), vec3<f32>(1.0), u > vec3<f32>(0.0)), count > 0u);
+        let dt = b - a;
+        let alpha = 1.0 - exp(-v.w * dt);
+        let w = t_i * alpha;
+        let t_next = t_i * (1.0 - alpha);
+        so_far += w * c;
+        let d_c = g * w * open;
+        let d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * pc.background);
+        for (var k = 0u; k < 8u; k++) {
+            let wk = trilinear_weight(cell.f, k);
+            if wk == 0.0 {
+                continue;
+            }
+            let corner = cell.base + trilinear_corner(k);
+            let n = 4u * node_index(corner);
+            add_float(n, d_c.x * wk);
+            add_float(n + 1u, d_c.y * wk);
+            add_float(n + 2u, d_c.z * wk);
+            add_float(n + 3u, d_sigma * wk);
+            if count > 0u {
+                let s = 4u * sh_first(corner, pc.resolution, pc.sh_degree);
+                for (var j = 0u; j < count; j++) {
+                    let e = d_c * (wk * y[j]);
+                    add_float(s + 4u * j, e.x);
+                    add_float(s + 4u * j + 1u, e.y);
+                    add_float(s + 4u * j + 2u, e.z);
+                }
+            }
+        }
+        t_i = t_next;
+    }
+}
