@@ -137,13 +137,26 @@ inlay_engine::gpu_struct! {
     }
 }
 
-/// Gains as the shader reads them: (r, g, b, 0) per frame.
-fn gain_bytes(gains: &[DVec3]) -> Vec<u8> {
-    gains
+/// The exposure gains' buffers: the gains as the shader reads them
+/// ((r, g, b, 0) per frame), their gradient and Adam's moments (zero).
+fn gain_buffers(ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<[Arc<Buffer>; 3]> {
+    anyhow::ensure!(!gains.is_empty(), "no frame");
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST;
+    let bytes: Vec<u8> = gains
         .iter()
         .flat_map(|g| [g.x as f32, g.y as f32, g.z as f32, 0.0])
         .flat_map(f32::to_le_bytes)
-        .collect()
+        .collect();
+    let buffer = |name: &str, data: &[u8]| -> anyhow::Result<Arc<Buffer>> {
+        Ok(Arc::new(Buffer::with_data(ctx, name, data, usage)?))
+    };
+    Ok([
+        buffer("train-gains", &bytes)?,
+        buffer("train-gain-grad", &vec![0u8; 16 * gains.len()])?,
+        buffer("train-gain-moments", &vec![0u8; 32 * gains.len()])?,
+    ])
 }
 
 impl TrainRay {
@@ -275,6 +288,7 @@ impl GpuTrainer {
             ctx.info().name,
             limit >> 20
         );
+        let [gains, gain_grad, gain_moments] = gain_buffers(ctx, &[DVec3::ONE])?;
         Ok(Self {
             ray_grad: lib.compute_pipeline(
                 ctx,
@@ -303,24 +317,9 @@ impl GpuTrainer {
                 &vec![0u8; n * 32],
                 usage,
             )?),
-            gains: Arc::new(Buffer::with_data(
-                ctx,
-                "train-gains",
-                &gain_bytes(&[DVec3::ONE]),
-                usage,
-            )?),
-            gain_grad: Arc::new(Buffer::with_data(
-                ctx,
-                "train-gain-grad",
-                &[0u8; 16],
-                usage,
-            )?),
-            gain_moments: Arc::new(Buffer::with_data(
-                ctx,
-                "train-gain-moments",
-                &[0u8; 32],
-                usage,
-            )?),
+            gains,
+            gain_grad,
+            gain_moments,
             resolution,
             bounds: field.bounds,
             sh_degree: field.sh_degree,
@@ -352,28 +351,7 @@ impl GpuTrainer {
     /// times its pixel; frame 0's stays as given when gains are learnt),
     /// their gradient and moments cleared.
     pub fn set_gains(&mut self, ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<()> {
-        anyhow::ensure!(!gains.is_empty(), "no frame");
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_SRC
-            | vk::BufferUsageFlags::TRANSFER_DST;
-        self.gains = Arc::new(Buffer::with_data(
-            ctx,
-            "train-gains",
-            &gain_bytes(gains),
-            usage,
-        )?);
-        self.gain_grad = Arc::new(Buffer::with_data(
-            ctx,
-            "train-gain-grad",
-            &vec![0u8; 16 * gains.len()],
-            usage,
-        )?);
-        self.gain_moments = Arc::new(Buffer::with_data(
-            ctx,
-            "train-gain-moments",
-            &vec![0u8; 32 * gains.len()],
-            usage,
-        )?);
+        [self.gains, self.gain_grad, self.gain_moments] = gain_buffers(ctx, gains)?;
         Ok(())
     }
 
