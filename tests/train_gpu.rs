@@ -104,13 +104,14 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
         );
     }
     for scatter in scatters {
-        for degree in [0, 2] {
-            gradient_and_adam_match(degree, scatter);
+        // With the distortion loss at degree 0, without it at degree 2.
+        for (degree, distortion) in [(0, 0.4), (2, 0.0)] {
+            gradient_and_adam_match(degree, distortion, scatter);
         }
     }
 }
 
-fn gradient_and_adam_match(degree: u32, scatter: GradientScatter) {
+fn gradient_and_adam_match(degree: u32, distortion: f64, scatter: GradientScatter) {
     let ctx = common::gpu();
     let lib = common::test_library();
     let field = sh_field(degree);
@@ -126,6 +127,7 @@ fn gradient_and_adam_match(degree: u32, scatter: GradientScatter) {
     let mut trainer = trainer_of(&ctx, &lib, &field, knobs)
         .with_scatter(&ctx, &lib, scatter)
         .unwrap();
+    trainer.distortion = distortion;
     let gains = [
         DVec3::ONE,
         DVec3::new(0.7, 1.2, 0.9),
@@ -150,10 +152,10 @@ fn gradient_and_adam_match(degree: u32, scatter: GradientScatter) {
         // The photograph records g·C: the gradient reaches C through g.
         let f = frame_of(i) as usize;
         let g = gains[f];
-        let r = render_ray_with_gradient(&field, ray, &knobs, bg, |c| {
+        let r = render_ray_with_gradient(&field, ray, &knobs, bg, *w * distortion, |c| {
             *w * g * pixel_loss(g * c, *target, eps).1
         });
-        let loss = w * pixel_loss(g * r.colour, *target, eps).0;
+        let loss = w * pixel_loss(g * r.colour, *target, eps).0 + r.distortion;
         if f != 0 {
             cpu_gain_grad[f] += *w * pixel_loss(g * r.colour, *target, eps).1 * r.colour;
         }

@@ -6,8 +6,9 @@
 // (field/sh_trilinear.wgsl). A photograph records its frame's exposure gain
 // (RGB) times the pixel (1 unless learnt); with learn_gains, the loss's
 // gradient with respect to the gain of every frame but the first is
-// scattered too. Mirrors passes/src/train/render.rs
-// render_ray_with_gradient.
+// scattered too. With pc.distortion > 0, the distortion loss of the ray's
+// weights is added, and its gradient with respect to the densities.
+// Mirrors passes/src/train/render.rs render_ray_with_gradient.
 // Needs from the includer: the bindings `grad` (2) and `gain_grad` (5) and
 // `add_float(i, v)`, `add_gain_float(i, v)` that add v to their element i
 // atomically (train/ray_grad.wgsl: a compare-and-swap loop, core WGSL;
@@ -29,7 +30,8 @@ struct TrainPush {
     epsilon: f32,
     sh_degree: u32,
     learn_gains: u32,
-    pad1: u32,
+    // The distortion loss's weight over the field's diagonal, λ/D (0: none).
+    distortion: f32,
     pad2: u32,
 }
 
@@ -100,6 +102,13 @@ fn train_ray(index: u32) {
     var colour = vec3<f32>(0.0);
     var transmittance = 1.0;
     var used = 0u;
+    let distort = pc.distortion > 0.0;
+    // The weights' sums the distortion loss needs: Σw, Σw·t, the ordered
+    // pairs Σ_{j<i} w_i w_j (t_i − t_j), and Σ w²Δ.
+    var w_all = 0.0;
+    var wt_all = 0.0;
+    var pairs = 0.0;
+    var own = 0.0;
     if t1 > t0 {
         loop {
             let a = t0 + f32(used) * pc.step;
@@ -110,7 +119,15 @@ fn train_ray(index: u32) {
             let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
             let v = sample_at(cell);
             let alpha = 1.0 - exp(-v.w * (b - a));
-            colour += transmittance * alpha * seen_colour(unclamped_colour(cell, v.xyz, y));
+            let w = transmittance * alpha;
+            colour += w * seen_colour(unclamped_colour(cell, v.xyz, y));
+            if distort {
+                let t = 0.5 * (a + b);
+                pairs += w * (t * w_all - wt_all);
+                own += w * w * (b - a);
+                w_all += w;
+                wt_all += w * t;
+            }
             transmittance *= 1.0 - alpha;
             used += 1u;
             if transmittance < pc.termination {
@@ -121,7 +138,10 @@ fn train_ray(index: u32) {
     let total = colour + transmittance * pc.background;
     let gain = gains[ray.frame].xyz;
     let l = pixel_loss(gain * total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
-    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss);
+    // The distortion loss, weighted as the pixel's (λ/D folded in).
+    let lambda = ray.weight * pc.distortion;
+    let distortion = lambda * (2.0 * pairs + own / 3.0);
+    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss + distortion);
     if pc.learn_gains != 0u && ray.frame != 0u {
         let gg = ray.weight * l.grad * total;
         add_gain_float(4u * ray.frame, gg.x);
@@ -129,13 +149,16 @@ fn train_ray(index: u32) {
         add_gain_float(4u * ray.frame + 2u, gg.z);
     }
     let g = ray.weight * l.grad * gain;
-    if all(g == vec3<f32>(0.0)) {
+    if all(g == vec3<f32>(0.0)) && distortion == 0.0 {
         return;
     }
     // Backward, with the running sum.
     let count = select(0u, sh_count(pc.sh_degree), pc.sh_degree > 0u);
     var t_i = 1.0;
     var so_far = vec3<f32>(0.0);
+    var w_before = 0.0;
+    var wt_before = 0.0;
+    var e_so_far = 0.0;
     for (var s = 0u; s < used; s++) {
         let a = t0 + f32(s) * pc.step;
         let b = min(a + pc.step, t1);
@@ -154,7 +177,19 @@ fn train_ray(index: u32) {
         let t_next = t_i * (1.0 - alpha);
         so_far += w * c;
         let d_c = g * w * open;
-        let d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * pc.background);
+        var d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * pc.background);
+        if distort {
+            // e = ∂L_d/∂w of this sample, from the sums before and after it.
+            let t = 0.5 * (a + b);
+            let w_after = w_all - w_before - w;
+            let wt_after = wt_all - wt_before - w * t;
+            let spread = t * w_before - wt_before + wt_after - t * w_after;
+            let e = lambda * (2.0 * spread + 2.0 / 3.0 * w * dt);
+            e_so_far += w * e;
+            d_sigma += dt * (t_next * e - (2.0 * distortion - e_so_far));
+            w_before += w;
+            wt_before += w * t;
+        }
         for (var k = 0u; k < 8u; k++) {
             let wk = trilinear_weight(cell.f, k);
             if wk == 0.0 {

@@ -40,8 +40,9 @@ inlay_engine::gpu_struct! {
         pub sh_degree: u32,
         /// 1: scatter the gradient of the frames' exposure gains.
         pub learn_gains: u32,
-        /// Padding.
-        pub pad1: u32,
+        /// The distortion loss's weight λ over the field's diagonal (0:
+        /// none).
+        pub distortion: f32,
         /// Padding.
         pub pad2: u32,
     }
@@ -259,6 +260,9 @@ pub struct GpuTrainer {
     /// The step size of the frames' exposure gains when they are learnt
     /// (Adam, after each of the grid's steps); None keeps them fixed.
     pub gain_rate: Option<f32>,
+    /// The distortion loss's weight λ ([`super::render_ray_with_gradient`];
+    /// 0 leaves it out).
+    pub distortion: f64,
 }
 
 impl GpuTrainer {
@@ -327,6 +331,7 @@ impl GpuTrainer {
             steps: 0,
             tv_weights: (0.0, 0.0),
             gain_rate: None,
+            distortion: 0.0,
         })
     }
 
@@ -380,7 +385,7 @@ impl GpuTrainer {
             epsilon: epsilon as f32,
             sh_degree: self.sh_degree,
             learn_gains: self.gain_rate.is_some() as u32,
-            pad1: 0,
+            distortion: (self.distortion / self.bounds.diagonal()) as f32,
             pad2: 0,
         }
     }

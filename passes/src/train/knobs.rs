@@ -33,6 +33,13 @@ pub struct TrainKnobs {
     pub tv_colour: f64,
     /// The same for density.
     pub tv_density: f64,
+    /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
+    /// pulls each ray's weight into one short stretch, surfaces into thin
+    /// shells; 0 leaves it out. On DOG at 128 nodes from 64 views of 256²,
+    /// 0.1 raised the held-out views by 1.3 and 2.2 dB, 0.5 overshot
+    /// (`docs/benchmarks.md`, "Distortion loss"); off by default until
+    /// measured on a real capture.
+    pub distortion: f64,
     /// Degree of the view-dependent colour trained (spherical harmonics,
     /// 0..=2; 0: one colour per node, as a bake's).
     pub sh_degree: u32,
@@ -64,6 +71,7 @@ impl Default for TrainKnobs {
             epsilon: 4.0,
             tv_colour: 0.0,
             tv_density: 0.0,
+            distortion: 0.0,
             sh_degree: 0,
             learn_exposure: false,
             prune: 0.01,
@@ -110,6 +118,7 @@ impl TrainKnobs {
         for (k, v) in [
             ("tv_colour", self.tv_colour),
             ("tv_density", self.tv_density),
+            ("distortion", self.distortion),
             ("prune", self.prune),
         ] {
             if !(v.is_finite() && v >= 0.0) {

@@ -242,6 +242,7 @@ pub fn train(
         let res = field.resolution;
         let mut gpu = GpuTrainer::new(ctx, lib, &field, march)?;
         gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
+        gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
         while step < end {

@@ -61,6 +61,11 @@ pub struct TrainArgs {
     /// Total variation's weight on neighbouring nodes' density differences.
     #[arg(long, default_value_t = TrainKnobs::default().tv_density)]
     pub tv_density: f64,
+    /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
+    /// weight into one short stretch, so surfaces train as thin shells
+    /// rather than haze (0: none).
+    #[arg(long, default_value_t = TrainKnobs::default().distortion)]
+    pub distortion: f64,
     /// Degree of view-dependent colour (spherical harmonics, 0..=2; 0 is
     /// one colour per node). Degree 1 adds 3 RGB coefficients a node,
     /// degree 2 8, to the file and to the device's memory. Default: the
@@ -126,6 +131,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         epsilon: args.epsilon,
         tv_colour: args.tv_colour,
         tv_density: args.tv_density,
+        distortion: args.distortion,
         sh_degree: args.sh_degree.unwrap_or(
             resume
                 .as_ref()
