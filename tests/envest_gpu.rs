@@ -33,11 +33,12 @@ impl Plants {
         }
     }
 
-    /// Surface points from `source`'s views.
+    /// Surface points from `source`'s views, those `seen_from` saw.
     fn surface(
         &self,
         knobs: &EnvEstimateKnobs,
         source: &inlay_passes::envest::ViewSource,
+        seen_from: Option<&inlay_passes::envest::Witnesses>,
     ) -> inlay_passes::envest::SurfaceSample {
         sample_surface(
             &self.ctx,
@@ -47,6 +48,7 @@ impl Plants {
             self.scene.march,
             knobs,
             source,
+            seen_from,
             &|_, _, _, _| {},
         )
         .unwrap()
@@ -63,7 +65,7 @@ fn near_field_kernels_match_the_cpu_mirror() {
         pixels_per_view: 4,
         ..EnvEstimateKnobs::default()
     };
-    let surface = p.surface(&knobs, &Default::default());
+    let surface = p.surface(&knobs, &Default::default(), None);
     assert_eq!(surface.views_kept, 3);
     assert!(surface.points.len() >= 6, "{} points", surface.points.len());
     for p in &surface.points {
@@ -163,7 +165,7 @@ fn views_from_cameras_draw_points_those_cameras_see() {
         pixels_per_view: 8,
         ..EnvEstimateKnobs::default()
     };
-    let surface = p.surface(&knobs, &source);
+    let surface = p.surface(&knobs, &source, None);
     common::assert_no_validation_errors(ctx);
     assert_eq!(surface.views_kept as usize, cameras.len());
     assert!(surface
@@ -184,4 +186,39 @@ fn views_from_cameras_draw_points_those_cameras_see() {
         );
         assert!(p.normal.dot(frame.origin - p.position) > 0.0);
     }
+}
+
+/// `--seen-from`: from the sphere's views, only points one of the scene's
+/// cameras saw are kept (the others counted); without it, points no camera
+/// saw are drawn too.
+#[test]
+fn seen_from_keeps_the_points_a_camera_saw() {
+    use inlay_passes::envest::{ViewSource, Witness, Witnesses};
+    let p = Plants::bake();
+    let witnesses = Witnesses {
+        cameras: p
+            .scene
+            .cameras
+            .iter()
+            .map(|c| Witness::new(c, 16, 9))
+            .collect(),
+    };
+    let knobs = EnvEstimateKnobs {
+        views: 12,
+        view_size: 32,
+        pixels_per_view: 8,
+        ..EnvEstimateKnobs::default()
+    };
+    let saw = |q: &inlay_passes::envest::SurfacePoint| {
+        witnesses.saw(&p.field, &p.scene.march, q.position, q.normal)
+    };
+    let all = p.surface(&knobs, &ViewSource::Sphere, None);
+    let seen = p.surface(&knobs, &ViewSource::Sphere, Some(&witnesses));
+    common::assert_no_validation_errors(&p.ctx);
+    assert_eq!(all.unseen, 0);
+    let unseen = all.points.iter().filter(|q| !saw(q)).count();
+    assert!(unseen > 0, "every point of the sphere's views was seen");
+    assert!(seen.unseen > 0);
+    assert!(seen.points.len() > all.points.len() / 2);
+    assert!(seen.points.iter().all(saw));
 }

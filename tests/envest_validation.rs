@@ -49,6 +49,7 @@ fn validate_with(name: &str, rays_per_point: u32, near_lights: u32) -> Validatio
         scene.march,
         &knobs,
         &Default::default(),
+        None,
         &|_, _, _, _| {},
     )
     .unwrap();

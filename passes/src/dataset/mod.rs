@@ -387,6 +387,8 @@ pub struct SceneCamera {
     /// Its principal point is more than a pixel off the image's centre
     /// (a scene camera is centred, so its view is shifted by that much).
     pub off_centre: bool,
+    /// Its image's size in pixels (width, height).
+    pub size: (u32, u32),
 }
 
 /// The cameras of the dataset at `path` as scene cameras, one per frame
@@ -397,6 +399,7 @@ pub fn scene_cameras(path: &Path, split: &str) -> Result<Vec<SceneCamera>, Datas
         .map(|(name, pose, k)| SceneCamera {
             off_centre: (k.cx - 0.5 * k.width as f64).abs() > 1.0
                 || (k.cy - 0.5 * k.height as f64).abs() > 1.0,
+            size: (k.width, k.height),
             spec: crate::camera::CameraSpec {
                 name: Some(name),
                 position: pose.origin(),

@@ -13,8 +13,9 @@ use super::fit::{fit_environment, FitData, FitResult};
 use super::knobs::EnvEstimateKnobs;
 use super::near_field::{NearField, NearFieldTracer};
 use super::quality::{view_quality, QualityScore, ViewImage};
-use super::surface::{draw_points, emitter_limit, view_candidates, SurfacePoint};
+use super::surface::{draw_points, emitter_limit, keep_seen, view_candidates, SurfacePoint};
 use super::views::ViewSource;
+use super::witnesses::Witnesses;
 use crate::camera::CameraFrame;
 use crate::field::{GpuGridField, GridField};
 use crate::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
@@ -49,6 +50,9 @@ pub struct SurfaceSample {
     pub emitters: usize,
     /// Covered pixels left out as mixed, over all kept views.
     pub mixed: usize,
+    /// Candidates tried and left out as seen by no photograph, over all
+    /// views rendered.
+    pub unseen: usize,
 }
 
 /// A finished estimate.
@@ -105,6 +109,7 @@ pub fn sample_surface(
     march: MarchKnobs,
     knobs: &EnvEstimateKnobs,
     source: &ViewSource,
+    seen_from: Option<&Witnesses>,
     progress: Progress,
 ) -> anyhow::Result<SurfaceSample> {
     let lib = &gpu.library(lib);
@@ -120,6 +125,7 @@ pub fn sample_surface(
         scores: Vec::new(),
         emitters: 0,
         mixed: 0,
+        unseen: 0,
     };
     let mut rejected = Vec::new();
     while out.views_kept < knobs.views && out.views_tried < max_tries {
@@ -141,7 +147,17 @@ pub fn sample_surface(
         };
         let mut keep = judged <= knobs.quality_threshold;
         if keep {
-            let candidates = view_candidates(field, &frame, &image, out.views_tried - 1);
+            let mut candidates =
+                view_candidates(field, &frame, &image, out.views_tried - 1, &march);
+            if let Some(w) = seen_from {
+                // Twice the points drawn, for those left out as lights.
+                let mut rng = Pcg32::new(knobs.seed, 0x5EE4_0000_0000 | out.views_tried as u64);
+                let count = 2 * knobs.pixels_per_view as usize;
+                candidates = keep_seen(candidates, count, &mut rng, |p| {
+                    w.saw(field, &march, p.position, p.normal)
+                });
+                out.unseen += candidates.unseen;
+            }
             // A view with no surface to draw from is as poor as an empty one.
             keep = !candidates.points.is_empty();
             if keep {
@@ -180,7 +196,9 @@ pub fn sample_surface(
     Ok(out)
 }
 
-/// Runs the whole estimate on `field`, its views from `source`.
+/// Runs the whole estimate on `field`, its views from `source`, its
+/// surface points those `seen_from` saw (all without).
+#[allow(clippy::too_many_arguments)]
 pub fn estimate_environment(
     ctx: &Arc<Context>,
     lib: &ShaderLibrary,
@@ -188,6 +206,7 @@ pub fn estimate_environment(
     march: MarchKnobs,
     knobs: &EnvEstimateKnobs,
     source: &ViewSource,
+    seen_from: Option<&Witnesses>,
     progress: Progress,
 ) -> anyhow::Result<EnvEstimate> {
     if let Some((k, m)) = knobs.problem() {
@@ -196,7 +215,9 @@ pub fn estimate_environment(
     let gpu = GpuGridField::upload(ctx, field)?;
     let lib = &gpu.library(lib);
     let t0 = Instant::now();
-    let surface = sample_surface(ctx, lib, field, &gpu, march, knobs, source, progress)?;
+    let surface = sample_surface(
+        ctx, lib, field, &gpu, march, knobs, source, seen_from, progress,
+    )?;
     let t1 = Instant::now();
     let tracer = NearFieldTracer::new(ctx, lib, march)?;
     let near = tracer.trace(

@@ -5,7 +5,8 @@
 //! its CPU mirror [`near_field_reference`], the ray set [`hemisphere`]),
 //! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
 //! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]);
-//! `estimate` runs them in order, `file` stores the lobes, and
+//! [`witnesses`] keeps a trained field's points to what its photographs
+//! saw; `estimate` runs them in order, `file` stores the lobes, and
 //! [`truth`] checks them against a recipe's lights ([`recovery`]: did it
 //! find each hidden emitter).
 
@@ -28,6 +29,7 @@ pub mod share_prior;
 pub mod surface;
 pub mod truth;
 pub mod views;
+pub mod witnesses;
 
 #[cfg(test)]
 mod tests;
@@ -45,9 +47,12 @@ pub use near_field::{NearField, NearFieldTracer};
 pub use near_lights::PointLight;
 pub use quality::{view_quality, QualityScore, ViewImage};
 pub use recovery::{emitter_recovery, EmitterRecovery};
-pub use surface::{draw_points, emitter_limit, view_candidates, SurfacePoint, ViewPoints};
+pub use surface::{
+    draw_points, emitter_limit, keep_seen, view_candidates, SurfacePoint, ViewPoints,
+};
 pub use truth::{
     field_light_irradiance, hidden_light_lobes, hidden_light_lobes_except, light_irradiance,
     lobes_irradiance, point_lights_irradiance, test_points, Lights, Validation,
 };
 pub use views::ViewSource;
+pub use witnesses::{Witness, Witnesses};

@@ -18,6 +18,7 @@ use inlay_passes::envest::{
     emitter_recovery, environment_file_text, estimate_environment, field_light_irradiance,
     hidden_light_lobes, EnvEstimateKnobs, Stage, Validation, ViewSource,
 };
+use inlay_passes::envest::{Witness, Witnesses};
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
 use inlay_passes::march::MarchPass;
 use inlay_passes::scene::{load_scene, ObjectEnvironment, Scene};
@@ -58,6 +59,13 @@ pub struct EstimateEnvArgs {
     /// constrained the light less than the sphere).
     #[arg(long, default_value = "sphere")]
     pub views_from: String,
+    /// Keep only surface points these cameras saw (facing one, inside its
+    /// view, nothing opaque between): a dataset's transforms.json, for a
+    /// field trained from it (the sphere's views see sides of it no
+    /// photograph did, such as a floor's underside), or `scene` for the
+    /// scene's cameras (at 16:9).
+    #[arg(long)]
+    pub seen_from: Option<String>,
     /// Views kept after the quality check (paper: 100).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().views)]
     pub views: u32,
@@ -172,6 +180,23 @@ fn view_source(scene: &Scene, views_from: &str) -> anyhow::Result<(ViewSource, S
     }
 }
 
+/// The cameras `--seen-from` names.
+fn witnesses(scene: &Scene, seen_from: &str) -> anyhow::Result<Witnesses> {
+    let cameras = match seen_from {
+        "scene" => scene
+            .cameras
+            .iter()
+            .map(|c| Witness::new(c, 16, 9))
+            .collect(),
+        path => inlay_passes::dataset::scene_cameras(Path::new(path), "train")
+            .map_err(|e| anyhow::anyhow!("--seen-from: {e}"))?
+            .iter()
+            .map(|c| Witness::new(&c.spec, c.size.0, c.size.1))
+            .collect(),
+    };
+    Ok(Witnesses { cameras })
+}
+
 /// Runs `estimate-env`.
 pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     let knobs = args.knobs();
@@ -193,6 +218,10 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         check_image_output("--compare", compare)?;
     }
     let (source, source_words) = view_source(&scene, &args.views_from)?;
+    let seen_from = match &args.seen_from {
+        Some(s) => Some(witnesses(&scene, s)?),
+        None => None,
+    };
     let mut field = scene_field(
         &scene,
         args.field.as_deref(),
@@ -221,18 +250,33 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         }
     };
     println!("views from {source_words}");
-    let estimate =
-        estimate_environment(ctx, &lib, &field, scene.march, &knobs, &source, &progress)?;
+    if let Some(w) = &seen_from {
+        println!(
+            "surface points only where one of {} cameras saw them",
+            w.cameras.len()
+        );
+    }
+    let estimate = estimate_environment(
+        ctx,
+        &lib,
+        &field,
+        scene.march,
+        &knobs,
+        &source,
+        seen_from.as_ref(),
+        &progress,
+    )?;
     bars.iter().for_each(|b| b.finish_and_clear());
     let s = &estimate.surface;
     println!(
-        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources, {} as mixed)",
+        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources, {} as mixed, {} as seen by no camera)",
         s.views_kept,
         s.views_tried,
         s.scores.iter().filter(|(_, k)| !k).count(),
         s.points.len(),
         s.emitters,
-        s.mixed
+        s.mixed,
+        s.unseen
     );
     println!(
         "time: views {:.1} s, near field {:.1} s ({} rays per point), fit {:.1} s ({} steps); final loss {:.4e} ({:.4e} without E_env's sampling noise)",
