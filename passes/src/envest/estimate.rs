@@ -128,6 +128,8 @@ pub fn sample_surface(
         unseen: 0,
     };
     let mut rejected = Vec::new();
+    // Views that passed the quality score but had no surface point.
+    let mut surfaceless = 0u32;
     while out.views_kept < knobs.views && out.views_tried < max_tries {
         let spec = source.view(&field.bounds, knobs.seed, out.views_tried as u64);
         out.views_tried += 1;
@@ -147,8 +149,14 @@ pub fn sample_surface(
         };
         let mut keep = judged <= knobs.quality_threshold;
         if keep {
-            let mut candidates =
-                view_candidates(field, &frame, &image, out.views_tried - 1, &march);
+            let mut candidates = view_candidates(
+                field,
+                &frame,
+                &image,
+                out.views_tried - 1,
+                &march,
+                knobs.surface_test,
+            );
             if let Some(w) = seen_from {
                 // Twice the points drawn, for those left out as lights.
                 let mut rng = Pcg32::new(knobs.seed, 0x5EE4_0000_0000 | out.views_tried as u64);
@@ -160,6 +168,9 @@ pub fn sample_surface(
             }
             // A view with no surface to draw from is as poor as an empty one.
             keep = !candidates.points.is_empty();
+            if !keep {
+                surfaceless += 1;
+            }
             if keep {
                 views.push((out.views_tried, candidates));
             }
@@ -187,6 +198,14 @@ pub fn sample_surface(
         out.mixed += drawn.mixed;
         out.points.extend(drawn.points);
     }
+    anyhow::ensure!(
+        !out.points.is_empty() || surfaceless == 0,
+        "{surfaceless} of {} views passed the quality check but held no surface point (surface test {:?}): \
+         a field trained from photographs has surfaces a hundred times less steep than a bake's; \
+         try the surface test `weight`",
+        out.views_tried,
+        knobs.surface_test
+    );
     anyhow::ensure!(
         !out.points.is_empty(),
         "no view of the field passed the quality check ({} tried, threshold {}): is the field empty?",

@@ -79,6 +79,11 @@ pub struct EnvEstimateKnobs {
     /// CUPS and PLANTS estimate the same at both, BOOKS 11.8 % → 12.5 %
     /// (30 views, 8192 rays; docs/fidelity.md).
     pub emitter_ratio: f64,
+    /// How a surface point is told from a point in a medium
+    /// ([`super::surface::SurfaceTest`]): by the density's gradient (for
+    /// baked fields, the default) or by where the ray's weight lies (for
+    /// trained fields).
+    pub surface_test: super::surface::SurfaceTest,
     /// Seed of every random choice (views, pixels, rays, batches, samples).
     pub seed: u64,
 }
@@ -98,6 +103,7 @@ impl Default for EnvEstimateKnobs {
             albedo_width: 64,
             albedo_octaves: 0,
             iterations: 1000,
+            surface_test: super::surface::SurfaceTest::Gradient,
             batch: 512,
             env_samples: 48,
             env_rate: 0.02,

@@ -4,14 +4,9 @@
 //!
 //! A pixel is a candidate when its ray passes through the field (Ô ≥ 0.5)
 //! and the point is on a surface the model describes: the normal faces
-//! the camera, the ray's weight sits on a surface (at least
-//! [`MIN_SURFACE_SHARE`] of its opacity within [`SURFACE_HALF_WIDTH`] node
-//! spacings of the expected depth; through semi-transparent matter such as
-//! foliage or glass it is spread along the ray, and the Lambertian surface
-//! model does not hold there; the test asks nothing of the density's
-//! scale, in which a bake's surfaces and a trainer's differ a hundredfold:
-//! it replaced |∇σ|·h² ≥ 0.5, which every surface of DOG's 128-node
-//! trained field failed), the pixel is not mixed (its radiance's luminance and
+//! the camera, the point is on a surface rather than inside
+//! semi-transparent matter such as foliage or glass, where the Lambertian
+//! surface model does not hold ([`SurfaceTest`]), the pixel is not mixed (its radiance's luminance and
 //! that of the field's own colour at the point differ by at most
 //! [`MAX_MIXED_DIFFERENCE`] of the larger: a ray that grazes a lamp's glow
 //! or a silhouette on its way collects light the point does not reflect),
@@ -32,17 +27,43 @@ use crate::march::{march_samples, MarchKnobs};
 use crate::rng::Pcg32;
 use crate::sgfit::model::luminance;
 
+/// Smallest |∇σ|·h² of a surface point under [`SurfaceTest::Gradient`]
+/// (an opaque surface of the bundled recipes reaches about 5 at its
+/// expected depth; a medium's edge about 0.05).
+pub const MIN_SURFACE_GRADIENT: f64 = 0.5;
+
 /// Half the width of the stretch of a ray, about its expected depth, that
-/// must hold a surface's weight, in node spacings.
+/// must hold a surface's weight under [`SurfaceTest::Weight`], in node
+/// spacings.
 pub const SURFACE_HALF_WIDTH: f64 = 2.0;
 
 /// Smallest share of a pixel's opacity within [`SURFACE_HALF_WIDTH`] node
-/// spacings of its expected depth for its point to be on a surface. Over
-/// the estimate's views, 95 % of DOG's baked surface pixels reach 0.84,
-/// the tenth of PLANTS' covered pixels that see into its foliage stay
-/// under 0.2; DOG trained at 128 nodes, half its pixels pass (median
-/// 0.53; 0.61 with the trainer's distortion loss).
+/// spacings of its expected depth for its point to be on a surface under
+/// [`SurfaceTest::Weight`]. Over the estimate's views, 95 % of DOG's
+/// baked surface pixels reach 0.84 and the tenth of PLANTS' covered
+/// pixels that see into its foliage stay under 0.2; DOG trained at 128
+/// nodes, half its pixels pass (median 0.53; 0.61 with the trainer's
+/// distortion loss).
 pub const MIN_SURFACE_SHARE: f64 = 0.5;
+
+/// How a surface point is told from one inside a medium.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SurfaceTest {
+    /// The density rises like a surface's: |∇σ|·h² ≥
+    /// [`MIN_SURFACE_GRADIENT`], h the node spacing. Right for a bake,
+    /// whose opaque surfaces are a hundred times steeper than its media.
+    /// A trained field's surfaces are as opaque with a hundredth of the
+    /// gradient: every surface of DOG trained at 128 nodes fails it.
+    #[default]
+    Gradient,
+    /// The ray's weight sits on a surface: at least [`MIN_SURFACE_SHARE`]
+    /// of the pixel's opacity within [`SURFACE_HALF_WIDTH`] node spacings
+    /// of its expected depth. Asks nothing of the density's scale, so it
+    /// holds on trained fields; but a bake's dense foliage passes it
+    /// (PLANTS' all-visible estimate 6.9 % of the lamp's light against
+    /// under 2 % with the gradient), so it is not the default.
+    Weight,
+}
 
 /// Largest relative difference between a pixel's luminance and the field's
 /// colour at its surface point before the pixel counts as mixed. On PLANTS
@@ -116,13 +137,15 @@ fn surface_share(
 }
 
 /// Every candidate surface point of `view` (rendered from `frame` with
-/// `knobs`), `view_index` naming it, before light sources are left out.
+/// `knobs`), `view_index` naming it, surfaces told by `test`, before light
+/// sources are left out.
 pub fn view_candidates(
     field: &GridField,
     frame: &CameraFrame,
     view: &ViewImage,
     view_index: u32,
     knobs: &MarchKnobs,
+    test: SurfaceTest,
 ) -> ViewPoints {
     let h = field.spacing().min_element();
     let mut out = ViewPoints::default();
@@ -137,10 +160,17 @@ pub fn view_candidates(
         let depth = *d as f64 / opacity;
         let x = ray.at(depth);
         let radiance = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) / opacity;
-        let normal = -field.density_gradient(x).normalize_or_zero();
-        let surface = normal.dot(ray.dir) < 0.0 && radiance.is_finite() && {
-            surface_share(field, &ray, depth, SURFACE_HALF_WIDTH * h, knobs) >= MIN_SURFACE_SHARE
-        };
+        let g = field.density_gradient(x);
+        let normal = -g.normalize_or_zero();
+        let surface = normal.dot(ray.dir) < 0.0
+            && radiance.is_finite()
+            && match test {
+                SurfaceTest::Gradient => g.length() * h * h >= MIN_SURFACE_GRADIENT,
+                SurfaceTest::Weight => {
+                    surface_share(field, &ray, depth, SURFACE_HALF_WIDTH * h, knobs)
+                        >= MIN_SURFACE_SHARE
+                }
+            };
         if !surface {
             out.not_surface += 1;
             continue;

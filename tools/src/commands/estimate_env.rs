@@ -18,7 +18,7 @@ use inlay_passes::envest::{
     emitter_recovery, environment_file_text, estimate_environment, field_light_irradiance,
     hidden_light_lobes, EnvEstimateKnobs, Stage, Validation, ViewSource,
 };
-use inlay_passes::envest::{Witness, Witnesses};
+use inlay_passes::envest::{SurfaceTest, Witness, Witnesses};
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
 use inlay_passes::march::MarchPass;
 use inlay_passes::scene::{load_scene, ObjectEnvironment, Scene};
@@ -91,6 +91,13 @@ pub struct EstimateEnvArgs {
     /// point over all the views is taken for a light source and left out.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().emitter_ratio)]
     pub emitter_ratio: f64,
+    /// How surface points are told from points inside a medium: `gradient`
+    /// (the density rises steeply; for baked fields) or `weight` (half the
+    /// pixel's opacity within two node spacings of its depth; for trained
+    /// fields, whose surfaces are as opaque with a hundredth of a bake's
+    /// gradient).
+    #[arg(long, value_enum, default_value = "gradient")]
+    pub surface_test: SurfaceTestArg,
     /// Point lights near the field fitted beside the lobes (0: the paper's
     /// distant model alone).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().near_lights)]
@@ -145,6 +152,10 @@ impl EstimateEnvArgs {
             lobes: self.lobes,
             near_lights: self.near_lights,
             emitter_ratio: self.emitter_ratio,
+            surface_test: match self.surface_test {
+                SurfaceTestArg::Gradient => SurfaceTest::Gradient,
+                SurfaceTestArg::Weight => SurfaceTest::Weight,
+            },
             albedo_width: self.albedo_width,
             albedo_octaves: self.albedo_octaves,
             iterations: self.iterations,
@@ -155,6 +166,15 @@ impl EstimateEnvArgs {
             ..EnvEstimateKnobs::default()
         }
     }
+}
+
+/// `--surface-test`'s values ([`SurfaceTest`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SurfaceTestArg {
+    /// The density's gradient (baked fields).
+    Gradient,
+    /// Where the ray's weight lies (trained fields).
+    Weight,
 }
 
 /// The views `--views-from` asks for, and words saying what they are.
