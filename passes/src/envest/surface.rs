@@ -6,8 +6,9 @@
 //! and the point is on a surface the model describes: the normal faces
 //! the camera, the point is on a surface rather than inside
 //! semi-transparent matter such as foliage or glass, where the Lambertian
-//! surface model does not hold ([`SurfaceTest`]), the pixel is not mixed (its radiance's luminance and
-//! that of the field's own colour at the point differ by at most
+//! surface model does not hold ([`SurfaceTest`]), the pixel is not mixed
+//! (its radiance's luminance and that of the field's own colour at the
+//! point differ by at most
 //! [`MAX_MIXED_DIFFERENCE`] of the larger: a ray that grazes a lamp's glow
 //! or a silhouette on its way collects light the point does not reflect),
 //! and the radiance is no more than `emitter_ratio` × the median
