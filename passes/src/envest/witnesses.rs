@@ -3,14 +3,15 @@
 //! A trained field is right only where its photographs looked. The
 //! estimate's views come from all around the field (the paper's sphere),
 //! and from below DOG's floor they see its underside, which no photograph
-//! did: the trainer gave it the colour of the lit top, and the fit read
-//! that as light from below (on DOG trained at 128 nodes from 64 views,
-//! a tenth of the points, their radiance ~400× the bake's;
-//! `docs/fidelity.md`, "Thirteenth pass"). With witnesses, a surface point
-//! is kept only when some photograph saw it: the point faces the camera,
-//! lies inside its view, and the field between them is under half opaque
-//! (marched from [`START_OFFSET`] node spacings off the surface, out of
-//! its own shell).
+//! did: the trainer gave it the colour of the lit top, which the fit can
+//! only read as light from below (on DOG trained at 128 nodes from 64
+//! views, a tenth of the points, their radiance ~400× the bake's; leaving
+//! them out did not move DOG's error beyond its seeds' spread, the rest
+//! outweighing them: `docs/fidelity.md`, "Thirteenth pass"). With
+//! witnesses, a surface point is kept only when some photograph saw it:
+//! the point faces the camera, lies inside its view, and the field between
+//! them is under half opaque (marched from [`START_OFFSET`] node spacings
+//! off the surface, out of its own shell).
 
 use glam::DVec3;
 
