@@ -16,6 +16,15 @@ use inlay_passes::train::{
 };
 
 /// A trainer starting from `field`.
+/// Frame `f`'s RGB of per-frame values laid out 4 to a frame.
+fn frame_rgb(values: &[f32], f: usize) -> DVec3 {
+    DVec3::new(
+        values[4 * f] as f64,
+        values[4 * f + 1] as f64,
+        values[4 * f + 2] as f64,
+    )
+}
+
 fn trainer_of(
     ctx: &std::sync::Arc<inlay_engine::Context>,
     lib: &inlay_engine::shader::ShaderLibrary,
@@ -190,11 +199,7 @@ fn gradient_and_adam_match(degree: u32, distortion: f64, scatter: GradientScatte
     );
     let gpu_gain_grad = trainer.gain_gradient(&mut renderer).unwrap();
     for (f, cpu) in cpu_gain_grad.iter().enumerate() {
-        let gpu = DVec3::new(
-            gpu_gain_grad[4 * f] as f64,
-            gpu_gain_grad[4 * f + 1] as f64,
-            gpu_gain_grad[4 * f + 2] as f64,
-        );
+        let gpu = frame_rgb(&gpu_gain_grad, f);
         // f32 sums over ~30 rays: 1e-3 of the frame's largest.
         assert!(
             (gpu - *cpu).abs().max_element() <= 1e-3 * cpu.abs().max_element().max(1e-6),
@@ -287,11 +292,7 @@ fn gradient_and_adam_match(degree: u32, distortion: f64, scatter: GradientScatte
     );
     let gpu_gains = trainer.gains(&mut renderer).unwrap();
     for (f, g) in gpu_gains.iter().enumerate() {
-        let c = DVec3::new(
-            cpu_gains[4 * f] as f64,
-            cpu_gains[4 * f + 1] as f64,
-            cpu_gains[4 * f + 2] as f64,
-        );
+        let c = frame_rgb(&cpu_gains, f);
         assert!((*g - c).abs().max_element() < 1e-4, "frame {f}: {g} vs {c}");
     }
     assert_eq!(gpu_gains[0], DVec3::ONE);
