@@ -105,6 +105,28 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
             vec![
                 "estimate-env".into(),
                 dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.toml")).into(),
+                "--radiance-from-photos".into(),
+            ],
+            vec!["--radiance-from-photos", "--seen-from"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.toml")).into(),
+                "--seen-from".into(),
+                "scene".into(),
+                "--radiance-from-photos".into(),
+            ],
+            vec!["--radiance-from-photos", "not `scene`"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
                 "--picture".into(),
                 s(&missing).into(),
             ],

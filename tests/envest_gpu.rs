@@ -222,3 +222,75 @@ fn seen_from_keeps_the_points_a_camera_saw() {
     assert!(seen.points.len() > all.points.len() / 2);
     assert!(seen.points.iter().all(saw));
 }
+
+/// `--radiance-from-photos`: with the scene's cameras' photographs (here
+/// the field's own renders, so that a reading must give back the radiance
+/// the field shows there), every point kept is read from them, and the
+/// readings agree with the field's colour at the points: the photographs'
+/// projection, pixel centres and bilinear read line up with the views'.
+#[test]
+fn photographs_give_back_the_radiance_they_recorded() {
+    use inlay_passes::camera::CameraFrame;
+    use inlay_passes::dataset::{FrameImage, PixelState};
+    use inlay_passes::envest::witnesses::Photo;
+    use inlay_passes::envest::{ViewSource, Witness, Witnesses};
+    use inlay_passes::field::RadianceField;
+    use inlay_passes::march::march_image;
+    use inlay_passes::sgfit::model::luminance;
+    let p = Plants::bake();
+    let (w, h) = (128, 72);
+    let cameras = p
+        .scene
+        .cameras
+        .iter()
+        .map(|c| {
+            let frame = CameraFrame::new(c, w, h);
+            let pixels = march_image(&p.field, &frame, &p.scene.march, &|_, _| f64::INFINITY);
+            let mut witness = Witness::new(c, w, h);
+            witness.photo = Some(Photo {
+                image: FrameImage {
+                    width: w,
+                    height: h,
+                    radiance: pixels
+                        .iter()
+                        .map(|m| m.colour.as_vec3().to_array())
+                        .collect(),
+                    state: vec![PixelState::Value; (w * h) as usize],
+                    counts: Default::default(),
+                },
+                scale: 1.0,
+            });
+            witness
+        })
+        .collect();
+    let witnesses = Witnesses { cameras };
+    let knobs = EnvEstimateKnobs {
+        views: 12,
+        view_size: 32,
+        pixels_per_view: 8,
+        ..EnvEstimateKnobs::default()
+    };
+    let read = p.surface(&knobs, &ViewSource::Sphere, Some(&witnesses));
+    common::assert_no_validation_errors(&p.ctx);
+    assert!(read.points.len() > 40, "{} points", read.points.len());
+    let ratio = read.photo_ratio.expect("read from the photographs");
+    assert!((ratio - 1.0).abs() < 0.05, "{ratio}");
+    let ratios: Vec<f64> = read
+        .points
+        .iter()
+        .map(|q| {
+            let own = luminance(p.field.colour(q.position, -q.normal));
+            luminance(q.radiance) / own.max(1e-9)
+        })
+        .collect();
+    let near = ratios.iter().filter(|r| (**r - 1.0).abs() < 0.2).count();
+    assert!(
+        near as f64 >= 0.8 * ratios.len() as f64,
+        "{near} of {} readings within 20 % of the field's colour: {ratios:?}",
+        ratios.len()
+    );
+    assert!(read
+        .points
+        .iter()
+        .all(|q| q.radiance.is_finite() && q.radiance.min_element() >= 0.0));
+}

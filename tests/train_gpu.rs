@@ -307,8 +307,8 @@ fn cups_dataset() -> inlay_passes::dataset::Dataset {
     use inlay_passes::camera::CameraFrame;
     use inlay_passes::dataset::capture::cap_cameras;
     use inlay_passes::dataset::{
-        BoundsSource, Dataset, Dialect, Distortion, Frame, FrameImage, Intrinsics, PixelCounts,
-        PixelState, Pose,
+        BoundsSource, Dataset, Dialect, Frame, FrameImage, Intrinsics, PixelCounts, PixelState,
+        Pose,
     };
     let scene = common::bundled_scene("cups.toml");
     let recipe = scene.recipe().unwrap();
@@ -332,20 +332,11 @@ fn cups_dataset() -> inlay_passes::dataset::Dataset {
                 &options,
                 &|_, _| {},
             );
-            let f = 0.5 * h as f64 / (0.5 * fov.to_radians()).tan();
             Frame {
                 index: i,
                 image_path: format!("view-{i}.exr").into(),
                 pose: Pose::looking_at(cam.position, cam.look_at, cam.up),
-                intrinsics: Intrinsics {
-                    width: w,
-                    height: h,
-                    fx: f,
-                    fy: f,
-                    cx: 0.5 * w as f64,
-                    cy: 0.5 * h as f64,
-                    distortion: Distortion::None,
-                },
+                intrinsics: Intrinsics::centred(w, h, fov),
                 exposure_time: None,
                 exposure_from_exif: false,
                 image: FrameImage {

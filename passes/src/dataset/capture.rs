@@ -5,6 +5,7 @@
 use glam::DVec3;
 use serde_json::json;
 
+use super::intrinsics::Intrinsics;
 use super::pose::Pose;
 use crate::camera::CameraSpec;
 use crate::geometry::Aabb;
@@ -75,7 +76,7 @@ pub fn transforms_json(
     bounds: &Aabb,
 ) -> serde_json::Value {
     let fov_y = frames.first().map_or(50.0, |f| f.camera.fov_y);
-    let f = 0.5 * height as f64 / (0.5 * fov_y.to_radians()).tan();
+    let f = Intrinsics::centred(width, height, fov_y).fy;
     let extent = bounds.size().max_element();
     let scale = 1.0 / extent;
     let c = bounds.center();

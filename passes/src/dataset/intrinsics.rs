@@ -119,6 +119,21 @@ pub struct Intrinsics {
 }
 
 impl Intrinsics {
+    /// An ideal pinhole of `width` × `height` square pixels, centred, whose
+    /// vertical field of view is `fov_y` degrees (a scene camera's).
+    pub fn centred(width: u32, height: u32, fov_y: f64) -> Self {
+        let f = 0.5 * height as f64 / (0.5 * fov_y.to_radians()).tan();
+        Self {
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx: 0.5 * width as f64,
+            cy: 0.5 * height as f64,
+            distortion: Distortion::None,
+        }
+    }
+
     /// The unit direction, in the OpenGL camera frame the transforms use
     /// (x right, y up, looking along −z), of the ray through image position
     /// (u, v) in pixels (pixel centres at +0.5, v downwards); None where

@@ -20,6 +20,7 @@ use crate::camera::CameraFrame;
 use crate::field::{GpuGridField, GridField};
 use crate::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
 use crate::rng::Pcg32;
+use crate::sgfit::model::luminance;
 
 /// Which stage an estimate is in, for progress reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,8 +51,13 @@ pub struct SurfaceSample {
     pub emitters: usize,
     /// Covered pixels left out as mixed, over all kept views.
     pub mixed: usize,
-    /// Candidates tried and left out as seen by no photograph, over all
-    /// views rendered.
+    /// Reading radiance from the photographs: the median, over the points
+    /// read, of the reading's luminance over the field's pixel's (how far
+    /// the field's colour is from its photographs').
+    pub photo_ratio: Option<f64>,
+    /// Candidates tried and left out as seen by no photograph (reading
+    /// radiance from the photographs: or read by none, its pixels
+    /// saturated or masked), over all views rendered.
     pub unseen: usize,
 }
 
@@ -126,7 +132,9 @@ pub fn sample_surface(
         emitters: 0,
         mixed: 0,
         unseen: 0,
+        photo_ratio: None,
     };
+    let mut photo_ratios = Vec::new();
     let mut rejected = Vec::new();
     // Views that passed the quality score but had no surface point.
     let mut surfaceless = 0u32;
@@ -161,8 +169,19 @@ pub fn sample_surface(
                 // Twice the points drawn, for those left out as lights.
                 let mut rng = Pcg32::new(knobs.seed, 0x5EE4_0000_0000 | out.views_tried as u64);
                 let count = 2 * knobs.pixels_per_view as usize;
+                let photos = w.have_photos();
                 candidates = keep_seen(candidates, count, &mut rng, |p| {
-                    w.saw(field, &march, p.position, p.normal)
+                    if !photos {
+                        return w.saw(field, &march, p.position, p.normal);
+                    }
+                    match w.photographed_radiance(field, &march, p.position, p.normal) {
+                        Some(r) => {
+                            photo_ratios.push(luminance(r) / luminance(p.radiance).max(1e-12));
+                            p.radiance = r;
+                            true
+                        }
+                        None => false,
+                    }
                 });
                 out.unseen += candidates.unseen;
             }
@@ -198,6 +217,16 @@ pub fn sample_surface(
         out.mixed += drawn.mixed;
         out.points.extend(drawn.points);
     }
+    if !photo_ratios.is_empty() {
+        let mid = photo_ratios.len() / 2;
+        out.photo_ratio = Some(*photo_ratios.select_nth_unstable_by(mid, f64::total_cmp).1);
+    }
+    anyhow::ensure!(
+        !out.points.is_empty() || surfaceless == 0 || !seen_from.is_some_and(|w| w.have_photos()),
+        "{surfaceless} of {} views passed the quality check but no photograph gave a reading within 2× of the field's colour at any of their surface points: \
+         were the photographs' exposures learnt in training (`inlay train --learn-exposure`), or are they scaled unlike the field?",
+        out.views_tried
+    );
     anyhow::ensure!(
         !out.points.is_empty() || surfaceless == 0,
         "{surfaceless} of {} views passed the quality check but held no surface point (surface test {:?}): \

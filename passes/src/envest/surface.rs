@@ -108,7 +108,7 @@ pub struct ViewPoints {
 /// `dir`, mixes light from elsewhere: its luminance and the field's colour
 /// at `x` along `dir` differ by more than [`MAX_MIXED_DIFFERENCE`] of the
 /// larger.
-fn is_mixed(field: &GridField, x: DVec3, dir: DVec3, radiance: DVec3) -> bool {
+pub(crate) fn is_mixed(field: &GridField, x: DVec3, dir: DVec3, radiance: DVec3) -> bool {
     let own = luminance(field.colour(x, dir));
     let seen = luminance(radiance);
     (seen - own).abs() > MAX_MIXED_DIFFERENCE * seen.max(own)
@@ -212,18 +212,20 @@ pub fn emitter_limit<'a>(
 /// Keeps up to `count` of `view`'s candidates for which `seen` holds,
 /// tried in a random order drawn with `rng` until `count` are kept (so
 /// that the test runs on few); the others tried are counted as unseen.
+/// `seen` may rewrite the point it keeps (its radiance read from the
+/// photographs that saw it).
 pub fn keep_seen(
     mut view: ViewPoints,
     count: usize,
     rng: &mut Pcg32,
-    seen: impl Fn(&SurfacePoint) -> bool,
+    mut seen: impl FnMut(&mut SurfacePoint) -> bool,
 ) -> ViewPoints {
     let mut kept = 0;
     let mut next = 0;
     while kept < count && next < view.points.len() {
         let j = next + (rng.next_u32() as usize % (view.points.len() - next));
         view.points.swap(next, j);
-        if seen(&view.points[next]) {
+        if seen(&mut view.points[next]) {
             view.points.swap(kept, next);
             kept += 1;
         } else {
@@ -331,10 +333,10 @@ mod tests {
         assert!(drawn.points.iter().all(|p| p.radiance.x < 1.0));
         assert_eq!(emitter_limit([], 8.0), 0.0);
         // Unseen points are passed over, and counted, until enough are kept.
-        let seen = |p: &SurfacePoint| p.radiance.x != 0.5;
+        let seen = |p: &mut SurfacePoint| p.radiance.x != 0.5;
         let drawn = keep_seen(lit.clone(), 2, &mut rng, seen);
         assert_eq!(drawn.points.len(), 2);
-        assert!(drawn.points.iter().all(seen));
+        assert!(drawn.points.iter().all(|p| p.radiance.x != 0.5));
         assert!(drawn.unseen <= 2);
         let drawn = keep_seen(lit, 9, &mut rng, seen);
         assert_eq!((drawn.points.len(), drawn.unseen), (3, 2));

@@ -12,13 +12,25 @@
 //! the point faces the camera, lies inside its view, and the field between
 //! them is under half opaque (marched from [`START_OFFSET`] node spacings
 //! off the surface, out of its own shell).
+//!
+//! A witness may carry its photograph's pixels ([`Photo`]); the estimate
+//! then reads each point's radiance from the photographs that saw it
+//! (`inlay estimate-env --radiance-from-photos`), not from the field. A
+//! trained field's colour is a fit to those photographs and carries the
+//! fit's errors: DOG's floor, trained at 128 nodes, is 1.11× the bake's
+//! radiance at the median (1.02–1.30× from the tenth to the ninetieth
+//! percentile), its photographs 1.00× (0.98–1.01×)
+//! (`docs/fidelity.md`, "Fourteenth pass").
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
-use crate::camera::{CameraFrame, CameraSpec};
+use super::surface::is_mixed;
+use crate::camera::CameraSpec;
+use crate::dataset::{Frame, FrameImage, Intrinsics, PixelState, Pose};
 use crate::field::GridField;
 use crate::geometry::Ray;
 use crate::march::{march_ray, MarchKnobs};
+use crate::sgfit::model::luminance;
 
 /// How far along its normal, in node spacings, the march toward a camera
 /// starts from a surface point (a trained surface's density is a shell a
@@ -28,28 +40,125 @@ pub const START_OFFSET: f64 = 2.0;
 /// Opacity between a point and a camera under which the camera saw it.
 pub const MAX_OCCLUSION: f64 = 0.5;
 
-/// One photograph's camera: where it was and what it took in.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A photograph's pixels as radiance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Photo {
+    /// The pixels as the dataset loader read them (linear).
+    pub image: FrameImage,
+    /// What a pixel's value is multiplied by to give radiance: 1 for
+    /// linear HDR images and LDR images of unknown exposure (as the
+    /// trainer reads them), 1/t for a bracket taken with exposure t.
+    pub scale: f64,
+}
+
+impl Photo {
+    /// The radiance at image position (u, v) in pixels (pixel centres at
+    /// +0.5), bilinear over the four nearest pixels; None unless all four
+    /// are measured values (not saturated, not masked).
+    pub fn radiance_at(&self, u: f64, v: f64) -> Option<DVec3> {
+        let (w, h) = (self.image.width as usize, self.image.height as usize);
+        let x = (u - 0.5).clamp(0.0, (w - 1) as f64);
+        let y = (v - 0.5).clamp(0.0, (h - 1) as f64);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        let mut sum = DVec3::ZERO;
+        for (i, weight) in [
+            (y0 * w + x0, (1.0 - fx) * (1.0 - fy)),
+            (y0 * w + x1, fx * (1.0 - fy)),
+            (y1 * w + x0, (1.0 - fx) * fy),
+            (y1 * w + x1, fx * fy),
+        ] {
+            if self.image.state[i] != PixelState::Value {
+                return None;
+            }
+            let c = self.image.radiance[i];
+            sum += weight * DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+        }
+        Some(self.scale * sum)
+    }
+}
+
+/// One photograph's camera: where it was and what it took in, and, where
+/// loaded, its pixels.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Witness {
-    /// Its frame (position, orientation, field of view, image size).
-    pub frame: CameraFrame,
+    /// Where the camera was.
+    pub pose: Pose,
+    /// Its lens and image size.
+    pub intrinsics: Intrinsics,
+    /// Its pixels, when the estimate reads radiance from them.
+    pub photo: Option<Photo>,
 }
 
 impl Witness {
-    /// The camera `spec` whose image is `width` × `height` (only their
-    /// ratio matters).
+    /// The pinhole camera `spec` whose image is `width` × `height`, its
+    /// pixels not known.
     pub fn new(spec: &CameraSpec, width: u32, height: u32) -> Self {
         Self {
-            frame: CameraFrame::new(spec, width, height),
+            pose: Pose::looking_at(spec.position, spec.look_at, spec.up),
+            intrinsics: Intrinsics::centred(width, height, spec.fov_y),
+            photo: None,
         }
+    }
+
+    /// The camera of a dataset's `frame`, with its pixels: a bracket's
+    /// values divided by its exposure time.
+    pub fn photographed(frame: Frame) -> Self {
+        let bracket = crate::train::pixels::is_bracket(&frame);
+        let scale = match frame.exposure_time {
+            Some(t) if bracket && t > 0.0 => 1.0 / t,
+            _ => 1.0,
+        };
+        Self {
+            pose: frame.pose,
+            intrinsics: frame.intrinsics,
+            photo: Some(Photo {
+                image: frame.image,
+                scale,
+            }),
+        }
+    }
+
+    /// Where `x` lands in the image, in pixels; None behind the camera or
+    /// outside the image.
+    pub fn project(&self, x: DVec3) -> Option<(f64, f64)> {
+        let to_local = DMat3::from_mat4(self.pose.matrix).transpose();
+        let (u, v) = self
+            .intrinsics
+            .project(to_local * (x - self.pose.origin()))?;
+        let (w, h) = (self.intrinsics.width as f64, self.intrinsics.height as f64);
+        ((0.0..=w).contains(&u) && (0.0..=h).contains(&v)).then_some((u, v))
     }
 
     /// Whether `x` lies inside the camera's view.
     pub fn frames(&self, x: DVec3) -> bool {
-        let (w, h) = (self.frame.width as f64, self.frame.height as f64);
-        self.frame
-            .project(x)
-            .is_some_and(|(u, v)| (0.0..=w).contains(&u) && (0.0..=h).contains(&v))
+        self.project(x).is_some()
+    }
+
+    /// Where in the image the camera saw the surface point `x` of `field`
+    /// whose normal is `normal` (facing it, inside its view, the field
+    /// between, marched with `knobs`, under [`MAX_OCCLUSION`] opaque);
+    /// None where it did not.
+    pub fn saw(
+        &self,
+        field: &GridField,
+        knobs: &MarchKnobs,
+        x: DVec3,
+        normal: DVec3,
+    ) -> Option<(f64, f64)> {
+        let start = x + START_OFFSET * field.spacing().min_element() * normal;
+        let to_camera = self.pose.origin() - start;
+        if normal.dot(to_camera) <= 0.0 {
+            return None;
+        }
+        let uv = self.project(x)?;
+        let distance = to_camera.length();
+        let ray = Ray {
+            origin: start,
+            dir: to_camera / distance,
+        };
+        (march_ray(field, &ray, distance, knobs).opacity < MAX_OCCLUSION).then_some(uv)
     }
 }
 
@@ -62,22 +171,49 @@ pub struct Witnesses {
 
 impl Witnesses {
     /// Whether some camera saw the surface point `x` of `field` whose
-    /// normal is `normal`: facing it, inside its view, and the field
-    /// between (marched with `knobs`) under [`MAX_OCCLUSION`] opaque.
+    /// normal is `normal` ([`Witness::saw`]).
     pub fn saw(&self, field: &GridField, knobs: &MarchKnobs, x: DVec3, normal: DVec3) -> bool {
-        let start = x + START_OFFSET * field.spacing().min_element() * normal;
-        self.cameras.iter().any(|c| {
-            let to_camera = c.frame.origin - start;
-            if normal.dot(to_camera) <= 0.0 || !c.frames(x) {
-                return false;
-            }
-            let distance = to_camera.length();
-            let ray = Ray {
-                origin: start,
-                dir: to_camera / distance,
-            };
-            march_ray(field, &ray, distance, knobs).opacity < MAX_OCCLUSION
-        })
+        self.cameras
+            .iter()
+            .any(|c| c.saw(field, knobs, x, normal).is_some())
+    }
+
+    /// Whether the cameras carry their photographs' pixels.
+    pub fn have_photos(&self) -> bool {
+        self.cameras.iter().any(|c| c.photo.is_some())
+    }
+
+    /// The radiance the photographs that saw the surface point `x` (normal
+    /// `normal`) recorded there: of their readings ([`Photo::radiance_at`]),
+    /// those not mixed (within [`super::surface::MAX_MIXED_DIFFERENCE`] of the field's
+    /// own colour at `x` seen from that camera, as a view's pixel must be:
+    /// a pixel that straddles an edge reads the surface behind), the one
+    /// of median luminance. None where no photograph saw it, or none gave
+    /// a clean reading.
+    pub fn photographed_radiance(
+        &self,
+        field: &GridField,
+        knobs: &MarchKnobs,
+        x: DVec3,
+        normal: DVec3,
+    ) -> Option<DVec3> {
+        let mut readings: Vec<DVec3> = self
+            .cameras
+            .iter()
+            .filter_map(|c| {
+                let photo = c.photo.as_ref()?;
+                let (u, v) = c.saw(field, knobs, x, normal)?;
+                let r = photo.radiance_at(u, v)?;
+                let dir = (x - c.pose.origin()).normalize();
+                (!is_mixed(field, x, dir, r)).then_some(r)
+            })
+            .collect();
+        if readings.is_empty() {
+            return None;
+        }
+        let mid = readings.len() / 2;
+        readings.select_nth_unstable_by(mid, |a, b| luminance(*a).total_cmp(&luminance(*b)));
+        Some(readings[mid])
     }
 }
 
@@ -150,5 +286,123 @@ mod tests {
         };
         assert!(both.saw(&field, &knobs, top, DVec3::Y));
         assert!(!Witnesses::default().saw(&field, &knobs, top, DVec3::Y));
+    }
+
+    /// A pinhole witness projects as the scene camera's frame does.
+    #[test]
+    fn a_scene_camera_projects_as_its_frame_does() {
+        let spec = CameraSpec {
+            name: None,
+            position: DVec3::new(0.3, 2.0, 1.5),
+            look_at: DVec3::new(-0.2, 0.0, 0.1),
+            up: DVec3::Y,
+            fov_y: 40.0,
+        };
+        let (w, h) = (64, 36);
+        let frame = crate::camera::CameraFrame::new(&spec, w, h);
+        let witness = Witness::new(&spec, w, h);
+        for x in [
+            DVec3::new(-0.2, 0.0, 0.1),
+            DVec3::new(0.1, 0.2, -0.1),
+            DVec3::new(-0.5, -0.1, 0.3),
+        ] {
+            let (a, b) = (frame.project(x).unwrap(), witness.project(x).unwrap());
+            assert!(
+                (a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9,
+                "{a:?} {b:?}"
+            );
+        }
+        assert!(witness.project(DVec3::new(0.3, 4.0, 3.0)).is_none());
+    }
+
+    /// A photograph above the floor (whose colour is 0.5 grey) whose pixel
+    /// (i, j) holds 0.25 + (i + 10 j) / 1000 + `offset` in red and 0.25 in
+    /// green and blue, taken with exposure 0.5 (its values read doubled).
+    fn photo_above(offset: f64, saturated: Option<usize>) -> Witness {
+        let (w, h) = (8u32, 8u32);
+        let mut witness = Witness::new(
+            &CameraSpec {
+                name: None,
+                position: DVec3::new(0.0, 3.0, 0.0),
+                look_at: DVec3::ZERO,
+                up: DVec3::Z,
+                fov_y: 30.0,
+            },
+            w,
+            h,
+        );
+        let radiance = (0..w * h)
+            .map(|p| {
+                let ramp = ((p % w) + 10 * (p / w)) as f64 / 1000.0;
+                [(0.25 + ramp + offset) as f32, 0.25, 0.25]
+            })
+            .collect();
+        let mut state = vec![PixelState::Value; (w * h) as usize];
+        if let Some(i) = saturated {
+            state[i] = PixelState::LowerBound;
+        }
+        witness.photo = Some(Photo {
+            image: FrameImage {
+                width: w,
+                height: h,
+                radiance,
+                state,
+                counts: Default::default(),
+            },
+            scale: 2.0,
+        });
+        witness
+    }
+
+    /// A point is read, bilinearly, where the photograph saw it; not where
+    /// it did not, nor next to a saturated pixel, nor where the reading is
+    /// over 2× from the field's colour; and of several photographs the
+    /// median reading wins.
+    #[test]
+    fn a_point_s_radiance_is_read_from_the_photographs_that_saw_it() {
+        let field = floor_and_wall();
+        let knobs = MarchKnobs::default();
+        let top = DVec3::new(0.05, 0.05, -0.02);
+        let one = Witnesses {
+            cameras: vec![photo_above(0.0, None)],
+        };
+        let (u, v) = one.cameras[0].project(top).unwrap();
+        let expected = 2.0 * (0.25 + ((u - 0.5) + 10.0 * (v - 0.5)) / 1000.0);
+        let read = one
+            .photographed_radiance(&field, &knobs, top, DVec3::Y)
+            .unwrap();
+        assert!((read.x - expected).abs() < 1e-6, "{read} {expected}");
+        assert!((read.y - 0.5).abs() < 1e-6);
+        assert!(one
+            .photographed_radiance(&field, &knobs, DVec3::new(0.05, -0.05, 0.0), -DVec3::Y)
+            .is_none());
+        let (i, j) = ((u - 0.5).floor() as usize, (v - 0.5).floor() as usize);
+        let blind = Witnesses {
+            cameras: vec![photo_above(0.0, Some(j * 8 + i + 1))],
+        };
+        assert!(blind
+            .photographed_radiance(&field, &knobs, top, DVec3::Y)
+            .is_none());
+        assert!(blind.saw(&field, &knobs, top, DVec3::Y));
+        let three = Witnesses {
+            cameras: vec![
+                photo_above(0.0, None),
+                photo_above(0.1, None),
+                photo_above(0.01, None),
+            ],
+        };
+        let median = three
+            .photographed_radiance(&field, &knobs, top, DVec3::Y)
+            .unwrap();
+        assert!((median.x - (expected + 0.02)).abs() < 1e-6, "{median}");
+        // A reading 5× the field's colour straddles something else.
+        let mixed = Witnesses {
+            cameras: vec![photo_above(2.0, None)],
+        };
+        assert!(mixed.saw(&field, &knobs, top, DVec3::Y));
+        assert!(mixed
+            .photographed_radiance(&field, &knobs, top, DVec3::Y)
+            .is_none());
+        assert!(three.have_photos() && !Witnesses::default().have_photos());
     }
 }

@@ -66,6 +66,12 @@ pub struct EstimateEnvArgs {
     /// scene's cameras (at 16:9).
     #[arg(long)]
     pub seen_from: Option<String>,
+    /// Read each surface point's radiance from the photographs of
+    /// `--seen-from DATASET` that saw it (the median of their readings),
+    /// not from the field: a trained field's colour is a reconstruction of
+    /// them, with its errors.
+    #[arg(long)]
+    pub radiance_from_photos: bool,
     /// Views kept after the quality check (paper: 100).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().views)]
     pub views: u32,
@@ -200,14 +206,27 @@ fn view_source(scene: &Scene, views_from: &str) -> anyhow::Result<(ViewSource, S
     }
 }
 
-/// The cameras `--seen-from` names.
-fn witnesses(scene: &Scene, seen_from: &str) -> anyhow::Result<Witnesses> {
+/// The cameras `--seen-from` names, with their photographs' pixels when
+/// `photos`.
+fn witnesses(scene: &Scene, seen_from: &str, photos: bool) -> anyhow::Result<Witnesses> {
     let cameras = match seen_from {
+        "scene" if photos => anyhow::bail!(
+            "--radiance-from-photos reads the photographs of a dataset: give --seen-from DATASET/transforms.json, not `scene`"
+        ),
         "scene" => scene
             .cameras
             .iter()
             .map(|c| Witness::new(c, 16, 9))
             .collect(),
+        path if photos => {
+            let options = inlay_passes::dataset::LoadOptions::default();
+            inlay_passes::dataset::load_dataset(Path::new(path), &options)
+                .map_err(|e| anyhow::anyhow!("--seen-from: {e}"))?
+                .frames
+                .into_iter()
+                .map(Witness::photographed)
+                .collect()
+        }
         path => inlay_passes::dataset::scene_cameras(Path::new(path), "train")
             .map_err(|e| anyhow::anyhow!("--seen-from: {e}"))?
             .iter()
@@ -239,7 +258,10 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     }
     let (source, source_words) = view_source(&scene, &args.views_from)?;
     let seen_from = match &args.seen_from {
-        Some(s) => Some(witnesses(&scene, s)?),
+        Some(s) => Some(witnesses(&scene, s, args.radiance_from_photos)?),
+        None if args.radiance_from_photos => anyhow::bail!(
+            "--radiance-from-photos needs the photographs: give --seen-from DATASET/transforms.json"
+        ),
         None => None,
     };
     let mut field = scene_field(
@@ -298,6 +320,9 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         s.mixed,
         s.unseen
     );
+    if let Some(r) = s.photo_ratio {
+        println!("radiance read from the photographs: at the median point {r:.3}× the field's own");
+    }
     println!(
         "time: views {:.1} s, near field {:.1} s ({} rays per point), fit {:.1} s ({} steps); final loss {:.4e} ({:.4e} without E_env's sampling noise)",
         estimate.seconds[0],
@@ -324,6 +349,14 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         ),
         ("iterations".to_string(), knobs.iterations.to_string()),
         ("seed".to_string(), knobs.seed.to_string()),
+        (
+            "radiance_from".to_string(),
+            if s.photo_ratio.is_some() {
+                "\"photographs\"".to_string()
+            } else {
+                "\"field\"".to_string()
+            },
+        ),
         ("lobes_kept".to_string(), lobes.len().to_string()),
         (
             "final_loss".to_string(),
