@@ -135,6 +135,8 @@ pub fn sample_surface(
         photo_ratio: None,
     };
     let mut photo_ratios = Vec::new();
+    // Whether points take their radiance from the photographs.
+    let photos = seen_from.is_some_and(Witnesses::have_photos);
     let mut rejected = Vec::new();
     // Views that passed the quality score but had no surface point.
     let mut surfaceless = 0u32;
@@ -169,7 +171,6 @@ pub fn sample_surface(
                 // Twice the points drawn, for those left out as lights.
                 let mut rng = Pcg32::new(knobs.seed, 0x5EE4_0000_0000 | out.views_tried as u64);
                 let count = 2 * knobs.pixels_per_view as usize;
-                let photos = w.have_photos();
                 candidates = keep_seen(candidates, count, &mut rng, |p| {
                     if !photos {
                         return w.saw(field, &march, p.position, p.normal);
@@ -222,7 +223,7 @@ pub fn sample_surface(
         out.photo_ratio = Some(*photo_ratios.select_nth_unstable_by(mid, f64::total_cmp).1);
     }
     anyhow::ensure!(
-        !out.points.is_empty() || surfaceless == 0 || !seen_from.is_some_and(|w| w.have_photos()),
+        !out.points.is_empty() || surfaceless == 0 || !photos,
         "{surfaceless} of {} views passed the quality check but no photograph gave a reading within 2× of the field's colour at any of their surface points: \
          were the photographs' exposures learnt in training (`inlay train --learn-exposure`), or are they scaled unlike the field?",
         out.views_tried
