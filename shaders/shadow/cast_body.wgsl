@@ -8,8 +8,10 @@
 // ρ = 1 − Σ_k w_k (1 − q(S(p'_k), λ'_k)) / max(Σ_k w_k, π L) over the
 // lobes L_k ⊗ cosine (w_k = μ'_k f_h(π/2, λ'_k); L the field's colour at
 // the pixel, π L the irradiance floor of an albedo ≤ 1 surface); each
-// lobe's occlusion 1 − q is capped by the share of its energy the
-// bounding sphere can block, and lobes whose
+// lobe's occlusion is capped by the share of its energy the bounding
+// sphere can block and, for a lobe the SSDF shadows, by its light over the
+// sphere's cone where the cone's points resolve it (shadow/cone.wgsl;
+// cast_bound), and lobes whose
 // direction clears the sphere by a quarter turn, or of which it can block
 // under CAST_SKIP_SHARE, skip the SSDF (q = 1); a direct lobe takes q
 // from its rays instead of the SSDF; the light the object sends back
@@ -65,6 +67,7 @@ var<immediate> pc: CastPush;
 @group(0) @binding(15) var<storage, read> objects: array<ObjectRecord>;
 
 #include "shadow/fh.wgsl"
+#include "shadow/cone.wgsl"
 #include "ssdf/ssdf.wgsl"
 #include "shadow/bounce.wgsl"
 #include "shadow/refine_list.wgsl"
@@ -132,6 +135,29 @@ fn clears_sphere(v: CastSphere, cos_gap: f32) -> bool {
     return !v.inside && cos_gap <= 0.0;
 }
 
+// The hemisphere integral w of product lobe p = L_k ⊗ cosine.
+fn cast_weight(p: Sg) -> vec3<f32> {
+    return p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
+}
+
+// The most light lobe `g` (its product with the cosine `p`) can lose at
+// the point `view` sees the sphere from: w × the sphere's share, and for a
+// lobe shadowed through the SSDF (`ssdf_lobe`) no more than its light over
+// the cone where the cone's points resolve it; −1 where the object cannot
+// block its light (runtime.rs cast_shadow_factor_within's bound).
+fn cast_bound(view: CastSphere, cone: ptr<function, CastCone>, g: Sg, p: Sg, ssdf_lobe: bool) -> vec3<f32> {
+    let gap = cast_cos_gap(view, p.direction);
+    let share = sphere_share(view, p, gap);
+    if clears_sphere(view, gap) || share < CAST_SKIP_SHARE {
+        return vec3<f32>(-1.0);
+    }
+    let most = cast_weight(p) * share;
+    if ssdf_lobe && !view.inside && cone_resolves(cone, g) {
+        return min(most, cone_blockable(cone, g));
+    }
+    return most;
+}
+
 // `radiance`: the field's colour at x; π × it floors the irradiance the
 // blocked light is taken from (an albedo ≤ 1 surface showing L receives at
 // least πL; runtime.rs cast_shadow_factor).
@@ -140,20 +166,20 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     let m = pc.light_count;
     let first_direct = m - min(pc.direct_lobes, m);
     let view = cast_sphere(x);
+    var cone: CastCone;
+    if !view.inside {
+        cone = cast_cone(view, n);
+    }
     // First the irradiance, and the most the object can block of it (each
-    // lobe's w × share bounds its w (1 − q)): where that is under
-    // CAST_TOLERANCE of the light, ρ = 1 without the SSDF or any ray.
+    // lobe's bound, cast_bound): where that is under CAST_TOLERANCE of the
+    // light, ρ = 1 without the SSDF or any ray.
     var den = vec3<f32>(0.0);
     var most = vec3<f32>(0.0);
     for (var k = 0u; k < m; k++) {
-        let p = sg_product(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), cosine);
-        let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
-        den += w;
-        let gap = cast_cos_gap(view, p.direction);
-        let share = sphere_share(view, p, gap);
-        if !clears_sphere(view, gap) && share >= CAST_SKIP_SHARE {
-            most += w * share;
-        }
+        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+        let p = sg_product(g, cosine);
+        den += cast_weight(p);
+        most += max(cast_bound(view, &cone, g, p, k < first_direct), vec3<f32>(0.0));
     }
     let total = max(den, SG_PI * radiance);
     let reach = most / max(total, vec3<f32>(1e-30));
@@ -163,24 +189,22 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     var blocked = vec3<f32>(0.0);
     var prepared = false;
     for (var k = 0u; k < m; k++) {
-        let p = sg_product(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), cosine);
-        let gap = cast_cos_gap(view, p.direction);
-        let share = sphere_share(view, p, gap);
-        if clears_sphere(view, gap) || share < CAST_SKIP_SHARE {
+        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+        let p = sg_product(g, cosine);
+        let bound = cast_bound(view, &cone, g, p, k < first_direct);
+        if bound.x < 0.0 {
             continue;
         }
-        var q = 1.0;
         if k >= first_direct {
-            q = cast_direct_visibility(x, k - first_direct, pc.direct_rays);
+            blocked += cast_weight(p) * (1.0 - cast_direct_visibility(x, k - first_direct, pc.direct_rays));
         } else {
             if !prepared {
                 ssdf_prepare(ssdf_to_object_point(x));
                 prepared = true;
             }
-            q = max(fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness), 1.0 - share);
+            let q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
+            blocked += min(cast_weight(p) * (1.0 - q), bound);
         }
-        let w = p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
-        blocked += w * (1.0 - q);
     }
     if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {
         // The bounce, its light from below x's plane at x's own ratio

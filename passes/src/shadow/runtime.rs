@@ -13,7 +13,10 @@
 //! object blocks nothing. ρ is per colour channel.
 //!
 //! **Beyond the paper.** Each lobe's occlusion 1 − q is capped by the share
-//! of its energy the object's bounding sphere can block ([`sphere_share`]),
+//! of its energy the object's bounding sphere can block ([`sphere_share`])
+//! and, for a lobe the SSDF shadows, by its cosine-weighted light over the
+//! sphere's cone ([`super::ConeQuadrature`]: far from the object, the
+//! sphere's bound alone darkened CUPS' far field twice as much as Cycles),
 //! and Γ_k is taken relative to the tangent plane's own visibility
 //! ([`self_shadow_factors`]): measured against Blender Cycles, the plain
 //! half-space model darkened the field by a few tenths of a per cent to a
@@ -220,8 +223,10 @@ impl SphereView {
 /// the object under a ceiling bulb), receives more than they say, and
 /// without the floor its shadow darkened ROOM's whole field by 4 %. Zero
 /// `radiance` gives the paper's ratio. The `direct` lobes (the last ones)
-/// are occluded by the share of their rays from `x` the mesh blocks. The
-/// light the object sends back ([`super::bounce_irradiance`] with its
+/// are occluded by the share of their rays from `x` the mesh blocks; each
+/// other lobe loses no more than [`sphere_share`] of its light, nor more
+/// than its light over the sphere's cone where [`super::ConeQuadrature`]
+/// resolves it. The light the object sends back ([`super::bounce_irradiance`] with its
 /// silhouette reflectance, `object`, its light from below `x`'s plane at
 /// `x`'s ratio before it; zero fill and albedo give the paper's black
 /// occluder) offsets the blocked light, never beyond it. Where the object
@@ -274,33 +279,47 @@ pub fn cast_shadow_factor_within(
     let first = direct.map_or(lobes.len(), |d| d.first(lobes.len()));
     let products: Vec<Sg64> = lobes.iter().map(|g| g.product(&cosine)).collect();
     let weight = |p: &Sg64| p.amplitude * hemisphere_integral(p.sharpness);
-    let blockable = |p: &Sg64| {
+    let cone = super::ConeQuadrature::new(&view, n);
+    // The most lobe k can lose: w × the sphere's share, and for a lobe
+    // shadowed through the SSDF no more than its light over the cone
+    // (None where the object cannot block its light).
+    let bound = |k: usize, p: &Sg64| -> Option<DVec3> {
         let share = view.share(p);
-        (!view.clear_of(p.direction) && share >= CAST_SKIP_SHARE).then_some(share)
+        if view.clear_of(p.direction) || share < CAST_SKIP_SHARE {
+            return None;
+        }
+        let most = weight(p) * share;
+        let over_cone = cone
+            .as_ref()
+            .filter(|_| k < first)
+            .and_then(|c| c.blockable(&lobes[k]));
+        Some(over_cone.map_or(most, |c| most.min(c)))
     };
-    // The irradiance, and the most the object can block of it (w × share
-    // bounds each lobe's w (1 − q)): under CAST_TOLERANCE of the light, ρ = 1.
+    // The irradiance, and the most the object can block of it: under
+    // CAST_TOLERANCE of the light, ρ = 1.
     let den: DVec3 = products.iter().map(weight).sum();
-    let most: DVec3 = products
+    let bounds: Vec<Option<DVec3>> = products
         .iter()
-        .filter_map(|p| blockable(p).map(|share| weight(p) * share))
-        .sum();
+        .enumerate()
+        .map(|(k, p)| bound(k, p))
+        .collect();
+    let most: DVec3 = bounds.iter().flatten().sum();
     let total = den.max(std::f64::consts::PI * radiance);
     if (most / total.max(DVec3::splat(1e-300))).max_element() < tolerance {
         return DVec3::ONE;
     }
     let mut blocked = DVec3::ZERO;
     for (k, p) in products.iter().enumerate() {
-        let Some(share) = blockable(p) else {
+        let Some(most) = bounds[k] else {
             continue;
         };
-        let q = if let Some(d) = direct.filter(|_| k >= first) {
-            d.clear_fraction(placed, x, k - first, None)
+        blocked += if let Some(d) = direct.filter(|_| k >= first) {
+            weight(p) * (1.0 - d.clear_fraction(placed, x, k - first, None))
         } else {
             let s = world_ssdf(field, placed, x, p.direction, mode);
-            (table.fraction(s as f32, p.sharpness as f32) as f64).max(1.0 - share)
+            let q = table.fraction(s as f32, p.sharpness as f32) as f64;
+            (weight(p) * (1.0 - q)).min(most)
         };
-        blocked += weight(p) * (1.0 - q);
     }
     if blocked.max_element() > 0.0 {
         // x's own ratio before the bounce: the bounce's light from below
