@@ -5,9 +5,11 @@
 // fit) from x, ray-cast against the mesh (shadow/direct_rays.wgsl). Per
 // pixel, the
 // point at the field's expected depth D̂/Ô, the normal −∇σ there, and
-// ρ = 1 − Σ_k w_k (1 − q(S(p'_k), λ'_k)) / max(Σ_k w_k, π L) over the
-// lobes L_k ⊗ cosine (w_k = μ'_k f_h(π/2, λ'_k); L the field's colour at
-// the pixel, π L the irradiance floor of an albedo ≤ 1 surface); each
+// ρ = 1 − Σ_k E_k (1 − q(S(p'_k), λ'_k)) / max(Σ_k E_k, π L) over the
+// lobes L_k, p'_k their products with the cosine and E_k their irradiance
+// on the point's plane (sg_diffuse_irradiance; runtime.rs explains why not
+// the products' integrals); L the field's colour at the pixel, π L the
+// irradiance floor of an albedo ≤ 1 surface; each
 // lobe's occlusion is capped by the share of its energy the bounding
 // sphere can block and, for a lobe the SSDF shadows, by its light over the
 // sphere's cone where the cone's points resolve it (shadow/cone.wgsl;
@@ -135,23 +137,24 @@ fn clears_sphere(v: CastSphere, cos_gap: f32) -> bool {
     return !v.inside && cos_gap <= 0.0;
 }
 
-// The hemisphere integral w of product lobe p = L_k ⊗ cosine.
-fn cast_weight(p: Sg) -> vec3<f32> {
-    return p.amplitude * (2.0 * SG_PI * sg_one_minus_exp_neg_over_x(p.sharpness));
-}
-
-// The most light lobe `g` (its product with the cosine `p`) can lose at
-// the point `view` sees the sphere from: w × the sphere's share, and for a
-// lobe shadowed through the SSDF (`ssdf_lobe`) no more than its light over
-// the cone where the cone's points resolve it; −1 where the object cannot
-// block its light (runtime.rs cast_shadow_factor_within's bound).
-fn cast_bound(view: CastSphere, cone: ptr<function, CastCone>, g: Sg, p: Sg, ssdf_lobe: bool) -> vec3<f32> {
+// The share of product lobe `p`'s energy the sphere seen as `view` can
+// block, or −1 where the object cannot block its light (the sphere clears
+// its axis by a quarter turn, or the share is under CAST_SKIP_SHARE).
+fn cast_share(view: CastSphere, p: Sg) -> f32 {
     let gap = cast_cos_gap(view, p.direction);
     let share = sphere_share(view, p, gap);
     if clears_sphere(view, gap) || share < CAST_SKIP_SHARE {
-        return vec3<f32>(-1.0);
+        return -1.0;
     }
-    let most = cast_weight(p) * share;
+    return share;
+}
+
+// The most light lobe `g`, of irradiance `e` (E_k) at the point, can lose
+// there: e × the sphere's `share`, and for a lobe shadowed through the
+// SSDF (`ssdf_lobe`) no more than its light over the cone where the
+// cone's points resolve it (runtime.rs cast_shadow_factor_within's bound).
+fn cast_bound(view: CastSphere, cone: ptr<function, CastCone>, g: Sg, e: vec3<f32>, share: f32, ssdf_lobe: bool) -> vec3<f32> {
+    let most = e * share;
     if ssdf_lobe && !view.inside && cone_resolves(cone, g) {
         return min(most, cone_blockable(cone, g));
     }
@@ -178,8 +181,12 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     for (var k = 0u; k < m; k++) {
         let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
         let p = sg_product(g, cosine);
-        den += cast_weight(p);
-        most += max(cast_bound(view, &cone, g, p, k < first_direct), vec3<f32>(0.0));
+        let e = sg_diffuse_irradiance(g, n);
+        den += e;
+        let share = cast_share(view, p);
+        if share >= 0.0 {
+            most += cast_bound(view, &cone, g, e, share, k < first_direct);
+        }
     }
     let total = max(den, SG_PI * radiance);
     let reach = most / max(total, vec3<f32>(1e-30));
@@ -191,19 +198,21 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     for (var k = 0u; k < m; k++) {
         let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
         let p = sg_product(g, cosine);
-        let bound = cast_bound(view, &cone, g, p, k < first_direct);
-        if bound.x < 0.0 {
+        let share = cast_share(view, p);
+        if share < 0.0 {
             continue;
         }
+        let e = sg_diffuse_irradiance(g, n);
+        let bound = cast_bound(view, &cone, g, e, share, k < first_direct);
         if k >= first_direct {
-            blocked += cast_weight(p) * (1.0 - cast_direct_visibility(x, k - first_direct, pc.direct_rays));
+            blocked += e * (1.0 - cast_direct_visibility(x, k - first_direct, pc.direct_rays));
         } else {
             if !prepared {
                 ssdf_prepare(ssdf_to_object_point(x));
                 prepared = true;
             }
             let q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
-            blocked += min(cast_weight(p) * (1.0 - q), bound);
+            blocked += min(e * (1.0 - q), bound);
         }
     }
     if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {

@@ -2,15 +2,20 @@
 //! the self-shadow factors Γ_k (eq. 9; `shaders/shade/shade.wgsl`) and the
 //! cast-shadow factor ρ (eq. 7–8; `shaders/shadow/cast.wgsl`).
 //!
-//! **ρ's denominator.** Eq. 8 approximates the numerator by
-//! Σ_k μ'_k f_h(S(p'_k), λ'_k) over the lobes L_k ⊗ cosine. With nothing in
-//! the way (S ≥ π/2) that sum is Σ μ'_k f_h(π/2, λ'_k), the lobes'
-//! hemisphere integrals, which fall short of the full irradiance
-//! Σ μ'_k ∫G'_k by up to 10 % for the broadest products (λ' ≈ 2.3). Taking
-//! eq. 7's denominator as the full inner product would darken every pixel
-//! of the field that much; it is taken as Σ μ'_k f_h(π/2, λ'_k) instead —
-//! the same normalisation as Γ_k in eq. 9 — so ρ = 1 exactly wherever the
-//! object blocks nothing. ρ is per colour channel.
+//! **ρ's weights.** Eq. 8 weighs each lobe L_k by its product with one SG
+//! for the clamped cosine, L_k ⊗ cosine = (p'_k, λ'_k, μ'_k), and eq. 7's
+//! denominator by the same products. That SG is 16 % above the cosine at
+//! the normal, 25 % below it 56° away and 0.12 at the horizon, so the
+//! weights misstate how the light divides between lobes: under ROOM's
+//! ceiling bulb (overhead, 80 % of the floor's light) and its softbox (34°
+//! above the floor), the softbox's share came out a third too small, and
+//! the monkey's shadow of it too faint (docs/fidelity.md, fifteenth pass).
+//! Each lobe is weighted by its irradiance on the point's plane as the
+//! shading takes it, E_k ([`Sg64::diffuse_irradiance`], Hill's fit: within
+//! 1.6 % from λ 5 up), and loses the share 1 − q(S(p'_k), λ'_k) of it that
+//! f_h says the object hides (q is the visible fraction of the product
+//! lobe's hemisphere energy): ρ = 1 − Σ_k E_k (1 − q_k) / Σ_k E_k, 1
+//! exactly wherever the object blocks nothing. ρ is per colour channel.
 //!
 //! **Beyond the paper.** Each lobe's occlusion 1 − q is capped by the share
 //! of its energy the object's bounding sphere can block ([`sphere_share`])
@@ -278,9 +283,10 @@ pub fn cast_shadow_factor_within(
     let view = SphereView::new(x, c, r, object.fill);
     let first = direct.map_or(lobes.len(), |d| d.first(lobes.len()));
     let products: Vec<Sg64> = lobes.iter().map(|g| g.product(&cosine)).collect();
-    let weight = |p: &Sg64| p.amplitude * hemisphere_integral(p.sharpness);
+    // Each lobe's light on x's plane (the module's doc: ρ's weights).
+    let irradiance: Vec<DVec3> = lobes.iter().map(|g| g.diffuse_irradiance(n)).collect();
     let cone = super::ConeQuadrature::new(&view, n);
-    // The most lobe k can lose: w × the sphere's share, and for a lobe
+    // The most lobe k can lose: E_k × the sphere's share, and for a lobe
     // shadowed through the SSDF no more than its light over the cone
     // (None where the object cannot block its light).
     let bound = |k: usize, p: &Sg64| -> Option<DVec3> {
@@ -288,7 +294,7 @@ pub fn cast_shadow_factor_within(
         if view.clear_of(p.direction) || share < CAST_SKIP_SHARE {
             return None;
         }
-        let most = weight(p) * share;
+        let most = irradiance[k] * share;
         let over_cone = cone
             .as_ref()
             .filter(|_| k < first)
@@ -297,7 +303,7 @@ pub fn cast_shadow_factor_within(
     };
     // The irradiance, and the most the object can block of it: under
     // CAST_TOLERANCE of the light, ρ = 1.
-    let den: DVec3 = products.iter().map(weight).sum();
+    let den: DVec3 = irradiance.iter().sum();
     let bounds: Vec<Option<DVec3>> = products
         .iter()
         .enumerate()
@@ -314,11 +320,11 @@ pub fn cast_shadow_factor_within(
             continue;
         };
         blocked += if let Some(d) = direct.filter(|_| k >= first) {
-            weight(p) * (1.0 - d.clear_fraction(placed, x, k - first, None))
+            irradiance[k] * (1.0 - d.clear_fraction(placed, x, k - first, None))
         } else {
             let s = world_ssdf(field, placed, x, p.direction, mode);
             let q = table.fraction(s as f32, p.sharpness as f32) as f64;
-            (weight(p) * (1.0 - q)).min(most)
+            (irradiance[k] * (1.0 - q)).min(most)
         };
     }
     if blocked.max_element() > 0.0 {
