@@ -16,16 +16,18 @@ use std::sync::Arc;
 
 use clap::Args;
 use glam::DVec3;
+use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::bake::{render_reference, ReferenceOptions};
-use inlay_passes::camera::CameraFrame;
-use inlay_passes::field::GpuGridField;
+use inlay_passes::camera::{CameraFrame, CameraSpec};
+use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::probe::{lobes_irradiance, probe_irradiance, AXES};
-use inlay_passes::scene::load_scene;
+use inlay_passes::scene::{load_scene, Scene};
 
 use crate::fidelity::{
-    block_means, coverage, luminance, masked_box_mean, mean_ratio, median_relative_error,
-    median_seed_noise, psnr, relative_l1, shadow_figures, shadow_ratio, side_by_side, Rgb, UMBRA,
+    block_means, box_shadow_ratio, coverage, far_pixels, luminance, mean_ratio,
+    median_relative_error, median_seed_noise, psnr, relative_l1, shadow_figures, side_by_side, Rgb,
+    FAR_RADII, UMBRA,
 };
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
@@ -68,15 +70,8 @@ struct CyclesPair {
     seeds: (Rgb, Rgb),
 }
 
-/// A surface point further than this many bounding radii from every object
-/// counts as far from them.
-const FAR_RADII: f64 = 4.0;
-
 /// Averaging `BLOCK` × `BLOCK` pixels cuts the noise by `BLOCK`.
 const BLOCK: u32 = 8;
-
-/// The shadow's ratio images are means over (2 · this + 1)² pixels.
-const SHADOW_BOX: u32 = 1;
 
 /// Both seeds of a Cycles image, if present.
 fn cycles_pair(dir: &Path, stem: &str) -> anyhow::Result<Option<CyclesPair>> {
@@ -101,6 +96,35 @@ fn figure(value: f64, pixels: usize) -> String {
     } else {
         format!("{value:.3}")
     }
+}
+
+/// One frame of `scene`'s field from `camera` at `size`, as `inlay render`
+/// and the viewer draw it: with the scene's objects inserted (their SSDFs
+/// baked or read through the cache) or, with `objects` false, the field
+/// alone.
+pub fn render_over_field(
+    ctx: &Arc<Context>,
+    library: &ShaderLibrary,
+    scene: &Scene,
+    field: &GridField,
+    camera: &CameraSpec,
+    (w, h): (u32, u32),
+    objects: bool,
+) -> anyhow::Result<Rgb> {
+    let mut view_scene = scene.clone();
+    if !objects {
+        view_scene.objects.clear();
+    }
+    let mut view = view_over_field(
+        ctx,
+        library,
+        &view_scene,
+        scene.march,
+        field,
+        camera.clone(),
+        true,
+    )?;
+    Ok(Rgb::of(&run_headless(ctx, &mut view, w, h, 1, 0.0)?.image))
 }
 
 /// Runs `fidelity`.
@@ -218,13 +242,8 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         // Far from every object: the surface seen lies more than
         // FAR_RADII bounding radii from each object's centre.
         let spheres: Vec<(DVec3, f64)> = scene.objects.iter().map(|o| o.sphere()).collect();
-        let far_px = |i: usize| {
-            bare_cover.point[i].is_some_and(|p| {
-                spheres
-                    .iter()
-                    .all(|(c, r)| (p - *c).length() > FAR_RADII * r)
-            })
-        };
+        let far = far_pixels(&bare_cover, &spheres);
+        let far_px = |i: usize| far[i];
         let reference = |objects: bool| -> Rgb {
             let run = |seed| {
                 render_reference(
@@ -301,45 +320,16 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                 traced_objects = Some(traced);
             }
         }
-        let mut view_scene = scene.clone();
-        view_scene.objects.clear();
-        let mut bare_view = view_over_field(
-            ctx,
-            &library,
-            &view_scene,
-            scene.march,
-            &field,
-            camera.clone(),
-            true,
-        )?;
-        let field_image = Rgb::of(&run_headless(ctx, &mut bare_view, w, h, 1, 0.0)?.image);
+        let field_image = render_over_field(ctx, &library, &scene, &field, camera, (w, h), false)?;
         row(&mut md, "field, bare", &field_image, &bare, &field_px)?;
         let Some(with) = with else {
             continue;
         };
-        let mut view = view_over_field(
-            ctx,
-            &library,
-            &scene,
-            scene.march,
-            &field,
-            camera.clone(),
-            true,
-        )?;
-        let inserted = Rgb::of(&run_headless(ctx, &mut view, w, h, 1, 0.0)?.image);
+        let inserted = render_over_field(ctx, &library, &scene, &field, camera, (w, h), true)?;
         row(&mut md, "insertion", &inserted, &with, &|i| {
             field_px(i) || object_px(i)
         })?;
-        // The ratio of 3 × 3 means over the field's own pixels: Cycles'
-        // per-pixel noise (5–19 % at 512 samples) would otherwise put
-        // hundreds of pixels below 0.9 by chance (ROOM: 1241 per pixel, 721
-        // after the means) and cap the correlation.
-        let ratio = |with: &Rgb, bare: &Rgb| {
-            shadow_ratio(
-                &masked_box_mean(with, SHADOW_BOX, field_only),
-                &masked_box_mean(bare, SHADOW_BOX, field_only),
-            )
-        };
+        let ratio = |with: &Rgb, bare: &Rgb| box_shadow_ratio(with, bare, field_only);
         let (ours, theirs) = (
             ratio(&inserted, &field_image),
             ratio(&with.mean, &bare.mean),
