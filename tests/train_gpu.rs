@@ -338,7 +338,7 @@ fn cups_dataset() -> inlay_passes::dataset::Dataset {
                 pose: Pose::looking_at(cam.position, cam.look_at, cam.up),
                 intrinsics: Intrinsics::centred(w, h, fov),
                 exposure_time: None,
-                exposure_from_exif: false,
+                exif_exposure: None,
                 image: FrameImage {
                     width: w,
                     height: h,

@@ -1,20 +1,31 @@
-//! A photograph's exposure time from its EXIF block (JPEG, PNG, WebP), for
+//! A photograph's exposure from its EXIF block (JPEG, PNG, WebP), for
 //! frames whose `transforms.json` entry gives none: the TIFF structure's
 //! first image directory, then the Exif directory it points to (tag
 //! 0x8769), read for ExposureTime (tag 0x829A, a rational number of
-//! seconds). Aperture and ISO are not read: brackets vary the time.
+//! seconds), FNumber (0x829D, rational) and the ISO speed
+//! (PhotographicSensitivity, 0x8827, a short or long). The light a sensor
+//! records grows with the time and the ISO and falls with the square of
+//! the f-number; a phone's bracket often varies the ISO with the time, and
+//! the time alone would then put its frames' radiance off by the ISO's
+//! ratio ([`relative_exposure`]).
 
 use std::path::Path;
 
 /// ExposureTime.
 const TAG_EXPOSURE_TIME: u16 = 0x829A;
+/// FNumber.
+const TAG_F_NUMBER: u16 = 0x829D;
+/// PhotographicSensitivity (ISOSpeedRatings before Exif 2.3).
+const TAG_ISO: u16 = 0x8827;
 /// The Exif directory's offset.
 const TAG_EXIF_IFD: u16 = 0x8769;
 /// TIFF field types.
+const TYPE_SHORT: u16 = 3;
 const TYPE_LONG: u16 = 4;
 const TYPE_RATIONAL: u16 = 5;
 
 /// Reads numbers in the block's byte order.
+#[derive(Clone, Copy)]
 struct Tiff<'a> {
     bytes: &'a [u8],
     little: bool,
@@ -57,11 +68,22 @@ impl Tiff<'_> {
     }
 }
 
-/// The exposure time in seconds that the EXIF block `exif` (a TIFF
-/// structure, as image decoders return it, with or without the
-/// `Exif\0\0` prefix) records, or None where it records none or the block
-/// is malformed.
-pub fn exposure_time_from_exif(exif: &[u8]) -> Option<f64> {
+/// What an EXIF block records of a photograph's exposure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExifExposure {
+    /// ExposureTime, seconds.
+    pub time: f64,
+    /// FNumber, where recorded.
+    pub f_number: Option<f64>,
+    /// The ISO speed, where recorded.
+    pub iso: Option<f64>,
+}
+
+/// The exposure that the EXIF block `exif` (a TIFF structure, as image
+/// decoders return it, with or without the `Exif\0\0` prefix) records:
+/// None where it records no exposure time or the block is malformed; the
+/// f-number and ISO where recorded (a zero or unreadable one is left out).
+pub fn exposure_from_exif(exif: &[u8]) -> Option<ExifExposure> {
     let bytes = exif.strip_prefix(b"Exif\0\0").unwrap_or(exif);
     let little = match bytes.get(..2)? {
         b"II" => true,
@@ -73,28 +95,82 @@ pub fn exposure_time_from_exif(exif: &[u8]) -> Option<f64> {
         return None;
     }
     let ifd0 = t.u32_at(4)? as usize;
-    let in_dir = |dir: usize| match t.entry(dir, TAG_EXPOSURE_TIME) {
-        Some((TYPE_RATIONAL, 1, field)) => t.rational(field),
-        _ => None,
-    };
     let exif_dir = match t.entry(ifd0, TAG_EXIF_IFD) {
         Some((TYPE_LONG, 1, field)) => t.u32_at(field).map(|o| o as usize),
         _ => None,
     };
-    exif_dir.and_then(in_dir).or_else(|| in_dir(ifd0))
+    // The Exif directory first, then IFD0 (some writers put them there).
+    let find = |read: &dyn Fn(usize) -> Option<f64>| exif_dir.and_then(read).or_else(|| read(ifd0));
+    let rational = |tag: u16| {
+        move |dir: usize| match t.entry(dir, tag) {
+            Some((TYPE_RATIONAL, 1, field)) => t.rational(field),
+            _ => None,
+        }
+    };
+    let iso = |dir: usize| {
+        let v = match t.entry(dir, TAG_ISO) {
+            Some((TYPE_SHORT, n, field)) if n >= 1 => t.u16_at(field).map(f64::from),
+            Some((TYPE_LONG, 1, field)) => t.u32_at(field).map(f64::from),
+            _ => None,
+        }?;
+        (v > 0.0).then_some(v)
+    };
+    Some(ExifExposure {
+        time: find(&rational(TAG_EXPOSURE_TIME))?,
+        f_number: find(&rational(TAG_F_NUMBER)),
+        iso: find(&iso),
+    })
 }
 
-/// The exposure time the image at `path` records in its EXIF block, if
-/// any (None for files without one, or that cannot be read: the loader
+/// The exposure time in seconds that the EXIF block `exif` records
+/// ([`exposure_from_exif`]).
+pub fn exposure_time_from_exif(exif: &[u8]) -> Option<f64> {
+    exposure_from_exif(exif).map(|e| e.time)
+}
+
+/// The exposure the image at `path` records in its EXIF block, if any
+/// (None for files without one, or that cannot be read: the loader
 /// reports unreadable images itself).
-pub fn exposure_time_of(path: &Path) -> Option<f64> {
+pub fn exposure_of(path: &Path) -> Option<ExifExposure> {
     use image::ImageDecoder as _;
     let reader = image::ImageReader::open(path)
         .ok()?
         .with_guessed_format()
         .ok()?;
     let mut decoder = reader.into_decoder().ok()?;
-    exposure_time_from_exif(&decoder.exif_metadata().ok()??)
+    exposure_from_exif(&decoder.exif_metadata().ok()??)
+}
+
+/// Each of `exposures`' relative exposure, in seconds at the reference ISO
+/// and f-number: time × ISO / ISO_ref × (N_ref / N)², the references the
+/// medians over the frames that record them (so a dataset shot at one ISO
+/// and aperture keeps its times as they are). A frame that does not
+/// record one of them while others do keeps its time for that factor.
+pub fn relative_exposure(exposures: &[ExifExposure]) -> Vec<f64> {
+    let median = |values: Vec<f64>| -> Option<f64> {
+        let mut v = values;
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_by(f64::total_cmp);
+        Some(v[v.len() / 2])
+    };
+    let iso_ref = median(exposures.iter().filter_map(|e| e.iso).collect());
+    let n_ref = median(exposures.iter().filter_map(|e| e.f_number).collect());
+    exposures
+        .iter()
+        .map(|e| {
+            let iso = match (e.iso, iso_ref) {
+                (Some(i), Some(r)) => i / r,
+                _ => 1.0,
+            };
+            let aperture = match (e.f_number, n_ref) {
+                (Some(n), Some(r)) => (r / n).powi(2),
+                _ => 1.0,
+            };
+            e.time * iso * aperture
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -104,6 +180,17 @@ pub(crate) mod tests {
     /// A TIFF block in either byte order: IFD0 with one unrelated entry and
     /// the Exif pointer, the Exif directory with ExposureTime num/den.
     pub(crate) fn exif_block(little: bool, num: u32, den: u32) -> Vec<u8> {
+        exif_block_with(little, (num, den), None, None)
+    }
+
+    /// As [`exif_block`], the Exif directory also holding FNumber (a
+    /// rational) and the ISO (a short) where given.
+    pub(crate) fn exif_block_with(
+        little: bool,
+        (num, den): (u32, u32),
+        f_number: Option<(u32, u32)>,
+        iso: Option<u16>,
+    ) -> Vec<u8> {
         let u16b = |v: u16| {
             if little {
                 v.to_le_bytes()
@@ -134,17 +221,97 @@ pub(crate) mod tests {
         let exif_at = 8 + 2 + 24 + 4;
         b.extend_from_slice(&u32b(exif_at));
         b.extend_from_slice(&u32b(0)); // no next IFD
-                                       // Exif IFD: 1 entry, the rational after it.
-        b.extend_from_slice(&u16b(1));
+                                       // The Exif IFD, its rationals after it.
+        let entries = 1 + f_number.is_some() as u32 + iso.is_some() as u32;
+        let values_at = exif_at + 2 + 12 * entries + 4;
+        b.extend_from_slice(&u16b(entries as u16));
+        let mut rationals = vec![(num, den)];
         b.extend_from_slice(&u16b(TAG_EXPOSURE_TIME));
         b.extend_from_slice(&u16b(TYPE_RATIONAL));
         b.extend_from_slice(&u32b(1));
-        let value_at = exif_at + 2 + 12 + 4;
-        b.extend_from_slice(&u32b(value_at));
+        b.extend_from_slice(&u32b(values_at));
+        if let Some(n) = f_number {
+            b.extend_from_slice(&u16b(TAG_F_NUMBER));
+            b.extend_from_slice(&u16b(TYPE_RATIONAL));
+            b.extend_from_slice(&u32b(1));
+            b.extend_from_slice(&u32b(values_at + 8));
+            rationals.push(n);
+        }
+        if let Some(v) = iso {
+            b.extend_from_slice(&u16b(TAG_ISO));
+            b.extend_from_slice(&u16b(TYPE_SHORT));
+            b.extend_from_slice(&u32b(1));
+            b.extend_from_slice(&u16b(v));
+            b.extend_from_slice(&u16b(0));
+        }
         b.extend_from_slice(&u32b(0));
-        b.extend_from_slice(&u32b(num));
-        b.extend_from_slice(&u32b(den));
+        for (n, d) in rationals {
+            b.extend_from_slice(&u32b(n));
+            b.extend_from_slice(&u32b(d));
+        }
         b
+    }
+
+    /// FNumber and ISO in both byte orders, and absent.
+    #[test]
+    fn reads_the_aperture_and_the_iso() {
+        for little in [true, false] {
+            let b = exif_block_with(little, (1, 100), Some((28, 10)), Some(800));
+            assert_eq!(
+                exposure_from_exif(&b),
+                Some(ExifExposure {
+                    time: 0.01,
+                    f_number: Some(2.8),
+                    iso: Some(800.0)
+                })
+            );
+            let bare = exposure_from_exif(&exif_block(little, 1, 100)).unwrap();
+            assert_eq!((bare.f_number, bare.iso), (None, None));
+            let zero = exif_block_with(little, (1, 100), Some((0, 10)), Some(0));
+            let e = exposure_from_exif(&zero).unwrap();
+            assert_eq!((e.time, e.f_number, e.iso), (0.01, None, None));
+        }
+    }
+
+    /// The ISO and f-number scale the time against the frames' medians: a
+    /// bracket that varies the ISO with the time gets exposures in the
+    /// ratio of the light recorded; one shot at a single ISO and aperture
+    /// keeps its times; a frame missing a value keeps its time for it.
+    #[test]
+    fn relative_exposures_follow_the_iso_and_the_aperture() {
+        let e = |time, f_number, iso| ExifExposure {
+            time,
+            f_number,
+            iso,
+        };
+        let same = [
+            e(0.01, Some(4.0), Some(100.0)),
+            e(0.04, Some(4.0), Some(100.0)),
+        ];
+        assert_eq!(relative_exposure(&same), vec![0.01, 0.04]);
+        // Equal times, ISO 100, 400, 1600: exposures 1 : 4 : 16.
+        let iso = [
+            e(0.01, None, Some(100.0)),
+            e(0.01, None, Some(400.0)),
+            e(0.01, None, Some(1600.0)),
+        ];
+        let r = relative_exposure(&iso);
+        assert!(
+            (r[1] - 0.01).abs() < 1e-15
+                && (r[0] - 0.0025).abs() < 1e-15
+                && (r[2] - 0.04).abs() < 1e-15,
+            "{r:?}"
+        );
+        // f/2.8 against f/5.6 gathers four times the light.
+        let aperture = [
+            e(0.01, Some(5.6), None),
+            e(0.01, Some(2.8), None),
+            e(0.01, Some(5.6), None),
+        ];
+        let r = relative_exposure(&aperture);
+        assert!((r[1] / r[0] - 4.0).abs() < 1e-12 && r[0] == 0.01, "{r:?}");
+        let missing = [e(0.01, None, Some(200.0)), e(0.02, None, None)];
+        assert_eq!(relative_exposure(&missing)[1], 0.02);
     }
 
     #[test]

@@ -102,10 +102,13 @@ pub struct Frame {
     /// The camera's intrinsics.
     pub intrinsics: Intrinsics,
     /// Exposure time in seconds, where given (`exposure_time`), else
-    /// where an LDR image's EXIF block records it.
+    /// where an LDR image's EXIF block records it: then its time scaled
+    /// by its ISO and f-number against the dataset's
+    /// ([`exif::relative_exposure`]).
     pub exposure_time: Option<f64>,
-    /// Whether [`Self::exposure_time`] came from the image's EXIF block.
-    pub exposure_from_exif: bool,
+    /// What the image's EXIF block records, where [`Self::exposure_time`]
+    /// came from there.
+    pub exif_exposure: Option<exif::ExifExposure>,
     /// Its pixels.
     pub image: FrameImage,
 }
@@ -248,6 +251,18 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
         );
         e.frames = problems;
         return Err(e);
+    }
+    // Exposures read from EXIF, in seconds at the dataset's ISO and
+    // aperture: a bracket that varies the ISO with the time.
+    let from_exif: Vec<usize> = (0..frames.len())
+        .filter(|&i| frames[i].exif_exposure.is_some())
+        .collect();
+    let exposures: Vec<exif::ExifExposure> = from_exif
+        .iter()
+        .filter_map(|&i| frames[i].exif_exposure)
+        .collect();
+    for (&i, e) in from_exif.iter().zip(exif::relative_exposure(&exposures)) {
+        frames[i].exposure_time = Some(e);
     }
     let (bounds, bounds_source) = dataset_bounds(top, dialect, &frames, options)?;
     let mut counts = PixelCounts::default();
@@ -575,7 +590,7 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
     // The file's key first; an LDR photograph's own record where it has
     // none (an EXR frame is radiance: no exposure applies).
     let exif = match (s.exposure_time, pixels::image_kind(&path)) {
-        (None, Some(pixels::ImageKind::Srgb)) => exif::exposure_time_of(&path),
+        (None, Some(pixels::ImageKind::Srgb)) => exif::exposure_of(&path),
         _ => None,
     };
     Ok(Frame {
@@ -583,8 +598,8 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
         image_path: path,
         pose,
         intrinsics,
-        exposure_time: s.exposure_time.or(exif),
-        exposure_from_exif: exif.is_some(),
+        exposure_time: s.exposure_time.or(exif.map(|e| e.time)),
+        exif_exposure: exif,
         image,
     })
 }

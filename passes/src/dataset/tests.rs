@@ -251,13 +251,14 @@ fn nerfstudio_opencv_frames_are_undistorted_and_masked_and_fisheye_is_refused() 
 /// `path`'s JPEG with an EXIF block recording `seconds` as num/den (an
 /// APP1 segment after the start-of-image marker, as cameras write it).
 fn add_exif(path: &Path, num: u32, den: u32) {
+    add_exif_block(path, &super::exif::tests::exif_block(false, num, den));
+}
+
+/// Puts the TIFF block `block` into the JPEG at `path` as its APP1 EXIF.
+fn add_exif_block(path: &Path, block: &[u8]) {
     let jpeg = std::fs::read(path).unwrap();
     assert_eq!(&jpeg[..2], &[0xFF, 0xD8]);
-    let payload = [
-        b"Exif\0\0".as_slice(),
-        &super::exif::tests::exif_block(false, num, den),
-    ]
-    .concat();
+    let payload = [b"Exif\0\0".as_slice(), block].concat();
     let mut out = jpeg[..2].to_vec();
     out.extend_from_slice(&[0xFF, 0xE1]);
     out.extend_from_slice(&((payload.len() + 2) as u16).to_be_bytes());
@@ -293,7 +294,7 @@ fn exposure_times_come_from_exif_where_the_file_gives_none() {
     let got: Vec<(Option<f64>, bool)> = d
         .frames
         .iter()
-        .map(|f| (f.exposure_time, f.exposure_from_exif))
+        .map(|f| (f.exposure_time, f.exif_exposure.is_some()))
         .collect();
     assert_eq!(
         got,
@@ -305,6 +306,40 @@ fn exposure_times_come_from_exif_where_the_file_gives_none() {
         ]
     );
     assert!(crate::train::pixels::is_bracket(&d.frames[0]));
+}
+
+/// A phone's bracket: equal times, ISO 100, 400 and 1600 in the frames'
+/// EXIF, and f/2.8 against f/5.6: the exposures follow the light each
+/// recorded (the median ISO and f-number the reference), not the times.
+#[test]
+fn exif_exposures_follow_the_iso_and_the_aperture() {
+    let dir = folder("exif-iso");
+    let settings = [
+        (Some((56, 10)), 100),
+        (Some((56, 10)), 400),
+        (Some((28, 10)), 1600),
+    ];
+    let mut frames = Vec::new();
+    for (i, (e, (f_number, iso))) in eyes().iter().zip(settings).enumerate() {
+        let name = format!("f{i}.jpg");
+        image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
+            .save(dir.join(&name))
+            .unwrap();
+        add_exif_block(
+            &dir.join(&name),
+            &super::exif::tests::exif_block_with(i % 2 == 0, (1, 100), f_number, Some(iso)),
+        );
+        frames.push(serde_json::json!({ "file_path": name, "transform_matrix": pose_rows(*e) }));
+    }
+    let doc = serde_json::json!({ "fl_x": 7.0, "frames": frames });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    let t: Vec<f64> = d.frames.iter().map(|f| f.exposure_time.unwrap()).collect();
+    // References: ISO 400, f/5.6.
+    let want = [0.01 / 4.0, 0.01, 0.01 * 4.0 * 4.0];
+    for (got, want) in t.iter().zip(want) {
+        assert!((got / want - 1.0).abs() < 1e-9, "{t:?}");
+    }
 }
 
 #[test]

@@ -109,8 +109,12 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         .filter(|f| f.exposure_time.is_some())
         .count();
     if timed > 0 {
-        let exif = d.frames.iter().filter(|f| f.exposure_from_exif).count();
-        println!("exposure_time given for {timed} frames ({exif} from the images' EXIF)");
+        let exif = d
+            .frames
+            .iter()
+            .filter(|f| f.exif_exposure.is_some())
+            .count();
+        println!("exposure_time given for {timed} frames ({exif} from the images' EXIF, scaled by their ISO and f-number where recorded)");
     }
     let b = d.bounds;
     println!(
