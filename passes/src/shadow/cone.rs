@@ -8,7 +8,7 @@
 //! cone, times the cosine lobe's, times the cone's covered solid angle.
 //! That bound is what decides far away, and it is loose twice over: the
 //! largest value where the mean belongs, and the clamped cosine's SG,
-//! 0.14 at the horizon where the cosine is 0, for a table point that sees
+//! 0.12 at the horizon where the cosine is 0, for a table point that sees
 //! the object low on its horizon. Against Blender Cycles it darkened
 //! CUPS' far field by 0.43 % where Cycles' darkens 0.22 %
 //! (`docs/fidelity.md`, fifteenth pass). Here each lobe's light is

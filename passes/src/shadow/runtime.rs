@@ -115,9 +115,9 @@ pub const HORIZON_FLOOR: f64 = 1e-6;
 pub const CAST_SKIP_SHARE: f64 = 1e-3;
 
 /// Where the object can block less than this share of a point's light
-/// (Σ_k w_k × its share bound, over the irradiance), the point is left
-/// unshadowed without the SSDF or any ray: ρ is then off by at most this
-/// (`CAST_TOLERANCE` in the shader).
+/// (the sum of the lobes' bounds on what they can lose, over the
+/// irradiance), the point is left unshadowed without the SSDF or any ray:
+/// ρ is then off by at most this (`CAST_TOLERANCE` in the shader).
 pub const CAST_TOLERANCE: f64 = 1e-3;
 
 /// The largest share of the hemisphere energy of lobe `p` (a light lobe
