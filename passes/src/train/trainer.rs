@@ -49,6 +49,10 @@ pub struct HeldOutView {
     /// Σ|L_field − L_photo| / Σ L_photo in luminance over the usable
     /// pixels (linear radiance; brackets at their exposure, clipped).
     pub relative_error: f64,
+    /// Σ L_field / Σ L_photo over the same pixels: whether the field is
+    /// brighter or darker than its photographs as a whole, which the
+    /// relative error cannot tell.
+    pub brightness: f64,
     /// The photograph (linear, brackets at their exposure and clipped).
     pub truth: Vec<[f32; 3]>,
     /// The field's rendering of it, the same way.
@@ -375,6 +379,54 @@ fn fitted_gain(frame: &crate::dataset::Frame, recorded: &[DVec3]) -> DVec3 {
     DVec3::select(rr.cmpgt(DVec3::ZERO), rt / rr, DVec3::ONE)
 }
 
+/// A rendered view's scores against its photograph ([`HeldOutView`]'s
+/// figures) over the pixels not masked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewScores {
+    /// PSNR in dB on sRGB-encoded values clipped at 1.
+    pub psnr: f64,
+    /// Σ|L_rendered − L_photo| / Σ L_photo in luminance.
+    pub relative_error: f64,
+    /// Σ L_rendered / Σ L_photo.
+    pub brightness: f64,
+}
+
+/// [`ViewScores`] of `rendered` against `truth` (linear rgb), leaving out
+/// the pixels `state` masks; with no light in the photograph the relative
+/// figures are infinite.
+pub fn view_scores(rendered: &[[f32; 3]], truth: &[[f32; 3]], state: &[PixelState]) -> ViewScores {
+    let (mut se, mut n, mut diff, mut total, mut ours) = (0.0, 0usize, 0.0, 0.0, 0.0);
+    for (i, (a, b)) in rendered.iter().zip(truth).enumerate() {
+        if state[i] == PixelState::Masked {
+            continue;
+        }
+        let (la, lb) = (
+            luminance(DVec3::from_array(a.map(|v| v as f64))),
+            luminance(DVec3::from_array(b.map(|v| v as f64))),
+        );
+        diff += (la - lb).abs();
+        total += lb;
+        ours += la;
+        for k in 0..3 {
+            se += (encoded(a[k] as f64) - encoded(b[k] as f64)).powi(2);
+        }
+        n += 3;
+    }
+    let mse = se / n.max(1) as f64;
+    let relative = |x: f64| {
+        if total > 0.0 {
+            x / total
+        } else {
+            f64::INFINITY
+        }
+    };
+    ViewScores {
+        psnr: -10.0 * mse.max(1e-12).log10(),
+        relative_error: relative(diff),
+        brightness: relative(ours),
+    }
+}
+
 /// Renders frame `f` of `dataset` from `field` and scores it; with
 /// `fit_exposure`, at the RGB gain that fits the photograph best (least
 /// squares over its usable pixels: a frame of unknown exposure).
@@ -423,33 +475,39 @@ pub fn score_view(
         })
         .collect();
     let truth: Vec<[f32; 3]> = frame.image.radiance.clone();
-    let (mut se, mut n, mut diff, mut total) = (0.0, 0usize, 0.0, 0.0);
-    for (i, (a, b)) in rendered.iter().zip(&truth).enumerate() {
-        if frame.image.state[i] == PixelState::Masked {
-            continue;
-        }
-        let (la, lb) = (
-            luminance(DVec3::from_array(a.map(|v| v as f64))),
-            luminance(DVec3::from_array(b.map(|v| v as f64))),
-        );
-        diff += (la - lb).abs();
-        total += lb;
-        for k in 0..3 {
-            se += (encoded(a[k] as f64) - encoded(b[k] as f64)).powi(2);
-        }
-        n += 3;
-    }
-    let mse = se / n.max(1) as f64;
+    let s = view_scores(&rendered, &truth, &frame.image.state);
     HeldOutView {
         frame: f,
-        psnr: -10.0 * mse.max(1e-12).log10(),
-        relative_error: if total > 0.0 {
-            diff / total
-        } else {
-            f64::INFINITY
-        },
+        psnr: s.psnr,
+        relative_error: s.relative_error,
+        brightness: s.brightness,
         truth,
         rendered,
         size: (w, h),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A view 10 % too bright everywhere scores brightness 1.1 and
+    /// relative error 0.1; a darker one the other way; masked pixels and
+    /// a black photograph are handled.
+    #[test]
+    fn view_scores_tell_a_bright_field_from_a_dark_one() {
+        let truth = vec![[0.2f32, 0.2, 0.2], [0.4, 0.4, 0.4], [9.0, 0.0, 0.0]];
+        let state = [PixelState::Value, PixelState::Value, PixelState::Masked];
+        let scaled = |k: f32| -> Vec<[f32; 3]> { truth.iter().map(|p| p.map(|v| v * k)).collect() };
+        let bright = view_scores(&scaled(1.1), &truth, &state);
+        assert!((bright.brightness - 1.1).abs() < 1e-6, "{bright:?}");
+        assert!((bright.relative_error - 0.1).abs() < 1e-6, "{bright:?}");
+        let dark = view_scores(&scaled(0.9), &truth, &state);
+        assert!((dark.brightness - 0.9).abs() < 1e-6 && (dark.relative_error - 0.1).abs() < 1e-6);
+        let same = view_scores(&truth, &truth, &state);
+        assert!(same.brightness == 1.0 && same.relative_error == 0.0 && same.psnr >= 119.0);
+        let black = vec![[0.0f32; 3]; 3];
+        let none = view_scores(&scaled(1.0), &black, &state);
+        assert!(none.brightness.is_infinite() && none.relative_error.is_infinite());
     }
 }

@@ -244,8 +244,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     }
     for v in &trained.held_out {
         println!(
-            "held-out frame {}: PSNR {:.2} dB, relative error {:.3}",
-            v.frame, v.psnr, v.relative_error
+            "held-out frame {}: PSNR {:.2} dB, relative error {:.3}, brightness field / photograph {:.3}",
+            v.frame, v.psnr, v.relative_error, v.brightness
         );
     }
     let mut outputs = Outputs::new();
