@@ -76,9 +76,9 @@ impl ConeQuadrature {
             directions[i] = d;
             weights[i] = d.dot(n).max(0.0) * per;
         }
+        let solid = 2.0 * std::f64::consts::PI * (1.0 - view.cos_beta);
         let sum: f64 = weights.iter().sum();
         if sum > 0.0 {
-            let solid = 2.0 * std::f64::consts::PI * (1.0 - view.cos_beta);
             let projected = projected_solid_angle(u.dot(n), view.sin_beta);
             let scale = view.covered_solid / solid * projected / sum;
             weights.iter_mut().for_each(|w| *w *= scale);
@@ -86,7 +86,7 @@ impl ConeQuadrature {
         Some(Self {
             directions,
             weights,
-            solid: 2.0 * std::f64::consts::PI * (1.0 - view.cos_beta),
+            solid,
         })
     }
 
