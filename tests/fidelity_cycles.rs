@@ -188,7 +188,7 @@ fn the_probe_irradiance_matches_cycles_sensors() {
 /// radii from it, 3 × 3 means of the field's own pixels) against Cycles,
 /// on fields baked at test size (64 nodes, 8 samples) with the objects'
 /// SSDFs at the scenes' knobs: the mean darkening within the issue's
-/// 0.3 %. Measured: CUPS front 0.14 %, side 0.07 %, ROOM 0.07 %
+/// 0.3 %. Measured: CUPS front 0.13 %, side 0.07 %, ROOM 0.07 %
 /// (Cycles: 0.22 %, 0.19 %, −0.27 %); before each lobe's loss was held to
 /// its light over the object's cone (docs/fidelity.md, fifteenth pass),
 /// 0.42 %, 0.32 % and 0.43 % on the same fields — what it was at full

@@ -3,7 +3,9 @@
 // bounding sphere's cap, filled and coloured by ssdf.reflectance, showing
 // a Lambertian face turned towards x lit by the object's lobes (their
 // irradiance on the normal towards x, through the clamped-cosine SG; the
-// part from below x's plane at x's own shadow ratio). Needs: common/sg.wgsl,
+// part from below x's plane at x's own shadow ratio), over the cap's
+// projected solid angle clipped at x's horizon. Needs: common/sg.wgsl,
+// shadow/cone.wgsl,
 // ssdf/ssdf.wgsl's `ssdf` block, the lobes `light_lobes` and `pc.light_count`.
 
 // The share of SG `p`'s energy from below the plane of normal `n`
@@ -24,7 +26,8 @@ fn cast_bounce(x: vec3<f32>, n: vec3<f32>, below: vec3<f32>) -> vec3<f32> {
     }
     let u = to / dist;
     let s = min(r / dist, 1.0);
-    let projected = s * s * max(dot(n, u), 0.0);
+    // The cap's projected solid angle over π, clipped at x's horizon.
+    let projected = cone_projected_solid_angle(dot(n, u), s) / SG_PI;
     if projected <= 0.0 {
         return vec3<f32>(0.0);
     }

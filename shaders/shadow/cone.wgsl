@@ -56,7 +56,7 @@ fn cast_cone(v: CastSphere, n: vec3<f32>) -> CastCone {
 // n, clipped at the horizon (cone.rs projected_solid_angle).
 fn cone_projected_solid_angle(cos_theta: f32, sin_beta: f32) -> f32 {
     let sin2 = sin_beta * sin_beta;
-    if cos_theta * cos_theta > sin2 {
+    if cos_theta * cos_theta >= sin2 {
         return SG_PI * sin2 * max(cos_theta, 0.0);
     }
     let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));

@@ -17,9 +17,12 @@
 //! (half the cosine's sharpness) weighted a bulb straight above eight times
 //! too much on the faces turned below it, and changed ROOM's shadow
 //! figures by less than their noise, so the plain cosine stays. Its
-//! irradiance at `x` is the cap's projected solid angle (π sin²β cos θ,
-//! exact while the cap is above `x`'s horizon; sin β = 1 inside the
-//! sphere) times that radiance. The lobes' light reaching that face from
+//! irradiance at `x` is the cap's projected solid angle, clipped at `x`'s
+//! horizon ([`super::cone::projected_solid_angle`]: π sin²β cos θ while
+//! the cap is above it; sin β = 1 inside the sphere) times that radiance.
+//! (Unclipped, an object standing on the surface, its cap across the
+//! horizon, sent back too little: CUPS' side view's shadow correlation
+//! 0.873 → 0.884, ROOM's area 1.29 → 1.26 of Cycles' with the clip.) The lobes' light reaching that face from
 //! below `x`'s plane is the field around `x`, which the probe saw
 //! unshadowed but the object shadows about as deeply as `x`: it counts at
 //! `x`'s own shadow ratio before the bounce (each lobe's share from below
@@ -136,7 +139,9 @@ pub fn bounce_irradiance(
         return DVec3::ZERO;
     }
     let u = to / dist;
-    let projected = (r / dist).powi(2).min(1.0) * n.dot(u).max(0.0);
+    // The cap's projected solid angle over π, clipped at x's horizon.
+    let projected =
+        super::cone::projected_solid_angle(n.dot(u), (r / dist).min(1.0)) / std::f64::consts::PI;
     if projected <= 0.0 {
         return DVec3::ZERO;
     }
@@ -149,7 +154,7 @@ pub fn bounce_irradiance(
             p.integral() * (DVec3::ONE - share + share * below)
         })
         .sum();
-    // π sin²β cos θ × albedo × E / π.
+    // (projected solid angle) × albedo × E / π.
     projected * reflectance * irradiance
 }
 

@@ -116,7 +116,7 @@ impl ConeQuadrature {
 /// / x), x = cot β, y = −x cot θ.
 pub fn projected_solid_angle(cos_theta: f64, sin_beta: f64) -> f64 {
     let sin2 = sin_beta * sin_beta;
-    if cos_theta * cos_theta > sin2 {
+    if cos_theta * cos_theta >= sin2 {
         return std::f64::consts::PI * sin2 * cos_theta.max(0.0);
     }
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
