@@ -122,12 +122,6 @@ pub fn exposure_from_exif(exif: &[u8]) -> Option<ExifExposure> {
     })
 }
 
-/// The exposure time in seconds that the EXIF block `exif` records
-/// ([`exposure_from_exif`]).
-pub fn exposure_time_from_exif(exif: &[u8]) -> Option<f64> {
-    exposure_from_exif(exif).map(|e| e.time)
-}
-
 /// The exposure the image at `path` records in its EXIF block, if any
 /// (None for files without one, or that cannot be read: the loader
 /// reports unreadable images itself).
@@ -176,6 +170,11 @@ pub fn relative_exposure(exposures: &[ExifExposure]) -> Vec<f64> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// The exposure time alone.
+    fn exposure_time_from_exif(exif: &[u8]) -> Option<f64> {
+        exposure_from_exif(exif).map(|e| e.time)
+    }
 
     /// A TIFF block in either byte order: IFD0 with one unrelated entry and
     /// the Exif pointer, the Exif directory with ExposureTime num/den.
