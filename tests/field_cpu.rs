@@ -248,6 +248,10 @@ fn bad_scene_files_name_the_key() {
             "lighting.frame_iterations",
         ),
         (
+            format!("{base}\n[shading]\nfield_light = 9\n"),
+            "shading.field_light",
+        ),
+        (
             format!("{base}\n[shadows]\ncast_scale = 0\n"),
             "shadows.cast_scale",
         ),

@@ -906,6 +906,8 @@ struct ToyView {
 
 /// One pixel of the toy as [`ToyView::shade`] rendered it.
 struct ShadedPixel {
+    /// Its column and row.
+    pixel: (u32, u32),
     ray: Ray,
     /// The G-buffer's surface point, normal and material.
     point: DVec3,
@@ -1020,6 +1022,7 @@ impl ToyView {
                 let g = nr.pixels[i].map(f64::from);
                 let a = am.pixels[i].map(f64::from);
                 pixels.push(ShadedPixel {
+                    pixel: (x, y),
                     point: ray.at(di.pixels[i][0] as f64),
                     normal: DVec3::new(g[0], g[1], g[2]).normalize(),
                     material: SurfaceMaterial {
@@ -1163,6 +1166,70 @@ fn lamp_field(c: DVec3, r: f64) -> (inlay_passes::field::GridField, LocalLight) 
     (field, light)
 }
 
+/// The lamp field around the toy ([`lamp_field`]) and the toy's light in
+/// it: the test lobes, then the lamp's lobe as the centre sees it (which
+/// the per-pixel shading replaces), with the buffers the shading binds.
+struct LampLights {
+    field: inlay_passes::field::GridField,
+    gpu_field: GpuGridField,
+    light: LocalLight,
+    emission: Emission,
+    lobes: Vec<Sg64>,
+    lobe_buf: Arc<Buffer>,
+    local_buf: Arc<Buffer>,
+    ray_buf: Arc<Buffer>,
+}
+
+impl LampLights {
+    fn new(view: &ToyView) -> Self {
+        use inlay_passes::lighting::local;
+        let ctx = &view.ctx;
+        let (c, r) = view.placed.mesh.bounding_sphere();
+        let (field, light) = lamp_field(c, r);
+        let emission = Emission {
+            intensity: DVec3::new(0.8, 0.6, 0.5) * r * r,
+            radius: 0.3 * r,
+        };
+        let mut lobes = test_lobes();
+        let to = light.centre - c;
+        lobes.push(local::sphere_lobe(
+            to.normalize(),
+            to.length(),
+            emission.radius,
+            emission.intensity,
+        ));
+        Self {
+            gpu_field: GpuGridField::upload(ctx, &field).unwrap(),
+            lobe_buf: lobe_buffer(ctx, &lobes),
+            local_buf: local_light_buffer(ctx, &[(light, emission)]),
+            ray_buf: ray_buffer(ctx, &[vec![DVec3::Y]]),
+            field,
+            light,
+            emission,
+            lobes,
+        }
+    }
+
+    /// The lobes as a frame binds them: one direct lobe, the local light,
+    /// its visibility from `side`² rays.
+    fn bind(&self, graph: &mut inlay_engine::graph::FrameGraph, side: u32) -> LightLobes {
+        LightLobes {
+            buffer: graph.import_buffer(&self.lobe_buf, None),
+            count: self.lobes.len() as u32,
+            direct: Some(DirectRays {
+                lobes: 1,
+                rays: graph.import_buffer(&self.ray_buf, None),
+                rays_per_lobe: 1,
+                local: LocalLightBindings {
+                    lights: graph.import_buffer(&self.local_buf, None),
+                    count: 1,
+                    side,
+                },
+            }),
+        }
+    }
+}
+
 /// The per-pixel shading of a local light (`shade/shade_self_shadow_direct.wgsl`:
 /// its lobe from each shaded point, Γ from its rays through the field and
 /// past the mesh) against its f64 mirror (`lighting::local::sphere_lobe`
@@ -1182,42 +1249,11 @@ fn local_light_shading_matches_its_mirror() {
     };
     let shade = ShadePass::new(ctx, &view.lib, 1, march).unwrap();
     let ndf = NdfLobes::new(1).unwrap();
-    let (c, r) = view.placed.mesh.bounding_sphere();
-    let (field, light) = lamp_field(c, r);
-    let gpu_field = GpuGridField::upload(ctx, &field).unwrap();
-    let emission = Emission {
-        intensity: DVec3::new(0.8, 0.6, 0.5) * r * r,
-        radius: 0.3 * r,
-    };
     let side = 3u32;
-    // The fitted lobes, then the light's lobe as the centre sees it (which
-    // the per-pixel shading replaces).
-    let mut lobes = test_lobes();
-    let to = light.centre - c;
-    lobes.push(local::sphere_lobe(
-        to.normalize(),
-        to.length(),
-        emission.radius,
-        emission.intensity,
-    ));
-    let lobe_buf = lobe_buffer(ctx, &lobes);
-    let local_buf = local_light_buffer(ctx, &[(light, emission)]);
-    let ray_buf = ray_buffer(ctx, &[vec![DVec3::Y]]);
+    let lamp = LampLights::new(&view);
+    let (field, light, emission, lobes) = (&lamp.field, lamp.light, lamp.emission, &lamp.lobes);
     let object_scene = inlay_passes::ssdf::object_scene(&view.placed.mesh);
-    let (pixels, peak) = view.shade(&shade, &gpu_field, |graph| LightLobes {
-        buffer: graph.import_buffer(&lobe_buf, None),
-        count: lobes.len() as u32,
-        direct: Some(DirectRays {
-            lobes: 1,
-            rays: graph.import_buffer(&ray_buf, None),
-            rays_per_lobe: 1,
-            local: LocalLightBindings {
-                lights: graph.import_buffer(&local_buf, None),
-                count: 1,
-                side,
-            },
-        }),
-    });
+    let (pixels, peak) = view.shade(&shade, &lamp.gpu_field, |graph| lamp.bind(graph, side));
     let fitted = lobes.len() - 1;
     let to_object = view.placed.world_to_object();
     let (mut off, mut worst) = (0, 0.0f64);
@@ -1236,7 +1272,7 @@ fn local_light_shading_matches_its_mirror() {
         );
         let lifted = p + n * (inlay_passes::shadow::DIRECT_RAY_OFFSET * view.placed.sphere().1);
         let v = local::visibility(
-            &field,
+            field,
             &object_scene,
             to_object,
             &light,
@@ -1283,6 +1319,85 @@ fn local_light_shading_matches_its_mirror() {
         off <= shaded / 50,
         "{off} of {shaded} pixels off the mirror"
     );
+    common::assert_no_validation_errors(ctx);
+}
+
+/// The field's light at the object's surface (`shade/field_light.wgsl`,
+/// entry `field_gain_only`) against its f64 mirror (`shade::field_light`):
+/// each 8 × 8 tile's pick, its rays through the lamp field (the lamp's own
+/// light taken off, the slab of medium dimming some of them) from the
+/// G-buffer's point, and each pixel's gain with its own normal. The field
+/// sends no light but the lamp's, which is taken off, so the gains are the
+/// lobes' share that the slab lets through: 1 where it is not in the way,
+/// near 0.6 where it is (measured 0.641–1.000). Tolerance:
+/// the march in f32 (3·10⁻⁴ of the transmittance, as above) and the lobes'
+/// sums in f32, 2·10⁻³ of the gain plus 10⁻⁴.
+#[test]
+fn field_light_gain_matches_its_mirror() {
+    use inlay_passes::shade::field_light::{diffuse_gain, ray_origin, tile_pick, tile_rays, TILE};
+    use std::collections::HashMap;
+    let view = ToyView::new();
+    let ctx = &view.ctx;
+    let march = MarchKnobs {
+        samples_per_ray: 256,
+        ..MarchKnobs::default()
+    };
+    let side = 6u32;
+    let shade = ShadePass::new_field_gain(ctx, &view.lib, march, side).unwrap();
+    let lamp = LampLights::new(&view);
+    let (field, light, lobes) = (&lamp.field, lamp.light, &lamp.lobes);
+    let (pixels, _) = view.shade(&shade, &lamp.gpu_field, |graph| lamp.bind(graph, 3));
+    let fitted = &lobes[..lobes.len() - 1];
+    let at: HashMap<(u32, u32), &ShadedPixel> = pixels.iter().map(|p| (p.pixel, p)).collect();
+    let (w, h) = (view.cam.width, view.cam.height);
+    let radius = view.placed.sphere().1;
+    let mut tiles: HashMap<(u32, u32), Vec<&ShadedPixel>> = HashMap::new();
+    for p in &pixels {
+        tiles
+            .entry((p.pixel.0 / TILE, p.pixel.1 / TILE))
+            .or_default()
+            .push(p);
+    }
+    let (mut off, mut worst) = (0, 0.0f64);
+    let (mut low, mut high) = (f64::INFINITY, 0.0f64);
+    let diffuse = |x, y| {
+        at.get(&(x, y))
+            .is_some_and(|p: &&ShadedPixel| p.material.clamped().diffuse() != DVec3::ZERO)
+    };
+    for (tile, members) in &tiles {
+        // A tile without diffuse pixels casts no rays; its gain stays 1.
+        let rays = tile_pick(*tile, w, h, diffuse).map(|pick| {
+            let source = at[&pick];
+            let origin = ray_origin(source.point, source.normal, radius);
+            tile_rays(field, &march, origin, fitted, &[light], side)
+        });
+        for p in members {
+            let cpu = rays
+                .as_ref()
+                .map_or(DVec3::ONE, |r| diffuse_gain(p.normal, r));
+            low = low.min(cpu.min_element());
+            high = high.max(cpu.max_element());
+            let err = ((p.gpu - cpu).abs() / (cpu.abs() * 2e-3 + 1e-4)).max_element();
+            if err > 1.0 {
+                off += 1;
+            } else {
+                worst = worst.max(err);
+            }
+        }
+    }
+    eprintln!(
+        "field light gain: {} pixels in {} tiles, gains {low:.3}..{high:.3}, {off} off the mirror, worst {worst:.3} of the tolerance",
+        pixels.len(),
+        tiles.len()
+    );
+    assert!(
+        pixels.len() > 300 && tiles.len() > 8,
+        "{} {}",
+        pixels.len(),
+        tiles.len()
+    );
+    assert!(low < 0.7 && high > 0.99, "gains {low}..{high}");
+    assert_eq!(off, 0, "{off} of {} pixels off the mirror", pixels.len());
     common::assert_no_validation_errors(ctx);
 }
 

@@ -3,6 +3,8 @@
 // lobes come from:
 //   shading_light_count() -> u32, shading_light(k) -> Sg,
 //   shading_attenuation(k) -> f32   (Γ_k, the self-shadow factor),
+//   shading_diffuse_gain(k) -> vec3<f32>  (a factor on lobe k's diffuse
+//     light: the field's light at the point over the lobes', or 1),
 //   shading_ndf_count() -> u32, shading_ndf(j) -> vec2<f32>  ((c_j, k_j)).
 #include "common/sg.wgsl"
 #include "common/brdf.wgsl"
@@ -31,7 +33,7 @@ fn shade_sg(n: vec3<f32>, v: vec3<f32>, albedo_in: vec3<f32>, roughness_in: f32,
             continue;
         }
         let g = shading_light(k);
-        diffuse += gamma * diffuse_colour * sg_diffuse_irradiance(g, n);
+        diffuse += gamma * diffuse_colour * sg_diffuse_irradiance(g, n) * shading_diffuse_gain(k);
         for (var j = 0u; j < shading_ndf_count(); j++) {
             let ck = shading_ndf(j);
             let d = Sg(r, ck.y * ndf_sharpness, vec3<f32>(ck.x * ndf_amplitude));

@@ -1,5 +1,6 @@
 // The SG fit's model, mirroring passes/src/sgfit/model.rs: Fibonacci axes, cold-start sharpness, texel validity, the step.
 // Needs: common/sg.wgsl and common/tangent_basis.wgsl.
+#include "common/fibonacci.wgsl"
 
 const FIT_PI: f32 = 3.14159265358979;
 const FIT_LN_2: f32 = 0.693147180559945;
@@ -10,12 +11,7 @@ const FIT_SEED_CONTRAST: f32 = 4.0;
 
 // Axis k of m Fibonacci-lattice points (+Y up).
 fn fit_fibonacci_axis(k: u32, m: u32) -> vec3<f32> {
-    let y = 1.0 - (2.0 * f32(k) + 1.0) / f32(m);
-    let r = sqrt(max(1.0 - y * y, 0.0));
-    // Golden angle π(3 − √5); the product is reduced mod 2π first to keep
-    // f32 accuracy for large k.
-    let phi = (f32(k) * 2.39996322972865332) % (2.0 * FIT_PI);
-    return vec3<f32>(r * cos(phi), y, r * sin(phi));
+    return fibonacci_axis(k, m);
 }
 
 fn fit_initial_sharpness(m: u32) -> f32 {

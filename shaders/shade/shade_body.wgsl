@@ -5,9 +5,11 @@
 // shader (shade/shade.wgsl, shade/shade_self_shadow.wgsl) defines the
 // entry point, calling shade_pixel, and the hooks
 //   shading_attenuation(k) -> f32 (Γ_k), shading_prepare(x, n) (called
-//   with the pixel's world-space surface point and normal before shading)
-//   and shading_lobe(k, g) -> Sg (lobe k as this pixel sees it: g, or a
-//   local light's lobe from the pixel's point).
+//   with the pixel's world-space surface point and normal before shading),
+//   shading_lobe(k, g) -> Sg (lobe k as this pixel sees it: g, or a
+//   local light's lobe from the pixel's point) and shading_diffuse_gain(k)
+//   -> vec3<f32> (a factor on lobe k's diffuse light, 1 but where
+//   shade/field_light.wgsl takes the field's light at the point).
 // Bindings 0-2 are left to the field (field/grid.wgsl) for the variant
 // that marches it.
 #include "common/camera.wgsl"
@@ -31,6 +33,9 @@ struct ShadePush {
     local_side: u32,
     march_step: f32,
     march_termination: f32,
+    // Side of the field-light rays per tile (0: off; read by
+    // shade/field_light.wgsl).
+    field_side: u32,
 }
 
 var<immediate> pc: ShadePush;

@@ -11,6 +11,10 @@ fn shading_lobe(k: u32, g: Sg) -> Sg {
     return g;
 }
 
+fn shading_diffuse_gain(k: u32) -> vec3<f32> {
+    return vec3<f32>(1.0);
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shade_pixel(id);

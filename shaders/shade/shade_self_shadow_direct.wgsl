@@ -5,7 +5,10 @@
 // radii off it (shadow/direct_rays.wgsl); the local lights, last, are
 // lobes from the pixel's own point towards their spheres
 // (lighting/local_light.wgsl), with Γ from their rays (local_visibility);
-// the other lobes take Γ from the SSDF. Mirrors
+// the other lobes take Γ from the SSDF. With pc.field_side > 0 the fitted
+// lobes' diffuse light is scaled by the field's light at the point
+// (shade/field_light.wgsl); the entry point `field_gain_only` writes that gain
+// instead of the radiance (for its test against the CPU mirror). Mirrors
 // passes/src/shadow/runtime.rs self_shadow_factors and
 // passes/src/lighting/local.rs.
 #include "common/ray_box.wgsl"
@@ -25,6 +28,7 @@
 
 #include "geometry/mesh_bvh.wgsl"
 #include "shadow/direct_rays.wgsl"
+#include "shade/field_light.wgsl"
 
 fn first_local() -> u32 {
     return pc.light_count - min(pc.local_count, pc.light_count);
@@ -83,7 +87,51 @@ fn shading_attenuation(k: u32) -> f32 {
     return direct_clear_fraction(lifted, k - first, pc.direct_rays, shade_normal, true);
 }
 
+var<private> field_gain: vec3<f32>;
+var<private> field_gain_ready: bool;
+var<private> field_pixel: vec2<u32>;
+
+fn shading_diffuse_gain(k: u32) -> vec3<f32> {
+    if k >= pc.light_count - min(pc.direct_lobes, pc.light_count) {
+        return vec3<f32>(1.0);
+    }
+    if !field_gain_ready {
+        field_gain = field_light_gain(field_pixel, shade_normal);
+        field_gain_ready = true;
+    }
+    return field_gain;
+}
+
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) local_index: u32,
+    @builtin(workgroup_id) group: vec3<u32>,
+) {
+    field_light_gather(id, local_index, group);
+    field_pixel = id.xy;
     shade_pixel(id);
+}
+
+// The gain alone, (g, 1) at the object's pixels and 0 where no object is.
+@compute @workgroup_size(8, 8, 1)
+fn field_gain_only(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) local_index: u32,
+    @builtin(workgroup_id) group: vec3<u32>,
+) {
+    field_light_gather(id, local_index, group);
+    if camera_outside(pc.camera, id.xy) {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let hit = textureLoad(distance_id, pixel, 0);
+    if hit.g != pc.object_index {
+        if hit.g < 0.0 && pc.write_empty != 0u {
+            textureStore(out_object, pixel, vec4<f32>(0.0));
+        }
+        return;
+    }
+    let n = normalize(textureLoad(normal_roughness, pixel, 0).xyz);
+    textureStore(out_object, pixel, vec4<f32>(field_light_gain(id.xy, n), 1.0));
 }

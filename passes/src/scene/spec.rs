@@ -59,6 +59,7 @@ pub(crate) struct ShadowsSpec {
 #[serde(deny_unknown_fields)]
 pub(crate) struct ShadingSpec {
     pub ndf_lobes: Option<u32>,
+    pub field_light: Option<u32>,
 }
 
 #[derive(Debug, Deserialize)]

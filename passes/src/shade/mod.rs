@@ -2,8 +2,11 @@
 //! over the G-buffer, with the brute-force CPU reference it is judged by
 //! ([`shade_probe_reference`]). One dispatch per object shades that
 //! object's pixels with its own fitted lobes; the output is the object's
-//! radiance I_v with coverage in alpha, before any shadow.
+//! radiance I_v with coverage in alpha, before any shadow. With
+//! `[shading] field_light` the fitted lobes' diffuse light at each point
+//! is scaled by the field's light there ([`field_light`]).
 
+pub mod field_light;
 mod reference;
 
 pub use reference::{shade_probe_reference, shade_reference_with};
@@ -47,8 +50,10 @@ inlay_engine::gpu_struct! {
         pub march_step: f32,
         /// The march's early-termination transmittance.
         pub march_termination: f32,
+        /// Side of the field-light rays per tile (0: off).
+        pub field_side: u32,
         /// Padding (the struct's size rounds up to 16 bytes).
-        pub _pad: [u32; 3],
+        pub _pad: [u32; 2],
     }
 }
 
@@ -83,8 +88,8 @@ pub struct SelfShadow {
 }
 
 /// The shading pipelines (without self-shadows; with them from the SSDF;
-/// with them from the SSDF and, for direct lobes, from rays cast against
-/// the mesh) and the NDF mixture they use.
+/// with them from the SSDF and, for direct lobes or the field's light at
+/// the point, from rays) and the NDF mixture they use.
 pub struct ShadePass {
     pipeline: Arc<ComputePipeline>,
     self_shadowed: Arc<ComputePipeline>,
@@ -92,6 +97,11 @@ pub struct ShadePass {
     ndf: Arc<Buffer>,
     ndf_lobes: NdfLobes,
     march: MarchKnobs,
+    /// Side of the field-light rays per tile (0: the paper's shading).
+    field_side: u32,
+    /// Bound as the direct lobes' rays and local lights where an object's
+    /// light has none but the rays' variant runs (for the field's light).
+    no_direct: Arc<Buffer>,
 }
 
 impl ShadePass {
@@ -103,15 +113,49 @@ impl ShadePass {
         ndf_lobes: u32,
         march: MarchKnobs,
     ) -> anyhow::Result<Self> {
+        Self::build(ctx, lib, ndf_lobes, march, "main")
+    }
+
+    /// A pass whose output, at the pixels of self-shadowed objects, is the
+    /// gain [`field_light`] puts on the fitted lobes' diffuse light with
+    /// `side`² rays per tile, in rgb with 1 in alpha (for its test against
+    /// the CPU mirror, and for inspection).
+    pub fn new_field_gain(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        march: MarchKnobs,
+        side: u32,
+    ) -> anyhow::Result<Self> {
+        Ok(Self::build(ctx, lib, 1, march, "field_gain_only")?.with_field_light(side))
+    }
+
+    /// Scales the fitted lobes' diffuse light at each point of a
+    /// self-shadowed object by the field's light there, from `side`² rays
+    /// per tile ([`field_light`]; 0: off, the paper's shading). It rides
+    /// with the self-shadowed variant (its rays start off the surface by
+    /// the SSDF's radius): an object drawn without self-shadows is lit by
+    /// its lobes alone.
+    pub fn with_field_light(mut self, side: u32) -> Self {
+        self.field_side = side.min(field_light::MAX_SIDE);
+        self
+    }
+
+    fn build(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        ndf_lobes: u32,
+        march: MarchKnobs,
+        direct_entry: &str,
+    ) -> anyhow::Result<Self> {
         let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
         let mut defines = shadow_defines();
         defines.push(Define::Bool("SKIP_EMPTY", march.skip_empty));
-        let shadowed = |file: &str| lib.compute_pipeline(ctx, file, "main", &defines);
+        let shadowed = |file: &str, entry: &str| lib.compute_pipeline(ctx, file, entry, &defines);
         Ok(Self {
             pipeline: lib.compute_pipeline(ctx, "shade/shade.wgsl", "main", &[])?,
-            self_shadowed: shadowed("shade/shade_self_shadow.wgsl")?,
-            self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl")?,
+            self_shadowed: shadowed("shade/shade_self_shadow.wgsl", "main")?,
+            self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl", direct_entry)?,
             ndf: Arc::new(Buffer::with_data(
                 ctx,
                 "ndf lobes",
@@ -120,6 +164,13 @@ impl ShadePass {
             )?),
             ndf_lobes: ndf,
             march,
+            field_side: 0,
+            no_direct: Arc::new(Buffer::with_data(
+                ctx,
+                "no direct lobes",
+                &[0u8; 32],
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?),
         })
     }
 
@@ -153,9 +204,12 @@ impl ShadePass {
         let ndf = graph.import_buffer(&self.ndf, None);
         let mut out = out;
         let grid = field.import(graph);
+        let no_direct = graph.import_buffer(&self.no_direct, None);
         let mut pass = graph.compute_pass(OBJECT_SHADE);
         for (i, l) in lobes.iter().enumerate() {
             let local = l.direct.map(|d| d.local);
+            let shadow = self_shadow.get(i).copied().flatten();
+            let field_light = self.field_side > 0 && shadow.is_some();
             let push = ShadePush {
                 camera: camera.rays(),
                 object_index: i as f32,
@@ -167,14 +221,18 @@ impl ShadePass {
                 local_side: local.map_or(1, |x| x.side),
                 march_step: self.march.step(field.diagonal) as f32,
                 march_termination: self.march.termination as f32,
-                _pad: [0; 3],
+                field_side: if field_light { self.field_side } else { 0 },
+                _pad: [0; 2],
             };
-            let shadow = self_shadow.get(i).copied().flatten();
-            let pipeline = match (shadow, l.direct) {
-                (Some(_), Some(_)) => &self.self_shadowed_direct,
-                (Some(_), None) => &self.self_shadowed,
+            let rays = l.direct.is_some() || field_light;
+            let pipeline = match (shadow, rays) {
+                (Some(_), true) => &self.self_shadowed_direct,
+                (Some(_), false) => &self.self_shadowed,
                 (None, _) => &self.pipeline,
             };
+            // The rays' variant binds the direct lobes' buffers, which an
+            // object lit by its fitted lobes alone does not have.
+            let filler = (shadow.is_some() && rays && l.direct.is_none()).then_some(no_direct);
             let mut d = grid
                 .bind(pass.dispatch(pipeline))
                 .read("normal_roughness", gbuffer.normal_roughness)
@@ -194,8 +252,8 @@ impl ShadePass {
                     .read("bvh_nodes", s.ssdf.bvh_nodes)
                     .read("bvh_triangles", s.ssdf.bvh_triangles);
             }
-            d.read_opt("sharp_rays", l.direct.map(|r| r.rays))
-                .read_opt("local_lights", local.map(|x| x.lights))
+            d.read_opt("sharp_rays", l.direct.map(|r| r.rays).or(filler))
+                .read_opt("local_lights", local.map(|x| x.lights).or(filler))
                 .threads([width, height, 1]);
         }
         pass.finish();

@@ -57,6 +57,10 @@ pub struct FidelityArgs {
     /// Leave out the path-traced reference (the slowest part).
     #[arg(long)]
     pub no_reference: bool,
+    /// Rays a side per tile for the field's light at the object's surface
+    /// (overrides `[shading] field_light`; 0: off).
+    #[arg(long)]
+    pub field_light: Option<u32>,
 }
 
 fn load(path: &Path) -> anyhow::Result<Rgb> {
@@ -129,7 +133,8 @@ pub fn render_over_field(
 
 /// Runs `fidelity`.
 pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    scene.shading.field_light = args.field_light.unwrap_or(scene.shading.field_light);
     let recipe = scene
         .recipe()
         .ok_or_else(|| {

@@ -62,6 +62,10 @@ pub struct RenderArgs {
     /// SG lobes for GGX's normal distribution (overrides `[shading] ndf_lobes`).
     #[arg(long)]
     pub ndf_lobes: Option<u32>,
+    /// Rays a side per tile for the field's light at the object's surface
+    /// (overrides `[shading] field_light`; 0: off).
+    #[arg(long)]
+    pub field_light: Option<u32>,
     /// Draw no shadows (neither self-shadows nor the cast shadow).
     #[arg(long)]
     pub no_shadows: bool,
@@ -119,6 +123,7 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         });
     }
     scene.shading.ndf_lobes = args.ndf_lobes.unwrap_or(scene.shading.ndf_lobes);
+    scene.shading.field_light = args.field_light.unwrap_or(scene.shading.field_light);
     scene.shadows.self_shadow &= !(args.no_shadows || args.no_self_shadow);
     scene.shadows.cast &= !(args.no_shadows || args.no_cast_shadow);
     scene.shadows.outside = args.shadow_outside.unwrap_or(scene.shadows.outside);

@@ -10,10 +10,12 @@ use inlay_passes::scene::{Scene, DEFAULT_CAST_REFINE};
 pub enum Preset {
     /// 128 samples per ray, a 16×16 probe, 8 lobes, 20 cold and 2 warm
     /// LM iterations, the cast shadow at half resolution without
-    /// refinement: interactive on a CPU device at small sizes.
+    /// refinement, the object lit by its lobes alone (no field light at
+    /// its surface): interactive on a CPU device at small sizes.
     Fast,
     /// 256 samples per ray, a 32×32 probe, 16 lobes, 40 cold and 4 warm
-    /// iterations, the cast shadow at half resolution.
+    /// iterations, the cast shadow at half resolution, the field's light at
+    /// the object's surface from 6 × 6 rays a tile.
     Balanced,
     /// The scene file's knobs (the paper's defaults unless it says otherwise).
     Scene,
@@ -42,9 +44,9 @@ impl Preset {
     /// scene file asks for).
     pub fn apply(self, authored: &Scene) -> Scene {
         let mut s = authored.clone();
-        let (samples, probe, lobes, cold, warm, cast_scale, cast_refine) = match self {
-            Preset::Fast => (128, 16, 8, 20, 2, 2, 1.0),
-            Preset::Balanced => (256, 32, 16, 40, 4, 2, DEFAULT_CAST_REFINE),
+        let (samples, probe, lobes, cold, warm, cast_scale, cast_refine, field_light) = match self {
+            Preset::Fast => (128, 16, 8, 20, 2, 2, 1.0, 0),
+            Preset::Balanced => (256, 32, 16, 40, 4, 2, DEFAULT_CAST_REFINE, 6),
             Preset::Scene => return s,
         };
         s.march.samples_per_ray = s.march.samples_per_ray.min(samples);
@@ -54,6 +56,7 @@ impl Preset {
         s.lighting.fit.warm_iterations = s.lighting.fit.warm_iterations.min(warm);
         s.shadows.cast_scale = s.shadows.cast_scale.max(cast_scale);
         s.shadows.cast_refine = s.shadows.cast_refine.max(cast_refine);
+        s.shading.field_light = s.shading.field_light.min(field_light);
         s
     }
 }

@@ -1,0 +1,148 @@
+// The field's light at the object's surface (`[shading] field_light`): the
+// fitted lobes are the light at the object's centre, and a point of the
+// object that the field hides from part of it (a toy among foliage, the
+// underside near a floor) would be lit as if it stood there. Each 8 × 8
+// workgroup of the shading pass is split into tiles of FIELD_LIGHT_TILE²
+// pixels; each tile picks one of its object pixels with diffuse light (the
+// one nearest the tile's centre), casts pc.field_side² rays from that
+// point (lifted off the surface) along fixed directions spread evenly over
+// the sphere, and keeps per ray the field's light, Ĉ + (1 − Ô)·L_fit(d)
+// (the lobes standing for what lies beyond the field; the colour gathered
+// inside a local light's sphere taken off, as the probe does, since that
+// light is shaded on its own), and the lobes' own L_fit(d). Each pixel of
+// the tile then scales its fitted lobes' diffuse light by
+//   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
+// per colour channel, at most 1 (field_light.rs GAIN_MAX says why), with
+// its own normal n: the same rays in numerator and denominator, so where
+// the field sends what the lobes say the gain is exactly 1 whatever the
+// rays' count. Mirrors passes/src/shade/field_light.rs.
+// Needs: shade/shade_body.wgsl, shade/self_shadow_ssdf.wgsl, field/grid.wgsl,
+// march/volume_march.wgsl, lighting/local_light.wgsl, shadow/direct_rays.wgsl
+// (DIRECT_RAY_OFFSET), the binding `local_lights`.
+#include "common/fibonacci.wgsl"
+
+// field_light.rs TILE: the pixels a side of the square whose rays one
+// pick casts (a workgroup holds FIELD_LIGHT_SPLIT² of them).
+const FIELD_LIGHT_TILE: u32 = 4u;
+const FIELD_LIGHT_SPLIT: u32 = 8u / FIELD_LIGHT_TILE;
+const FIELD_LIGHT_TILES: u32 = FIELD_LIGHT_SPLIT * FIELD_LIGHT_SPLIT;
+// field_light.rs MAX_SIDE² · FIELD_LIGHT_TILES: the workgroup's rays.
+const FIELD_LIGHT_MAX_RAYS: u32 = 256u;
+// field_light.rs GAIN_MAX: the gain only takes light away.
+const FIELD_LIGHT_GAIN_MAX: f32 = 1.0;
+const FIELD_LIGHT_NO_PICK: u32 = 0xffffffffu;
+// "No object along the ray": the rays see the whole field.
+const FIELD_LIGHT_NO_OBJECT: f32 = 3.0e38;
+
+var<workgroup> field_light_pick: array<atomic<u32>, FIELD_LIGHT_TILES>;
+var<workgroup> field_light_rays: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
+var<workgroup> field_light_lobes: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
+var<workgroup> field_light_dirs: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
+
+// Rays per tile.
+fn field_light_ray_count() -> u32 {
+    return min(pc.field_side * pc.field_side, FIELD_LIGHT_MAX_RAYS / FIELD_LIGHT_TILES);
+}
+
+// The tile of the workgroup's pixel `local` (its position in the group).
+fn field_light_tile(local: vec2<u32>) -> u32 {
+    let t = local / FIELD_LIGHT_TILE;
+    return t.x + FIELD_LIGHT_SPLIT * t.y;
+}
+
+// The fitted lobes' radiance along d (the direct lobes at the end left out).
+fn field_light_fitted(d: vec3<f32>) -> vec3<f32> {
+    let fitted = pc.light_count - min(pc.direct_lobes, pc.light_count);
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < fitted; k++) {
+        sum += sg_eval(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), d);
+    }
+    return sum;
+}
+
+// The field's light from `origin` along d, a local light's own taken off.
+fn field_light_along(origin: vec3<f32>, d: vec3<f32>, lobes: vec3<f32>) -> vec3<f32> {
+    let m = march_ray(origin, d, FIELD_LIGHT_NO_OBJECT, pc.march_step, pc.march_termination);
+    var colour = m.colour;
+    let first = pc.light_count - min(pc.local_count, pc.light_count);
+    for (var l = 0u; l < pc.light_count - first; l++) {
+        let sphere = local_lights[2u * l];
+        if local_lights[2u * l + 1u].w != 0.0 && local_active(sphere, origin) {
+            colour -= local_inside_colour(sphere, origin, d, pc.march_step, pc.march_termination);
+        }
+    }
+    return max(colour, vec3<f32>(0.0)) + (1.0 - m.opacity) * lobes;
+}
+
+// Whether pixel `p` is the object's and has diffuse light to correct
+// (a metal's pixels pick no rays: their gain is never used).
+fn field_light_wants(p: vec2<u32>) -> bool {
+    if camera_outside(pc.camera, p) || textureLoad(distance_id, vec2<i32>(p), 0).g != pc.object_index {
+        return false;
+    }
+    let am = textureLoad(albedo_metallic, vec2<i32>(p), 0);
+    return any(brdf_diffuse(clamp(am.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), clamp(am.a, 0.0, 1.0)) > vec3<f32>(0.0));
+}
+
+// The tiles' rays, into workgroup memory; every invocation of the
+// workgroup calls it (it holds barriers), before any returns.
+fn field_light_gather(id: vec3<u32>, local_index: u32, group: vec3<u32>) {
+    if pc.field_side == 0u {
+        return;
+    }
+    if local_index < FIELD_LIGHT_TILES {
+        atomicStore(&field_light_pick[local_index], FIELD_LIGHT_NO_PICK);
+    }
+    workgroupBarrier();
+    let local = id.xy % vec2<u32>(8u);
+    if field_light_wants(id.xy) {
+        // Twice the offset from the tile's centre, so it is a whole number.
+        let o = vec2<i32>(local % FIELD_LIGHT_TILE) * 2 - vec2<i32>(i32(FIELD_LIGHT_TILE) - 1);
+        atomicMin(&field_light_pick[field_light_tile(local)], (u32(o.x * o.x + o.y * o.y) << 8u) | local_index);
+    }
+    workgroupBarrier();
+    let count = field_light_ray_count();
+    for (var k = local_index; k < count * FIELD_LIGHT_TILES; k += 64u) {
+        let tile = k / count;
+        let pick = atomicLoad(&field_light_pick[tile]);
+        if pick == FIELD_LIGHT_NO_PICK {
+            continue;
+        }
+        let source = pick & 0xffu;
+        let pixel = group.xy * 8u + vec2<u32>(source % 8u, source / 8u);
+        let hit = textureLoad(distance_id, vec2<i32>(pixel), 0);
+        let n = normalize(textureLoad(normal_roughness, vec2<i32>(pixel), 0).xyz);
+        let x = pc.camera.origin + camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5)) * hit.r;
+        let origin = x + n * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
+        let d = fibonacci_axis(k % count, count);
+        let lobes = field_light_fitted(d);
+        field_light_rays[k] = vec4<f32>(field_light_along(origin, d, lobes), 0.0);
+        field_light_lobes[k] = vec4<f32>(lobes, 0.0);
+        field_light_dirs[k] = vec4<f32>(d, 0.0);
+    }
+    workgroupBarrier();
+}
+
+// The gain on the fitted lobes' diffuse light at the pixel `id` of normal
+// n (1 where the feature is off).
+fn field_light_gain(id: vec2<u32>, n: vec3<f32>) -> vec3<f32> {
+    if pc.field_side == 0u {
+        return vec3<f32>(1.0);
+    }
+    let tile = field_light_tile(id % vec2<u32>(8u));
+    if atomicLoad(&field_light_pick[tile]) == FIELD_LIGHT_NO_PICK {
+        return vec3<f32>(1.0);
+    }
+    let count = field_light_ray_count();
+    let first = tile * count;
+    var field = vec3<f32>(0.0);
+    var lobes = vec3<f32>(0.0);
+    for (var r = first; r < first + count; r++) {
+        let w = max(dot(n, field_light_dirs[r].xyz), 0.0);
+        field += w * field_light_rays[r].xyz;
+        lobes += w * field_light_lobes[r].xyz;
+    }
+    let ok = lobes > vec3<f32>(0.0);
+    let gain = select(vec3<f32>(1.0), field / select(vec3<f32>(1.0), lobes, ok), ok);
+    return clamp(gain, vec3<f32>(0.0), vec3<f32>(FIELD_LIGHT_GAIN_MAX));
+}
