@@ -248,7 +248,7 @@ fn bad_scene_files_name_the_key() {
             "lighting.frame_iterations",
         ),
         (
-            format!("{base}\n[shading]\nfield_light = 9\n"),
+            format!("{base}\n[shading]\nfield_light = 17\n"),
             "shading.field_light",
         ),
         (

@@ -283,6 +283,7 @@ fn shading_kernel_matches_its_f64_mirror() {
             .iter()
             .zip(&lights)
             .map(|(b, l)| LightLobes {
+                environment: None,
                 buffer: graph.import_buffer(b, None),
                 count: l.len() as u32,
                 direct: None,

@@ -3,19 +3,19 @@
 // object that the field hides from part of it (a toy among foliage, the
 // underside near a floor) would be lit as if it stood there. Each 8 × 8
 // workgroup of the shading pass is split into tiles of FIELD_LIGHT_TILE²
-// pixels; each tile picks one of its object pixels with diffuse light (the
-// one nearest the tile's centre), casts pc.field_side² rays from that
-// point (lifted off the surface) along fixed directions spread evenly over
-// the sphere, and keeps per ray the field's light, Ĉ + (1 − Ô)·L_fit(d)
-// (the lobes standing for what lies beyond the field; the colour gathered
-// inside a local light's sphere taken off, as the probe does, since that
-// light is shaded on its own), and the lobes' own L_fit(d). Each pixel of
-// the tile then scales its fitted lobes' diffuse light by
+// pixels (one tile, as built); each tile picks one of its object pixels
+// with diffuse light (the one nearest the tile's centre), casts
+// pc.field_side² rays from that point (lifted off the surface) along fixed
+// directions spread evenly over the sphere, and keeps per ray the field's
+// light, Ĉ + (1 − Ô)·L_env(d) (the broad lobes of L_env beyond the field,
+// as the probe adds them; the colour gathered inside a local light's
+// sphere taken off, as the probe does, since that light is shaded on its
+// own), and the fitted lobes' L_fit(d). Each pixel of the tile then scales
+// its fitted lobes' diffuse light by
 //   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
-// per colour channel, at most 1 (field_light.rs GAIN_MAX says why), with
-// its own normal n: the same rays in numerator and denominator, so where
-// the field sends what the lobes say the gain is exactly 1 whatever the
-// rays' count. Mirrors passes/src/shade/field_light.rs.
+// per colour channel, with its own normal n: the same rays in numerator
+// and denominator, so where the field sends what the lobes say the gain is
+// exactly 1 whatever the rays' count. Mirrors passes/src/shade/field_light.rs.
 // Needs: shade/shade_body.wgsl, shade/self_shadow_ssdf.wgsl, field/grid.wgsl,
 // march/volume_march.wgsl, lighting/local_light.wgsl, shadow/direct_rays.wgsl
 // (DIRECT_RAY_OFFSET), the binding `local_lights`.
@@ -23,13 +23,14 @@
 
 // field_light.rs TILE: the pixels a side of the square whose rays one
 // pick casts (a workgroup holds FIELD_LIGHT_SPLIT² of them).
-const FIELD_LIGHT_TILE: u32 = 4u;
+const FIELD_LIGHT_TILE: u32 = 8u;
 const FIELD_LIGHT_SPLIT: u32 = 8u / FIELD_LIGHT_TILE;
 const FIELD_LIGHT_TILES: u32 = FIELD_LIGHT_SPLIT * FIELD_LIGHT_SPLIT;
 // field_light.rs MAX_SIDE² · FIELD_LIGHT_TILES: the workgroup's rays.
 const FIELD_LIGHT_MAX_RAYS: u32 = 256u;
-// field_light.rs GAIN_MAX: the gain only takes light away.
-const FIELD_LIGHT_GAIN_MAX: f32 = 1.0;
+// field_light.rs GAIN_MAX: a bound, not a model (a field that sends more
+// than this many times the lobes' light onto a plane is not their error).
+const FIELD_LIGHT_GAIN_MAX: f32 = 16.0;
 const FIELD_LIGHT_NO_PICK: u32 = 0xffffffffu;
 // "No object along the ray": the rays see the whole field.
 const FIELD_LIGHT_NO_OBJECT: f32 = 3.0e38;
@@ -60,8 +61,21 @@ fn field_light_fitted(d: vec3<f32>) -> vec3<f32> {
     return sum;
 }
 
-// The field's light from `origin` along d, a local light's own taken off.
-fn field_light_along(origin: vec3<f32>, d: vec3<f32>, lobes: vec3<f32>) -> vec3<f32> {
+// Lobes of L_env, two vec4 each: (p, λ), (μ, 0); pc.env_count of them.
+@group(0) @binding(23) var<storage, read> env_lobes: array<vec4<f32>>;
+
+// L_env's broad lobes along d.
+fn field_light_environment(d: vec3<f32>) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < pc.env_count; k++) {
+        sum += sg_eval(sg_unpack(env_lobes[2u * k], env_lobes[2u * k + 1u]), d);
+    }
+    return sum;
+}
+
+// The field's light from `origin` along d, a local light's own taken off,
+// L_env beyond the field.
+fn field_light_along(origin: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let m = march_ray(origin, d, FIELD_LIGHT_NO_OBJECT, pc.march_step, pc.march_termination);
     var colour = m.colour;
     let first = pc.light_count - min(pc.local_count, pc.light_count);
@@ -71,7 +85,7 @@ fn field_light_along(origin: vec3<f32>, d: vec3<f32>, lobes: vec3<f32>) -> vec3<
             colour -= local_inside_colour(sphere, origin, d, pc.march_step, pc.march_termination);
         }
     }
-    return max(colour, vec3<f32>(0.0)) + (1.0 - m.opacity) * lobes;
+    return max(colour, vec3<f32>(0.0)) + (1.0 - m.opacity) * field_light_environment(d);
 }
 
 // Whether pixel `p` is the object's and has diffuse light to correct
@@ -115,9 +129,8 @@ fn field_light_gather(id: vec3<u32>, local_index: u32, group: vec3<u32>) {
         let x = pc.camera.origin + camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5)) * hit.r;
         let origin = x + n * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
         let d = fibonacci_axis(k % count, count);
-        let lobes = field_light_fitted(d);
-        field_light_rays[k] = vec4<f32>(field_light_along(origin, d, lobes), 0.0);
-        field_light_lobes[k] = vec4<f32>(lobes, 0.0);
+        field_light_rays[k] = vec4<f32>(field_light_along(origin, d), 0.0);
+        field_light_lobes[k] = vec4<f32>(field_light_fitted(d), 0.0);
         field_light_dirs[k] = vec4<f32>(d, 0.0);
     }
     workgroupBarrier();

@@ -33,9 +33,10 @@ struct ShadePush {
     local_side: u32,
     march_step: f32,
     march_termination: f32,
-    // Side of the field-light rays per tile (0: off; read by
-    // shade/field_light.wgsl).
+    // Side of the field-light rays per tile (0: off) and the lobes of L_env
+    // they see past the field (read by shade/field_light.wgsl).
     field_side: u32,
+    env_count: u32,
 }
 
 var<immediate> pc: ShadePush;

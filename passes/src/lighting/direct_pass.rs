@@ -206,6 +206,7 @@ impl DirectLightPass {
         LightLobes {
             buffer,
             count: self.count,
+            environment: None,
             direct: Some(DirectRays {
                 lobes: self.count - self.fitted,
                 rays,

@@ -23,7 +23,7 @@ use inlay_engine::Context;
 
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
-use crate::probe::{ProbeKnobs, ProbePass, PROBE_TRACE};
+use crate::probe::{EnvironmentLobes, ProbeKnobs, ProbePass, PROBE_TRACE};
 use crate::scene::Scene;
 use crate::sg::Sg64;
 use crate::sgfit::{FitKnobs, FitStart, SgFitPass, SG_FIT};
@@ -59,6 +59,11 @@ pub struct LightLobes {
     pub count: u32,
     /// The direct lobes at the end of those, when there are any.
     pub direct: Option<DirectRays>,
+    /// The broad lobes of L_env the probe added beyond the field (None
+    /// when there are none or the environment is switched off): what the
+    /// field's light at the object's surface sees past the field
+    /// ([`crate::shade::field_light`]).
+    pub environment: Option<EnvironmentLobes>,
 }
 
 /// The last `lobes` lobes of a [`LightLobes`] are direct (too sharp for the
@@ -223,6 +228,24 @@ impl IncidentLight {
         work: LightingWork,
         environment: bool,
     ) -> anyhow::Result<LightLobes> {
+        let mut lights = self.add_lobes(graph, field, centre, work, environment)?;
+        lights.environment = if environment {
+            self.probe.environment_lobes(graph)
+        } else {
+            None
+        };
+        Ok(lights)
+    }
+
+    /// [`Self::add_with`]'s passes and lobes, before L_env's are attached.
+    fn add_lobes(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        centre: DVec3,
+        work: LightingWork,
+        environment: bool,
+    ) -> anyhow::Result<LightLobes> {
         let fitted = self.fit.knobs().lobes;
         // The field's own local lights are shaded with the environment off
         // too (its sharp lobes and outside lights then black).
@@ -246,6 +269,7 @@ impl IncidentLight {
                         buffer: graph.import_buffer(self.fit.lobes(), None),
                         count: fitted,
                         direct: None,
+                        environment: None,
                     },
                 })
             }
@@ -259,6 +283,7 @@ impl IncidentLight {
                         buffer: lobes,
                         count: fitted,
                         direct: None,
+                        environment: None,
                     },
                 })
             }
@@ -271,6 +296,7 @@ impl IncidentLight {
                         buffer: lobes,
                         count: fitted,
                         direct: None,
+                        environment: None,
                     },
                 })
             }

@@ -5,7 +5,7 @@ use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
 use glam::DVec3;
-use inlay_engine::graph::{FrameGraph, ImageHandle};
+use inlay_engine::graph::{BufferHandle, FrameGraph, ImageHandle};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc};
 
@@ -62,6 +62,16 @@ pub const ENVIRONMENT_SWITCH: EffectSwitch = EffectSwitch {
 
 /// Format of the probe image: L_i in rgb, Ô in alpha.
 pub const PROBE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// The broad lobes of L_env a probe adds beyond the field, as a frame
+/// binds them (two vec4s each, (p, λ), (μ, 0)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EnvironmentLobes {
+    /// The buffer.
+    pub buffer: BufferHandle,
+    /// How many lobes.
+    pub count: u32,
+}
 
 /// L_env's lobes and the entry point that adds them.
 struct ProbeEnvironment {
@@ -184,6 +194,16 @@ impl ProbePass {
     /// is never evaluated).
     pub fn has_environment(&self) -> bool {
         self.environment.is_some()
+    }
+
+    /// The environment lobes the probe adds beyond the field (packed as
+    /// the light lobes are, blurred to the sub-sample spacing), imported
+    /// into `graph`; None when there are none.
+    pub fn environment_lobes(&self, graph: &mut FrameGraph) -> Option<EnvironmentLobes> {
+        self.environment.as_ref().map(|e| EnvironmentLobes {
+            buffer: graph.import_buffer(&e.lobes, None),
+            count: e.count,
+        })
     }
 
     /// Adds the `probe-trace` pass tracing `field` from `origin`, with the

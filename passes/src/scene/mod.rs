@@ -239,7 +239,7 @@ pub struct ShadingKnobs {
     /// SG lobes standing for GGX's distribution of normals (1 is the usual
     /// single lobe; see [`crate::brdf::NdfLobes`]).
     pub ndf_lobes: u32,
-    /// Side of the rays per 4 × 4 pixel tile that take the field's light
+    /// Side of the rays per 8 × 8 pixel tile that take the field's light
     /// at the object's surface ([`crate::shade::field_light`]; 0: off, the
     /// paper's shading, every point lit by the lobes at the centre). Drawn
     /// with the self-shadows: without them the lobes alone light the object.
@@ -255,14 +255,14 @@ pub struct ShadingKnobs {
 /// pass 1022 → 1076 ms, the frame about 10.6 s).
 pub const DEFAULT_NDF_LOBES: u32 = crate::brdf::MAX_NDF_LOBES;
 
-/// The default `[shading] field_light`: 8 × 8 rays a tile. Against Cycles
-/// it took PLANTS' toy among the foliage from a median error of 0.167 to
-/// 0.142 (front) and 0.288 to 0.266 (high), ROOM's monkey from 0.104 to
-/// 0.103 and CUPS' side view from 0.125 to 0.121; the metal balls of DOG
-/// and BOOKS have no diffuse light and cast no rays. With fewer rays it
-/// helps less (6²: 0.154, 4²: 0.169 on PLANTS' front view;
-/// `docs/fidelity.md`, sixteenth pass).
-pub const DEFAULT_FIELD_LIGHT: u32 = 8;
+/// The default `[shading] field_light`: 16 × 16 rays a tile. Against
+/// Cycles it took PLANTS' toy among the foliage from a median error of
+/// 0.167 to 0.121 (front) and 0.288 to 0.170 (high); ROOM's monkey and
+/// CUPS' cube stayed within 0.002 of their figures; the metal balls of DOG
+/// and BOOKS have no diffuse light and cast no rays. With fewer rays the
+/// estimate is rougher (12²: 0.114 and 0.178; 8²: 0.136 and 0.226, the toy
+/// 17 % too dark on the high view; `docs/fidelity.md`, sixteenth pass).
+pub const DEFAULT_FIELD_LIGHT: u32 = 16;
 
 impl Default for ShadingKnobs {
     fn default() -> Self {

@@ -12,16 +12,17 @@
 //! centre, [`tile_pick`]) casts `side`²
 //! rays from its point, lifted off the surface ([`ray_origin`]), along
 //! fixed directions spread evenly over the sphere (a Fibonacci lattice).
-//! Each ray keeps the field's light, Ĉ + (1 − Ô)·L_fit(d), with the fitted
-//! lobes standing for what lies beyond the field and a local light's own
-//! colour taken off as the probe takes it off (it is shaded per pixel), and
-//! the lobes' L_fit(d) ([`tile_rays`]). Every pixel of the tile weighs the
-//! rays by its own clamped cosine ([`diffuse_gain`]):
+//! Each ray keeps the field's light, Ĉ + (1 − Ô)·L_env(d), with the broad
+//! lobes of L_env beyond the field as the probe adds them and a local
+//! light's own colour taken off as the probe takes it off (it is shaded
+//! per pixel), and the fitted lobes' L_fit(d) ([`tile_rays`]): at the
+//! centre the first is the probe the lobes were fitted to. Every pixel of
+//! the tile weighs the rays by its own clamped cosine ([`diffuse_gain`]):
 //!
 //!   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
 //!
-//! per colour channel, at most 1 ([`GAIN_MAX`] says why). The same rays
-//! stand in numerator and denominator, so
+//! per colour channel. The same rays stand in numerator and denominator,
+//! so
 //! where the field sends what the lobes say the gain is 1 whatever the
 //! rays' count, and their quadrature error largely cancels. The specular
 //! term, the direct lobes (sharp lights outside the field, ray-cast) and
@@ -39,34 +40,29 @@ use crate::sgfit::model::fibonacci_axis;
 use crate::shadow::DIRECT_RAY_OFFSET;
 
 /// The largest side of the rays per tile (the shader's workgroup arrays
-/// hold 256 rays, for the 4 tiles of its 8 × 8 workgroup).
-pub const MAX_SIDE: u32 = 8;
+/// hold 256 rays).
+pub const MAX_SIDE: u32 = 16;
 
-/// The largest gain: the correction only takes light away. The lobes
-/// already hold what the field sends the object's centre; what they cannot
-/// know is what the field hides from a point of its surface. A point may
-/// also see more than the centre (nearer a bright wall), but with a few
-/// dozen directions shared by a tile, a gain above 1 was mostly a small
-/// bright patch of the field one ray hit and the smooth lobes spread:
-/// against Cycles, uncapped gains (up to 16) took PLANTS' toy's median
-/// error to 0.147 and 0.265 but ROOM's from 0.104 to 0.107 and CUPS' side
-/// view's to 0.125, the toy 8 % too bright, and were unstable in the
-/// rays' count (6² rays: 0.166 and 0.293); capped at 1, 0.142 and 0.266,
-/// ROOM 0.103, CUPS 0.121, improving steadily with the rays (4², 6², 8²:
-/// 0.169, 0.154, 0.142 on the front view).
-pub const GAIN_MAX: f64 = 1.0;
+/// The largest gain, a bound and not a model: a field sending more than
+/// this many times the lobes' light onto a plane is not an error of the
+/// lobes this corrects. (A cap at 1, tried while the rays took the lobes
+/// for what lies past the field, cost PLANTS' toy 8–11 % of its
+/// brightness once they took L_env: `docs/fidelity.md`, sixteenth pass.)
+pub const GAIN_MAX: f64 = 16.0;
 
-/// Pixels a side of a tile. Against Cycles on PLANTS' toy, 8 × 8 tiles
-/// (one pick per workgroup) left its median error at 0.157 where the
-/// point's own rays give 0.135 and 4 × 4 tiles 0.147 (`docs/fidelity.md`).
-pub const TILE: u32 = 4;
+/// Pixels a side of a tile: the shading pass's 8 × 8 workgroup. At the
+/// same rays per workgroup, one tile of 16² rays did better against
+/// Cycles than four 4 × 4 tiles of 8² each (PLANTS' toy 0.121 and 0.170
+/// against 0.127 and 0.203; `docs/fidelity.md`, sixteenth pass): the
+/// rays' count matters more than their origins' spacing.
+pub const TILE: u32 = 8;
 
 /// One ray of a tile.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TileRay {
     /// Its direction (unit).
     pub dir: DVec3,
-    /// The field's light along it, the lobes beyond the field.
+    /// The field's light along it, L_env beyond the field.
     pub field: DVec3,
     /// The fitted lobes' radiance along it.
     pub lobes: DVec3,
@@ -108,14 +104,24 @@ pub fn ray_origin(x: DVec3, n: DVec3, radius: f64) -> DVec3 {
     x + n * (DIRECT_RAY_OFFSET * radius)
 }
 
+/// The lobes a tile's rays compare: the `fitted` lobes, and the broad
+/// lobes of L_env the probe adds past the field (`environment`).
+#[derive(Debug, Clone, Copy)]
+pub struct RayLight<'a> {
+    /// The object's fitted lobes (the direct ones left out).
+    pub fitted: &'a [Sg64],
+    /// L_env's broad lobes, as the probe adds them.
+    pub environment: &'a [Sg64],
+}
+
 /// The tile's `side`² rays from `origin` through `field` (marched with
-/// `march`), with the `fitted` lobes beyond it and the colour inside each
-/// of the active `local` lights taken off.
+/// `march`), with `light.environment` beyond it and the colour inside
+/// each of the active `local` lights taken off, beside `light.fitted`.
 pub fn tile_rays(
     field: &dyn RadianceField,
     march: &MarchKnobs,
     origin: DVec3,
-    fitted: &[Sg64],
+    light: RayLight<'_>,
     local: &[LocalLight],
     side: u32,
 ) -> Vec<TileRay> {
@@ -123,7 +129,8 @@ pub fn tile_rays(
     (0..count)
         .map(|r| {
             let dir = fibonacci_axis(r, count);
-            let lobes: DVec3 = fitted.iter().map(|g| g.eval(dir)).sum();
+            let lobes: DVec3 = light.fitted.iter().map(|g| g.eval(dir)).sum();
+            let beyond: DVec3 = light.environment.iter().map(|g| g.eval(dir)).sum();
             let m = march_ray(field, &Ray { origin, dir }, f64::INFINITY, march);
             let mut colour = m.colour;
             for light in local.iter().filter(|l| l.active(origin)) {
@@ -131,7 +138,7 @@ pub fn tile_rays(
             }
             TileRay {
                 dir,
-                field: colour.max(DVec3::ZERO) + (1.0 - m.opacity) * lobes,
+                field: colour.max(DVec3::ZERO) + (1.0 - m.opacity) * beyond,
                 lobes,
             }
         })
@@ -189,7 +196,7 @@ mod tests {
             }
         }
         fn colour(&self, _x: DVec3, _d: DVec3) -> DVec3 {
-            DVec3::splat(100.0 * self.glow)
+            DVec3::splat(1000.0 * self.glow)
         }
     }
 
@@ -208,15 +215,15 @@ mod tests {
         ]
     }
 
+    /// The lobes fitted to the probe of a clear field under the sky are the
+    /// sky: both terms alike.
     fn rays_with(field: &dyn RadianceField, side: u32) -> Vec<TileRay> {
-        tile_rays(
-            field,
-            &MarchKnobs::default(),
-            DVec3::ZERO,
-            &sky(),
-            &[],
-            side,
-        )
+        let sky = sky();
+        let light = RayLight {
+            fitted: &sky,
+            environment: &sky,
+        };
+        tile_rays(field, &MarchKnobs::default(), DVec3::ZERO, light, &[], side)
     }
 
     #[test]
@@ -225,7 +232,7 @@ mod tests {
             roof: false,
             glow: 0.0,
         };
-        for side in [1, 4, 8] {
+        for side in [1, 4, 8, 16] {
             let rays = rays_with(&field, side);
             assert_eq!(rays.len(), (side * side) as usize);
             for n in [DVec3::Y, DVec3::X, DVec3::new(0.3, -0.5, 0.8).normalize()] {
@@ -265,9 +272,26 @@ mod tests {
     }
 
     #[test]
-    fn a_field_brighter_than_the_lobes_adds_nothing() {
+    fn past_the_field_the_rays_see_the_environment_not_the_lobes() {
+        // A clear field with no environment: the lobes (fitted where the
+        // field held light the point no longer sees) light nothing here.
+        let sky = sky();
+        let light = RayLight {
+            fitted: &sky,
+            environment: &[],
+        };
+        let clear = Slab {
+            roof: false,
+            glow: 0.0,
+        };
+        let rays = tile_rays(&clear, &MarchKnobs::default(), DVec3::ZERO, light, &[], 8);
+        assert_eq!(diffuse_gain(DVec3::Y, &rays), DVec3::ZERO);
+    }
+
+    #[test]
+    fn the_gain_stops_at_its_bound() {
         // A glowing medium sends far more than the lobes hold: the gain
-        // stops at 1 (GAIN_MAX), and stays finite with black lobes.
+        // stops at GAIN_MAX, and stays finite (1) with black lobes.
         let field = Slab {
             roof: false,
             glow: 1.0,
@@ -275,20 +299,24 @@ mod tests {
         let rays = rays_with(&field, 8);
         assert!(rays
             .iter()
-            .all(|r| r.field.min_element() > 10.0 * r.lobes.max_element()));
-        assert_eq!(diffuse_gain(DVec3::Z, &rays), DVec3::ONE);
-        let dark = tile_rays(&field, &MarchKnobs::default(), DVec3::ZERO, &[], &[], 8);
+            .all(|r| r.field.min_element() > 2.0 * GAIN_MAX * r.lobes.max_element()));
+        assert_eq!(diffuse_gain(DVec3::Z, &rays), DVec3::splat(GAIN_MAX));
+        let none = RayLight {
+            fitted: &[],
+            environment: &[],
+        };
+        let dark = tile_rays(&field, &MarchKnobs::default(), DVec3::ZERO, none, &[], 8);
         assert_eq!(diffuse_gain(DVec3::Z, &dark), DVec3::ONE);
     }
 
     #[test]
     fn the_pick_is_the_object_pixel_nearest_the_centre() {
         let all = |_, _| true;
-        assert_eq!(tile_pick((0, 0), 64, 64, all), Some((1, 1)));
-        assert_eq!(tile_pick((2, 1), 64, 64, all), Some((9, 5)));
-        assert_eq!(tile_pick((0, 0), 64, 64, |x, _| x == 3), Some((3, 1)));
+        assert_eq!(tile_pick((0, 0), 64, 64, all), Some((3, 3)));
+        assert_eq!(tile_pick((2, 1), 64, 64, all), Some((19, 11)));
+        assert_eq!(tile_pick((0, 0), 64, 64, |x, _| x == 7), Some((7, 3)));
         assert_eq!(tile_pick((0, 0), 64, 64, |_, _| false), None);
         // Pixels past the image's edge are never picked.
-        assert_eq!(tile_pick((1, 1), 6, 6, all), Some((5, 5)));
+        assert_eq!(tile_pick((0, 0), 2, 2, all), Some((1, 1)));
     }
 }

@@ -52,8 +52,11 @@ inlay_engine::gpu_struct! {
         pub march_termination: f32,
         /// Side of the field-light rays per tile (0: off).
         pub field_side: u32,
+        /// Lobes of L_env in `env_lobes` (what the field-light rays see
+        /// past the field).
+        pub env_count: u32,
         /// Padding (the struct's size rounds up to 16 bytes).
-        pub _pad: [u32; 2],
+        pub _pad: u32,
     }
 }
 
@@ -99,8 +102,8 @@ pub struct ShadePass {
     march: MarchKnobs,
     /// Side of the field-light rays per tile (0: the paper's shading).
     field_side: u32,
-    /// Bound as the direct lobes' rays and local lights where an object's
-    /// light has none but the rays' variant runs (for the field's light).
+    /// Bound as the direct lobes' rays, local lights and environment lobes
+    /// where an object's light has none but the rays' variant runs.
     no_direct: Arc<Buffer>,
 }
 
@@ -222,7 +225,8 @@ impl ShadePass {
                 march_step: self.march.step(field.diagonal) as f32,
                 march_termination: self.march.termination as f32,
                 field_side: if field_light { self.field_side } else { 0 },
-                _pad: [0; 2],
+                env_count: l.environment.filter(|_| field_light).map_or(0, |e| e.count),
+                _pad: 0,
             };
             let rays = l.direct.is_some() || field_light;
             let pipeline = match (shadow, rays) {
@@ -252,8 +256,14 @@ impl ShadePass {
                     .read("bvh_nodes", s.ssdf.bvh_nodes)
                     .read("bvh_triangles", s.ssdf.bvh_triangles);
             }
+            let env = (shadow.is_some() && rays).then(|| {
+                l.environment
+                    .filter(|_| field_light)
+                    .map_or(no_direct, |e| e.buffer)
+            });
             d.read_opt("sharp_rays", l.direct.map(|r| r.rays).or(filler))
                 .read_opt("local_lights", local.map(|x| x.lights).or(filler))
+                .read_opt("env_lobes", env)
                 .threads([width, height, 1]);
         }
         pass.finish();

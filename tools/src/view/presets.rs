@@ -15,7 +15,7 @@ pub enum Preset {
     Fast,
     /// 256 samples per ray, a 32×32 probe, 16 lobes, 40 cold and 4 warm
     /// iterations, the cast shadow at half resolution, the field's light at
-    /// the object's surface from 6 × 6 rays a tile.
+    /// the object's surface from 12 × 12 rays a tile.
     Balanced,
     /// The scene file's knobs (the paper's defaults unless it says otherwise).
     Scene,
@@ -46,7 +46,7 @@ impl Preset {
         let mut s = authored.clone();
         let (samples, probe, lobes, cold, warm, cast_scale, cast_refine, field_light) = match self {
             Preset::Fast => (128, 16, 8, 20, 2, 2, 1.0, 0),
-            Preset::Balanced => (256, 32, 16, 40, 4, 2, DEFAULT_CAST_REFINE, 6),
+            Preset::Balanced => (256, 32, 16, 40, 4, 2, DEFAULT_CAST_REFINE, 12),
             Preset::Scene => return s,
         };
         s.march.samples_per_ray = s.march.samples_per_ray.min(samples);
