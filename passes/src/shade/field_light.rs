@@ -9,9 +9,9 @@
 //! by what the field sends it over what the lobes say it gets, on the same
 //! rays: per tile of [`TILE`]² pixels of the shading pass, one of the
 //! tile's object pixels that have diffuse light (the nearest to the tile's
-//! centre, [`tile_pick`]) casts `side`²
-//! rays from its point, lifted off the surface ([`ray_origin`]), along
-//! fixed directions spread evenly over the sphere (a Fibonacci lattice).
+//! centre, [`tile_pick`]) casts `side`² rays from its point, lifted off
+//! the surface ([`ray_origin`]), along fixed directions spread evenly over
+//! the sphere (a Fibonacci lattice).
 //! Each ray keeps the field's light, Ĉ + (1 − Ô)·L_env(d), with the broad
 //! lobes of L_env beyond the field as the probe adds them and a local
 //! light's own colour taken off as the probe takes it off (it is shaded
@@ -22,8 +22,7 @@
 //!   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
 //!
 //! per colour channel. The same rays stand in numerator and denominator,
-//! so
-//! where the field sends what the lobes say the gain is 1 whatever the
+//! so where the field sends what the lobes say the gain is 1 whatever the
 //! rays' count, and their quadrature error largely cancels. The specular
 //! term, the direct lobes (sharp lights outside the field, ray-cast) and
 //! the local lights are left as they are: they already see from the point.
