@@ -23,8 +23,8 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use inlay::commands::fidelity::render_over_field;
 use inlay::fidelity::{
-    block_means, box_shadow_ratio, coverage, far_pixels, luminance, relative_l1, shadow_figures,
-    Rgb,
+    block_means, box_shadow_ratio, coverage, far_pixels, luminance, mean_ratio,
+    median_relative_error, relative_l1, shadow_figures, Rgb,
 };
 use inlay_engine::{HdrImage, ImageDesc, Readback};
 use inlay_passes::bake::{render_reference, ReferenceOptions};
@@ -240,5 +240,73 @@ fn the_far_field_darkens_as_little_as_in_cycles() {
             );
         }
     }
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// The field's light at the object's surface (`[shading] field_light`) on
+/// PLANTS' toy among the foliage, on a field baked at test size (64
+/// nodes, 8 samples): against Cycles, the toy's median relative error
+/// (pixels whose 4² rays all hit it) with the scene's 16² rays a tile is
+/// no worse than the paper's shading (0 rays) on either camera and well
+/// below it on one, and the toy's mean brightness stays within the
+/// issue's ±10 %. Measured on the 2-core machine: front 0.197 with and
+/// 0.197 without (brightness 1.039), high 0.196 and 0.314 (0.917); on the
+/// full bake 0.121 and 0.167, 0.170 and 0.288 (`docs/fidelity.md`,
+/// sixteenth pass). The margins: 0.005 is the change 12² against 16²
+/// rays makes on the full bake's high view (0.008) rounded down, and the
+/// 0.05 of improvement is under half the measured 0.118.
+#[test]
+fn the_toy_among_leaves_is_lit_by_what_reaches_it() {
+    let ctx = common::gpu();
+    let name = "plants";
+    let scene = common::bundled_scene(&format!("{name}.toml"));
+    assert!(
+        scene.shading.field_light > 0,
+        "the scene's shading takes the field's light"
+    );
+    let recipe = scene.recipe().unwrap().clone();
+    let field = common::bake_small(&scene, 64, 8, scene.bake.bounces);
+    let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
+    let library = gpu_field.library(&embedded_library());
+    let mut best = 0.0f64;
+    for camera in &scene.cameras {
+        let camera_name = camera.name.clone().unwrap();
+        let seed =
+            |s: &str| load(&cycles_dir(name).join(format!("{camera_name}-objects-full-{s}.exr")));
+        let truth = Rgb::mean(&seed("s1"), &seed("s2"));
+        let (w, h) = (truth.width, truth.height);
+        let frame = CameraFrame::new(camera, w, h);
+        let object = coverage(&recipe, &scene.objects, &frame, 4).object;
+        let mask = |i: usize| object[i] >= 1.0;
+        let pixels = (0..(w * h) as usize).filter(|&i| mask(i)).count();
+        assert!(pixels > 300, "{camera_name}: {pixels} toy pixels");
+        let figures = |side: u32| {
+            let mut s = scene.clone();
+            s.shading.field_light = side;
+            let ours = render_over_field(&ctx, &library, &s, &field, camera, (w, h), true).unwrap();
+            (
+                median_relative_error(&ours, &truth, mask),
+                mean_ratio(&ours, &truth, mask),
+            )
+        };
+        let (paper, paper_brightness) = figures(0);
+        let (ours, brightness) = figures(scene.shading.field_light);
+        eprintln!(
+            "{name} {camera_name}: toy median error {ours:.3} with the field's light, {paper:.3} without; brightness {brightness:.3} and {paper_brightness:.3}"
+        );
+        assert!(
+            ours <= paper + 0.005,
+            "{camera_name}: {ours} against {paper}"
+        );
+        assert!(
+            (brightness - 1.0).abs() < 0.1,
+            "{camera_name}: brightness {brightness}"
+        );
+        best = best.max(paper - ours);
+    }
+    assert!(
+        best > 0.05,
+        "the field's light improved the toy by {best} at most"
+    );
     common::assert_no_validation_errors(&ctx);
 }
