@@ -67,19 +67,29 @@ fn shading_ndf(j: u32) -> vec2<f32> {
     return ndf_lobes[j];
 }
 
-fn shade_pixel(id: vec3<u32>) {
+// Whether pixel `id` holds this dispatch's object; where no object is, the
+// first dispatch writes zero.
+fn shade_owns(id: vec3<u32>) -> bool {
     if camera_outside(pc.camera, id.xy) {
-        return;
+        return false;
     }
     let pixel = vec2<i32>(id.xy);
-    let hit = textureLoad(distance_id, pixel, 0);
-    let object = hit.g;
+    let object = textureLoad(distance_id, pixel, 0).g;
     if object != pc.object_index {
         if object < 0.0 && pc.write_empty != 0u {
             textureStore(out_object, pixel, vec4<f32>(0.0));
         }
+        return false;
+    }
+    return true;
+}
+
+fn shade_pixel(id: vec3<u32>) {
+    if !shade_owns(id) {
         return;
     }
+    let pixel = vec2<i32>(id.xy);
+    let hit = textureLoad(distance_id, pixel, 0);
     let nr = textureLoad(normal_roughness, pixel, 0);
     let am = textureLoad(albedo_metallic, pixel, 0);
     let dir = camera_ray_dir(pc.camera, vec2<f32>(id.xy) + vec2<f32>(0.5));

@@ -121,17 +121,10 @@ fn field_gain_only(
     @builtin(workgroup_id) group: vec3<u32>,
 ) {
     field_light_gather(id, local_index, group);
-    if camera_outside(pc.camera, id.xy) {
+    if !shade_owns(id) {
         return;
     }
     let pixel = vec2<i32>(id.xy);
-    let hit = textureLoad(distance_id, pixel, 0);
-    if hit.g != pc.object_index {
-        if hit.g < 0.0 && pc.write_empty != 0u {
-            textureStore(out_object, pixel, vec4<f32>(0.0));
-        }
-        return;
-    }
     let n = normalize(textureLoad(normal_roughness, pixel, 0).xyz);
     textureStore(out_object, pixel, vec4<f32>(field_light_gain(id.xy, n), 1.0));
 }
