@@ -4,7 +4,8 @@ Run by hand (never in CI) with Debian's Blender 3.4:
 
     blender -b --factory-startup --python tools/cycles/render_cycles.py -- \
         scenes/dog.toml --out docs/cycles/dog [--what cameras,probes,training] \
-        [--width 320 --height 180 --samples 512 --seeds 1,2 --threads 0]
+        [--width 320 --height 180 --samples 512 --seeds 1,2 --threads 0] \
+        [--object-diffuse burley|lambert]
 
 The scene file is translated, not re-modelled: every recipe primitive
 becomes a mesh (planes as large quads, spheres and cylinders finely
@@ -24,7 +25,10 @@ with the scene's vertical field of view, and each glTF object imported by
 Blender's glTF importer (a Principled BSDF: metallic-roughness, F0 = 0.04
 for dielectrics, α = roughness²; its diffuse part is Burley's, not
 Lambert's) and posed as the scene poses it, with the scene's material
-override applied.
+override applied. `--object-diffuse lambert` swaps the Principled
+diffuse for glTF's own Lambertian one (the specular kept) and tags the
+object images `-lambert`: the two renders measure how much of inlay's
+object error is the material model (docs/fidelity.md, seventeenth pass).
 
 Coordinates: inlay is +Y up, Blender +Z up; a point (x, y, z) of inlay is
 (x, −z, y) in Blender, as Blender's glTF importer maps it.
@@ -83,6 +87,12 @@ def parse_args():
     p.add_argument("--views", type=int, default=32, help="training views")
     p.add_argument("--view-size", type=int, default=96)
     p.add_argument("--view-samples", type=int, default=256)
+    p.add_argument(
+        "--object-diffuse",
+        default="burley",
+        choices=["burley", "lambert"],
+        help="the objects' diffuse: the importer's Principled BSDF (Burley) or glTF's own Lambert",
+    )
     return p.parse_args(argv)
 
 
@@ -459,7 +469,7 @@ def pose_matrix(o):
     return Matrix.Translation(pos) @ R @ S
 
 
-def import_object(scene_dir, o, collection):
+def import_object(scene_dir, o, collection, lambert=False):
     before = set(bpy.data.objects)
     bpy.ops.import_scene.gltf(filepath=os.path.join(scene_dir, o["file"]))
     new = [ob for ob in bpy.data.objects if ob not in before]
@@ -474,6 +484,7 @@ def import_object(scene_dir, o, collection):
     # The importer already maps glTF's axes to Blender's (C); the pose acts in inlay's.
     root.matrix_world = C @ pose_matrix(o) @ C.inverted()
     override = o.get("material", {})
+    swapped = set()
     for ob in new:
         if ob.type != "MESH":
             continue
@@ -496,7 +507,58 @@ def import_object(scene_dir, o, collection):
                 r = n.inputs["Roughness"]
                 if not r.links:
                     r.default_value = max(r.default_value, 0.1)
+            if lambert and m.name not in swapped:
+                swapped.add(m.name)
+                for n in [n for n in m.node_tree.nodes if n.type == "BSDF_PRINCIPLED"]:
+                    lambert_diffuse(m.node_tree, n)
     return root, new
+
+
+def lambert_diffuse(nt, p):
+    """Swap the Principled BSDF `p`'s Burley diffuse for glTF's own
+    Lambertian one, keeping its specular: the material becomes
+    mix(metallic; P₀ + Lambert(base), P₁) where P₀ is `p` with a black base
+    colour and metallic 0 (its white F0 = 0.04 specular alone: in Cycles 3.x
+    the Principled diffuse is added to the specular, not weighted by it) and
+    P₁ is `p` with metallic 1 (no diffuse at all). Both ends are exactly
+    glTF's f = (1 − metallic)·albedo/π + specular, inlay's model; between
+    them the blend is linear in metallic, as glTF's is."""
+    out_links = [lk for lk in nt.links if lk.from_node == p]
+    metal = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    for inp in p.inputs:
+        if inp.name not in metal.inputs or not hasattr(inp, "default_value"):
+            continue
+        metal.inputs[inp.name].default_value = inp.default_value
+        for lk in inp.links:
+            nt.links.new(lk.from_socket, metal.inputs[inp.name])
+    metal.distribution = p.distribution
+    for lk in list(metal.inputs["Metallic"].links):
+        nt.links.remove(lk)
+    metal.inputs["Metallic"].default_value = 1.0
+    lam = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    lam.inputs["Roughness"].default_value = 0.0
+    base = p.inputs["Base Color"]
+    lam.inputs["Color"].default_value = base.default_value
+    for lk in list(base.links):
+        nt.links.new(lk.from_socket, lam.inputs["Color"])
+        nt.links.remove(lk)
+    base.default_value = (0.0, 0.0, 0.0, 1.0)
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    fac = p.inputs["Metallic"]
+    mix.inputs["Fac"].default_value = fac.default_value
+    for lk in list(fac.links):
+        nt.links.new(lk.from_socket, mix.inputs["Fac"])
+        nt.links.remove(lk)
+    fac.default_value = 0.0
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(p.outputs["BSDF"], add.inputs[0])
+    nt.links.new(lam.outputs["BSDF"], add.inputs[1])
+    nt.links.new(add.outputs["Shader"], mix.inputs[1])
+    nt.links.new(metal.outputs["BSDF"], mix.inputs[2])
+    for lk in out_links:
+        to = lk.to_socket
+        nt.links.remove(lk)
+        nt.links.new(mix.outputs["Shader"], to)
 
 
 def object_centre(objs):
@@ -708,7 +770,7 @@ def main():
     sc.collection.children.link(objects)
     placed = []
     for o in spec.get("objects", []):
-        root, parts = import_object(scene_dir, o, objects)
+        root, parts = import_object(scene_dir, o, objects, args.object_diffuse == "lambert")
         # The scene's name, not Blender's (which adds .001 when a glTF
         # node of the same name came first).
         placed.append((o.get("name", os.path.splitext(os.path.basename(o["file"]))[0]), parts))
@@ -740,7 +802,8 @@ def main():
                     set_bounces(0 if light == "direct" else bounces)
                     for s in seeds:
                         sc.cycles.seed = s
-                        render_to(os.path.join(args.out, f"{name}-{mode}-{light}-s{s}.exr"), log)
+                        tag = "-lambert" if mode == "objects" and args.object_diffuse == "lambert" else ""
+                        render_to(os.path.join(args.out, f"{name}-{mode}-{light}{tag}-s{s}.exr"), log)
 
     if "probes" in what:
         sc.render.image_settings.color_depth = "32"
@@ -803,10 +866,17 @@ def main():
             json.dump(transforms, fh, indent=1)
         os.replace(os.path.join(tdir, "transforms.json.partial"), os.path.join(tdir, "transforms.json"))
 
+    command = "blender -b --factory-startup --python tools/cycles/render_cycles.py -- " + " ".join(
+        sys.argv[sys.argv.index("--") + 1 :]
+    )
+    # Each image keeps the command that made it: a directory's images come
+    # from several runs (the last one's command is the file's "command").
+    for e in log:
+        e.setdefault("command", command)
     meta = {
         "blender": bpy.app.version_string,
         "scene": os.path.relpath(scene_path),
-        "command": "blender -b --factory-startup --python tools/cycles/render_cycles.py -- " + " ".join(sys.argv[sys.argv.index("--") + 1 :]),
+        "command": command,
         "bounces": bounces,
         "images": log,
     }

@@ -293,7 +293,23 @@ pub struct ShadowFigures {
     pub truth_umbra: f64,
     /// inlay's mean ratio over the same pixels.
     pub umbra: f64,
+    /// The area ratio at each of [`AREA_THRESHOLDS`]: where a shadow's
+    /// edge is a broad plateau near 0.9, the one threshold's figure swings
+    /// with a percent of darkening, and its neighbours show it.
+    pub area_ratios: [f64; 4],
+    /// inlay's total darkening Σ max(1 − ratio, 0) over the truth's, over
+    /// the pixels either darkens below [`SHADOW_EDGE`]: how much light the
+    /// shadow takes in all, whatever its threshold.
+    pub darkening_ratio: f64,
 }
+
+/// The ratios at which [`ShadowFigures::area_ratios`] counts the shadow's
+/// pixels (the figure is the one at 0.9).
+pub const AREA_THRESHOLDS: [f64; 4] = [0.8, 0.85, 0.9, 0.95];
+
+/// The ratio below which a pixel counts towards
+/// [`ShadowFigures::darkening_ratio`] (above it, noise and far veils).
+pub const SHADOW_EDGE: f64 = 0.97;
 
 /// The shadow ratio below which the truth's shadow counts as its umbra,
 /// where the shadow's depth (not its extent) is compared.
@@ -309,7 +325,8 @@ pub fn shadow_figures(
 ) -> ShadowFigures {
     let di: Vec<f64> = inlay.iter().map(|r| 1.0 - r).collect();
     let dt: Vec<f64> = truth.iter().map(|r| 1.0 - r).collect();
-    let area = |r: &[f64]| (0..r.len()).filter(|&i| field(i) && r[i] < 0.9).count();
+    let area_below = |r: &[f64], t: f64| (0..r.len()).filter(|&i| field(i) && r[i] < t).count();
+    let area = |r: &[f64]| area_below(r, 0.9);
     let far: Vec<usize> = (0..truth.len()).filter(|&i| field(i) && far(i)).collect();
     let mean_over = |d: &[f64]| far.iter().map(|&i| d[i]).sum::<f64>() / far.len().max(1) as f64;
     let truth_area = area(truth);
@@ -328,6 +345,18 @@ pub fn shadow_figures(
         umbra_pixels: umbra.len(),
         truth_umbra: umbra_mean(truth),
         umbra: umbra_mean(inlay),
+        area_ratios: AREA_THRESHOLDS
+            .map(|t| area_below(inlay, t) as f64 / area_below(truth, t).max(1) as f64),
+        darkening_ratio: {
+            let shadow = (0..truth.len())
+                .filter(|&i| field(i) && (truth[i] < SHADOW_EDGE || inlay[i] < SHADOW_EDGE));
+            let (mut a, mut b) = (0.0, 0.0);
+            for i in shadow {
+                a += di[i].max(0.0);
+                b += dt[i].max(0.0);
+            }
+            a / b.max(f64::MIN_POSITIVE)
+        },
     }
 }
 
@@ -556,5 +585,19 @@ mod tests {
         // The umbra is pixel 1 alone (pixel 5 is not the field's).
         assert_eq!(f.umbra_pixels, 1);
         assert!((f.truth_umbra - 0.4).abs() < 1e-12 && (f.umbra - 0.6).abs() < 1e-12);
+        // The total darkening over the pixels either darkens below 0.97
+        // (1, 2; pixel 3 stays above it in both): 0.6 against 0.8.
+        assert!((f.darkening_ratio - 0.75).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_plateau_at_the_threshold_shows_in_the_neighbouring_areas() {
+        // Both pixels of a broad edge near 0.9, inlay 0.04 darker on one.
+        let (truth, inlay) = ([0.88, 0.92, 1.0], [0.88, 0.88, 1.0]);
+        let f = shadow_figures(&inlay, &truth, |_| true, |_| false);
+        assert_eq!(AREA_THRESHOLDS, [0.8, 0.85, 0.9, 0.95]);
+        assert_eq!(f.area_ratios, [0.0, 0.0, 2.0, 1.0]);
+        assert_eq!(f.area_ratio, f.area_ratios[2]);
+        assert!((f.darkening_ratio - 1.2).abs() < 1e-12);
     }
 }

@@ -27,7 +27,7 @@ use inlay_passes::scene::{load_scene, Scene};
 use crate::fidelity::{
     block_means, box_shadow_ratio, coverage, far_pixels, luminance, mean_ratio,
     median_relative_error, median_seed_noise, psnr, relative_l1, shadow_figures, side_by_side, Rgb,
-    FAR_RADII, UMBRA,
+    AREA_THRESHOLDS, FAR_RADII, SHADOW_EDGE, UMBRA,
 };
 use crate::field_source::scene_field;
 use crate::headless::run_headless;
@@ -355,11 +355,24 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                     .map(|i| DVec3::splat(if field_only(i) { r[i] } else { 1.0 }))
                     .collect(),
             };
-            let file = dir.join(format!("{}-{name}-shadow-ratio.png", scene.name));
             let picture = side_by_side(&ratio_image(&theirs), &ratio_image(&ours)).to_hdr();
-            outputs.borrow_mut().image(&file, &picture, 1.0)?;
+            // The PNG to look at, the EXR to measure (its ratios unclamped).
+            for ext in ["png", "exr"] {
+                let file = dir.join(format!("{}-{name}-shadow-ratio.{ext}", scene.name));
+                outputs.borrow_mut().image(&file, &picture, 1.0)?;
+            }
         }
         let shadow = shadow_figures(&ours, &theirs, field_only, far_px);
+        // Cycles with glTF's own Lambertian diffuse in place of the
+        // Principled BSDF's Burley (`render_cycles.py --object-diffuse
+        // lambert`), where rendered: how much of the error is that model.
+        let lambert_median = cycles_pair(&args.cycles, &format!("{name}-objects-full-lambert"))?
+            .map_or("—".to_string(), |l| {
+                figure(
+                    median_relative_error(&inserted, &l.mean, object_px),
+                    object_count,
+                )
+            });
         let traced_median = traced_objects.as_ref().map_or("—".to_string(), |t| {
             figure(
                 median_relative_error(t, &with.mean, object_px),
@@ -368,13 +381,18 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         });
         writeln!(
             insertion,
-            "| {name} | {} | {} | {traced_median} | {} | {object_count} | {:.3} | {:.2} ({} px) | {:.2} % | {:.2} % ({} px) | {:.2} / {:.2} ({} px) | {:.3}, {:.2} |",
+            "| {name} | {} | {} | {lambert_median} | {traced_median} | {} | {object_count} | {:.3} | {:.2} ({} px) | {} | {:.3} | {:.2} % | {:.2} % ({} px) | {:.2} / {:.2} ({} px) | {:.3}, {:.2} |",
             figure(mean_ratio(&inserted, &with.mean, object_px), object_count),
             figure(median_relative_error(&inserted, &with.mean, object_px), object_count),
             figure(median_seed_noise(&with.seeds.0, &with.seeds.1, object_px), object_count),
             shadow.correlation,
             shadow.area_ratio,
             shadow.truth_area,
+            shadow
+                .area_ratios
+                .map(|a| format!("{a:.2}"))
+                .join(", "),
+            shadow.darkening_ratio,
             100.0 * shadow.far_darkening,
             100.0 * shadow.truth_far_darkening,
             shadow.far_pixels,
@@ -387,11 +405,11 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     }
     writeln!(md)?;
     if !insertion.is_empty() {
-        writeln!(md, "The insertion against Cycles with the objects (object mask: pixels whose 16 rays all hit an object first; median relative error of inlay's path tracer with the objects, where rendered: the two renderers' material models; of Cycles' noise: the median |s₀ − s₁| / (s₀ + s₁) of its two seeds, what a noise-free renderer scores against their mean; shadow: the luminance ratio of the images with and without the objects, each a mean over 3 × 3 pixels of the field alone, inlay's against Cycles', over the pixels the field alone covers; far: surface points more than {FAR_RADII} bounding radii from every object; Cycles' two seeds against each other give the noise's scale):\n")?;
-        writeln!(md, "| camera | object brightness inlay / Cycles | median relative error | median relative error, path tracer | median error of Cycles' noise | mask px | shadow correlation | shadow area (< 0.9) inlay / Cycles | far darkening, inlay | far darkening, Cycles | umbra (Cycles < {UMBRA}): Cycles / inlay mean ratio | Cycles seeds: correlation, area |")?;
+        writeln!(md, "The insertion against Cycles with the objects (object mask: pixels whose 16 rays all hit an object first; the same against Cycles with glTF's Lambertian diffuse for the objects' Principled (Burley) one, where rendered (`*-objects-full-lambert-*.exr`); median relative error of inlay's path tracer with the objects, where rendered: the two renderers' material models; of Cycles' noise: the median |s₀ − s₁| / (s₀ + s₁) of its two seeds, what a noise-free renderer scores against their mean; shadow: the luminance ratio of the images with and without the objects, each a mean over 3 × 3 pixels of the field alone, inlay's against Cycles', over the pixels the field alone covers; area at several ratios, and the total darkening Σ max(1 − ratio, 0) over the pixels either darkens below {SHADOW_EDGE}; far: surface points more than {FAR_RADII} bounding radii from every object; Cycles' two seeds against each other give the noise's scale):\n")?;
+        writeln!(md, "| camera | object brightness inlay / Cycles | median relative error | the same, Cycles with Lambert's diffuse | median relative error, path tracer | median error of Cycles' noise | mask px | shadow correlation | shadow area (< 0.9) inlay / Cycles | area at {} | total darkening inlay / Cycles | far darkening, inlay | far darkening, Cycles | umbra (Cycles < {UMBRA}): Cycles / inlay mean ratio | Cycles seeds: correlation, area |", AREA_THRESHOLDS.map(|t| t.to_string()).join(", "))?;
         writeln!(
             md,
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
         )?;
         md.push_str(&insertion);
         writeln!(md)?;
