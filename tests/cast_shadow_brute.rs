@@ -1,17 +1,21 @@
 //! The cast shadow's model against brute force through the field, at every
 //! pixel of the shadow (eighteenth pass of docs/fidelity.md). At each field
-//! point the front camera sees within 4 bounding radii of the object, at
-//! 320 × 180: ρ of the model (`cast_shadow_factor` of an object that
-//! reflects nothing, with the probe's fitted lobes; a light outside the
-//! field by its rays to its disk, as the frame casts it) against ρ of the
-//! light that reaches the point itself — 16² cosine-weighted rays marched
-//! through the field from the point (light past the field as the probe
-//! adds it), each cut where the object's mesh crosses it, and every
-//! spherical emitter of the recipe sampled over its disk through the
-//! field's transmittance (an emitter inside the field is cut off the
-//! rays). The object's own light is in neither. Ignored by default: it
-//! needs the full bakes (minutes on first use, then cached) — run it with
-//! `cargo test --release --test cast_shadow_brute -- --ignored --nocapture`.
+//! point a camera sees within 4 bounding radii of the object, at 320 × 180:
+//! ρ of the model as the frame takes it (`cast_shadow_factor` of an object
+//! that reflects nothing, with the light the frame assembles: the fitted
+//! lobes of a probe the local lights are left out of, then each local
+//! light, weighed by its light at the point and shadowed by rays to its
+//! disk) against ρ of the light that reaches the point itself — 16²
+//! cosine-weighted rays marched through the field from the point (light
+//! past the field as the probe adds it), each cut where the object's mesh
+//! crosses it, and every spherical emitter of the recipe sampled over its
+//! disk through the field's transmittance (an emitter inside the field is
+//! cut off the rays). The object's own light is in neither. Ignored by
+//! default: it needs the full bakes (minutes on first use, then cached) —
+//! run it with
+//! `cargo test --release --test cast_shadow_brute -- --ignored --nocapture`;
+//! with `CAST_SHADOW_BRUTE_OUT=DIR` each point's pixel, model and brute
+//! force are written to `DIR/<scene>-<camera>.txt`.
 
 mod common;
 
@@ -19,10 +23,16 @@ use glam::DVec3;
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::geometry::{MeshScene, Ray};
+use inlay_passes::lighting::direct_reference::direct_and_local_lights;
+use inlay_passes::lighting::local::Emission;
+use inlay_passes::lighting::sharp::lobe_rays;
+use inlay_passes::lighting::LocalLight;
 use inlay_passes::march::march_ray;
 use inlay_passes::scene::{Scene, Shape};
 use inlay_passes::sg::Sg64;
-use inlay_passes::shadow::{cast_shadow_factor, field_normal, FhTable, ObjectReflectance};
+use inlay_passes::shadow::{
+    cast_shadow_factor, field_normal, DirectOcclusion, FhTable, ObjectReflectance,
+};
 use inlay_passes::ssdf::OutsideMode;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -43,6 +53,13 @@ fn sphere_entry(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
     let disc = b * b - (oc.length_squared() - r * r);
     let t = -b - disc.max(0.0).sqrt();
     (disc >= 0.0 && t > 0.0).then_some(t)
+}
+
+/// How far past an emitter's radius its light ends in the field: two
+/// node spacings (trilinear interpolation spreads its nodes' density and
+/// colour that far).
+fn cut_margin(field: &GridField) -> f64 {
+    2.0 * field.spacing().max_element()
 }
 
 /// A spherical emitter of the recipe.
@@ -115,7 +132,7 @@ fn light_at(
         let cut = lights
             .iter()
             .filter(|e| e.in_field)
-            .filter_map(|e| sphere_entry(o, d, e.centre, e.radius))
+            .filter_map(|e| sphere_entry(o, d, e.centre, e.radius + cut_margin(field)))
             .fold(f64::INFINITY, f64::min);
         let m = march_ray(field, &ray, cut, &scene.march);
         let past: DVec3 = if cut.is_finite() {
@@ -154,7 +171,10 @@ fn light_at(
                 if cos_n <= 0.0 {
                     continue;
                 }
-                let t = sphere_entry(o, d, e.centre, e.radius).unwrap_or(dist);
+                // The field's transmittance up to the emitter's blurred
+                // shell (its nodes' density reaches past its radius).
+                let margin = if e.in_field { cut_margin(field) } else { 0.0 };
+                let t = sphere_entry(o, d, e.centre, e.radius + margin).unwrap_or(dist);
                 let ray = Ray { origin: o, dir: d };
                 let clear = 1.0 - march_ray(field, &ray, t, &scene.march).opacity;
                 let light = e.luminance * clear * cos_n * omega / (DISK_SIDE * DISK_SIDE) as f64;
@@ -170,25 +190,57 @@ fn light_at(
 
 /// Figures over the shadow: (model ρ, brute-force ρ) at each point either
 /// darkens below 0.985.
-fn shadow_points(scene_file: &str, camera: usize) -> Vec<(f64, f64)> {
+fn shadow_points(scene_file: &str, camera: usize) -> Vec<(u32, u32, f64, f64)> {
     let ctx = common::gpu();
     let scene = common::bundled_scene(scene_file);
     let field = inlay::field_source::scene_field(&scene, None, true, None).unwrap();
     let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
     let placed = scene.objects[0].clone();
     let (centre, radius) = placed.sphere();
-    let (env, _) = inlay_passes::lighting::object_lights(&scene, centre, true);
-    let traced = inlay::commands::probe::trace_and_fit(
-        &ctx,
-        &gpu_field,
-        centre,
-        scene.lighting.probe,
-        scene.lighting.fit,
-        scene.march,
-        &env,
+    // The light as the frame assembles it: the fitted lobes of a probe
+    // the local lights (the field's own emitters, a recipe's hidden
+    // bulbs) are left out of, L_env's sharp lobes, then each local light
+    // as the centre sees it.
+    let (env, hidden) = inlay_passes::lighting::object_lights(&scene, centre, true);
+    let local: Vec<LocalLight> = scene
+        .lighting
+        .local
+        .choose(&gpu_field.emitters)
+        .into_iter()
+        .chain(hidden)
+        .collect();
+    let side = scene.lighting.local.rays;
+    let knobs = (scene.lighting.probe, scene.lighting.fit, scene.march);
+    let traced = inlay::commands::probe::trace_and_fit_with_local(
+        &ctx, &gpu_field, centre, knobs, &env, &local, side,
     )
     .unwrap();
     let lobes = traced.lights.clone();
+    let rays: Vec<Vec<DVec3>> = traced.lights[traced.report.lobes.len()..lobes.len() - local.len()]
+        .iter()
+        .map(|g| lobe_rays(g, scene.lighting.probe.supersampling))
+        .collect();
+    let (_, emissions) =
+        direct_and_local_lights(&field, centre, &[], &[], 1, &local, side, &scene.march);
+    let local_emitting: Vec<(LocalLight, Emission)> = local
+        .iter()
+        .zip(emissions)
+        .map(|(l, e)| {
+            let e = e.unwrap_or(Emission {
+                intensity: DVec3::ZERO,
+                radius: l.radius,
+            });
+            (*l, e)
+        })
+        .collect();
+    let object_scene = inlay_passes::ssdf::object_scene(&placed.mesh);
+    let occlusion = DirectOcclusion {
+        scene: &object_scene,
+        rays: &rays,
+        local: &local_emitting,
+        local_side: side,
+        field: Some((&field, scene.march)),
+    };
     let lib = gpu_field.library(&inlay_passes::shaders::library().unwrap());
     let ssdf = inlay::ssdf_source::object_ssdf(
         &ctx,
@@ -236,34 +288,35 @@ fn shadow_points(scene_file: &str, camera: usize) -> Vec<(f64, f64)> {
                 return None; // a point the rays leave in the dark (a box's inside)
             }
             let brute = (l.field.1 + l.outside.1) / total;
-            let lobes_rho = luminance(cast_shadow_factor(
+            let model = luminance(cast_shadow_factor(
                 &ssdf,
                 &placed,
                 &table,
                 &lobes,
                 x,
                 n,
-                DVec3::ZERO,
+                m.colour,
                 OutsideMode::Correct,
-                None,
+                (!local.is_empty() || !rays.is_empty()).then_some(occlusion),
                 &black,
             ));
-            // The lobes' light on the point's plane, over the same rays.
-            let a: f64 = hemisphere(n, SIDE)
-                .iter()
-                .map(|&d| luminance(lobes.iter().map(|g| g.eval(d)).sum()))
-                .sum::<f64>()
-                * PI
-                / (SIDE * SIDE) as f64;
-            let model = (lobes_rho * a + l.outside.1) / (a + l.outside.0);
-            (brute < 0.985 || model < 0.985).then_some((model, brute))
+            (brute < 0.985 || model < 0.985).then_some((px, py, model, brute))
         })
         .collect()
 }
 
 /// Prints the figures; returns (total darkening model / brute force, mean
 /// |Δρ|, area below 0.9 model / brute force).
-fn report(name: &str, points: &[(f64, f64)]) -> (f64, f64, f64) {
+fn report(name: &str, pixels: &[(u32, u32, f64, f64)]) -> (f64, f64, f64) {
+    if let Ok(dir) = std::env::var("CAST_SHADOW_BRUTE_OUT") {
+        let text: String = pixels
+            .iter()
+            .map(|(x, y, m, b)| format!("{x} {y} {m:.5} {b:.5}\n"))
+            .collect();
+        let path = std::path::Path::new(&dir).join(format!("{name}.txt"));
+        std::fs::write(&path, text).unwrap();
+    }
+    let points: Vec<(f64, f64)> = pixels.iter().map(|p| (p.2, p.3)).collect();
     let dark =
         |f: fn(&(f64, f64)) -> f64| points.iter().map(|p| (1.0 - f(p)).max(0.0)).sum::<f64>();
     let ratio = dark(|p| p.0) / dark(|p| p.1);
@@ -297,19 +350,31 @@ fn report(name: &str, points: &[(f64, f64)]) -> (f64, f64, f64) {
 
 #[test]
 #[ignore]
-fn the_model_darkens_rooms_floor_as_its_light_says() {
-    // PLANTS' high view is printed, not held: there the model (the toy's
-    // centre's light) and the light the floor receives part (the
-    // eighteenth pass of docs/fidelity.md).
-    report("PLANTS high", &shadow_points("plants.toml", 1));
-    let (ratio, mean_diff, _) = report("ROOM front", &shadow_points("room.toml", 0));
-    // Measured on lavapipe (the 2-core machine): ratio 0.99, mean |Δρ|
-    // 0.02. ROOM's light at the monkey's centre is the light its floor
-    // receives (the bulb overhead, the walls around), so the model's
-    // lobes stand for it; the bounds leave room for the 16² rays' noise.
+fn the_model_darkens_the_floor_as_its_light_says() {
+    // ROOM: the light at the monkey's centre is the light its floor
+    // receives (the bulb overhead, the walls around). Measured on lavapipe
+    // (the 2-core machine): total darkening 0.971 of brute force's, mean
+    // |Δρ| 0.016, area below 0.9 1.09.
+    let (ratio, mean_diff, _) = report("room-front", &shadow_points("room.toml", 0));
     assert!(
         (ratio - 1.0).abs() < 0.1,
-        "total darkening model / brute force {ratio}"
+        "ROOM: total darkening model / brute force {ratio}"
     );
-    assert!(mean_diff < 0.04, "mean |Δρ| {mean_diff}");
+    assert!(mean_diff < 0.04, "ROOM: mean |Δρ| {mean_diff}");
+    // PLANTS' high view: the lamp reaches the toy's centre through the
+    // left plant's foliage and the floor around the shadow in the open.
+    // With the lamp weighed at the object's centre the model's shadow
+    // covered 1.14× brute force's area below 0.9 (a ring too dark); with
+    // it weighed at each point, 1.06 (total darkening 0.943, mean |Δρ|
+    // 0.053: the umbra, lit by less of the room than the centre is, stays
+    // too light).
+    let (ratio, _, area) = report("plants-high", &shadow_points("plants.toml", 1));
+    assert!(
+        (area - 1.0).abs() < 0.1,
+        "PLANTS: area below 0.9, model / brute force {area}"
+    );
+    assert!(
+        (ratio - 1.0).abs() < 0.1,
+        "PLANTS: total darkening model / brute force {ratio}"
+    );
 }

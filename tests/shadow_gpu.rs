@@ -355,6 +355,7 @@ fn compare_cast_shadow(
         rays: &rays,
         local: &local_list,
         local_side: 3,
+        field: Some((&grid_field, march_knobs)),
     };
     let direct_total = direct + locals;
     let (w, h) = (48u32, 36u32);
@@ -795,6 +796,7 @@ fn self_shadow_factors_match_brute_force() {
         rays: &rays,
         local: &[],
         local_side: 1,
+        field: None,
     };
     let map = inlay_passes::probe::DirectionMap::new(inlay_passes::probe::MapKind::Octahedral, 96);
     let (c, r) = mesh.bounding_sphere();
@@ -1070,6 +1072,7 @@ fn self_shadowed_shading_matches_its_mirror() {
         rays: &rays,
         local: &[],
         local_side: 1,
+        field: None,
     };
     for direct in [false, true] {
         let (pixels, peak) = view.shade(&shade, &gpu_field, |graph| LightLobes {

@@ -1,8 +1,14 @@
 // The body of the cast-shadow pass (eq. 7-8) of one object on the field,
 // included by shadow/cast.wgsl and shadow/cast_direct.wgsl, which define
-// the hook cast_direct_visibility(x, lobe, rays) -> f32: the visible share
+// the hooks cast_direct_visibility(x, lobe, rays) -> f32: the visible share
 // of direct lobe `lobe` (the last pc.direct_lobes lobes, too sharp for the
-// fit) from x, ray-cast against the mesh (shadow/direct_rays.wgsl). Per
+// fit) from x, ray-cast against the mesh (shadow/direct_rays.wgsl), and,
+// for the local lights (the last pc.local_count of those),
+// cast_local_lobe(x, l) -> Sg, the light's lobe from x,
+// cast_local_arrival(x, n, l) -> (transmittance, share of its rays from
+// above the plane), and cast_local_clear(x, n, l) -> the share of those
+// rays past the mesh (shadow/local_rays.wgsl): a local light is weighed
+// by its light at x, not at the object's centre. Per
 // pixel, the
 // point at the field's expected depth D̂/Ô, the normal −∇σ there, and
 // ρ = 1 − Σ_k E_k (1 − q(S(p'_k), λ'_k)) / max(Σ_k E_k, π L) over the
@@ -161,6 +167,22 @@ fn cast_bound(view: CastSphere, cone: ptr<function, CastCone>, g: Sg, e: vec3<f3
     return most;
 }
 
+// Lobe k as x sees it: a local light's from x itself (cast_local_lobe),
+// the others as the object's centre sees them.
+fn cast_seen_lobe(x: vec3<f32>, k: u32, first_local: u32) -> Sg {
+    if k >= first_local {
+        return cast_local_lobe(x, k - first_local);
+    }
+    return sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+}
+
+// Whether the object can block under CAST_TOLERANCE of the light `total`
+// when it can block at most `most`.
+fn cast_within_tolerance(most: vec3<f32>, total: vec3<f32>) -> bool {
+    let reach = most / max(total, vec3<f32>(1e-30));
+    return !(max(reach.x, max(reach.y, reach.z)) >= CAST_TOLERANCE);
+}
+
 // `radiance`: the field's colour at x; π × it floors the irradiance the
 // blocked light is taken from (an albedo ≤ 1 surface showing L receives at
 // least πL; runtime.rs cast_shadow_factor).
@@ -168,6 +190,7 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     let cosine = sg_clamped_cosine(n);
     let m = pc.light_count;
     let first_direct = m - min(pc.direct_lobes, m);
+    let first_local = m - min(min(pc.local_count, pc.direct_lobes), m);
     let view = cast_sphere(x);
     var cone: CastCone;
     if !view.inside {
@@ -175,34 +198,56 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     }
     // First the irradiance, and the most the object can block of it (each
     // lobe's bound, cast_bound): where that is under CAST_TOLERANCE of the
-    // light, ρ = 1 without the SSDF or any ray.
+    // light, ρ = 1 without the SSDF or any ray. A local light's light at x
+    // needs a ray through the field: the test is first taken without it (a
+    // lower bound, floored at π L) against the local lights' whole
+    // spheres' bounds (an upper one), then again with it.
     var den = vec3<f32>(0.0);
     var most = vec3<f32>(0.0);
     for (var k = 0u; k < m; k++) {
-        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+        let g = cast_seen_lobe(x, k, first_local);
         let p = sg_product(g, cosine);
         let e = sg_diffuse_irradiance(g, n);
-        den += e;
+        if k < first_local {
+            den += e;
+        }
         let share = cast_share(view, p);
         if share >= 0.0 {
             most += cast_bound(view, &cone, g, e, share, k < first_direct);
         }
     }
-    let total = max(den, SG_PI * radiance);
-    let reach = most / max(total, vec3<f32>(1e-30));
-    if !(max(reach.x, max(reach.y, reach.z)) >= CAST_TOLERANCE) {
+    let floor = SG_PI * radiance;
+    if cast_within_tolerance(most, max(den, floor)) {
         return vec3<f32>(1.0);
+    }
+    var arrivals: array<vec2<f32>, MAX_LOCAL_LIGHTS>;
+    if first_local < m {
+        for (var k = first_local; k < m; k++) {
+            let a = cast_local_arrival(x, n, k - first_local);
+            arrivals[k - first_local] = a;
+            den += sg_diffuse_irradiance(cast_seen_lobe(x, k, first_local), n) * a.x * a.y;
+        }
+        if cast_within_tolerance(most, max(den, floor)) {
+            return vec3<f32>(1.0);
+        }
     }
     var blocked = vec3<f32>(0.0);
     var prepared = false;
     for (var k = 0u; k < m; k++) {
-        let g = sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
+        let g = cast_seen_lobe(x, k, first_local);
         let p = sg_product(g, cosine);
         let share = cast_share(view, p);
+        let e = sg_diffuse_irradiance(g, n);
+        if k >= first_local {
+            if share >= 0.0 {
+                let a = arrivals[k - first_local];
+                blocked += e * a.x * (a.y - cast_local_clear(x, n, k - first_local));
+            }
+            continue;
+        }
         if share < 0.0 {
             continue;
         }
-        let e = sg_diffuse_irradiance(g, n);
         let bound = cast_bound(view, &cone, g, e, share, k < first_direct);
         if k >= first_direct {
             blocked += e * (1.0 - cast_direct_visibility(x, k - first_direct, pc.direct_rays));
@@ -215,6 +260,7 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
             blocked += min(e * (1.0 - q), bound);
         }
     }
+    let total = max(den, floor);
     if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {
         // The bounce, its light from below x's plane at x's own ratio
         // before it (runtime.rs cast_shadow_factor: the field the object's

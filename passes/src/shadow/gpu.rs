@@ -32,7 +32,8 @@ inlay_engine::gpu_struct! {
     }
 }
 
-/// The defines of `shadow/fh.wgsl`, `shadow/cone.wgsl` and `ssdf/ssdf.wgsl`.
+/// The defines of `shadow/fh.wgsl`, `shadow/cone.wgsl`, `ssdf/ssdf.wgsl`
+/// and `shadow/cast_body.wgsl`.
 pub fn shadow_defines() -> Vec<Define> {
     vec![
         Define::U32("FH_COLUMNS", FH_COLUMNS),
@@ -40,6 +41,7 @@ pub fn shadow_defines() -> Vec<Define> {
         Define::F32("FH_SHARPNESS_MIN", FH_SHARPNESS_RANGE.0 as f32),
         Define::F32("FH_SHARPNESS_MAX", FH_SHARPNESS_RANGE.1 as f32),
         Define::U32("SSDF_MAX_COMPONENTS", MAX_SSDF_COMPONENTS),
+        Define::U32("MAX_LOCAL_LIGHTS", crate::lighting::local::MAX_LOCAL_LIGHTS),
         Define::U32("CONE_POINTS", super::CONE_POINTS as u32),
         Define::F32("CONE_RESOLUTION", super::CONE_RESOLUTION as f32),
     ]

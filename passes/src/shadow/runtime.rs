@@ -228,7 +228,12 @@ impl SphereView {
 /// the object under a ceiling bulb), receives more than they say, and
 /// without the floor its shadow darkened ROOM's whole field by 4 %. Zero
 /// `radiance` gives the paper's ratio. The `direct` lobes (the last ones)
-/// are occluded by the share of their rays from `x` the mesh blocks; each
+/// are occluded by the share of their rays from `x` the mesh blocks; a
+/// local light among them is weighed by its own light at `x` — its
+/// sphere's lobe from `x`, times the field's transmittance towards it
+/// and the share of its rays from above the plane
+/// ([`DirectOcclusion::local_arrival`]) — and loses the share of those
+/// the mesh blocks ([`DirectOcclusion::local_clear`]); each
 /// other lobe loses no more than [`sphere_share`] of its light, nor more
 /// than its light over the sphere's cone where [`super::ConeQuadrature`]
 /// resolves it. The light the object sends back ([`super::bounce_irradiance`] with its
@@ -282,9 +287,22 @@ pub fn cast_shadow_factor_within(
     let (c, r) = placed.sphere();
     let view = SphereView::new(x, c, r, object.fill);
     let first = direct.map_or(lobes.len(), |d| d.first(lobes.len()));
-    let products: Vec<Sg64> = lobes.iter().map(|g| g.product(&cosine)).collect();
-    // Each lobe's light on x's plane (the module's doc: ρ's weights).
-    let irradiance: Vec<DVec3> = lobes.iter().map(|g| g.diffuse_irradiance(n)).collect();
+    let first_local = direct.map_or(lobes.len(), |d| d.first_local(lobes.len()));
+    // The lights as x sees them: a local light's lobe from x itself
+    // ([`DirectOcclusion::local_lobe`]), the others as the object's
+    // centre sees them.
+    let seen: Vec<Sg64> = lobes
+        .iter()
+        .enumerate()
+        .map(|(k, g)| match direct.filter(|_| k >= first_local) {
+            Some(d) => d.local_lobe(k - first_local, x),
+            None => *g,
+        })
+        .collect();
+    let products: Vec<Sg64> = seen.iter().map(|g| g.product(&cosine)).collect();
+    // Each lobe's light on x's plane (the module's doc: ρ's weights); a
+    // local light's before the field takes any of it.
+    let irradiance: Vec<DVec3> = seen.iter().map(|g| g.diffuse_irradiance(n)).collect();
     let cone = super::ConeQuadrature::new(&view, n);
     // The most lobe k can lose: E_k × the sphere's share, and for a lobe
     // shadowed through the SSDF no more than its light over the cone
@@ -298,24 +316,47 @@ pub fn cast_shadow_factor_within(
         let over_cone = cone
             .as_ref()
             .filter(|_| k < first)
-            .and_then(|c| c.blockable(&lobes[k]));
+            .and_then(|c| c.blockable(&seen[k]));
         Some(over_cone.map_or(most, |c| most.min(c)))
     };
     // The irradiance, and the most the object can block of it: under
-    // CAST_TOLERANCE of the light, ρ = 1.
-    let den: DVec3 = irradiance.iter().sum();
+    // CAST_TOLERANCE of the light, ρ = 1. A local light's light at x needs
+    // a ray through the field, so the test is first taken without it (a
+    // lower bound of the light, floored at π × radiance) against the local
+    // lights' whole spheres' bounds (an upper one), then again with it.
+    let mut den: DVec3 = irradiance[..first_local].iter().sum();
     let bounds: Vec<Option<DVec3>> = products
         .iter()
         .enumerate()
         .map(|(k, p)| bound(k, p))
         .collect();
     let most: DVec3 = bounds.iter().flatten().sum();
-    let total = den.max(std::f64::consts::PI * radiance);
-    if (most / total.max(DVec3::splat(1e-300))).max_element() < tolerance {
+    let floor = std::f64::consts::PI * radiance;
+    let within =
+        |den: DVec3| (most / den.max(floor).max(DVec3::splat(1e-300))).max_element() < tolerance;
+    if within(den) {
         return DVec3::ONE;
+    }
+    let mut arriving = vec![(0.0, 0.0); lobes.len()];
+    if let Some(d) = direct {
+        for (k, a) in arriving.iter_mut().enumerate().skip(first_local) {
+            *a = d.local_arrival(k - first_local, x, n);
+            den += irradiance[k] * a.0 * a.1;
+        }
+        if first_local < lobes.len() && within(den) {
+            return DVec3::ONE;
+        }
     }
     let mut blocked = DVec3::ZERO;
     for (k, p) in products.iter().enumerate() {
+        if let Some(d) = direct.filter(|_| k >= first_local) {
+            if bounds[k].is_some() {
+                let (t, above) = arriving[k];
+                let clear = d.local_clear(placed, k - first_local, x, n);
+                blocked += irradiance[k] * t * (above - clear);
+            }
+            continue;
+        }
         let Some(most) = bounds[k] else {
             continue;
         };
@@ -327,6 +368,7 @@ pub fn cast_shadow_factor_within(
             (irradiance[k] * (1.0 - q)).min(most)
         };
     }
+    let total = den.max(floor);
     if blocked.max_element() > 0.0 {
         // x's own ratio before the bounce: the bounce's light from below
         // x's plane is the field around x, shadowed about as deeply

@@ -10,7 +10,7 @@ use clap::{Args, ValueEnum};
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage, ImageDesc, Readback, Renderer, SubmitSync};
 use inlay_passes::field::GpuGridField;
-use inlay_passes::lighting::{sharp_limit, split_environment, IncidentLight};
+use inlay_passes::lighting::{sharp_limit, split_environment, IncidentLight, LocalLight};
 use inlay_passes::march::MarchKnobs;
 use inlay_passes::probe::{
     lobes_irradiance, probe_irradiance, DirectionMap, MapKind, ProbeKnobs, AXES, PROBE_FORMAT,
@@ -246,8 +246,33 @@ pub fn trace_and_fit(
     march: MarchKnobs,
     env: &[Sg64],
 ) -> anyhow::Result<TracedProbe> {
+    let knobs = (probe_knobs, fit_knobs, march);
+    trace_and_fit_with_local(ctx, field, at, knobs, env, &[], 1)
+}
+
+/// As [`trace_and_fit`], with `local` lights left out of the probe and
+/// appended to the lights as `at` sees them (`local_side`² rays each), as
+/// the frame lights an object ([`inlay_passes::lighting::local`]).
+pub fn trace_and_fit_with_local(
+    ctx: &Arc<Context>,
+    field: &GpuGridField,
+    at: DVec3,
+    (probe_knobs, fit_knobs, march): (ProbeKnobs, FitKnobs, MarchKnobs),
+    env: &[Sg64],
+    local: &[LocalLight],
+    local_side: u32,
+) -> anyhow::Result<TracedProbe> {
     let library = field.library(&inlay_passes::shaders::library()?);
-    let light = IncidentLight::new(ctx, &library, probe_knobs, fit_knobs, march, env, &[], 1)?;
+    let light = IncidentLight::new(
+        ctx,
+        &library,
+        probe_knobs,
+        fit_knobs,
+        march,
+        env,
+        local,
+        local_side,
+    )?;
     let map = light.probe.map();
     let readback = Readback::new(
         ctx,
