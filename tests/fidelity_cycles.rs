@@ -26,11 +26,11 @@ use inlay::fidelity::{
     block_means, box_shadow_ratio, coverage, far_pixels, luminance, mean_ratio,
     median_relative_error, relative_l1, shadow_figures, Rgb,
 };
-use inlay_engine::{HdrImage, ImageDesc, Readback};
+use inlay_engine::HdrImage;
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::field::GpuGridField;
-use inlay_passes::probe::{probe_irradiance, ProbePass, PROBE_FORMAT};
+use inlay_passes::probe::{probe_irradiance, ProbePass};
 use inlay_passes::shaders::embedded_library;
 
 fn cycles_dir(scene: &str) -> PathBuf {
@@ -134,15 +134,7 @@ fn the_probe_irradiance_matches_cycles_sensors() {
         let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
         let knobs = scene.lighting.probe;
         let map = knobs.direction_map();
-        let rb = Readback::new(
-            &ctx,
-            ImageDesc {
-                width: map.width,
-                height: map.height,
-                format: PROBE_FORMAT,
-            },
-        )
-        .unwrap();
+        let rb = common::probe_readback(&ctx, &map);
         for object in &scene.objects {
             let path = cycles_dir(name).join(format!("irradiance-{}.json", object.name));
             let json: serde_json::Value =

@@ -8,14 +8,14 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use inlay_engine::shader::{compile, Define, ShaderStage};
-use inlay_engine::{Context, HdrImage, ImageDesc, Readback};
+use inlay_engine::{Context, HdrImage};
 use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::lighting::{
     direct_lights, environment_lobes, lobe_rays, sharp_limit, split_environment, IncidentLight,
     LightingWork,
 };
 use inlay_passes::march::MarchKnobs;
-use inlay_passes::probe::{trace_probe, MapKind, ProbeKnobs, ProbePass, PROBE_FORMAT};
+use inlay_passes::probe::{trace_probe, MapKind, ProbeKnobs, ProbePass, ProbeTexels};
 use inlay_passes::sg::Sg64;
 use inlay_passes::sgfit::{fit_reference, FitKnobs, FitStart, ProbeSamples, Start};
 use inlay_passes::shaders::embedded_library;
@@ -30,15 +30,7 @@ fn march() -> MarchKnobs {
 fn gpu_probe(ctx: &Arc<Context>, pass: &ProbePass, field: &GridField, origin: DVec3) -> HdrImage {
     let gpu_field = GpuGridField::upload(ctx, field).unwrap();
     let map = pass.map();
-    let rb = Readback::new(
-        ctx,
-        ImageDesc {
-            width: map.width,
-            height: map.height,
-            format: PROBE_FORMAT,
-        },
-    )
-    .unwrap();
+    let rb = common::probe_readback(ctx, &map);
     common::run_frame(ctx, |graph| {
         let probe = pass.add(graph, &gpu_field, origin);
         rb.add_to_graph(graph, probe);
@@ -84,6 +76,7 @@ fn probe_matches_the_cpu_reference_with_and_without_environment() {
             map: kind,
             resolution: 12,
             supersampling: 2,
+            stride: 1,
         };
         let pass = ProbePass::new(&ctx, &lib, knobs, march(), &env, &[]).unwrap();
         let gpu = gpu_probe(&ctx, &pass, &field, origin);
@@ -95,6 +88,63 @@ fn probe_matches_the_cpu_reference_with_and_without_environment() {
             "{scene}: the probe is enclosed"
         );
     }
+}
+
+/// A strided trace (`[lighting] probe_stride` 2) on PLANTS' small bake,
+/// on a 13 × 13 map (blocks cut by its edge): after a whole trace from one
+/// point, each share traced from another writes exactly its texels (one
+/// of each 2 × 2 block), with the CPU reference's values from there, and
+/// leaves the others as they were; after the four shares the probe is the
+/// whole trace from the second point.
+#[test]
+fn a_strided_trace_writes_its_share_and_completes_in_stride_squared() {
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let s = common::bundled_scene("plants.toml");
+    let field = common::bake_small(&s, 24, 4, 0);
+    let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
+    let knobs = ProbeKnobs {
+        map: MapKind::Octahedral,
+        resolution: 13,
+        supersampling: 2,
+        stride: 2,
+    };
+    let pass = ProbePass::new(&ctx, &lib, knobs, march(), &[], &[]).unwrap();
+    let map = pass.map();
+    let rb = common::probe_readback(&ctx, &map);
+    let (a, b) = (DVec3::new(0.0, 0.4, 0.0), DVec3::new(-0.3, 0.3, -0.2));
+    let trace = |origin: DVec3, texels: ProbeTexels| {
+        common::run_frame(&ctx, |graph| {
+            let probe = pass.add_with(graph, &gpu_field, origin, false, texels);
+            rb.add_to_graph(graph, probe);
+        });
+        rb.read().unwrap()
+    };
+    let at_a = trace(a, ProbeTexels::All);
+    let cpu_b = trace_probe(&field, b, &knobs, &march(), &[]);
+    let mut probe = at_a.clone();
+    for n in 0..knobs.phases() {
+        let (ox, oy) = knobs.phase_offset(n);
+        let next = trace(b, ProbeTexels::Phase(n));
+        for y in 0..map.height {
+            for x in 0..map.width {
+                let i = (y * map.width + x) as usize;
+                if x % 2 == ox && y % 2 == oy {
+                    probe.pixels[i] = next.pixels[i];
+                } else {
+                    assert_eq!(
+                        next.pixels[i], probe.pixels[i],
+                        "share {n}: texel ({x}, {y}) moved"
+                    );
+                }
+            }
+        }
+    }
+    assert_matches(&probe, &cpu_b, "four shares from the second point");
+    assert_ne!(
+        at_a.pixels, probe.pixels,
+        "the two points see the same probe"
+    );
 }
 
 #[test]
@@ -139,6 +189,7 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
         map: MapKind::Octahedral,
         resolution: 16,
         supersampling: 2,
+        stride: 1,
     };
     // BOOKS' sun (λ 800) is too sharp for the fit: it is shaded directly,
     // and the probe holds the sky alone.
@@ -166,7 +217,8 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
         work,
         LightingWork::Update {
             start: FitStart::Cold,
-            iterations: 20
+            iterations: 20,
+            texels: ProbeTexels::All,
         }
     );
     assert!(executed.iter().any(|p| p == "probe-trace") && executed.iter().any(|p| p == "sg-fit"));
@@ -204,7 +256,8 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
             work,
             LightingWork::Update {
                 start: FitStart::Warm,
-                iterations: 2
+                iterations: 2,
+                texels: ProbeTexels::All,
             }
         );
         assert!(executed.iter().any(|p| p == "sg-fit"));
@@ -226,6 +279,103 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
 /// field's transmittance along its rays as the f64 reference computes it.
 /// Tolerance: the march's, 3e-4 in opacity per ray (tests/field_gpu.rs),
 /// so 3e-4 of each lobe's amplitude.
+/// With a strided probe (`probe_stride` 2) the dragged object's warm
+/// updates each trace a quarter of the texels; once it stops, three more
+/// frames trace the rest where it stands, the update then runs to its end
+/// on the whole probe, and nothing runs after: the lighting settles
+/// `stride`² − 1 + (warm − frame) / frame iterations = 4 frames after the
+/// stop here (6 at the scene defaults, 8 warm iterations). The lobes it
+/// settles on fit the probe as well as those of a light traced whole at
+/// every frame (relative residual within 10 % + 0.01).
+#[test]
+fn a_strided_probe_settles_within_its_phases_after_the_object_stops() {
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let s = common::bundled_scene("books.toml");
+    let field = common::bake_small(&s, 24, 4, 0);
+    let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
+    let env = environment_lobes(&s.environment);
+    let fit_knobs = FitKnobs {
+        lobes: 8,
+        cold_iterations: 20,
+        warm_iterations: 4,
+        ..FitKnobs::default()
+    };
+    let light_with = |stride: u32| {
+        let probe = ProbeKnobs {
+            map: MapKind::Octahedral,
+            resolution: 16,
+            supersampling: 2,
+            stride,
+        };
+        IncidentLight::new(&ctx, &lib, probe, fit_knobs, march(), &env, &[], 1).unwrap()
+    };
+    let frame = |light: &mut IncidentLight, centre: DVec3| {
+        let work = light.plan(centre, 0);
+        let report = common::run_frame(&ctx, |graph| {
+            light.add(graph, &gpu_field, centre, work).unwrap();
+            light.fit.add_readback(graph);
+        });
+        (work, report.executed)
+    };
+    let path: Vec<DVec3> = (0..4)
+        .map(|i| DVec3::new(0.1 + 0.02 * i as f64, 0.3, 0.1))
+        .collect();
+    let (mut strided, mut whole) = (light_with(2), light_with(1));
+    let warm = |n: u32| LightingWork::Update {
+        start: FitStart::Warm,
+        iterations: 2,
+        texels: ProbeTexels::Phase(n),
+    };
+    for (i, &c) in path.iter().enumerate() {
+        let (work, _) = frame(&mut strided, c);
+        frame(&mut whole, c);
+        if i == 0 {
+            assert!(matches!(
+                work,
+                LightingWork::Update {
+                    start: FitStart::Cold,
+                    texels: ProbeTexels::All,
+                    ..
+                }
+            ));
+        } else {
+            assert_eq!(work, warm(i as u32 - 1), "dragged frame {i}");
+        }
+    }
+    let stop = *path.last().unwrap();
+    let mut after = Vec::new();
+    loop {
+        let (work, executed) = frame(&mut strided, stop);
+        if work == LightingWork::Reuse {
+            assert!(!executed.iter().any(|p| p == "probe-trace" || p == "sg-fit"));
+            break;
+        }
+        after.push(work);
+        assert!(after.len() <= 10, "{after:?}");
+    }
+    assert_eq!(
+        after,
+        [
+            warm(3),
+            warm(0),
+            warm(1),
+            LightingWork::Continue { iterations: 2 }
+        ]
+    );
+    while frame(&mut whole, stop).0 != LightingWork::Reuse {}
+    let (a, b) = (
+        strided.fit.read_report().unwrap(),
+        whole.fit.read_report().unwrap(),
+    );
+    eprintln!(
+        "strided probe settled at residual {:.4}, traced whole {:.4}",
+        a.relative_residual(),
+        b.relative_residual()
+    );
+    assert!(a.relative_residual() <= 1.1 * b.relative_residual() + 0.01);
+}
+
 #[test]
 fn direct_light_matches_the_cpu_reference() {
     let ctx = common::gpu();
@@ -237,6 +387,7 @@ fn direct_light_matches_the_cpu_reference() {
         map: MapKind::Octahedral,
         resolution: 16,
         supersampling: 3,
+        stride: 1,
     };
     let centre = DVec3::new(0.1, 0.3, 0.1);
     // Needles (λ 400) in Fibonacci directions, sorted by how much of them
@@ -360,6 +511,7 @@ fn local_lights_leave_the_probe_and_return_as_lobes() {
         map: MapKind::Octahedral,
         resolution: 16,
         supersampling: 3,
+        stride: 1,
     };
     let fit_knobs = FitKnobs {
         lobes: 4,

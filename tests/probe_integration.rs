@@ -101,6 +101,7 @@ fn knobs(map: MapKind, resolution: u32, supersampling: u32) -> ProbeKnobs {
         map,
         resolution,
         supersampling,
+        stride: 1,
     }
 }
 

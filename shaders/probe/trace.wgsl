@@ -9,6 +9,9 @@
 // Local lights (lighting/local_light.wgsl) active from the origin are left
 // out: the colour a ray gathers inside their spheres is taken off, since
 // they are shaded per pixel.
+// A strided trace (`stride` > 1) writes one texel of each stride × stride
+// block and leaves the others as they were (passes/src/probe/knobs.rs
+// ProbeKnobs::stride).
 // Mirrors passes/src/probe/reference.rs.
 #include "common/ray_box.wgsl"
 #include "common/sg.wgsl"
@@ -27,9 +30,10 @@ struct ProbePush {
     side: u32,
     // Local lights in `local_spheres`.
     local_count: u32,
-    // The struct is 16-byte aligned (its vec3): pad to 48 bytes.
-    pad1: u32,
-    pad2: u32,
+    // One texel of each stride × stride block is traced, the one at
+    // (phase mod stride, phase / stride) in it (1, 0: every texel).
+    stride: u32,
+    phase: u32,
 }
 
 var<immediate> pc: ProbePush;
@@ -74,34 +78,41 @@ fn probe_sample(t: vec2<u32>, k: u32) -> ProbeSample {
     return ProbeSample(dd.xyz, dd.w, m);
 }
 
+// The texel invocation `id` traces (beyond the map: none).
+fn probe_texel(id: vec2<u32>) -> vec2<u32> {
+    return id * pc.stride + vec2<u32>(pc.phase % pc.stride, pc.phase / pc.stride);
+}
+
 // Each entry point writes the solid-angle mean over the texel's sub-samples.
 @compute @workgroup_size(8, 8, 1)
-fn main_with_environment(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main_with_environment(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let id = probe_texel(gid.xy);
     if id.x >= pc.width || id.y >= pc.height {
         return;
     }
     var sum = vec4<f32>(0.0);
     var weight = 0.0;
     for (var k = 0u; k < pc.side * pc.side; k++) {
-        let s = probe_sample(id.xy, k);
+        let s = probe_sample(id, k);
         let l = s.march.colour + (1.0 - s.march.opacity) * environment(s.dir);
         sum += s.weight * vec4<f32>(l, s.march.opacity);
         weight += s.weight;
     }
-    textureStore(probe, id.xy, sum / weight);
+    textureStore(probe, id, sum / weight);
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main_field_only(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main_field_only(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let id = probe_texel(gid.xy);
     if id.x >= pc.width || id.y >= pc.height {
         return;
     }
     var sum = vec4<f32>(0.0);
     var weight = 0.0;
     for (var k = 0u; k < pc.side * pc.side; k++) {
-        let s = probe_sample(id.xy, k);
+        let s = probe_sample(id, k);
         sum += s.weight * vec4<f32>(s.march.colour, s.march.opacity);
         weight += s.weight;
     }
-    textureStore(probe, id.xy, sum / weight);
+    textureStore(probe, id, sum / weight);
 }

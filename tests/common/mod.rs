@@ -147,3 +147,19 @@ pub fn empty_field(ctx: &Arc<Context>) -> inlay_passes::field::GpuGridField {
     );
     inlay_passes::field::GpuGridField::upload(ctx, &field).unwrap()
 }
+
+/// A readback of a probe image on `map`.
+pub fn probe_readback(
+    ctx: &Arc<Context>,
+    map: &inlay_passes::probe::DirectionMap,
+) -> inlay_engine::Readback {
+    inlay_engine::Readback::new(
+        ctx,
+        inlay_engine::ImageDesc {
+            width: map.width,
+            height: map.height,
+            format: inlay_passes::probe::PROBE_FORMAT,
+        },
+    )
+    .unwrap()
+}

@@ -23,7 +23,7 @@ use inlay_engine::Context;
 
 use crate::field::GpuGridField;
 use crate::march::MarchKnobs;
-use crate::probe::{EnvironmentLobes, ProbeKnobs, ProbePass, PROBE_TRACE};
+use crate::probe::{EnvironmentLobes, ProbeKnobs, ProbePass, ProbeTexels, PROBE_TRACE};
 use crate::scene::Scene;
 use crate::sg::Sg64;
 use crate::sgfit::{FitKnobs, FitStart, SgFitPass, SG_FIT};
@@ -39,6 +39,9 @@ pub enum LightingWork {
         start: FitStart,
         /// Iterations of the fit.
         iterations: u32,
+        /// The texels traced (every one, or this update's share of a
+        /// strided trace, [`crate::probe::ProbeKnobs::stride`]).
+        texels: ProbeTexels,
     },
     /// Go on with the last fit on the last probe for `iterations` more
     /// (the object is still; the update it began is not finished).
@@ -108,6 +111,11 @@ pub struct IncidentLight {
     last: Option<([u64; 3], u64)>,
     /// Iterations of the last warm update still to run.
     pending: u32,
+    /// The strided trace's next update ([`ProbeTexels::Phase`]).
+    phase: u32,
+    /// Of the probe's `stride`² shares, how many were traced where the
+    /// object now is, for the lighting it now has.
+    fresh: u32,
 }
 
 impl IncidentLight {
@@ -148,6 +156,8 @@ impl IncidentLight {
             direct,
             last: Default::default(),
             pending: 0,
+            phase: 0,
+            fresh: 0,
         })
     }
 
@@ -162,30 +172,57 @@ impl IncidentLight {
     /// the environment light changes), and remembers them: a cold fit
     /// first; a warm update when either changed, at most the fit's
     /// `frame_iterations` of it this frame; while the object stays, the
-    /// rest of that update continued; then nothing.
+    /// rest of that update continued; then nothing. With a strided probe
+    /// ([`crate::probe::ProbeKnobs::stride`] s > 1) a warm update traces
+    /// one texel of each s × s block; while the object stays, each frame
+    /// traces the next share and starts the update again from the lobes it
+    /// has, until the probe is whole where the object stands (s² − 1
+    /// frames after it stopped), and the update on the whole probe then
+    /// runs to its end as above.
     pub fn plan(&mut self, centre: DVec3, version: u64) -> LightingWork {
         let key = (centre.to_array().map(f64::to_bits), version);
         let knobs = *self.fit.knobs();
+        let phases = self.probe.knobs().phases();
         let chunk = |n: u32| match knobs.frame_iterations {
             0 => n,
             f => n.min(f),
         };
+        let share = |light: &mut Self| -> LightingWork {
+            let texels = if phases <= 1 {
+                ProbeTexels::All
+            } else {
+                ProbeTexels::Phase(light.phase)
+            };
+            light.phase = (light.phase + 1) % phases.max(1);
+            light.fresh = (light.fresh + 1).min(phases);
+            let n = chunk(knobs.warm_iterations);
+            // The update runs to its end only on a whole probe.
+            light.pending = if light.fresh == phases {
+                knobs.warm_iterations - n
+            } else {
+                0
+            };
+            LightingWork::Update {
+                start: FitStart::Warm,
+                iterations: n,
+                texels,
+            }
+        };
         let work = match self.last {
             None => {
                 self.pending = 0;
+                self.fresh = phases;
                 LightingWork::Update {
                     start: FitStart::Cold,
                     iterations: knobs.cold_iterations,
+                    texels: ProbeTexels::All,
                 }
             }
             Some(last) if last != key => {
-                let n = chunk(knobs.warm_iterations);
-                self.pending = knobs.warm_iterations - n;
-                LightingWork::Update {
-                    start: FitStart::Warm,
-                    iterations: n,
-                }
+                self.fresh = 0;
+                share(self)
             }
+            Some(_) if self.fresh < phases => share(self),
             Some(_) if self.pending > 0 => {
                 let n = chunk(self.pending);
                 self.pending -= n;
@@ -201,6 +238,7 @@ impl IncidentLight {
     pub fn reset(&mut self) {
         self.last = None;
         self.pending = 0;
+        self.fresh = 0;
     }
 
     /// Adds the probe trace (with L_env) and the fit when `work` asks for
@@ -287,8 +325,14 @@ impl IncidentLight {
                     },
                 })
             }
-            LightingWork::Update { start, iterations } => {
-                let probe = self.probe.add_with(graph, field, centre, environment);
+            LightingWork::Update {
+                start,
+                iterations,
+                texels,
+            } => {
+                let probe = self
+                    .probe
+                    .add_with(graph, field, centre, environment, texels);
                 let lobes = self.fit.add(graph, probe, start, iterations)?;
                 Ok(match direct {
                     Some(d) => d.add(graph, field, centre, lobes, environment),

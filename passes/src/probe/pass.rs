@@ -35,10 +35,11 @@ inlay_engine::gpu_struct! {
         pub side: u32,
         /// Local lights left out ([`crate::lighting::local`]).
         pub local_count: u32,
-        /// Padding to the struct's 16-byte alignment.
-        pub pad1: u32,
-        /// Padding.
-        pub pad2: u32,
+        /// One texel of each `stride` × `stride` block is traced
+        /// ([`ProbeKnobs::stride`]; 1: every texel).
+        pub stride: u32,
+        /// Which one: column + stride × row in the block.
+        pub phase: u32,
     }
 }
 
@@ -80,13 +81,24 @@ struct ProbeEnvironment {
     count: u32,
 }
 
+/// Which texels of the probe a trace writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProbeTexels {
+    /// Every texel.
+    All,
+    /// The texels of the `n`-th update of a strided trace
+    /// ([`ProbeKnobs::phase_offset`]); the others keep what the updates
+    /// before wrote.
+    Phase(u32),
+}
+
 /// The probe trace for one set of knobs and one environment light.
 pub struct ProbePass {
     field_only: Arc<ComputePipeline>,
     environment: Option<ProbeEnvironment>,
     image: Arc<Image>,
     map: DirectionMap,
-    supersampling: u32,
+    knobs: ProbeKnobs,
     march: MarchKnobs,
     spheres: Arc<Buffer>,
     local_count: u32,
@@ -159,7 +171,7 @@ impl ProbePass {
             environment,
             image,
             map,
-            supersampling: knobs.supersampling,
+            knobs,
             march,
             spheres: {
                 let mut bytes = crate::lighting::direct_pass::sphere_bytes(local);
@@ -206,26 +218,40 @@ impl ProbePass {
         })
     }
 
-    /// Adds the `probe-trace` pass tracing `field` from `origin`, with the
-    /// L_env term; returns the written probe image.
-    pub fn add(&self, graph: &mut FrameGraph, field: &GpuGridField, origin: DVec3) -> ImageHandle {
-        self.add_with(graph, field, origin, true)
+    /// The knobs it was built with.
+    pub fn knobs(&self) -> ProbeKnobs {
+        self.knobs
     }
 
-    /// Adds the `probe-trace` pass; `environment = false` leaves the L_env
-    /// term out (the field-only entry point runs, the lobes are not bound).
+    /// Adds the `probe-trace` pass tracing every texel of `field` from
+    /// `origin`, with the L_env term; returns the written probe image.
+    pub fn add(&self, graph: &mut FrameGraph, field: &GpuGridField, origin: DVec3) -> ImageHandle {
+        self.add_with(graph, field, origin, true, ProbeTexels::All)
+    }
+
+    /// Adds the `probe-trace` pass writing `texels`; `environment = false`
+    /// leaves the L_env term out (the field-only entry point runs, the
+    /// lobes are not bound).
     pub fn add_with(
         &self,
         graph: &mut FrameGraph,
         field: &GpuGridField,
         origin: DVec3,
         environment: bool,
+        texels: ProbeTexels,
     ) -> ImageHandle {
         let grid = field.import(graph);
         let probe = self.import(graph);
         let chosen = self.environment.as_ref().filter(|_| environment);
         let env = chosen.map(|e| (graph.import_buffer(&e.lobes, None), e.count));
         let (w, h) = (self.map.width, self.map.height);
+        let (stride, phase) = match texels {
+            ProbeTexels::All => (1, 0),
+            ProbeTexels::Phase(n) => {
+                let (x, y) = self.knobs.phase_offset(n);
+                (self.knobs.stride, x + self.knobs.stride * y)
+            }
+        };
         let push = ProbePush {
             origin: origin.as_vec3().to_array(),
             step: self.march.step(field.diagonal) as f32,
@@ -233,10 +259,10 @@ impl ProbePass {
             height: h,
             termination: self.march.termination as f32,
             env_lobe_count: env.map_or(0, |(_, n)| n),
-            side: self.supersampling,
+            side: self.knobs.supersampling,
             local_count: self.local_count,
-            pad1: 0,
-            pad2: 0,
+            stride,
+            phase,
         };
         let mut probe = probe;
         let pipeline = chosen.map_or(&self.field_only, |e| &e.pipeline);
@@ -246,7 +272,7 @@ impl ProbePass {
             .read("local_spheres", spheres)
             .read_opt("env_lobes", env.map(|(b, _)| b))
             .push(&push)
-            .threads([w, h, 1]);
+            .threads([w.div_ceil(stride), h.div_ceil(stride), 1]);
         probe
     }
 }

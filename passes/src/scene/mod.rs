@@ -295,6 +295,7 @@ impl LightingKnobs {
                 map: s.probe_map.unwrap_or(d.probe.map),
                 resolution: s.probe_resolution.unwrap_or(d.probe.resolution),
                 supersampling: s.probe_supersampling.unwrap_or(d.probe.supersampling),
+                stride: s.probe_stride.unwrap_or(d.probe.stride),
             },
             fit: crate::sgfit::FitKnobs {
                 lobes: s.lobes.unwrap_or(d.fit.lobes),

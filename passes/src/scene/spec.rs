@@ -154,6 +154,7 @@ pub(crate) struct LightingSpec {
     pub probe_map: Option<crate::probe::MapKind>,
     pub probe_resolution: Option<u32>,
     pub probe_supersampling: Option<u32>,
+    pub probe_stride: Option<u32>,
     pub lobes: Option<u32>,
     pub cold_iterations: Option<u32>,
     pub warm_iterations: Option<u32>,

@@ -134,6 +134,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProbeArgs) -> anyhow::Result<()> {
         map: args.placement.map_or(knobs.probe.map),
         resolution: args.resolution.unwrap_or(knobs.probe.resolution),
         supersampling: args.supersampling.unwrap_or(knobs.probe.supersampling),
+        stride: knobs.probe.stride,
     };
     let fit_knobs = FitKnobs {
         lobes: args.lobes.unwrap_or(knobs.fit.lobes),
