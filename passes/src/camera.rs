@@ -159,6 +159,31 @@ impl CameraFrame {
         })
     }
 
+    /// The pixels the sphere (`centre`, `radius`) can cover, as (x0, y0,
+    /// x1, y1) with the ends exclusive, clipped to the image (empty where
+    /// it misses the image): the projection of its bounding cube's corners,
+    /// widened by a pixel. None when the cube reaches behind the image
+    /// plane (the sphere may then cover any pixel).
+    pub fn sphere_pixels(&self, centre: DVec3, radius: f64) -> Option<[u32; 4]> {
+        let (mut lo, mut hi) = (
+            (f64::INFINITY, f64::INFINITY),
+            (f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for corner in 0..8 {
+            let s = |bit: u32| if corner & bit == 0 { -radius } else { radius };
+            let (x, y) = self.project(centre + DVec3::new(s(1), s(2), s(4)))?;
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        let clip = |v: f64, n: u32| v.clamp(0.0, n as f64) as u32;
+        Some([
+            clip((lo.0 - 1.0).floor(), self.width),
+            clip((lo.1 - 1.0).floor(), self.height),
+            clip((hi.0 + 1.0).ceil(), self.width),
+            clip((hi.1 + 1.0).ceil(), self.height),
+        ])
+    }
+
     /// The camera as the march, shading and cast-shadow push blocks hold
     /// it (f32, with the image size).
     pub fn rays(&self) -> CameraRays {
@@ -202,6 +227,42 @@ inlay_engine::gpu_struct! {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every pixel whose ray meets the sphere lies in `sphere_pixels`; a
+    /// sphere around the eye, or behind it, gives None.
+    #[test]
+    fn sphere_pixels_hold_every_pixel_the_sphere_covers() {
+        let spec = CameraSpec {
+            name: None,
+            position: DVec3::new(0.3, 0.8, 2.0),
+            look_at: DVec3::new(0.0, 0.2, 0.0),
+            up: DVec3::Y,
+            fov_y: 45.0,
+        };
+        let cam = CameraFrame::new(&spec, 64, 48);
+        for (centre, radius) in [
+            (DVec3::new(0.0, 0.2, 0.0), 0.1),
+            (DVec3::new(-0.4, 0.0, 0.3), 0.25),
+            (DVec3::new(0.9, 0.5, -0.5), 0.05),
+        ] {
+            let [x0, y0, x1, y1] = cam.sphere_pixels(centre, radius).unwrap();
+            let mut hits = 0;
+            for py in 0..48 {
+                for px in 0..64 {
+                    let r = cam.pixel_ray(px, py);
+                    let oc = r.origin - centre;
+                    let b = oc.dot(r.dir);
+                    if b * b - (oc.length_squared() - radius * radius) >= 0.0 && b < 0.0 {
+                        hits += 1;
+                        assert!(px >= x0 && px < x1 && py >= y0 && py < y1, "({px}, {py})");
+                    }
+                }
+            }
+            assert!(hits > 0);
+            assert!((x1 - x0) * (y1 - y0) < 64 * 48);
+        }
+        assert!(cam.sphere_pixels(spec.position, 0.1).is_none());
+    }
 
     #[test]
     fn centre_pixel_looks_forward_and_corners_span_the_fov() {

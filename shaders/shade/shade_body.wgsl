@@ -37,6 +37,9 @@ struct ShadePush {
     // they see past the field (read by shade/field_light.wgsl).
     field_side: u32,
     env_count: u32,
+    // The first 8 × 8 tile a dispatch covers, x | y << 16 (the field
+    // light's gain pass covers the object's pixels alone; 0 elsewhere).
+    tile_origin: u32,
 }
 
 var<immediate> pc: ShadePush;

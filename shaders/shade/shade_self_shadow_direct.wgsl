@@ -7,8 +7,14 @@
 // (lighting/local_light.wgsl), with Γ from their rays (local_visibility);
 // the other lobes take Γ from the SSDF. With pc.field_side > 0 the fitted
 // lobes' diffuse light is scaled by the field's light at the point
-// (shade/field_light.wgsl); the entry point `field_gain_only` writes that gain
-// instead of the radiance (for its test against the CPU mirror). Mirrors
+// (shade/field_light.wgsl): the entry point `field_gain_only` writes that
+// gain (pass `object-field-light`, before this one), and `main` reads it
+// from `field_gain_in`. They are two passes because the gain's rays are
+// shared through workgroup memory, and a shader with workgroup barriers
+// runs every invocation as a coroutine on lavapipe: with the gather in
+// `main`, DOG's shading took 60 ms at 320 × 180, and 20 ms with the gain
+// apart (plus 1.5 ms for it, over the ball's tiles alone; docs/
+// benchmarks.md, issue 26's fourth pass). Mirrors
 // passes/src/shadow/runtime.rs self_shadow_factors and
 // passes/src/lighting/local.rs.
 #include "common/ray_box.wgsl"
@@ -25,6 +31,10 @@
 // shines from; 0 while inactive), written by the direct-light pass
 // (lighting/direct.wgsl).
 @group(0) @binding(22) var<storage, read> local_lights: array<vec4<f32>>;
+
+// The gain `field_gain_only` wrote at each pixel (rgb), read by `main`
+// when pc.field_side > 0.
+@group(0) @binding(24) var field_gain_in: texture_2d<f32>;
 
 #include "geometry/mesh_bvh.wgsl"
 #include "shadow/direct_rays.wgsl"
@@ -92,34 +102,33 @@ var<private> field_gain_ready: bool;
 var<private> field_pixel: vec2<u32>;
 
 fn shading_diffuse_gain(k: u32) -> vec3<f32> {
-    if k >= pc.light_count - min(pc.direct_lobes, pc.light_count) {
+    if pc.field_side == 0u || k >= pc.light_count - min(pc.direct_lobes, pc.light_count) {
         return vec3<f32>(1.0);
     }
     if !field_gain_ready {
-        field_gain = field_light_gain(field_pixel, shade_normal);
+        field_gain = textureLoad(field_gain_in, vec2<i32>(field_pixel), 0).rgb;
         field_gain_ready = true;
     }
     return field_gain;
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(local_invocation_index) local_index: u32,
-    @builtin(workgroup_id) group: vec3<u32>,
-) {
-    field_light_gather(id, local_index, group);
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     field_pixel = id.xy;
     shade_pixel(id);
 }
 
-// The gain alone, (g, 1) at the object's pixels and 0 where no object is.
+// The gain alone, (g, 1) at the object's pixels and 0 where no object is,
+// over the tiles from pc.tile_origin on.
 @compute @workgroup_size(8, 8, 1)
 fn field_gain_only(
-    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(global_invocation_id) dispatched: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
-    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(workgroup_id) dispatched_group: vec3<u32>,
 ) {
+    let first = vec3<u32>(pc.tile_origin & 0xffffu, pc.tile_origin >> 16u, 0u);
+    let group = dispatched_group + first;
+    let id = dispatched + first * 8u;
     field_light_gather(id, local_index, group);
     if !shade_owns(id) {
         return;

@@ -95,12 +95,13 @@ pub struct PassInfo {
 }
 
 /// The frame's passes, in the order a frame runs them.
-pub const FRAME_PASSES: [PassInfo; 11] = [
+pub const FRAME_PASSES: [PassInfo; 12] = [
     probe::PROBE_TRACE_INFO,
     sgfit::SG_FIT_INFO,
     lighting::DIRECT_LIGHT_INFO,
     gbuffer::OBJECT_GBUFFER_INFO,
     march::NERF_MARCH_INFO,
+    shade::OBJECT_FIELD_LIGHT_INFO,
     shade::OBJECT_SHADE_INFO,
     shadow::CAST_SHADOW_INFO,
     shadow::SHADOW_UPSAMPLE_INFO,

@@ -357,6 +357,10 @@ impl InsertionFrame {
                 (Some(ssdf), Some(fh_table)) if effects.self_shadow => Some(SelfShadow {
                     fh_table,
                     ssdf: *ssdf,
+                    pixels: {
+                        let (c, r) = placed[i].sphere();
+                        frame.sphere_pixels(c, r)
+                    },
                 }),
                 _ => None,
             })

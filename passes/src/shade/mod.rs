@@ -14,7 +14,7 @@ pub use reference::{shade_probe_reference, shade_reference_with};
 use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{BufferHandle, FrameGraph, ImageHandle};
+use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
@@ -55,8 +55,9 @@ inlay_engine::gpu_struct! {
         /// Lobes of L_env in `env_lobes` (what the field-light rays see
         /// past the field).
         pub env_count: u32,
-        /// Padding (the struct's size rounds up to 16 bytes).
-        pub _pad: u32,
+        /// The first 8 × 8 tile the dispatch covers, x | y << 16 (the
+        /// field light's gain pass covers the object's pixels alone).
+        pub tile_origin: u32,
     }
 }
 
@@ -69,6 +70,17 @@ pub const OBJECT_SHADE_INFO: PassInfo = PassInfo {
 
 /// The shading pass's name in the frame graph (and in timings).
 pub const OBJECT_SHADE: &str = OBJECT_SHADE_INFO.name;
+
+/// The field light's gain pass ([`field_light`]), run before `object-shade`
+/// when `[shading] field_light` is on: its name, Table 1 module and switch.
+pub const OBJECT_FIELD_LIGHT_INFO: PassInfo = PassInfo {
+    name: "object-field-light",
+    module: Table1Module::Rendering,
+    switch: Some(SELF_SHADOW_SWITCH),
+};
+
+/// The field light's gain pass's name in the frame graph.
+pub const OBJECT_FIELD_LIGHT: &str = OBJECT_FIELD_LIGHT_INFO.name;
 
 /// The switch that leaves the objects' self-shadows out (eq. 9).
 pub const SELF_SHADOW_SWITCH: EffectSwitch = EffectSwitch {
@@ -88,6 +100,10 @@ pub struct SelfShadow {
     pub fh_table: BufferHandle,
     /// The object's SSDF field and per-frame block.
     pub ssdf: SsdfBindings,
+    /// The pixels the object can cover, (x0, y0, x1, y1) exclusive
+    /// ([`crate::camera::CameraFrame::sphere_pixels`]; None: any): the
+    /// field light's gain pass runs over their tiles alone.
+    pub pixels: Option<[u32; 4]>,
 }
 
 /// The shading pipelines (without self-shadows; with them from the SSDF;
@@ -97,6 +113,12 @@ pub struct ShadePass {
     pipeline: Arc<ComputePipeline>,
     self_shadowed: Arc<ComputePipeline>,
     self_shadowed_direct: Arc<ComputePipeline>,
+    /// The field light's gain alone (`field_gain_only`), run as its own
+    /// pass before the shading when the field light is on.
+    field_gain: Arc<ComputePipeline>,
+    /// Whether [`Self::add`] returns the gain pass's image instead of the
+    /// shading ([`Self::new_field_gain`]).
+    gain_only: bool,
     ndf: Arc<Buffer>,
     ndf_lobes: NdfLobes,
     march: MarchKnobs,
@@ -116,20 +138,24 @@ impl ShadePass {
         ndf_lobes: u32,
         march: MarchKnobs,
     ) -> anyhow::Result<Self> {
-        Self::build(ctx, lib, ndf_lobes, march, "main")
+        Self::build(ctx, lib, ndf_lobes, march)
     }
 
     /// A pass whose output, at the pixels of self-shadowed objects, is the
     /// gain [`field_light`] puts on the fitted lobes' diffuse light with
-    /// `side`² rays per tile, in rgb with 1 in alpha (for its test against
-    /// the CPU mirror, and for inspection).
+    /// `side`² rays per tile, in rgb with 1 in alpha, as the frame's
+    /// `object-field-light` pass computes it over the tiles of each
+    /// object's [`SelfShadow::pixels`] (0 at their other pixels, the rest
+    /// unwritten): for its test against the CPU mirror, and for inspection.
     pub fn new_field_gain(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
         march: MarchKnobs,
         side: u32,
     ) -> anyhow::Result<Self> {
-        Ok(Self::build(ctx, lib, 1, march, "field_gain_only")?.with_field_light(side))
+        let mut pass = Self::build(ctx, lib, 1, march)?.with_field_light(side);
+        pass.gain_only = true;
+        Ok(pass)
     }
 
     /// Scales the fitted lobes' diffuse light at each point of a
@@ -148,7 +174,6 @@ impl ShadePass {
         lib: &ShaderLibrary,
         ndf_lobes: u32,
         march: MarchKnobs,
-        direct_entry: &str,
     ) -> anyhow::Result<Self> {
         let ndf = NdfLobes::new(ndf_lobes).map_err(|m| anyhow::anyhow!("ndf_lobes: {m}"))?;
         let bytes: Vec<u8> = ndf.packed().iter().flat_map(|x| x.to_le_bytes()).collect();
@@ -158,7 +183,9 @@ impl ShadePass {
         Ok(Self {
             pipeline: lib.compute_pipeline(ctx, "shade/shade.wgsl", "main", &[])?,
             self_shadowed: shadowed("shade/shade_self_shadow.wgsl", "main")?,
-            self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl", direct_entry)?,
+            self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl", "main")?,
+            field_gain: shadowed("shade/shade_self_shadow_direct.wgsl", "field_gain_only")?,
+            gain_only: false,
             ndf: Arc::new(Buffer::with_data(
                 ctx,
                 "ndf lobes",
@@ -208,65 +235,163 @@ impl ShadePass {
         let mut out = out;
         let grid = field.import(graph);
         let no_direct = graph.import_buffer(&self.no_direct, None);
+        let setups: Vec<ObjectSetup> = lobes
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let shadow = self_shadow.get(i).copied().flatten();
+                let field_light = self.field_side > 0 && shadow.is_some();
+                let local = l.direct.map(|d| d.local);
+                ObjectSetup {
+                    light: *l,
+                    shadow,
+                    field_light,
+                    push: ShadePush {
+                        camera: camera.rays(),
+                        object_index: i as f32,
+                        write_empty: (i == 0) as u32,
+                        light_count: l.count,
+                        direct_lobes: l.direct.map_or(0, |d| d.lobes),
+                        direct_rays: l.direct.map_or(0, |d| d.rays_per_lobe),
+                        local_count: local.map_or(0, |x| x.count),
+                        local_side: local.map_or(1, |x| x.side),
+                        march_step: self.march.step(field.diagonal) as f32,
+                        march_termination: self.march.termination as f32,
+                        field_side: if field_light { self.field_side } else { 0 },
+                        env_count: l.environment.filter(|_| field_light).map_or(0, |e| e.count),
+                        tile_origin: 0,
+                    },
+                }
+            })
+            .collect();
+        let common = CommonInputs {
+            grid,
+            gbuffer: *gbuffer,
+            ndf,
+            no_direct,
+        };
+        // The field light's gain first, in its own pass (its workgroup
+        // barriers would slow the whole shading on lavapipe).
+        let gain = setups.iter().any(|o| o.field_light).then(|| {
+            let mut gain = graph.create_image(
+                "field-gain",
+                ImageDesc {
+                    width,
+                    height,
+                    format: OBJECT_COLOUR_FORMAT,
+                },
+            );
+            let mut pass = graph.compute_pass(OBJECT_FIELD_LIGHT);
+            for (k, o) in setups.iter().filter(|o| o.field_light).enumerate() {
+                let pixels = o.shadow.and_then(|s| s.pixels);
+                let (origin, threads) = gain_tiles(pixels, width, height);
+                if threads[0] == 0 || threads[1] == 0 {
+                    continue;
+                }
+                let push = ShadePush {
+                    write_empty: (k == 0) as u32,
+                    tile_origin: origin,
+                    ..o.push
+                };
+                common
+                    .bind(pass.dispatch(&self.field_gain), o)
+                    .write("out_object", &mut gain)
+                    .push(&push)
+                    .threads(threads);
+            }
+            pass.finish();
+            gain
+        });
+        if let Some(gain) = gain.filter(|_| self.gain_only) {
+            return gain;
+        }
         let mut pass = graph.compute_pass(OBJECT_SHADE);
-        for (i, l) in lobes.iter().enumerate() {
-            let local = l.direct.map(|d| d.local);
-            let shadow = self_shadow.get(i).copied().flatten();
-            let field_light = self.field_side > 0 && shadow.is_some();
-            let push = ShadePush {
-                camera: camera.rays(),
-                object_index: i as f32,
-                write_empty: (i == 0) as u32,
-                light_count: l.count,
-                direct_lobes: l.direct.map_or(0, |d| d.lobes),
-                direct_rays: l.direct.map_or(0, |d| d.rays_per_lobe),
-                local_count: local.map_or(0, |x| x.count),
-                local_side: local.map_or(1, |x| x.side),
-                march_step: self.march.step(field.diagonal) as f32,
-                march_termination: self.march.termination as f32,
-                field_side: if field_light { self.field_side } else { 0 },
-                env_count: l.environment.filter(|_| field_light).map_or(0, |e| e.count),
-                _pad: 0,
-            };
-            let rays = l.direct.is_some() || field_light;
-            let pipeline = match (shadow, rays) {
+        for o in &setups {
+            let rays = o.light.direct.is_some() || o.field_light;
+            let pipeline = match (o.shadow, rays) {
                 (Some(_), true) => &self.self_shadowed_direct,
                 (Some(_), false) => &self.self_shadowed,
                 (None, _) => &self.pipeline,
             };
-            // The rays' variant binds the direct lobes' buffers, which an
-            // object lit by its fitted lobes alone does not have.
-            let filler = (shadow.is_some() && rays && l.direct.is_none()).then_some(no_direct);
-            let mut d = grid
-                .bind(pass.dispatch(pipeline))
-                .read("normal_roughness", gbuffer.normal_roughness)
-                .read("albedo_metallic", gbuffer.albedo_metallic)
-                .read("distance_id", gbuffer.distance_id)
-                .read("light_lobes", l.buffer)
-                .read("ndf_lobes", ndf)
+            // Where the gain is not used the shader reads nothing there;
+            // the binding takes the G-buffer's normals.
+            common
+                .bind(pass.dispatch(pipeline), o)
+                .read("field_gain_in", gain.unwrap_or(gbuffer.normal_roughness))
                 .write("out_object", &mut out)
-                .push(&push);
-            if let Some(s) = shadow {
-                d = d
-                    .read("fh_table", s.fh_table)
-                    .read("ssdf", s.ssdf.object)
-                    .read("objects", s.ssdf.records)
-                    .read("ssdf_rows", s.ssdf.rows)
-                    .read("ssdf_coefs", s.ssdf.coefs)
-                    .read("bvh_nodes", s.ssdf.bvh_nodes)
-                    .read("bvh_triangles", s.ssdf.bvh_triangles);
-            }
-            let env = (shadow.is_some() && rays).then(|| {
-                l.environment
-                    .filter(|_| field_light)
-                    .map_or(no_direct, |e| e.buffer)
-            });
-            d.read_opt("sharp_rays", l.direct.map(|r| r.rays).or(filler))
-                .read_opt("local_lights", local.map(|x| x.lights).or(filler))
-                .read_opt("env_lobes", env)
+                .push(&o.push)
                 .threads([width, height, 1]);
         }
         pass.finish();
         out
+    }
+}
+
+/// The field light's gain pass's dispatch over the 8 × 8 tiles holding
+/// `pixels` (x0, y0, x1, y1; None: the whole `width` × `height`): its
+/// first tile (x | y << 16) and its invocations.
+fn gain_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32) -> (u32, [u32; 3]) {
+    let [x0, y0, x1, y1] = pixels.unwrap_or([0, 0, width, height]);
+    let (x1, y1) = (x1.min(width), y1.min(height));
+    let (tx0, ty0) = (x0 / 8, y0 / 8);
+    let (tx1, ty1) = (x1.div_ceil(8), y1.div_ceil(8));
+    (
+        tx0 | (ty0 << 16),
+        [tx1.saturating_sub(tx0) * 8, ty1.saturating_sub(ty0) * 8, 1],
+    )
+}
+
+/// One object's shading inputs and push constants for a frame.
+struct ObjectSetup {
+    light: LightLobes,
+    shadow: Option<SelfShadow>,
+    field_light: bool,
+    push: ShadePush,
+}
+
+/// What every object's dispatch binds alike.
+struct CommonInputs {
+    grid: crate::field::GridBindings,
+    gbuffer: GBuffer,
+    ndf: BufferHandle,
+    no_direct: BufferHandle,
+}
+
+impl CommonInputs {
+    /// Binds the G-buffer, the object's lobes, the NDF mixture, and where
+    /// it is self-shadowed its SSDF and mesh and, for the rays' variant,
+    /// its direct lobes' rays, local lights and L_env's lobes (fillers
+    /// where it has none).
+    fn bind<'p, 'g>(&self, dispatch: Dispatch<'p, 'g>, o: &ObjectSetup) -> Dispatch<'p, 'g> {
+        let l = &o.light;
+        let rays = l.direct.is_some() || o.field_light;
+        let filler = (o.shadow.is_some() && rays && l.direct.is_none()).then_some(self.no_direct);
+        let mut d = self
+            .grid
+            .bind(dispatch)
+            .read("normal_roughness", self.gbuffer.normal_roughness)
+            .read("albedo_metallic", self.gbuffer.albedo_metallic)
+            .read("distance_id", self.gbuffer.distance_id)
+            .read("light_lobes", l.buffer)
+            .read("ndf_lobes", self.ndf);
+        if let Some(s) = o.shadow {
+            d = d
+                .read("fh_table", s.fh_table)
+                .read("ssdf", s.ssdf.object)
+                .read("objects", s.ssdf.records)
+                .read("ssdf_rows", s.ssdf.rows)
+                .read("ssdf_coefs", s.ssdf.coefs)
+                .read("bvh_nodes", s.ssdf.bvh_nodes)
+                .read("bvh_triangles", s.ssdf.bvh_triangles);
+        }
+        let env = (o.shadow.is_some() && rays).then(|| {
+            l.environment
+                .filter(|_| o.field_light)
+                .map_or(self.no_direct, |e| e.buffer)
+        });
+        let local = l.direct.map(|d| d.local);
+        d.read_opt("sharp_rays", l.direct.map(|r| r.rays).or(filler))
+            .read_opt("local_lights", local.map(|x| x.lights).or(filler))
+            .read_opt("env_lobes", env)
     }
 }
