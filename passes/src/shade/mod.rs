@@ -212,7 +212,11 @@ impl ShadePass {
     /// Adds `object-shade`: object i's pixels (index i in the G-buffer) are
     /// shaded with `lobes[i]` (an SG fit's lobe buffer), self-shadowed
     /// (eq. 9) where `self_shadow[i]` is given; local lights are seen
-    /// through `field`.
+    /// through `field`. With the field light on, `object-field-light`
+    /// comes first, writing each self-shadowed object's gain over the
+    /// tiles of its [`SelfShadow::pixels`] into an image the shading reads
+    /// (a pass of its own: its workgroup barriers would make lavapipe run
+    /// the whole shading as coroutines).
     pub fn add(
         &self,
         graph: &mut FrameGraph,
