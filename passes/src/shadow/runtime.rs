@@ -496,7 +496,8 @@ mod tests {
     /// Leaving unshadowed the points where the object can block under the
     /// tolerance of the light moves ρ by at most the tolerance, and only
     /// there: a sphere's exact SSDF (S = ∠(d, c − x) − asin(r/|c − x|)),
-    /// a sun, a broad lobe and a sky, floor points out to 25 radii.
+    /// a sun, a broad lobe and a sky, floor points out to 25 radii; and
+    /// the same with the sun a local light, weighed at each point.
     #[test]
     fn the_cast_tolerance_bounds_the_change() {
         use crate::probe::{DirectionMap, MapKind};
@@ -548,44 +549,70 @@ mod tests {
                 amplitude: DVec3::new(0.3, 0.4, 0.6),
             },
         ];
-        let mut rng = crate::rng::Pcg32::new(5, 2);
-        let (mut skipped, mut shadowed) = (0, 0);
-        for _ in 0..3000 {
-            let [u, v] = rng.next_2d();
-            let (rad, phi) = (r * (1.0 + 24.0 * u * u), 2.0 * std::f64::consts::PI * v);
-            let x = DVec3::new(c.x + rad * phi.cos(), c.y - r, c.z + rad * phi.sin());
-            let at = (x, DVec3::Y, DVec3::splat(0.2));
-            let rho = |tol| {
-                cast_shadow_factor_within(
-                    &field,
-                    &placed,
-                    &table,
-                    &lobes,
-                    at,
-                    OutsideMode::Correct,
-                    None,
-                    &object,
-                    tol,
-                )
-            };
-            let (exact, within) = (rho(0.0), rho(CAST_TOLERANCE));
-            if within == DVec3::ONE && exact != DVec3::ONE {
-                skipped += 1;
-                assert!(
-                    (DVec3::ONE - exact).max_element() <= CAST_TOLERANCE,
-                    "{x}: {exact}"
-                );
-            } else {
-                assert_eq!(within, exact, "{x}");
+        // The same light with the sun a local light above the ball (its
+        // light weighed at each point, its shadow from rays to its disk):
+        // the test is taken without it, then with it.
+        let light = crate::lighting::LocalLight {
+            centre: c + DVec3::new(0.9, 3.0, 0.6) * r,
+            radius: 0.3 * r,
+            emission: None,
+        };
+        let emission = crate::lighting::local::Emission {
+            intensity: DVec3::splat(400.0) * r * r,
+            radius: 0.3 * r,
+        };
+        let local = [(light, emission)];
+        let object_scene = crate::ssdf::object_scene(&mesh);
+        let occlusion = DirectOcclusion {
+            scene: &object_scene,
+            rays: &[],
+            local: &local,
+            local_side: 2,
+            field: None,
+        };
+        let mut with_local = lobes.to_vec();
+        with_local.rotate_left(1);
+        for (lights, direct) in [(&lobes[..], None), (&with_local[..], Some(occlusion))] {
+            let mut rng = crate::rng::Pcg32::new(5, 2);
+            let (mut skipped, mut shadowed) = (0, 0);
+            for _ in 0..3000 {
+                let [u, v] = rng.next_2d();
+                let (rad, phi) = (r * (1.0 + 24.0 * u * u), 2.0 * std::f64::consts::PI * v);
+                let x = DVec3::new(c.x + rad * phi.cos(), c.y - r, c.z + rad * phi.sin());
+                let at = (x, DVec3::Y, DVec3::splat(0.2));
+                let rho = |tol| {
+                    cast_shadow_factor_within(
+                        &field,
+                        &placed,
+                        &table,
+                        lights,
+                        at,
+                        OutsideMode::Correct,
+                        direct,
+                        &object,
+                        tol,
+                    )
+                };
+                let (exact, within) = (rho(0.0), rho(CAST_TOLERANCE));
+                if within == DVec3::ONE && exact != DVec3::ONE {
+                    skipped += 1;
+                    assert!(
+                        (DVec3::ONE - exact).max_element() <= CAST_TOLERANCE,
+                        "{x}: {exact}"
+                    );
+                } else {
+                    assert_eq!(within, exact, "{x}");
+                }
+                if exact.max_element() < 0.9 {
+                    shadowed += 1;
+                }
             }
-            if exact.max_element() < 0.9 {
-                shadowed += 1;
-            }
+            assert!(
+                skipped > 300 && shadowed > 20,
+                "{skipped} skipped, {shadowed} shadowed (local light: {})",
+                direct.is_some()
+            );
         }
-        assert!(
-            skipped > 300 && shadowed > 20,
-            "{skipped} skipped, {shadowed} shadowed"
-        );
     }
 
     /// A pane of thin glass (optical depth about 0.3 across) at y 0.6–0.64 above an
