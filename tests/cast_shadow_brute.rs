@@ -241,17 +241,7 @@ fn shadow_points(scene_file: &str, camera: usize) -> Vec<(u32, u32, f64, f64)> {
         local_side: side,
         field: Some((&field, scene.march)),
     };
-    let lib = gpu_field.library(&inlay_passes::shaders::library().unwrap());
-    let ssdf = inlay::ssdf_source::object_ssdf(
-        &ctx,
-        &lib,
-        &placed.mesh,
-        &scene.object_sources[0].file,
-        None,
-        &scene.shadows.bake,
-        true,
-    )
-    .unwrap();
+    let ssdf = common::first_object_ssdf(&ctx, &gpu_field, &scene);
     common::assert_no_validation_errors(&ctx);
     let table = FhTable::new();
     let mesh = MeshScene::new(std::slice::from_ref(&placed));

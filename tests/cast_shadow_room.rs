@@ -62,17 +62,7 @@ fn rooms_penumbra_darkens_as_brute_force_says() {
     )
     .unwrap();
     let lobes = &traced.lights;
-    let lib = gpu_field.library(&inlay_passes::shaders::library().unwrap());
-    let ssdf = inlay::ssdf_source::object_ssdf(
-        &ctx,
-        &lib,
-        &placed.mesh,
-        &scene.object_sources[0].file,
-        None,
-        &scene.shadows.bake,
-        true,
-    )
-    .unwrap();
+    let ssdf = common::first_object_ssdf(&ctx, &gpu_field, &scene);
     let table = FhTable::new();
     let mesh = MeshScene::new(std::slice::from_ref(&placed));
     let black = ObjectReflectance {

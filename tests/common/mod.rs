@@ -163,3 +163,23 @@ pub fn probe_readback(
     )
     .unwrap()
 }
+
+/// The SSDF of a bundled scene's first object at the scene's bake knobs,
+/// from the cache (baked on first use) on `field`'s shader library.
+pub fn first_object_ssdf(
+    ctx: &Arc<Context>,
+    field: &inlay_passes::field::GpuGridField,
+    scene: &inlay_passes::scene::Scene,
+) -> inlay_passes::ssdf::SsdfField {
+    let lib = field.library(&inlay_passes::shaders::library().unwrap());
+    inlay::ssdf_source::object_ssdf(
+        ctx,
+        &lib,
+        &scene.objects[0].mesh,
+        &scene.object_sources[0].file,
+        None,
+        &scene.shadows.bake,
+        true,
+    )
+    .unwrap()
+}
