@@ -10,7 +10,8 @@
 //     select (1 thread)        warm lobes (current) or the cold start, state reset
 //   or a fit continued from an earlier frame: resume (1 thread)
 //   per iteration: texel_features, gram_blocks, assemble (the normal equations from
-//                              the features' Gram matrix), solve, cost (candidate), decide.
+//                              the features' Gram matrix), solve_channels (3 groups),
+//                              solve_schur, solve_nonlinear, cost (candidate), decide.
 //   conserve_energy (M groups): the current lobes with amplitudes that hold
 //                              the probe's energy (energy.rs), into the shading slot.
 // The lobe buffer holds three slots of M lobes (SLOT_*), two vec4 each.
@@ -528,24 +529,84 @@ var<workgroup> red_max: array<f32, 256>;
 var<workgroup> wg_fail: u32;
 var<workgroup> wg_bad_step: atomic<u32>;
 
-// The damped, Jacobi-scaled step by Cholesky in one workgroup, applied to
-// the current lobes into the candidate slot (mirrors passes/src/sgfit/solve.rs). Layout
-// of `work`: n × n lower triangle, then √D (n), then the right-hand side
-// (n), then the step (n). Right-looking, with L's columns kept unscaled
-// (C_ij = L_ij L_jj, the diagonal holding L_jj²), so each invocation reads
-// the pivot itself and a column costs one barrier; the right-hand side
-// rides along as row n (its forward substitution comes with the
-// factorisation), and the back substitution takes one barrier a step.
+// ---- the damped step (mirrors passes/src/sgfit/solve.rs) ------------------
+// Marquardt's step from the Jacobi-scaled, damped normal equations, in the
+// three stages of solve.rs's doc: each channel's amplitude block factored
+// by its own workgroup (`solve_channels`), the Schur complement in the
+// nonlinear block over every core (`solve_schur`), then that factored and
+// both substituted back in one workgroup (`solve_nonlinear`). Layout of
+// `work` (M lobes, q = 3M nonlinear parameters, R = 4M + 1 rows a channel):
+//   √D (6M); per channel, R rows of M: its M × M block (lower), the q
+//   nonlinear rows in its columns, its right-hand side; S with its
+//   right-hand side as row q ((q + 1) × q); the step (6M); a failure flag
+//   per channel (3).
+
+fn solve_channel_at(c: u32) -> u32 {
+    let m = pc.lobe_count;
+    return 6u * m + c * (4u * m + 1u) * m;
+}
+
+fn solve_schur_at() -> u32 {
+    return solve_channel_at(3u);
+}
+
+fn solve_step_at() -> u32 {
+    let q = 3u * pc.lobe_count;
+    return solve_schur_at() + (q + 1u) * q;
+}
+
+fn solve_flags_at() -> u32 {
+    return solve_step_at() + 6u * pc.lobe_count;
+}
+
+// The fit's parameter index of amplitude c of lobe k, and of nonlinear
+// parameter r (solve.rs amplitude_index, nonlinear_index).
+fn amplitude_index(c: u32, k: u32) -> u32 {
+    return 6u * k + c;
+}
+
+fn nonlinear_index(r: u32) -> u32 {
+    return 6u * (r / 3u) + 3u + r % 3u;
+}
+
+// Entry (a, b) of the normal matrix, read from the upper triangle the
+// assemble kernel wrote; its right-hand side −b_a / √D_a.
+fn normal_sym(a: u32, b: u32) -> f32 {
+    return normal[min(a, b) * pc.cols + max(a, b)];
+}
+
+fn scaled_rhs(a: u32, d: f32) -> f32 {
+    return -normal[a * pc.cols + 6u * pc.lobe_count] / d;
+}
+
+// Reduces rows j + 1.. of the `count` rows of `width` at `at` by column j
+// of their head block (a step of solve.rs factor_unscaled); invocations
+// take rows by `lid`. Returns whether the pivot was positive.
+fn factor_column(at: u32, width: u32, count: u32, j: u32, lid: u32) -> bool {
+    let pivot = work[at + j * width + j];
+    for (var i = j + 1u + lid; i < count; i += 256u) {
+        let f = work[at + i * width + j] / pivot;
+        let last = min(i, width - 1u);
+        for (var k = j + 1u; k <= last; k++) {
+            work[at + i * width + k] -= f * work[at + k * width + j];
+        }
+    }
+    return pivot > 0.0 && fit_finite(pivot);
+}
+
+// Stage 1, one workgroup per channel: √D (the first workgroup writes it
+// for the later stages; each computes what it reads), the channel's rows
+// filled and factored.
 @compute @workgroup_size(256, 1, 1)
-fn solve(@builtin(local_invocation_index) lid: u32) {
-    let n = 6u * pc.lobe_count;
-    let cols = pc.cols;
-    let d_at = n * n;
-    let y_at = n * n + n;
-    let x_at = n * n + 2u * n;
+fn solve_channels(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    let m = pc.lobe_count;
+    let n = 6u * m;
+    let q = 3u * m;
+    let c = wg.x;
+    let at = solve_channel_at(c);
     var mx = 0.0;
     for (var i = lid; i < n; i += 256u) {
-        mx = max(mx, normal[i * cols + i]);
+        mx = max(mx, normal[i * pc.cols + i]);
     }
     red_max[lid] = mx;
     if lid == 0u {
@@ -559,61 +620,140 @@ fn solve(@builtin(local_invocation_index) lid: u32) {
         workgroupBarrier();
     }
     let diag_floor = max(RELATIVE_DIAGONAL_FLOOR * red_max[0], ABSOLUTE_DIAGONAL_FLOOR);
-    let eta = state.damping;
-    for (var i = lid; i < n; i += 256u) {
-        let d = sqrt(max(normal[i * cols + i], diag_floor));
-        work[d_at + i] = d;
-        work[y_at + i] = -normal[i * cols + n] / d;
+    if c == 0u {
+        for (var i = lid; i < n; i += 256u) {
+            work[i] = sqrt(max(normal[i * pc.cols + i], diag_floor));
+        }
     }
-    storageBarrier();
-    for (var idx = lid; idx < n * n; idx += 256u) {
-        let i = idx / n;
-        let j = idx % n;
-        if j <= i {
-            // (j, i) lies in the upper triangle the assemble kernel wrote.
-            let a = normal[j * cols + i] / (work[d_at + i] * work[d_at + j]);
-            work[idx] = a + select(0.0, eta, i == j);
+    let eta = state.damping;
+    for (var idx = lid; idx < (m + q + 1u) * m; idx += 256u) {
+        let i = idx / m;
+        let j = idx % m;
+        let aj = amplitude_index(c, j);
+        let dj = sqrt(max(normal[aj * pc.cols + aj], diag_floor));
+        if i < m {
+            if j <= i {
+                let ai = amplitude_index(c, i);
+                let di = sqrt(max(normal[ai * pc.cols + ai], diag_floor));
+                work[at + idx] = normal_sym(ai, aj) / (di * dj) + select(0.0, eta, i == j);
+            }
+        } else if i < m + q {
+            let r = nonlinear_index(i - m);
+            let dr = sqrt(max(normal[r * pc.cols + r], diag_floor));
+            work[at + idx] = normal_sym(r, aj) / (dr * dj);
+        } else {
+            work[at + idx] = scaled_rhs(aj, dj);
         }
     }
     storageBarrier();
-    for (var j = 0u; j < n; j++) {
-        // L_jj², final since the previous column's barrier.
-        let pivot = work[j * n + j];
-        if !(pivot > 0.0 && fit_finite(pivot)) {
+    for (var j = 0u; j < m; j++) {
+        if !factor_column(at, m, m + q + 1u, j, lid) {
             atomicStore(&wg_bad_step, 1u);
         }
-        for (var i = j + 1u + lid; i <= n; i += 256u) {
-            if i < n {
-                // Row i: A_ik −= L_ij L_kj = C_ij C_kj / L_jj² (k in j+1..=i).
-                let f = work[i * n + j] / pivot;
-                for (var k = j + 1u; k <= i; k++) {
-                    work[i * n + k] -= f * work[k * n + j];
-                }
-            } else {
-                // The right-hand side: y_k −= L_kj z_j = C_kj y_j / L_jj².
-                let f = work[y_at + j] / pivot;
-                for (var k = j + 1u; k < n; k++) {
-                    work[y_at + k] -= f * work[k * n + j];
-                }
+        storageBarrier();
+    }
+    if lid == 0u {
+        work[solve_flags_at() + c] = f32(atomicLoad(&wg_bad_step));
+    }
+}
+
+// Stage 2, an entry of S (or of its right-hand side, row q) per
+// invocation: Â_rt − Σ_c Σ_j C_rj C_tj / L_jj².
+@compute @workgroup_size(64, 1, 1)
+fn solve_schur(@builtin(global_invocation_id) id: vec3<u32>) {
+    let m = pc.lobe_count;
+    let q = 3u * m;
+    let r = id.x / q;
+    let t = id.x % q;
+    if r > q || (r < q && t > r) {
+        return;
+    }
+    let nt = nonlinear_index(t);
+    var value = 0.0;
+    if r < q {
+        let nr = nonlinear_index(r);
+        value = normal_sym(nr, nt) / (work[nr] * work[nt]) + select(0.0, state.damping, r == t);
+    } else {
+        value = scaled_rhs(nt, work[nt]);
+    }
+    for (var c = 0u; c < 3u; c++) {
+        let at = solve_channel_at(c);
+        let row_r = at + (m + r) * m;
+        let row_t = at + (m + t) * m;
+        var sum = 0.0;
+        for (var j = 0u; j < m; j++) {
+            sum += work[row_r + j] * work[row_t + j] / work[at + j * m + j];
+        }
+        value -= sum;
+    }
+    work[solve_schur_at() + r * q + t] = value;
+}
+
+// Stage 3, one workgroup: S factored, the nonlinear step, each channel's
+// amplitudes, the step applied to the current lobes into the candidate
+// slot.
+@compute @workgroup_size(256, 1, 1)
+fn solve_nonlinear(@builtin(local_invocation_index) lid: u32) {
+    let m = pc.lobe_count;
+    let n = 6u * m;
+    let q = 3u * m;
+    let s_at = solve_schur_at();
+    let x_at = solve_step_at();
+    let flags = solve_flags_at();
+    if lid == 0u {
+        let earlier = work[flags] + work[flags + 1u] + work[flags + 2u];
+        atomicStore(&wg_bad_step, select(0u, 1u, earlier != 0.0));
+    }
+    workgroupBarrier();
+    for (var j = 0u; j < q; j++) {
+        if !factor_column(s_at, q, q + 1u, j, lid) {
+            atomicStore(&wg_bad_step, 1u);
+        }
+        storageBarrier();
+    }
+    // Lᵀ x = z through S, its right-hand side (row q) in place: x_j =
+    // y_j / L_jj², then y_i −= C_ji x_j (i < j).
+    let y_at = s_at + q * q;
+    for (var jj = 0u; jj < q; jj++) {
+        let j = q - 1u - jj;
+        let xj = work[y_at + j] / work[s_at + j * q + j];
+        if lid == 0u {
+            work[x_at + nonlinear_index(j)] = xj;
+        }
+        for (var i = lid; i < j; i += 256u) {
+            work[y_at + i] -= work[s_at + j * q + i] * xj;
+        }
+        storageBarrier();
+    }
+    // Each channel's right-hand side less the nonlinear step's share.
+    for (var idx = lid; idx < 3u * m; idx += 256u) {
+        let at = solve_channel_at(idx / m);
+        let j = idx % m;
+        var y = work[at + (m + q) * m + j];
+        for (var r = 0u; r < q; r++) {
+            y -= work[at + (m + r) * m + j] * work[x_at + nonlinear_index(r)];
+        }
+        work[at + (m + q) * m + j] = y;
+    }
+    storageBarrier();
+    // Back through the three channels' blocks at once.
+    for (var jj = 0u; jj < m; jj++) {
+        let j = m - 1u - jj;
+        for (var idx = lid; idx < 3u * m; idx += 256u) {
+            let c = idx / m;
+            let i = idx % m;
+            let at = solve_channel_at(c);
+            let xj = work[at + (m + q) * m + j] / work[at + j * m + j];
+            if i == j {
+                work[x_at + amplitude_index(c, j)] = xj;
+            } else if i < j {
+                work[at + (m + q) * m + i] -= work[at + j * m + i] * xj;
             }
         }
         storageBarrier();
     }
-    // Lᵀ x = z with z_j = y_j / L_jj: x_j = y_j / L_jj², then
-    // y_i −= C_ji x_j for i < j.
-    for (var jj = 0u; jj < n; jj++) {
-        let j = n - 1u - jj;
-        let xj = work[y_at + j] / work[j * n + j];
-        if lid == 0u {
-            work[x_at + j] = xj;
-        }
-        for (var i = lid; i < j; i += 256u) {
-            work[y_at + i] -= work[j * n + i] * xj;
-        }
-        storageBarrier();
-    }
     for (var i = lid; i < n; i += 256u) {
-        let delta = work[x_at + i] / work[d_at + i];
+        let delta = work[x_at + i] / work[i];
         work[x_at + i] = delta;
         if !fit_finite(delta) {
             atomicStore(&wg_bad_step, 1u);

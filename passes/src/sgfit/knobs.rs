@@ -31,7 +31,8 @@ impl Default for FitKnobs {
     }
 }
 
-/// Most lobes a fit may have (the solve holds 6M × 6M in one workgroup's reach).
+/// Most lobes a fit may have (the fit's normal matrix, 6M + 1 columns, and its solve
+/// are sized for it).
 pub const MAX_LOBES: u32 = 64;
 /// Most iterations one fit records (the per-iteration residual log's length).
 pub const MAX_ITERATIONS: u32 = 256;

@@ -150,7 +150,9 @@ struct Kernels {
     features: Arc<ComputePipeline>,
     gram_blocks: Arc<ComputePipeline>,
     assemble: Arc<ComputePipeline>,
-    solve: Arc<ComputePipeline>,
+    solve_channels: Arc<ComputePipeline>,
+    solve_schur: Arc<ComputePipeline>,
+    solve_nonlinear: Arc<ComputePipeline>,
     decide: Arc<ComputePipeline>,
     resume: Arc<ComputePipeline>,
     conserve_energy: Arc<ComputePipeline>,
@@ -254,7 +256,9 @@ impl SgFitPass {
             features: build("texel_features")?,
             gram_blocks: build("gram_blocks")?,
             assemble: build("assemble")?,
-            solve: build("solve")?,
+            solve_channels: build("solve_channels")?,
+            solve_schur: build("solve_schur")?,
+            solve_nonlinear: build("solve_nonlinear")?,
             decide: build("decide")?,
             resume: build("resume")?,
             conserve_energy: build("conserve_energy")?,
@@ -383,7 +387,14 @@ impl SgFitPass {
             s.feature_cols as u64 * s.feature_cols as u64 * 4,
         );
         let normal = graph.create_buffer("sg-fit-normal", s.cols as u64 * s.cols as u64 * 4);
-        let work = graph.create_buffer("sg-fit-work", (n * n + 3 * n) * 4);
+        // The solve's layout (shaders/sgfit/fit.wgsl, "the damped step"):
+        // √D, three channels of 4M + 1 rows of M, S and its right-hand
+        // side, the step, three flags.
+        let m = self.knobs.lobes as u64;
+        let work = graph.create_buffer(
+            "sg-fit-work",
+            (n + 3 * (4 * m + 1) * m + (3 * m + 1) * 3 * m + n + 3) * 4,
+        );
         let fitted = graph.create_buffer("sg-fit-probe", self.map.texels() as u64 * 16);
         // The transients are written before they are read within the pass
         // (StorageWrite: no previous content); the lobes and the state
@@ -407,6 +418,8 @@ impl SgFitPass {
         let blocks = s.feature_cols / 4;
         let block_groups = (blocks * blocks).div_ceil(64);
         let entries = (n * (n + 1)).div_ceil(64) as u32;
+        let q = 3 * self.knobs.lobes;
+        let schur_groups = ((q + 1) * q).div_ceil(64);
         let mut run = |p: &Arc<ComputePipeline>, push: &FitPush, groups: [u32; 3]| {
             pass.dispatch(p).push(push).groups(groups)
         };
@@ -425,7 +438,9 @@ impl SgFitPass {
             run(&k.features, &candidate, [s.groups, 1, 1]);
             run(&k.gram_blocks, &candidate, [block_groups, 1, 1]);
             run(&k.assemble, &candidate, [entries, 1, 1]);
-            run(&k.solve, &candidate, [1, 1, 1]);
+            run(&k.solve_channels, &candidate, [3, 1, 1]);
+            run(&k.solve_schur, &candidate, [schur_groups, 1, 1]);
+            run(&k.solve_nonlinear, &candidate, [1, 1, 1]);
             run(&k.cost, &candidate, [s.groups, 1, 1]);
             run(&k.decide, &candidate, [1, 1, 1]);
         }

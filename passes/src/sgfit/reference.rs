@@ -122,14 +122,13 @@ pub fn fit_reference(
         }
         _ => (cold, cold_cost, true),
     };
-    let p = knobs.parameters();
     let mut eta = knobs.damping;
     let mut costs = vec![current];
     let mut accepted = 0;
     let mut normal: Option<(Vec<f64>, Vec<f64>)> = None;
     for _ in 0..iterations {
         let (a, b) = normal.get_or_insert_with(|| normal_equations(probe, &lobes));
-        let candidate = damped_step(a, b, p, eta)
+        let candidate = damped_step(a, b, lobes.len(), eta)
             .map(|d| apply_step(&lobes, &d, max_sharpness(probe.directions.len())));
         let candidate_cost = candidate.as_ref().map(|c| cost(probe, c));
         match (candidate, candidate_cost) {
