@@ -525,6 +525,11 @@ fn assemble(@builtin(global_invocation_id) id: vec3<u32>) {
     normal[i * pc.cols + j] = value;
 }
 
+// Invocations of the solve's workgroups: stage 1 reduces 4M + 1 rows and
+// stage 3 3M + 1 a column; lavapipe runs every invocation of a workgroup
+// through each barrier, so 64 (rows taken in turns) ran an LM iteration
+// 15 % faster than 256 at M = 32 (docs/benchmarks.md, issue 26's fifth pass).
+const SOLVE_WORKGROUP: u32 = 64u;
 var<workgroup> red_max: array<f32, 256>;
 var<workgroup> wg_fail: u32;
 var<workgroup> wg_bad_step: atomic<u32>;
@@ -581,10 +586,10 @@ fn scaled_rhs(a: u32, d: f32) -> f32 {
 
 // Reduces rows j + 1.. of the `count` rows of `width` at `at` by column j
 // of their head block (a step of solve.rs factor_unscaled); invocations
-// take rows by `lid`. Returns whether the pivot was positive.
+// take rows by `lid`, SOLVE_WORKGROUP apart. Returns whether the pivot was positive.
 fn factor_column(at: u32, width: u32, count: u32, j: u32, lid: u32) -> bool {
     let pivot = work[at + j * width + j];
-    for (var i = j + 1u + lid; i < count; i += 256u) {
+    for (var i = j + 1u + lid; i < count; i += SOLVE_WORKGROUP) {
         let f = work[at + i * width + j] / pivot;
         let last = min(i, width - 1u);
         for (var k = j + 1u; k <= last; k++) {
@@ -597,7 +602,7 @@ fn factor_column(at: u32, width: u32, count: u32, j: u32, lid: u32) -> bool {
 // Stage 1, one workgroup per channel: √D (the first workgroup writes it
 // for the later stages; each computes what it reads), the channel's rows
 // filled and factored.
-@compute @workgroup_size(256, 1, 1)
+@compute @workgroup_size(SOLVE_WORKGROUP, 1, 1)
 fn solve_channels(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wg: vec3<u32>) {
     let m = pc.lobe_count;
     let n = 6u * m;
@@ -605,7 +610,7 @@ fn solve_channels(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_
     let c = wg.x;
     let at = solve_channel_at(c);
     var mx = 0.0;
-    for (var i = lid; i < n; i += 256u) {
+    for (var i = lid; i < n; i += SOLVE_WORKGROUP) {
         mx = max(mx, normal[i * pc.cols + i]);
     }
     red_max[lid] = mx;
@@ -613,7 +618,7 @@ fn solve_channels(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_
         atomicStore(&wg_bad_step, 0u);
     }
     workgroupBarrier();
-    for (var s = 128u; s > 0u; s >>= 1u) {
+    for (var s = SOLVE_WORKGROUP / 2u; s > 0u; s >>= 1u) {
         if lid < s {
             red_max[lid] = max(red_max[lid], red_max[lid + s]);
         }
@@ -621,12 +626,12 @@ fn solve_channels(@builtin(local_invocation_index) lid: u32, @builtin(workgroup_
     }
     let diag_floor = max(RELATIVE_DIAGONAL_FLOOR * red_max[0], ABSOLUTE_DIAGONAL_FLOOR);
     if c == 0u {
-        for (var i = lid; i < n; i += 256u) {
+        for (var i = lid; i < n; i += SOLVE_WORKGROUP) {
             work[i] = sqrt(max(normal[i * pc.cols + i], diag_floor));
         }
     }
     let eta = state.damping;
-    for (var idx = lid; idx < (m + q + 1u) * m; idx += 256u) {
+    for (var idx = lid; idx < (m + q + 1u) * m; idx += SOLVE_WORKGROUP) {
         let i = idx / m;
         let j = idx % m;
         let aj = amplitude_index(c, j);
@@ -692,7 +697,7 @@ fn solve_schur(@builtin(global_invocation_id) id: vec3<u32>) {
 // Stage 3, one workgroup: S factored, the nonlinear step, each channel's
 // amplitudes, the step applied to the current lobes into the candidate
 // slot.
-@compute @workgroup_size(256, 1, 1)
+@compute @workgroup_size(SOLVE_WORKGROUP, 1, 1)
 fn solve_nonlinear(@builtin(local_invocation_index) lid: u32) {
     let m = pc.lobe_count;
     let n = 6u * m;
@@ -720,13 +725,13 @@ fn solve_nonlinear(@builtin(local_invocation_index) lid: u32) {
         if lid == 0u {
             work[x_at + nonlinear_index(j)] = xj;
         }
-        for (var i = lid; i < j; i += 256u) {
+        for (var i = lid; i < j; i += SOLVE_WORKGROUP) {
             work[y_at + i] -= work[s_at + j * q + i] * xj;
         }
         storageBarrier();
     }
     // Each channel's right-hand side less the nonlinear step's share.
-    for (var idx = lid; idx < 3u * m; idx += 256u) {
+    for (var idx = lid; idx < 3u * m; idx += SOLVE_WORKGROUP) {
         let at = solve_channel_at(idx / m);
         let j = idx % m;
         var y = work[at + (m + q) * m + j];
@@ -739,7 +744,7 @@ fn solve_nonlinear(@builtin(local_invocation_index) lid: u32) {
     // Back through the three channels' blocks at once.
     for (var jj = 0u; jj < m; jj++) {
         let j = m - 1u - jj;
-        for (var idx = lid; idx < 3u * m; idx += 256u) {
+        for (var idx = lid; idx < 3u * m; idx += SOLVE_WORKGROUP) {
             let c = idx / m;
             let i = idx % m;
             let at = solve_channel_at(c);
@@ -752,7 +757,7 @@ fn solve_nonlinear(@builtin(local_invocation_index) lid: u32) {
         }
         storageBarrier();
     }
-    for (var i = lid; i < n; i += 256u) {
+    for (var i = lid; i < n; i += SOLVE_WORKGROUP) {
         let delta = work[x_at + i] / work[i];
         work[x_at + i] = delta;
         if !fit_finite(delta) {
@@ -765,7 +770,7 @@ fn solve_nonlinear(@builtin(local_invocation_index) lid: u32) {
     }
     let failed = workgroupUniformLoad(&wg_fail);
     if failed == 0u {
-        for (var k = lid; k < pc.lobe_count; k += 256u) {
+        for (var k = lid; k < pc.lobe_count; k += SOLVE_WORKGROUP) {
             let b = x_at + 6u * k;
             let d0 = vec4<f32>(work[b], work[b + 1u], work[b + 2u], work[b + 3u]);
             let d1 = vec2<f32>(work[b + 4u], work[b + 5u]);
