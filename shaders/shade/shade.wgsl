@@ -17,5 +17,15 @@ fn shading_diffuse_gain(k: u32) -> vec3<f32> {
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    shade_pixel(id);
+    shade_pixel(shade_dispatched_pixel(id));
+}
+
+// Zero over the whole image: the pass's first dispatch, before each
+// object's over the tiles it can cover.
+@compute @workgroup_size(8, 8, 1)
+fn clear(@builtin(global_invocation_id) id: vec3<u32>) {
+    if camera_outside(pc.camera, id.xy) {
+        return;
+    }
+    textureStore(out_object, vec2<i32>(id.xy), vec4<f32>(0.0));
 }

@@ -1,6 +1,6 @@
 // The body of the object's SG shading pass (eq. 5) over the G-buffer: one
 // dispatch per object, shading the pixels holding that object with its
-// fitted lobes; the first dispatch also writes zero where no object is.
+// fitted lobes.
 // Output: the object's radiance I_v with coverage in alpha. The including
 // shader (shade/shade.wgsl, shade/shade_self_shadow.wgsl) defines the
 // entry point, calling shade_pixel, and the hooks
@@ -10,6 +10,10 @@
 //   local light's lobe from the pixel's point) and shading_diffuse_gain(k)
 //   -> vec3<f32> (a factor on lobe k's diffuse light, 1 but where
 //   shade/field_light.wgsl takes the field's light at the point).
+// A dispatch covers the 8 × 8 tiles from pc.tile_origin on
+// (shade_dispatched_pixel): the tiles the object's bounding sphere can
+// cover, or the whole image; the image is cleared first (shade.wgsl
+// `clear`), so pixels no dispatch covers read zero.
 // Bindings 0-2 are left to the field (field/grid.wgsl) for the variant
 // that marches it.
 #include "common/camera.wgsl"
@@ -37,8 +41,9 @@ struct ShadePush {
     // they see past the field (read by shade/field_light.wgsl).
     field_side: u32,
     env_count: u32,
-    // The first 8 × 8 tile a dispatch covers, x | y << 16 (the field
-    // light's gain pass covers the object's pixels alone; 0 elsewhere).
+    // The first 8 × 8 tile a dispatch covers, x | y << 16: a self-shadowed
+    // object's dispatches (and its field light's gain) cover the tiles its
+    // bounding sphere can cover; 0 where a dispatch covers the image.
     tile_origin: u32,
 }
 
@@ -68,6 +73,12 @@ fn shading_ndf_count() -> u32 {
 
 fn shading_ndf(j: u32) -> vec2<f32> {
     return ndf_lobes[j];
+}
+
+// The pixel invocation `id` of a dispatch takes: the dispatch covers the
+// tiles from pc.tile_origin on (an object's own, or from the first).
+fn shade_dispatched_pixel(id: vec3<u32>) -> vec3<u32> {
+    return id + vec3<u32>(pc.tile_origin & 0xffffu, pc.tile_origin >> 16u, 0u) * 8u;
 }
 
 // Whether pixel `id` holds this dispatch's object; where no object is, the

@@ -17,5 +17,5 @@ fn shading_diffuse_gain(k: u32) -> vec3<f32> {
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    shade_pixel(id);
+    shade_pixel(shade_dispatched_pixel(id));
 }

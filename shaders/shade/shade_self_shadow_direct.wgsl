@@ -113,7 +113,8 @@ fn shading_diffuse_gain(k: u32) -> vec3<f32> {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(global_invocation_id) dispatched: vec3<u32>) {
+    let id = shade_dispatched_pixel(dispatched);
     field_pixel = id.xy;
     shade_pixel(id);
 }
@@ -128,7 +129,7 @@ fn field_gain_only(
 ) {
     let first = vec3<u32>(pc.tile_origin & 0xffffu, pc.tile_origin >> 16u, 0u);
     let group = dispatched_group + first;
-    let id = dispatched + first * 8u;
+    let id = shade_dispatched_pixel(dispatched);
     field_light_gather(id, local_index, group);
     if !shade_owns(id) {
         return;

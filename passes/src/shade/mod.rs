@@ -34,7 +34,9 @@ inlay_engine::gpu_struct! {
         pub camera: CameraRays,
         /// The object shaded by this dispatch (its G-buffer index).
         pub object_index: f32,
-        /// Whether this dispatch clears the pixels no object covers.
+        /// Whether this dispatch writes zero at the pixels no object
+        /// covers (the field light's gain pass; the shading clears its
+        /// image first).
         pub write_empty: u32,
         /// Lobes that light the object.
         pub light_count: u32,
@@ -55,8 +57,10 @@ inlay_engine::gpu_struct! {
         /// Lobes of L_env in `env_lobes` (what the field-light rays see
         /// past the field).
         pub env_count: u32,
-        /// The first 8 × 8 tile the dispatch covers, x | y << 16 (the
-        /// field light's gain pass covers the object's pixels alone).
+        /// The first 8 × 8 tile the dispatch covers, x | y << 16: a
+        /// self-shadowed object's shading and field light cover the tiles
+        /// its bounding sphere can cover; 0 where a dispatch covers the
+        /// image.
         pub tile_origin: u32,
     }
 }
@@ -101,8 +105,8 @@ pub struct SelfShadow {
     /// The object's SSDF field and per-frame block.
     pub ssdf: SsdfBindings,
     /// The pixels the object can cover, (x0, y0, x1, y1) exclusive
-    /// ([`crate::camera::CameraFrame::sphere_pixels`]; None: any): the
-    /// field light's gain pass runs over their tiles alone.
+    /// ([`crate::camera::CameraFrame::sphere_pixels`]; None: any): its
+    /// shading and its field light's gain run over their tiles alone.
     pub pixels: Option<[u32; 4]>,
 }
 
@@ -111,6 +115,8 @@ pub struct SelfShadow {
 /// the point, from rays) and the NDF mixture they use.
 pub struct ShadePass {
     pipeline: Arc<ComputePipeline>,
+    /// Zero over the whole image, the shading pass's first dispatch.
+    clear: Arc<ComputePipeline>,
     self_shadowed: Arc<ComputePipeline>,
     self_shadowed_direct: Arc<ComputePipeline>,
     /// The field light's gain alone (`field_gain_only`), run as its own
@@ -182,6 +188,7 @@ impl ShadePass {
         let shadowed = |file: &str, entry: &str| lib.compute_pipeline(ctx, file, entry, &defines);
         Ok(Self {
             pipeline: lib.compute_pipeline(ctx, "shade/shade.wgsl", "main", &[])?,
+            clear: lib.compute_pipeline(ctx, "shade/shade.wgsl", "clear", &[])?,
             self_shadowed: shadowed("shade/shade_self_shadow.wgsl", "main")?,
             self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl", "main")?,
             field_gain: shadowed("shade/shade_self_shadow_direct.wgsl", "field_gain_only")?,
@@ -253,7 +260,7 @@ impl ShadePass {
                     push: ShadePush {
                         camera: camera.rays(),
                         object_index: i as f32,
-                        write_empty: (i == 0) as u32,
+                        write_empty: 0,
                         light_count: l.count,
                         direct_lobes: l.direct.map_or(0, |d| d.lobes),
                         direct_rays: l.direct.map_or(0, |d| d.rays_per_lobe),
@@ -288,7 +295,7 @@ impl ShadePass {
             let mut pass = graph.compute_pass(OBJECT_FIELD_LIGHT);
             for (k, o) in setups.iter().filter(|o| o.field_light).enumerate() {
                 let pixels = o.shadow.and_then(|s| s.pixels);
-                let (origin, threads) = gain_tiles(pixels, width, height);
+                let (origin, threads) = object_tiles(pixels, width, height);
                 if threads[0] == 0 || threads[1] == 0 {
                     continue;
                 }
@@ -309,7 +316,21 @@ impl ShadePass {
         if let Some(gain) = gain.filter(|_| self.gain_only) {
             return gain;
         }
+        // The image cleared, then each object shaded: a self-shadowed one
+        // over the tiles its bounding sphere can cover alone. Lavapipe
+        // gives every invocation of the self-shadowed shaders a fixed cost
+        // (their size), even one that returns at once: over the whole
+        // image that was most of the pass (docs/benchmarks.md, issue 26's
+        // fifth pass).
         let mut pass = graph.compute_pass(OBJECT_SHADE);
+        let clear = ShadePush {
+            camera: camera.rays(),
+            ..bytemuck::Zeroable::zeroed()
+        };
+        pass.dispatch(&self.clear)
+            .write("out_object", &mut out)
+            .push(&clear)
+            .threads([width, height, 1]);
         for o in &setups {
             let rays = o.light.direct.is_some() || o.field_light;
             let pipeline = match (o.shadow, rays) {
@@ -317,24 +338,33 @@ impl ShadePass {
                 (Some(_), false) => &self.self_shadowed,
                 (None, _) => &self.pipeline,
             };
+            let (origin, threads) = object_tiles(o.shadow.and_then(|s| s.pixels), width, height);
+            if threads[0] == 0 || threads[1] == 0 {
+                continue;
+            }
+            let push = ShadePush {
+                write_empty: 0,
+                tile_origin: origin,
+                ..o.push
+            };
             // Where the gain is not used the shader reads nothing there;
             // the binding takes the G-buffer's normals.
             common
                 .bind(pass.dispatch(pipeline), o)
                 .read("field_gain_in", gain.unwrap_or(gbuffer.normal_roughness))
                 .write("out_object", &mut out)
-                .push(&o.push)
-                .threads([width, height, 1]);
+                .push(&push)
+                .threads(threads);
         }
         pass.finish();
         out
     }
 }
 
-/// The field light's gain pass's dispatch over the 8 × 8 tiles holding
-/// `pixels` (x0, y0, x1, y1; None: the whole `width` × `height`): its
-/// first tile (x | y << 16) and its invocations.
-fn gain_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32) -> (u32, [u32; 3]) {
+/// A dispatch over the 8 × 8 tiles holding `pixels` (x0, y0, x1, y1;
+/// None: the whole `width` × `height`): its first tile (x | y << 16) and
+/// its invocations.
+fn object_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32) -> (u32, [u32; 3]) {
     let [x0, y0, x1, y1] = pixels.unwrap_or([0, 0, width, height]);
     let (x1, y1) = (x1.min(width), y1.min(height));
     let (tx0, ty0) = (x0 / 8, y0 / 8);
