@@ -24,9 +24,11 @@
 // under CAST_SKIP_SHARE, skip the SSDF (q = 1); a direct lobe takes q
 // from its rays instead of the SSDF; the light the object sends back
 // (shadow/bounce.wgsl) offsets the blocked light, never beyond it. Mirrors
-// passes/src/shadow/runtime.rs cast_shadow_factor. `main_chained`
-// multiplies the previous object's ρ image; `main_refine*` take ρ again at
-// the pixels shadow-upsample listed. Output: ρ in rgb.
+// passes/src/shadow/runtime.rs cast_shadow_factor. `main_classify` writes
+// 1 where the first test leaves a pixel unshadowed and lists the others;
+// `main_listed` takes ρ in full at the listed pixels, and at the pixels
+// shadow-upsample listed; the `_chained` entries multiply the previous
+// object's ρ. Output: ρ in rgb.
 // Needs: the shadow defines (passes/src/shadow/gpu.rs).
 #include "common/ray_box.wgsl"
 #include "field/grid.wgsl"
@@ -72,6 +74,12 @@ var<immediate> pc: CastPush;
 @group(0) @binding(17) var refined: texture_storage_2d<rgba32float, read_write>;
 @group(0) @binding(18) var<storage, read> refine_count: u32;
 @group(0) @binding(19) var<storage, read> refine_list: array<u32>;
+// The list `main_classify*` appends the pixels the object may shadow to
+// (their count, their indices y · width + x at the cast scale, and the
+// workgroups of REFINE_WORKGROUP of the listed pass's indirect dispatch).
+@group(0) @binding(20) var<storage, read_write> cast_count: atomic<u32>;
+@group(0) @binding(21) var<storage, read_write> cast_list: array<u32>;
+@group(0) @binding(22) var<storage, read_write> cast_args: array<atomic<u32>, 3>;
 @group(0) @binding(15) var<storage, read> objects: array<ObjectRecord>;
 
 #include "shadow/fh.wgsl"
@@ -186,11 +194,47 @@ fn cast_within_tolerance(most: vec3<f32>, total: vec3<f32>) -> bool {
 // `radiance`: the field's colour at x; π × it floors the irradiance the
 // blocked light is taken from (an albedo ≤ 1 surface showing L receives at
 // least πL; runtime.rs cast_shadow_factor).
+// The first light's bound at x: its irradiance without the local lights
+// (`den`) and the most the object can block of all of it (`most`, each
+// lobe's cast_bound; a local light's whole sphere's).
+struct CastFirstBound {
+    den: vec3<f32>,
+    most: vec3<f32>,
+}
+
+fn cast_first_local() -> u32 {
+    let m = pc.light_count;
+    return m - min(min(pc.local_count, pc.direct_lobes), m);
+}
+
+fn cast_first_direct() -> u32 {
+    return pc.light_count - min(pc.direct_lobes, pc.light_count);
+}
+
+fn cast_first_bound(x: vec3<f32>, n: vec3<f32>, view: CastSphere, cone: ptr<function, CastCone>) -> CastFirstBound {
+    let cosine = sg_clamped_cosine(n);
+    let first_local = cast_first_local();
+    var b = CastFirstBound(vec3<f32>(0.0), vec3<f32>(0.0));
+    for (var k = 0u; k < pc.light_count; k++) {
+        let g = cast_seen_lobe(x, k, first_local);
+        let p = sg_product(g, cosine);
+        let e = sg_diffuse_irradiance(g, n);
+        if k < first_local {
+            b.den += e;
+        }
+        let share = cast_share(view, p);
+        if share >= 0.0 {
+            b.most += cast_bound(view, cone, g, e, share, k < cast_first_direct());
+        }
+    }
+    return b;
+}
+
 fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     let cosine = sg_clamped_cosine(n);
     let m = pc.light_count;
-    let first_direct = m - min(pc.direct_lobes, m);
-    let first_local = m - min(min(pc.local_count, pc.direct_lobes), m);
+    let first_direct = cast_first_direct();
+    let first_local = cast_first_local();
     let view = cast_sphere(x);
     var cone: CastCone;
     if !view.inside {
@@ -202,20 +246,9 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     // needs a ray through the field: the test is first taken without it (a
     // lower bound, floored at π L) against the local lights' whole
     // spheres' bounds (an upper one), then again with it.
-    var den = vec3<f32>(0.0);
-    var most = vec3<f32>(0.0);
-    for (var k = 0u; k < m; k++) {
-        let g = cast_seen_lobe(x, k, first_local);
-        let p = sg_product(g, cosine);
-        let e = sg_diffuse_irradiance(g, n);
-        if k < first_local {
-            den += e;
-        }
-        let share = cast_share(view, p);
-        if share >= 0.0 {
-            most += cast_bound(view, &cone, g, e, share, k < first_direct);
-        }
-    }
+    let first = cast_first_bound(x, n, view, &cone);
+    var den = first.den;
+    let most = first.most;
     let floor = SG_PI * radiance;
     if cast_within_tolerance(most, max(den, floor)) {
         return vec3<f32>(1.0);
@@ -288,6 +321,38 @@ fn field_normal_at(x: vec3<f32>) -> vec3<f32> {
 
 const CAST_NO_OBJECT: f32 = 3.0e38;
 
+// The field's point at pixel `pixel` (ray direction `dir`): its expected
+// depth D̂/Ô.
+fn pixel_point(pixel: vec2<i32>, dir: vec3<f32>, opacity: f32) -> vec3<f32> {
+    return pc.camera.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
+}
+
+// Whether pixel_factor(pixel) is 1 by its first test alone: no field
+// there, or a point on a surface where the object can block under
+// CAST_TOLERANCE of the light without the local lights' (cast_factor's
+// first test). False where the rest of it must decide, the point off any
+// surface (marched again) included.
+fn pixel_unshadowed(pixel: vec2<i32>) -> bool {
+    let colour = textureLoad(field_colour, pixel, 0);
+    let opacity = colour.a;
+    if opacity <= 1e-4 {
+        return true;
+    }
+    let dir = camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5));
+    let x = pixel_point(pixel, dir, opacity);
+    let n = field_normal_at(x);
+    if all(n == vec3<f32>(0.0)) {
+        return false;
+    }
+    let view = cast_sphere(x);
+    var cone: CastCone;
+    if !view.inside {
+        cone = cast_cone(view, n);
+    }
+    let first = cast_first_bound(x, n, view, &cone);
+    return cast_within_tolerance(first.most, max(first.den, SG_PI * colour.rgb / opacity));
+}
+
 // ρ at pixel `pixel` (1 where the field is empty or flat). The shadow is
 // taken at the field's expected depth D̂/Ô; where that point lies off any
 // surface (the pixel sees a table through glass, and D̂/Ô falls between
@@ -302,7 +367,7 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
         return vec3<f32>(1.0);
     }
     let dir = camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5));
-    let x = pc.camera.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
+    let x = pixel_point(pixel, dir, opacity);
     let n = field_normal_at(x);
     if any(n != vec3<f32>(0.0)) {
         return cast_factor(x, n, colour.rgb / opacity);
@@ -331,38 +396,55 @@ fn cast_source(id: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(p);
 }
 
-// The including shader's `main_refine` and `main_refine_chained` call
-// this (pc.scale 1, one invocation per
-// listed pixel, in workgroups of REFINE_WORKGROUP, dispatched indirectly):
-// at the i-th pixel shadow-upsample listed, ρ taken exactly, in place in
-// the upsampled image; `chained` multiplies the previous objects' ρ there.
+// The including shader's `main_listed` and `main_listed_chained` call this
+// (one invocation per listed pixel, in workgroups of REFINE_WORKGROUP,
+// dispatched indirectly): at the i-th listed pixel of the image at pc.scale
+// (the pixels `cast_classify` listed, or at pc.scale 1 those
+// shadow-upsample flagged), ρ taken in full, in place in `refined`;
+// `chained` multiplies what is there (the previous objects' ρ).
 fn refine_listed(i: u32, chained: bool) {
     if i >= refine_count {
         return;
     }
     let p = refine_list[i];
-    let pixel = vec2<i32>(vec2<u32>(p % pc.camera.width, p / pc.camera.width));
-    var rho = pixel_factor(pixel);
+    let width = (pc.camera.width + pc.scale - 1u) / pc.scale;
+    let at = vec2<u32>(p % width, p / width);
+    var rho = pixel_factor(cast_source(at));
     if chained {
-        rho *= textureLoad(refined, pixel).rgb;
+        rho *= textureLoad(refined, vec2<i32>(at)).rgb;
     }
-    textureStore(refined, pixel, vec4<f32>(rho, 1.0));
+    textureStore(refined, vec2<i32>(at), vec4<f32>(rho, 1.0));
 }
 
-// The including shader's `main` calls this: ρ alone.
-fn cast_main(id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy * pc.scale) {
-        return;
-    }
-    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(pixel_factor(cast_source(id.xy)), 1.0));
+// Whether invocation `id` of a classification lies off the image.
+fn cast_outside(id: vec3<u32>) -> bool {
+    return camera_outside(pc.camera, id.xy * pc.scale);
 }
 
-// The including shader's `main_chained` calls this: ρ times the previous
-// object's (a function of its own: `main` binds no previous image).
-fn cast_main_chained(id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy * pc.scale) {
+// The previous object's ρ at invocation `id` (main_classify_chained; a
+// function of its own: `main_classify` binds no previous image).
+fn cast_previous(id: vec3<u32>) -> vec3<f32> {
+    return textureLoad(previous, vec2<i32>(id.xy), 0).rgb;
+}
+
+// The including shader's `main_classify` and `main_classify_chained` call
+// this, over the image at pc.scale: where the first test leaves the pixel
+// unshadowed (pixel_unshadowed), ρ = 1 times `previous` (the previous
+// object's ρ there, or 1) and nothing more; elsewhere that is written too,
+// and the pixel is listed for `main_listed*`, which takes ρ in full there. Two stages, so
+// that the shadow's own code runs only at the pixels it can darken:
+// lavapipe gives every invocation of a shader that large a fixed cost,
+// even one that returns at once (docs/benchmarks.md, issue 26's fifth
+// pass).
+fn cast_classify(id: vec3<u32>, previous_rho: vec3<f32>) {
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(previous_rho, 1.0));
+    if pixel_unshadowed(cast_source(id.xy)) {
         return;
     }
-    let rho = pixel_factor(cast_source(id.xy)) * textureLoad(previous, vec2<i32>(id.xy), 0).rgb;
-    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(rho, 1.0));
+    let width = (pc.camera.width + pc.scale - 1u) / pc.scale;
+    let i = atomicAdd(&cast_count, 1u);
+    cast_list[i] = id.y * width + id.x;
+    if i % REFINE_WORKGROUP == 0u {
+        atomicAdd(&cast_args[0], 1u);
+    }
 }

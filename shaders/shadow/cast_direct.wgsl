@@ -48,21 +48,25 @@ fn cast_local_clear(x: vec3<f32>, n: vec3<f32>, l: u32) -> f32 {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    cast_main(id);
+fn main_classify(@builtin(global_invocation_id) id: vec3<u32>) {
+    if !cast_outside(id) {
+        cast_classify(id, vec3<f32>(1.0));
+    }
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main_chained(@builtin(global_invocation_id) id: vec3<u32>) {
-    cast_main_chained(id);
+fn main_classify_chained(@builtin(global_invocation_id) id: vec3<u32>) {
+    if !cast_outside(id) {
+        cast_classify(id, cast_previous(id));
+    }
 }
 
 @compute @workgroup_size(REFINE_WORKGROUP, 1, 1)
-fn main_refine(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main_listed(@builtin(global_invocation_id) id: vec3<u32>) {
     refine_listed(id.x, false);
 }
 
 @compute @workgroup_size(REFINE_WORKGROUP, 1, 1)
-fn main_refine_chained(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main_listed_chained(@builtin(global_invocation_id) id: vec3<u32>) {
     refine_listed(id.x, true);
 }

@@ -1,8 +1,14 @@
 //! The cast-shadow pass (`cast-shadow`, compute; METHOD.md §4.4 step 5):
 //! ρ per pixel from the field's depth and density gradient, the object's
 //! fitted lighting and its SSDF field (`shaders/shadow/cast.wgsl`, mirrored
-//! by [`super::cast_shadow_factor`]). One pass per object; each after the
-//! first multiplies the previous object's ρ. Where the object's light ends
+//! by [`super::cast_shadow_factor`]). Per object, in two stages under the
+//! one name: `main_classify` over the image at the cast scale writes ρ = 1
+//! where the object can block under the tolerance of a point's light
+//! without the local lights', and lists the other pixels; `main_listed`
+//! takes ρ in full at the listed pixels alone (an indirect dispatch).
+//! Lavapipe gives every invocation of the full shader a fixed cost, even
+//! one that returns at once, so it runs only where a shadow may fall. Each
+//! object after the first multiplies the previous object's ρ. Where the object's light ends
 //! in direct lobes (too sharp for the fit), `shaders/shadow/cast_direct.wgsl`
 //! ray-casts their shadows against the object's mesh ([`super::direct`]).
 
@@ -141,11 +147,12 @@ pub struct CastInputs {
     pub ssdf: SsdfBindings,
 }
 
-/// The cast-shadow pipelines: at the cast scale (first or chained,
-/// without or with direct lobes), the upsampling, and the refinement.
+/// The cast-shadow pipelines: the classification at the cast scale and
+/// the full ρ at listed pixels (first or chained, without or with direct
+/// lobes), and the upsampling.
 pub struct CastShadowPass {
-    cast: CastPipelines,
-    refine: CastPipelines,
+    classify: CastPipelines,
+    listed: CastPipelines,
     upsample: Arc<ComputePipeline>,
     upsample_listed: Arc<ComputePipeline>,
     march: MarchKnobs,
@@ -153,14 +160,30 @@ pub struct CastShadowPass {
     refine_spread: f64,
 }
 
-/// The list of pixels `shadow-upsample` flagged for `shadow-refine`: their
-/// count, their indices (y · width + x), and the refinement's indirect
-/// dispatch arguments (one workgroup per 64 of them).
+/// A list of pixels ρ is taken at in full (those `main_classify` listed,
+/// or those `shadow-upsample` flagged for `shadow-refine`): their count,
+/// their indices (y · width + x of the image they index), and the indirect
+/// dispatch's arguments (one workgroup per 64 of them).
 #[derive(Debug, Clone, Copy)]
-struct RefineList {
+struct PixelList {
     count: BufferHandle,
     pixels: BufferHandle,
     args: BufferHandle,
+}
+
+impl PixelList {
+    /// An empty list of up to `capacity` pixels, `name` its buffers'
+    /// prefix.
+    fn new(graph: &mut FrameGraph, name: &str, capacity: u64) -> Self {
+        Self {
+            count: graph.upload_buffer(&format!("{name}-count"), vec![0; 4]),
+            pixels: graph.create_buffer(&format!("{name}-list"), 4 * capacity),
+            args: graph.upload_buffer(
+                &format!("{name}-args"),
+                [0u32, 1, 1].iter().flat_map(|v| v.to_le_bytes()).collect(),
+            ),
+        }
+    }
 }
 
 impl CastShadowPass {
@@ -198,16 +221,10 @@ impl CastShadowPass {
                 chained_direct: build("shadow/cast_direct.wgsl", chained)?,
             })
         };
-        let refining = scale > 1 && refine_spread < 1.0;
         Ok(Self {
             march,
-            cast: pipelines("main", "main_chained")?,
-            // Without refinement the cast pipelines stand in (never used).
-            refine: if refining {
-                pipelines("main_refine", "main_refine_chained")?
-            } else {
-                pipelines("main", "main_chained")?
-            },
+            classify: pipelines("main_classify", "main_classify_chained")?,
+            listed: pipelines("main_listed", "main_listed_chained")?,
             upsample: build("shadow/upsample.wgsl", "main")?,
             upsample_listed: build("shadow/upsample.wgsl", "main_listed")?,
             scale,
@@ -256,19 +273,11 @@ impl CastShadowPass {
             scale: self.scale,
             refine_spread: self.refine_spread.min(1.0) as f32,
         };
-        // The list shadow-refine runs over: its count, its pixels, and the
-        // indirect dispatch's arguments.
-        let mut buffers = self.refines().then(|| {
-            (
-                graph.upload_buffer("shadow-refine-count", vec![0; 4]),
-                graph.create_buffer("shadow-refine-list", 4 * width as u64 * height as u64),
-                graph.upload_buffer(
-                    "shadow-refine-args",
-                    [0u32, 1, 1].iter().flat_map(|v| v.to_le_bytes()).collect(),
-                ),
-            )
-        });
-        let pipeline = match buffers {
+        // The list shadow-refine runs over.
+        let mut list = self
+            .refines()
+            .then(|| PixelList::new(graph, "shadow-refine", width as u64 * height as u64));
+        let pipeline = match list {
             Some(_) => &self.upsample_listed,
             None => &self.upsample,
         };
@@ -279,28 +288,24 @@ impl CastShadowPass {
             .read("low_shadow", low)
             .write("out_shadow", &mut up)
             .push(&push);
-        if let Some((count, pixels, args)) = buffers.as_mut() {
+        if let Some(l) = list.as_mut() {
             upsample = upsample
-                .read_write("refine_count", count)
-                .write("refine_list", pixels)
-                .read_write("refine_args", args);
+                .read_write("refine_count", &mut l.count)
+                .write("refine_list", &mut l.pixels)
+                .read_write("refine_args", &mut l.args);
         }
         upsample.threads([width, height, 1]);
-        let Some((count, pixels, args)) = buffers else {
+        let Some(list) = list else {
             return up;
         };
-        let list = RefineList {
-            count,
-            pixels,
-            args,
-        };
         for (i, o) in objects.iter().enumerate() {
-            let target = Target::Refine {
+            let mut target = Target::Listed {
                 image: up,
                 list,
                 chained: i > 0,
+                scale: 1,
             };
-            up = self.dispatch(graph, field, camera, march, *o, target);
+            up = self.dispatch(graph, field, camera, march, *o, &mut target);
         }
         up
     }
@@ -324,18 +329,25 @@ impl CastShadowPass {
             fh_table,
             ssdf,
         };
-        self.dispatch(
-            graph,
-            field,
-            camera,
-            march,
-            inputs,
-            Target::Cast { previous },
-        )
+        let (width, height) = super::upsample::low_size(camera.width, camera.height, self.scale);
+        let list = PixelList::new(graph, "cast-shadow", width as u64 * height as u64);
+        let mut classify = Target::Classify { previous, list };
+        let image = self.dispatch(graph, field, camera, march, inputs, &mut classify);
+        let Target::Classify { list, .. } = classify else {
+            unreachable!("a classification stays one");
+        };
+        let mut listed = Target::Listed {
+            image,
+            list,
+            chained: previous.is_some(),
+            scale: self.scale,
+        };
+        self.dispatch(graph, field, camera, march, inputs, &mut listed)
     }
 
-    /// One object's `cast-shadow` (at the cast scale) or `shadow-refine`
-    /// (at full resolution, in place), as `target` says.
+    /// One object's `cast-shadow` stage (at the cast scale) or
+    /// `shadow-refine` (at full resolution, in place), as `target` says; a
+    /// classification's list is left in `target` as the pass wrote it.
     fn dispatch(
         &self,
         graph: &mut FrameGraph,
@@ -343,16 +355,16 @@ impl CastShadowPass {
         camera: &CameraFrame,
         march: &MarchOutputs,
         inputs: CastInputs,
-        target: Target,
+        target: &mut Target,
     ) -> ImageHandle {
-        let scale = match target {
-            Target::Cast { .. } => self.scale,
-            Target::Refine { .. } => 1,
+        let scale = match *target {
+            Target::Classify { .. } => self.scale,
+            Target::Listed { scale, .. } => scale,
         };
         let (width, height) = super::upsample::low_size(camera.width, camera.height, scale);
         let grid = field.import(graph);
-        let created = match target {
-            Target::Cast { .. } => Some(graph.create_image(
+        let created = match *target {
+            Target::Classify { .. } => Some(graph.create_image(
                 "shadow",
                 ImageDesc {
                     width,
@@ -360,7 +372,7 @@ impl CastShadowPass {
                     format: SHADOW_FORMAT,
                 },
             )),
-            Target::Refine { .. } => None,
+            Target::Listed { .. } => None,
         };
         let step = (field.bounds.size() / (field.resolution.as_dvec3() - 1.0)).min_element() as f32;
         let CastInputs {
@@ -384,14 +396,19 @@ impl CastShadowPass {
             pad1: 0,
             pad2: 0,
         };
-        let (name, pipeline) = match target {
-            Target::Cast { previous } => (
+        let (name, pipeline) = match *target {
+            Target::Classify { previous, .. } => (
                 CAST_SHADOW,
-                self.cast.pick(previous.is_some(), direct.is_some()),
+                self.classify.pick(previous.is_some(), direct.is_some()),
             ),
-            Target::Refine { chained, .. } => {
-                (SHADOW_REFINE, self.refine.pick(chained, direct.is_some()))
-            }
+            Target::Listed { chained, scale, .. } => (
+                if scale == 1 && self.scale > 1 {
+                    SHADOW_REFINE
+                } else {
+                    CAST_SHADOW
+                },
+                self.listed.pick(chained, direct.is_some()),
+            ),
         };
         let pass = grid
             .bind(graph.compute(name, pipeline))
@@ -409,21 +426,22 @@ impl CastShadowPass {
             .read_opt("local_lights", direct.map(|d| d.local.lights))
             .push(&push);
         match target {
-            Target::Cast { previous } => {
-                let mut out = created.expect("created above for a cast");
-                pass.read_opt("previous", previous)
+            Target::Classify { previous, list } => {
+                let mut out = created.expect("created above for a classification");
+                pass.read_opt("previous", *previous)
                     .write("out_shadow", &mut out)
+                    .read_write("cast_count", &mut list.count)
+                    .write("cast_list", &mut list.pixels)
+                    .read_write("cast_args", &mut list.args)
                     .threads([width, height, 1]);
                 out
             }
-            Target::Refine {
-                mut image, list, ..
-            } => {
+            Target::Listed { image, list, .. } => {
                 pass.read("refine_count", list.count)
                     .read("refine_list", list.pixels)
-                    .read_write("refined", &mut image)
+                    .read_write("refined", image)
                     .indirect(list.args, 0);
-                image
+                *image
             }
         }
     }
@@ -432,13 +450,20 @@ impl CastShadowPass {
 /// What [`CastShadowPass::dispatch`] writes.
 #[derive(Debug, Clone, Copy)]
 enum Target {
-    /// ρ at the cast scale, times `previous` (another object's) if given.
-    Cast { previous: Option<ImageHandle> },
-    /// ρ taken again at the pixels of `list`, in place in `image` (the
-    /// upsampled ρ), times what is there when `chained`.
-    Refine {
+    /// ρ = 1 at the cast scale where the first test leaves a pixel
+    /// unshadowed, times `previous` (another object's) if given, and the
+    /// other pixels appended to `list`.
+    Classify {
+        previous: Option<ImageHandle>,
+        list: PixelList,
+    },
+    /// ρ taken in full at the pixels of `list`, in place in `image` (of
+    /// the image at `scale`: the classified one, or the upsampled one at
+    /// 1), times what is there when `chained`.
+    Listed {
         image: ImageHandle,
-        list: RefineList,
+        list: PixelList,
         chained: bool,
+        scale: u32,
     },
 }
