@@ -79,6 +79,21 @@ fn back_substitute(rows: &[f64], m: usize, mut y: Vec<f64>) -> Vec<f64> {
     x
 }
 
+/// √D: the Jacobi scaling of the `n` × `n` matrix `a`, its diagonal floored
+/// at [`RELATIVE_DIAGONAL_FLOOR`] × its largest and at
+/// [`ABSOLUTE_DIAGONAL_FLOOR`].
+fn jacobi_scale(a: &[f64], n: usize) -> Vec<f64> {
+    let max_diag = (0..n).map(|i| a[i * n + i]).fold(0.0f64, f64::max);
+    (0..n)
+        .map(|i| {
+            a[i * n + i]
+                .max(RELATIVE_DIAGONAL_FLOOR * max_diag)
+                .max(ABSOLUTE_DIAGONAL_FLOOR)
+                .sqrt()
+        })
+        .collect()
+}
+
 /// The step δ for the fit's normal matrix `a` (6M × 6M for `lobes` = M,
 /// row-major, symmetric, amplitudes of different channels uncoupled),
 /// gradient `b` = Jᵀr and damping `eta`, by the three stages of the
@@ -86,15 +101,7 @@ fn back_substitute(rows: &[f64], m: usize, mut y: Vec<f64>) -> Vec<f64> {
 /// floating point (the step is then rejected).
 pub fn damped_step(a: &[f64], b: &[f64], lobes: usize, eta: f64) -> Option<Vec<f64>> {
     let (m, n, q) = (lobes, PER_LOBE * lobes, 3 * lobes);
-    let max_diag = (0..n).map(|i| a[i * n + i]).fold(0.0f64, f64::max);
-    let d: Vec<f64> = (0..n)
-        .map(|i| {
-            a[i * n + i]
-                .max(RELATIVE_DIAGONAL_FLOOR * max_diag)
-                .max(ABSOLUTE_DIAGONAL_FLOOR)
-                .sqrt()
-        })
-        .collect();
+    let d = jacobi_scale(a, n);
     let scaled = |i: usize, j: usize| a[i * n + j] / (d[i] * d[j]) + if i == j { eta } else { 0.0 };
     let rhs = |i: usize| -b[i] / d[i];
     // 1. Per channel: its block (rows 0..m), the nonlinear rows in its
@@ -177,15 +184,7 @@ mod tests {
     /// One Cholesky of the whole scaled, damped system: the oracle the
     /// staged solve is checked against.
     fn whole_cholesky_step(a: &[f64], b: &[f64], n: usize, eta: f64) -> Option<Vec<f64>> {
-        let max_diag = (0..n).map(|i| a[i * n + i]).fold(0.0f64, f64::max);
-        let d: Vec<f64> = (0..n)
-            .map(|i| {
-                a[i * n + i]
-                    .max(RELATIVE_DIAGONAL_FLOOR * max_diag)
-                    .max(ABSOLUTE_DIAGONAL_FLOOR)
-                    .sqrt()
-            })
-            .collect();
+        let d = jacobi_scale(a, n);
         let mut rows = vec![0.0; (n + 1) * n];
         for i in 0..n {
             for j in 0..=i {
