@@ -14,9 +14,9 @@ pub fn quantile(values: &[f64], q: f64) -> f64 {
 }
 
 /// A table of each pass's GPU and CPU time (median and p95; passes of one
-/// name summed within a frame) over the frames it ran in (passes that ran in only some frames, such as the
-/// probe and the SG fit, say in how many), with the culled passes and the
-/// frame total.
+/// name summed within a frame) over the frames it ran in (passes that ran
+/// in only some frames, such as the probe and the SG fit, say in how
+/// many), with the culled passes and the frame total.
 pub fn format_table(frames: &[FrameTimings], device: &str) -> String {
     let mut out = String::new();
     let Some(last) = frames.last() else {

@@ -8,9 +8,10 @@
 //! takes ρ in full at the listed pixels alone (an indirect dispatch).
 //! Lavapipe gives every invocation of the full shader a fixed cost, even
 //! one that returns at once, so it runs only where a shadow may fall. Each
-//! object after the first multiplies the previous object's ρ. Where the object's light ends
-//! in direct lobes (too sharp for the fit), `shaders/shadow/cast_direct.wgsl`
-//! ray-casts their shadows against the object's mesh ([`super::direct`]).
+//! object after the first multiplies the previous object's ρ. Where the
+//! object's light ends in direct lobes (too sharp for the fit),
+//! `shaders/shadow/cast_direct.wgsl` ray-casts their shadows against the
+//! object's mesh ([`super::direct`]).
 
 use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
