@@ -396,6 +396,11 @@ fn cast_source(id: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(p);
 }
 
+// The width of the image at pc.scale (upsample.rs low_size).
+fn cast_low_width() -> u32 {
+    return (pc.camera.width + pc.scale - 1u) / pc.scale;
+}
+
 // The including shader's `main_listed` and `main_listed_chained` call this
 // (one invocation per listed pixel, in workgroups of REFINE_WORKGROUP,
 // dispatched indirectly): at the i-th listed pixel of the image at pc.scale
@@ -407,7 +412,7 @@ fn refine_listed(i: u32, chained: bool) {
         return;
     }
     let p = refine_list[i];
-    let width = (pc.camera.width + pc.scale - 1u) / pc.scale;
+    let width = cast_low_width();
     let at = vec2<u32>(p % width, p / width);
     var rho = pixel_factor(cast_source(at));
     if chained {
@@ -441,7 +446,7 @@ fn cast_classify(id: vec3<u32>, previous_rho: vec3<f32>) {
     if pixel_unshadowed(cast_source(id.xy)) {
         return;
     }
-    let width = (pc.camera.width + pc.scale - 1u) / pc.scale;
+    let width = cast_low_width();
     let i = atomicAdd(&cast_count, 1u);
     cast_list[i] = id.y * width + id.x;
     if i % REFINE_WORKGROUP == 0u {

@@ -253,10 +253,12 @@ impl ShadePass {
                 let shadow = self_shadow.get(i).copied().flatten();
                 let field_light = self.field_side > 0 && shadow.is_some();
                 let local = l.direct.map(|d| d.local);
+                let (origin, threads) = object_tiles(shadow.and_then(|s| s.pixels), width, height);
                 ObjectSetup {
                     light: *l,
                     shadow,
                     field_light,
+                    threads,
                     push: ShadePush {
                         camera: camera.rays(),
                         object_index: i as f32,
@@ -270,7 +272,7 @@ impl ShadePass {
                         march_termination: self.march.termination as f32,
                         field_side: if field_light { self.field_side } else { 0 },
                         env_count: l.environment.filter(|_| field_light).map_or(0, |e| e.count),
-                        tile_origin: 0,
+                        tile_origin: origin,
                     },
                 }
             })
@@ -294,21 +296,18 @@ impl ShadePass {
             );
             let mut pass = graph.compute_pass(OBJECT_FIELD_LIGHT);
             for (k, o) in setups.iter().filter(|o| o.field_light).enumerate() {
-                let pixels = o.shadow.and_then(|s| s.pixels);
-                let (origin, threads) = object_tiles(pixels, width, height);
-                if threads[0] == 0 || threads[1] == 0 {
+                if o.off_screen() {
                     continue;
                 }
                 let push = ShadePush {
                     write_empty: (k == 0) as u32,
-                    tile_origin: origin,
                     ..o.push
                 };
                 common
                     .bind(pass.dispatch(&self.field_gain), o)
                     .write("out_object", &mut gain)
                     .push(&push)
-                    .threads(threads);
+                    .threads(o.threads);
             }
             pass.finish();
             gain
@@ -338,23 +337,17 @@ impl ShadePass {
                 (Some(_), false) => &self.self_shadowed,
                 (None, _) => &self.pipeline,
             };
-            let (origin, threads) = object_tiles(o.shadow.and_then(|s| s.pixels), width, height);
-            if threads[0] == 0 || threads[1] == 0 {
+            if o.off_screen() {
                 continue;
             }
-            let push = ShadePush {
-                write_empty: 0,
-                tile_origin: origin,
-                ..o.push
-            };
             // Where the gain is not used the shader reads nothing there;
             // the binding takes the G-buffer's normals.
             common
                 .bind(pass.dispatch(pipeline), o)
                 .read("field_gain_in", gain.unwrap_or(gbuffer.normal_roughness))
                 .write("out_object", &mut out)
-                .push(&push)
-                .threads(threads);
+                .push(&o.push)
+                .threads(o.threads);
         }
         pass.finish();
         out
@@ -380,7 +373,17 @@ struct ObjectSetup {
     light: LightLobes,
     shadow: Option<SelfShadow>,
     field_light: bool,
+    /// The invocations of its dispatches: over the tiles of its
+    /// [`SelfShadow::pixels`] (from `push.tile_origin`), or the image.
+    threads: [u32; 3],
     push: ShadePush,
+}
+
+impl ObjectSetup {
+    /// Whether its tiles are empty (its bounding sphere is off screen).
+    fn off_screen(&self) -> bool {
+        self.threads[0] == 0 || self.threads[1] == 0
+    }
 }
 
 /// What every object's dispatch binds alike.
