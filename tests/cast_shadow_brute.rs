@@ -205,7 +205,7 @@ fn shadow_points(scene_file: &str, camera: usize) -> Vec<(u32, u32, f64, f64)> {
     let local: Vec<LocalLight> = scene
         .lighting
         .local
-        .choose(&gpu_field.emitters)
+        .choose(&gpu_field.emitters, &gpu_field.bounds)
         .into_iter()
         .chain(hidden)
         .collect();
@@ -341,23 +341,32 @@ fn report(name: &str, pixels: &[(u32, u32, f64, f64)]) -> (f64, f64, f64) {
 #[test]
 #[ignore]
 fn the_model_darkens_the_floor_as_its_light_says() {
-    // ROOM: the light at the monkey's centre is the light its floor
-    // receives (the bulb overhead, the walls around). Measured on lavapipe
-    // (the 2-core machine): total darkening 0.971 of brute force's, mean
-    // |Δρ| 0.016, area below 0.9 1.09.
-    let (ratio, mean_diff, _) = report("room-front", &shadow_points("room.toml", 0));
+    // ROOM: the bulb overhead and the softbox on the wall are local
+    // lights, weighed at each point; the walls' light at the monkey's
+    // centre is what its floor receives. Measured on lavapipe (the 2-core
+    // machine): total darkening 1.010 of brute force's, mean |Δρ| 0.013,
+    // area below 0.9 1.00. With the softbox among the fitted lobes (seen
+    // from the centre, 0.2 m above the floor and nearer the softbox), the
+    // floor beside the monkey lost 0.42 of its light where it loses 0.31:
+    // 0.971, 0.016 and 1.09.
+    let (ratio, mean_diff, area) = report("room-front", &shadow_points("room.toml", 0));
     assert!(
         (ratio - 1.0).abs() < 0.1,
         "ROOM: total darkening model / brute force {ratio}"
     );
     assert!(mean_diff < 0.04, "ROOM: mean |Δρ| {mean_diff}");
+    assert!(
+        (area - 1.0).abs() < 0.05,
+        "ROOM: area below 0.9, model / brute force {area}"
+    );
     // PLANTS' high view: the lamp reaches the toy's centre through the
     // left plant's foliage and the floor around the shadow in the open.
     // With the lamp weighed at the object's centre the model's shadow
     // covered 1.14× brute force's area below 0.9 (a ring too dark); with
-    // it weighed at each point, 1.06 (total darkening 0.943, mean |Δρ|
+    // it weighed at each point, 1.05 (total darkening 0.932, mean |Δρ|
     // 0.053: the umbra, lit by less of the room than the centre is, stays
-    // too light).
+    // too light; 1.06 and 0.943 before the fit's staged solve, issue 26,
+    // rounded it elsewhere).
     let (ratio, _, area) = report("plants-high", &shadow_points("plants.toml", 1));
     assert!(
         (area - 1.0).abs() < 0.1,

@@ -183,8 +183,9 @@ fn the_probe_irradiance_matches_cycles_sensors() {
 /// radii from it, 3 × 3 means of the field's own pixels) against Cycles,
 /// on fields baked at test size (64 nodes, 8 samples) with the objects'
 /// SSDFs at the scenes' knobs: the mean darkening within the issue's
-/// 0.3 %. Measured: CUPS front 0.13 %, side 0.07 %, ROOM 0.07 %
-/// (Cycles: 0.22 %, 0.19 %, −0.28 %); before each lobe's loss was held to
+/// 0.3 %. Measured: CUPS front 0.13 %, side 0.07 %, ROOM 0.035 %
+/// (0.07 % while its softbox was among the fitted lobes; Cycles: 0.22 %,
+/// 0.19 %, −0.28 %); before each lobe's loss was held to
 /// its light over the object's cone (docs/fidelity.md, fifteenth pass),
 /// 0.42 %, 0.32 % and 0.43 % on the same fields — what it was at full
 /// size too (0.43 %, 0.32 %, 0.32 %). The shadow's shape and depth need

@@ -502,7 +502,7 @@ fn local_lights_leave_the_probe_and_return_as_lobes() {
     let s = common::bundled_scene("plants.toml");
     let field = common::bake_small(&s, 40, 4, 0);
     let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
-    let local = LocalLightKnobs::default().choose(&gpu_field.emitters);
+    let local = LocalLightKnobs::default().choose(&gpu_field.emitters, &gpu_field.bounds);
     assert_eq!(local.len(), 1, "{:?}", gpu_field.emitters);
     let lamp = DVec3::new(0.1, 0.95, 0.35);
     assert!(local[0].centre.distance(lamp) < 0.03, "{:?}", local[0]);

@@ -27,6 +27,9 @@ pub struct FieldEmitter {
     pub ratio: f64,
     /// Σ luminance × node volume over its nodes (ranks emitters).
     pub power: f64,
+    /// Its power over the same sum across every node with density: the
+    /// share of the field's light it holds (0–1).
+    pub share: f64,
 }
 
 /// Rec. 709 luminance of a node's colour.
@@ -61,6 +64,14 @@ pub fn find_emitters(field: &GridField) -> Vec<FieldEmitter> {
         return Vec::new();
     }
     let limit = MIN_EMITTER_RATIO * median;
+    let node_volume = h.x * h.y * h.z;
+    let field_power: f64 = field
+        .nodes
+        .iter()
+        .filter(|n| n[3] > 0.0)
+        .map(luminance)
+        .sum::<f64>()
+        * node_volume;
     let bright: Vec<bool> = field
         .nodes
         .iter()
@@ -69,7 +80,6 @@ pub fn find_emitters(field: &GridField) -> Vec<FieldEmitter> {
     let r = field.resolution;
     let (nx, ny, nz) = (r.x as i64, r.y as i64, r.z as i64);
     let mut seen = vec![false; bright.len()];
-    let node_volume = h.x * h.y * h.z;
     let position = |i: usize| {
         let (x, y, z) = (i as i64 % nx, (i as i64 / nx) % ny, i as i64 / (nx * ny));
         field.bounds.min + DVec3::new(x as f64, y as f64, z as f64) * h
@@ -121,6 +131,7 @@ pub fn find_emitters(field: &GridField) -> Vec<FieldEmitter> {
             radius: reach + h.length(),
             ratio: weights.iter().copied().fold(0.0, f64::max) / median,
             power: total * node_volume,
+            share: total * node_volume / field_power,
         });
     }
     emitters.sort_by(|a, b| b.power.total_cmp(&a.power));
@@ -175,6 +186,19 @@ mod tests {
             e[0]
         );
         assert!(e[0].ratio > 100.0);
+    }
+
+    #[test]
+    fn an_emitters_share_is_its_part_of_the_fields_light() {
+        let c = DVec3::new(0.6, 0.7, 0.4);
+        let f = field(&[(c, 0.08, 50.0)]);
+        let e = find_emitters(&f);
+        // The ball's nodes against the floor's, counted from the nodes.
+        let lum = |n: &[f32; 4]| luminance(n);
+        let ball: f64 = f.nodes.iter().filter(|n| n[0] > 1.0).map(lum).sum();
+        let all: f64 = f.nodes.iter().filter(|n| n[3] > 0.0).map(lum).sum();
+        assert!((e[0].share - ball / all).abs() < 1e-12, "{:?}", e[0]);
+        assert!(e[0].share > 0.0 && e[0].share < 1.0);
     }
 
     #[test]

@@ -158,7 +158,7 @@ impl InsertionFrame {
             scene.objects.len()
         );
         let shadows = ssdfs.iter().any(Option::is_some);
-        let local = scene.lighting.local.choose(&field.emitters);
+        let local = scene.lighting.local.choose(&field.emitters, &field.bounds);
         for l in &local {
             log::info!(
                 "local light at {:.3} (radius {:.3}): shaded per pixel",

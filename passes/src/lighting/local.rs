@@ -18,7 +18,7 @@
 use glam::{DVec2, DVec3};
 
 use crate::field::{FieldEmitter, RadianceField};
-use crate::geometry::Ray;
+use crate::geometry::{Aabb, Ray};
 use crate::march::{march_ray, MarchKnobs};
 use crate::sg::Sg64;
 
@@ -46,6 +46,10 @@ pub struct LocalLightKnobs {
     /// median surface's luminance (at least
     /// [`crate::field::MIN_EMITTER_RATIO`]).
     pub ratio: f64,
+    /// An emitter also qualifies when it holds at least this share of the
+    /// field's light ([`FieldEmitter::share`]; 0–1, above 1: never): a
+    /// softbox or a window dimmer than `ratio` but lighting the room.
+    pub share: f64,
     /// Visibility rays per shaded point and light: `rays`² points of the
     /// light's disk.
     pub rays: u32,
@@ -56,6 +60,7 @@ impl Default for LocalLightKnobs {
         Self {
             count: 4,
             ratio: 50.0,
+            share: 0.05,
             rays: 2,
         }
     }
@@ -80,6 +85,15 @@ impl LocalLightKnobs {
                 ),
             ));
         }
+        if !(self.share.is_finite() && self.share >= 0.0) {
+            return Err((
+                "local_light_share".into(),
+                format!(
+                    "{}: must be a share of the field's light, 0 to 1 (above 1: none)",
+                    self.share
+                ),
+            ));
+        }
         if !(1..=8).contains(&self.rays) {
             return Err((
                 "local_light_rays".into(),
@@ -89,11 +103,16 @@ impl LocalLightKnobs {
         Ok(())
     }
 
-    /// The lights chosen among a field's `emitters` (brightest first).
-    pub fn choose(&self, emitters: &[FieldEmitter]) -> Vec<LocalLight> {
+    /// The lights chosen among the `emitters` of a field over `bounds`
+    /// (most powerful first): bright enough or holding enough of the
+    /// field's light, and small enough to be shaded locally from some
+    /// point of the field (a lit floor's patch whose sphere holds the
+    /// whole field never is, [`ACTIVE_DISTANCE`]).
+    pub fn choose(&self, emitters: &[FieldEmitter], bounds: &Aabb) -> Vec<LocalLight> {
         emitters
             .iter()
-            .filter(|e| e.ratio >= self.ratio)
+            .filter(|e| e.ratio >= self.ratio || e.share >= self.share)
+            .filter(|e| farthest_corner(bounds, e.centre) > ACTIVE_DISTANCE * e.radius)
             .take(self.count as usize)
             .map(|e| LocalLight {
                 centre: e.centre,
@@ -102,6 +121,12 @@ impl LocalLightKnobs {
             })
             .collect()
     }
+}
+
+/// The distance from `p` to the corner of `bounds` farthest from it.
+fn farthest_corner(bounds: &Aabb, p: DVec3) -> f64 {
+    let far = (bounds.max - p).abs().max((p - bounds.min).abs());
+    far.length()
 }
 
 /// The radius a point light is given as a local light (world units): a
@@ -643,9 +668,48 @@ mod tests {
                 rays: 0,
                 ..Default::default()
             },
+            LocalLightKnobs {
+                share: -0.1,
+                ..Default::default()
+            },
+            LocalLightKnobs {
+                share: f64::INFINITY,
+                ..Default::default()
+            },
         ];
         for k in bad {
             assert!(k.check().is_err(), "{k:?}");
         }
+    }
+
+    #[test]
+    fn lights_are_chosen_bright_or_holding_the_rooms_light_and_small() {
+        let bounds = Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        };
+        let emitter = |ratio, share, radius| FieldEmitter {
+            centre: DVec3::new(-0.9, 0.5, 0.0),
+            radius,
+            ratio,
+            power: share,
+            share,
+        };
+        let lamp = emitter(700.0, 0.01, 0.05);
+        let softbox = emitter(25.0, 0.13, 0.4);
+        let lit_patch = emitter(30.0, 0.02, 0.2);
+        // A lit floor: most of the field's light, its sphere the field.
+        let floor = emitter(24.0, 0.9, 1.8);
+        let chosen = LocalLightKnobs::default().choose(&[floor, softbox, lamp, lit_patch], &bounds);
+        let radii: Vec<f64> = chosen.iter().map(|l| l.radius).collect();
+        assert_eq!(radii, [0.4, 0.05]);
+        // Above 1, the share chooses nothing; the ratio still does.
+        let by_ratio = LocalLightKnobs {
+            share: 1.5,
+            ..Default::default()
+        };
+        let chosen = by_ratio.choose(&[floor, softbox, lamp, lit_patch], &bounds);
+        assert_eq!(chosen.len(), 1);
+        assert_eq!(chosen[0].radius, 0.05);
     }
 }

@@ -307,6 +307,7 @@ impl LightingKnobs {
             local: crate::lighting::LocalLightKnobs {
                 count: s.local_lights.unwrap_or(d.local.count),
                 ratio: s.local_light_ratio.unwrap_or(d.local.ratio),
+                share: s.local_light_share.unwrap_or(d.local.share),
                 rays: s.local_light_rays.unwrap_or(d.local.rays),
             },
         };

@@ -163,5 +163,6 @@ pub(crate) struct LightingSpec {
     pub environment: Option<String>,
     pub local_lights: Option<u32>,
     pub local_light_ratio: Option<f64>,
+    pub local_light_share: Option<f64>,
     pub local_light_rays: Option<u32>,
 }
