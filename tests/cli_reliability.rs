@@ -462,8 +462,10 @@ fn the_most_objects_a_scene_may_hold_render() {
 }
 
 /// `bake-scene` refuses, before baking, a resolution whose field the device
-/// could not render (before, it baked for minutes and `render` refused the
-/// file afterwards).
+/// could not render even sparsely (before, it baked for minutes and
+/// `render` refused the file afterwards). Lavapipe's 2 GiB heap holds
+/// every bundled scene's 512-node field (sparse, it also fits its 128 MiB
+/// binding): there the check is `reliability.rs`'s on a small device.
 #[test]
 fn bake_scene_refuses_a_field_the_device_cannot_render() {
     let dir = scratch("bake-limit");
@@ -471,9 +473,9 @@ fn bake_scene_refuses_a_field_the_device_cannot_render() {
     let scene =
         inlay_passes::scene::load_scene(std::path::Path::new(&scene_path("dog.toml"))).unwrap();
     let res = inlay_passes::bake::grid_resolution(scene.recipe().unwrap(), 512);
-    if inlay_passes::field::check_field_fits(&info, res, 0).is_ok() {
+    if inlay_passes::field::check_field_may_fit(&info, res, 0).is_ok() {
         eprintln!(
-            "{} renders a 512-node field: nothing to refuse here",
+            "{} may render a 512-node field: nothing to refuse here",
             info.name
         );
         return;

@@ -42,25 +42,24 @@ fn gpu_march(
     gpu_march_with(
         ctx,
         &gpu_field.library(&common::test_library()),
-        field,
+        &gpu_field,
         camera,
         knobs,
         clip,
     )
 }
 
-/// [`gpu_march`] with the passes compiled from `lib`.
+/// [`gpu_march`] of an uploaded field with the passes compiled from `lib`.
 fn gpu_march_with(
     ctx: &Arc<Context>,
     lib: &inlay_engine::shader::ShaderLibrary,
-    field: &GridField,
+    gpu_field: &GpuGridField,
     camera: &CameraFrame,
     knobs: MarchKnobs,
     clip: Option<(f32, f32)>,
 ) -> (HdrImage, HdrImage) {
     let lib = lib.clone();
     let march = MarchPass::new(ctx, &lib, knobs).unwrap();
-    let gpu_field = GpuGridField::upload(ctx, field).unwrap();
     let pattern = std::sync::Arc::new(
         ComputePipeline::new(
             ctx,
@@ -114,7 +113,7 @@ fn gpu_march_with(
             .threads([w, h, 1]);
         img
     });
-    let out = march.add(&mut graph, &gpu_field, camera, object_depth);
+    let out = march.add(&mut graph, gpu_field, camera, object_depth);
     colour_rb.add_to_graph(&mut graph, out.colour_opacity);
     depth_rb.add_to_graph(&mut graph, out.depth);
     renderer
@@ -282,8 +281,15 @@ fn gpu_march_matches_the_cpu_reference_with_view_dependent_colour() {
         );
         // Compiled for any field (the default library: the degree read
         // per ray), the same image.
-        let (general, _) =
-            gpu_march_with(&ctx, &common::test_library(), &field, &camera, knobs, None);
+        let uploaded = GpuGridField::upload(&ctx, &field).unwrap();
+        let (general, _) = gpu_march_with(
+            &ctx,
+            &common::test_library(),
+            &uploaded,
+            &camera,
+            knobs,
+            None,
+        );
         assert_eq!(general.pixels, colour.pixels, "degree {degree}");
     }
     common::assert_no_validation_errors(&ctx);
@@ -302,9 +308,81 @@ fn a_pass_for_plain_fields_refuses_view_dependent_colour() {
     let lib = GpuGridField::upload(&ctx, &plain)
         .unwrap()
         .library(&common::test_library());
-    let field = plain.clone().with_sh(1, sh);
+    let field = GpuGridField::upload(&ctx, &plain.clone().with_sh(1, sh)).unwrap();
     let camera = CameraFrame::new(&s.cameras[0], 8, 8);
     gpu_march_with(&ctx, &lib, &field, &camera, MarchKnobs::default(), None);
+}
+
+/// A field stored sparsely (only its non-zero bricks, `field::bricks`)
+/// marches to the same image, bit for bit, as stored densely: plain and
+/// with view-dependent colour of degree 1 and 2, compiled for the field
+/// and for any field. The bake leaves most of PLANTS' bricks empty.
+#[test]
+fn a_sparse_field_marches_as_the_dense_one() {
+    use inlay_passes::field::{sh_extra_coefficients, FieldLayout};
+    let ctx = common::gpu();
+    let s = scene("plants.toml");
+    let plain = small_field(&s, 64, 1);
+    let camera = CameraFrame::new(&s.cameras[0], 48, 32);
+    let knobs = MarchKnobs {
+        samples_per_ray: 256,
+        termination: 1e-4,
+        skip_empty: true,
+    };
+    for degree in [0, 1, 2] {
+        let k = sh_extra_coefficients(degree);
+        let sh = (0..plain.nodes.len() * k)
+            .map(|i| {
+                let c = plain.nodes[i / k];
+                let w = ((i % 7) as f32 - 3.0) / 4.0;
+                [w * c[0], -w * c[1], 0.5 * w * c[2]]
+            })
+            .collect();
+        let field = plain.clone().with_sh(degree, sh);
+        let dense = GpuGridField::upload_as(&ctx, &field, FieldLayout::Dense).unwrap();
+        let sparse = GpuGridField::upload_as(&ctx, &field, FieldLayout::Sparse).unwrap();
+        assert!(sparse.sparse && !dense.sparse);
+        assert!(
+            sparse.node_bytes < dense.node_bytes * 2 / 3,
+            "degree {degree}: sparse {} bytes, dense {}",
+            sparse.node_bytes,
+            dense.node_bytes
+        );
+        let march = |f: &GpuGridField, general: bool| {
+            let lib = if general {
+                common::test_library()
+            } else {
+                f.library(&common::test_library())
+            };
+            gpu_march_with(&ctx, &lib, f, &camera, knobs, None)
+        };
+        let (want, want_depth) = march(&dense, false);
+        for general in [false, true] {
+            let (got, got_depth) = march(&sparse, general);
+            assert_eq!(
+                got.pixels, want.pixels,
+                "degree {degree}, general {general}"
+            );
+            assert_eq!(got_depth.pixels, want_depth.pixels, "degree {degree}");
+        }
+    }
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// A pass compiled for dense fields refuses a sparse one (it would read
+/// the pool as the grid).
+#[test]
+#[should_panic(expected = "compiled for dense fields")]
+fn a_pass_for_dense_fields_refuses_a_sparse_one() {
+    use inlay_passes::field::FieldLayout;
+    let ctx = common::gpu();
+    let s = scene("plants.toml");
+    let plain = small_field(&s, 24, 1);
+    let dense = GpuGridField::upload_as(&ctx, &plain, FieldLayout::Dense).unwrap();
+    let sparse = GpuGridField::upload_as(&ctx, &plain, FieldLayout::Sparse).unwrap();
+    let camera = CameraFrame::new(&s.cameras[0], 8, 8);
+    let lib = dense.library(&common::test_library());
+    gpu_march_with(&ctx, &lib, &sparse, &camera, MarchKnobs::default(), None);
 }
 
 #[test]

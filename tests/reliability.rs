@@ -9,7 +9,7 @@ use inlay::commands::on_device;
 use inlay::outputs::Outputs;
 use inlay_engine::graph::{BufferAccess, FrameGraph, PassKind};
 use inlay_engine::{vk, Buffer, BufferLocation, ContextOptions, DeviceInfo, Renderer, SubmitSync};
-use inlay_passes::field::check_field_fits;
+use inlay_passes::field::{check_field_fits, check_field_may_fit};
 use inlay_passes::object::check_mesh_fits;
 use inlay_passes::ssdf::{check_bake_fits, BAKE_BYTES_PER_TRIANGLE};
 
@@ -114,6 +114,12 @@ fn limits_come_from_the_device_and_say_what_fits() {
     let e = check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 1).unwrap_err();
     assert!(e.to_string().contains("degree 1"), "{e}");
     check_field_fits(&small_device(&real, 64 << 18, 1 << 40), res, 1).unwrap();
+    // Before the nodes are known, only the heap refuses: the sparse layout
+    // may fit the binding.
+    check_field_may_fit(&small_device(&real, 1024, 16 << 18), res, 0).unwrap();
+    let e =
+        check_field_may_fit(&small_device(&real, u32::MAX, (16 << 18) - 16), res, 0).unwrap_err();
+    assert!(e.to_string().contains("largest memory heap"), "{e}");
 }
 
 /// A frame of far more passes than the timer's first pool holds (a scene of

@@ -3,6 +3,10 @@
 // them, and the coarse occupancy grid for empty-space skipping. Mirrors
 // passes/src/field/grid.rs and passes/src/field/occupancy.rs; the layout of
 // `GridInfo` and of `grid_nodes` is written by passes/src/field/gpu_grid.rs.
+// A sparse field (FIELD_SPARSE, a define of the pass's shader library, and
+// brick_dims.x > 0) keeps only its non-zero bricks of nodes: the table
+// after the occupancy cells in `grid_occupancy` gives each brick's slot
+// (passes/src/field/bricks.rs).
 
 #include "field/trilinear.wgsl"
 #include "field/sh.wgsl"
@@ -16,6 +20,8 @@ struct GridInfo {
     _pad1: u32,
     occupancy_dims: vec3<u32>,
     _pad2: u32,
+    brick_dims: vec3<u32>,
+    pool_nodes: u32,
 }
 
 @group(0) @binding(0) var<uniform> grid_info: GridInfo;
@@ -24,9 +30,51 @@ struct GridInfo {
 
 #include "field/sh_trilinear.wgsl"
 
-fn grid_node(i: vec3<u32>) -> vec4<f32> {
+// Nodes per brick side, and the table's entry of a dropped brick (mirrors
+// BRICK_SIDE and EMPTY_BRICK).
+const GRID_BRICK_SIDE: u32 = 8u;
+const GRID_EMPTY_BRICK: u32 = 0xffffffffu;
+
+// Where node i lies in grid_nodes, or GRID_EMPTY_BRICK where its brick was
+// dropped (the node is zero). Mirrors BrickLayout::pool_index.
+fn grid_node_index(i: vec3<u32>) -> u32 {
+    if FIELD_SPARSE && grid_info.brick_dims.x != 0u {
+        let d = grid_info.brick_dims;
+        let b = i / GRID_BRICK_SIDE;
+        let o = grid_info.occupancy_dims;
+        let slot = grid_occupancy[o.x * o.y * o.z + b.x + d.x * (b.y + d.y * b.z)];
+        if slot == GRID_EMPTY_BRICK {
+            return GRID_EMPTY_BRICK;
+        }
+        let l = i % GRID_BRICK_SIDE;
+        return slot * (GRID_BRICK_SIDE * GRID_BRICK_SIDE * GRID_BRICK_SIDE) + l.x + GRID_BRICK_SIDE * (l.y + GRID_BRICK_SIDE * l.z);
+    }
     let r = grid_info.resolution;
-    return grid_nodes[i.x + r.x * (i.y + r.y * i.z)];
+    return i.x + r.x * (i.y + r.y * i.z);
+}
+
+fn grid_node(i: vec3<u32>) -> vec4<f32> {
+    let n = grid_node_index(i);
+    if FIELD_SPARSE && n == GRID_EMPTY_BRICK {
+        return vec4<f32>(0.0);
+    }
+    return grid_nodes[n];
+}
+
+// The view-dependent part at a cell: Σ over its corners of weight ×
+// sh_node (a dropped brick's coefficients are zero). The coefficients
+// follow the pool_nodes nodes.
+fn grid_sh(cell: TrilinearCell, basis: array<f32, 8>) -> vec3<f32> {
+    let count = sh_count(grid_info.sh_degree);
+    var c = vec3<f32>(0.0);
+    for (var k = 0u; k < 8u; k++) {
+        let n = grid_node_index(cell.base + trilinear_corner(k));
+        if FIELD_SPARSE && n == GRID_EMPTY_BRICK {
+            continue;
+        }
+        c += trilinear_weight(cell.f, k) * sh_node(grid_info.pool_nodes + count * n, count, basis);
+    }
+    return c;
 }
 
 // Trilinear (r, g, b, σ) at x; zero outside the bounds.
@@ -56,7 +104,7 @@ fn grid_view_colour(x: vec3<f32>, basis: array<f32, 8>, base: vec3<f32>) -> vec3
     if !cell.inside {
         return base;
     }
-    return max(base + sh_trilinear(cell, grid_info.resolution, grid_info.sh_degree, basis), vec3<f32>(0.0));
+    return max(base + grid_sh(cell, basis), vec3<f32>(0.0));
 }
 
 // When the coarse cell holding x is empty: the distance along dir from x to

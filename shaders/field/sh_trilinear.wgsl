@@ -18,17 +18,24 @@ fn sh_first(i: vec3<u32>, resolution: vec3<u32>, degree: u32) -> u32 {
     return r.x * r.y * r.z + sh_count(degree) * (i.x + r.x * (i.y + r.y * i.z));
 }
 
+// Σ_j y_j·coefficient_j of the node whose `count` further coefficients
+// start at grid_nodes[first].
+fn sh_node(first: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
+    var y = basis;
+    var s = vec3<f32>(0.0);
+    for (var j = 0u; j < count; j++) {
+        s += y[j] * grid_nodes[first + j].xyz;
+    }
+    return s;
+}
+
+// The view-dependent part at a cell of a dense grid.
 fn sh_trilinear(cell: TrilinearCell, resolution: vec3<u32>, degree: u32, basis: array<f32, 8>) -> vec3<f32> {
     let count = sh_count(degree);
-    var y = basis;
     var c = vec3<f32>(0.0);
     for (var k = 0u; k < 8u; k++) {
         let n = sh_first(cell.base + trilinear_corner(k), resolution, degree);
-        var s = vec3<f32>(0.0);
-        for (var j = 0u; j < count; j++) {
-            s += y[j] * grid_nodes[n + j].xyz;
-        }
-        c += trilinear_weight(cell.f, k) * s;
+        c += trilinear_weight(cell.f, k) * sh_node(n, count, basis);
     }
     return c;
 }

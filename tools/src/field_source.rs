@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use inlay_engine::DeviceInfo;
 use inlay_passes::bake::{bake_grid, BakeKnobs};
 use inlay_passes::field::{
-    check_field_fits, field_bytes, load_field, read_field_header, GridField, FIELD_VERSION,
+    check_field_may_fit, field_bytes, load_field, read_field_header, GridField, FIELD_VERSION,
 };
 use inlay_passes::scene::{FieldSource, Scene};
 
@@ -77,12 +77,13 @@ fn cache_entry(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBu
     Ok(entry_path(&scene.name, key, "inlayfield"))
 }
 
-/// Fails unless the field file at `path` fits `device` (read from its
-/// header, before the nodes are).
+/// Fails unless the field file at `path` may fit `device` (read from its
+/// header, before the nodes are; whether it needs the sparse layout, the
+/// upload finds).
 fn check_file_fits(path: &Path, device: Option<&DeviceInfo>) -> anyhow::Result<()> {
     let header = read_field_header(path)?;
     if let Some(info) = device {
-        check_field_fits(info, header.resolution, header.sh_degree)
+        check_field_may_fit(info, header.resolution, header.sh_degree)
             .with_context(|| format!("{}: resolution", path.display()))?;
     }
     Ok(())
@@ -110,7 +111,7 @@ pub fn scene_field(
         FieldSource::Recipe(recipe) => {
             if let Some(info) = device {
                 let res = inlay_passes::bake::grid_resolution(recipe, scene.bake.resolution);
-                check_field_fits(info, res, 0).with_context(|| {
+                check_field_may_fit(info, res, 0).with_context(|| {
                     format!(
                         "{}: [bake] resolution {}",
                         scene.path.display(),

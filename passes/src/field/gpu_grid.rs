@@ -1,7 +1,10 @@
 //! A grid field uploaded to the GPU, laid out for `shaders/field/grid.wgsl`:
 //! a uniform block of bounds and sizes, the nodes as `vec4<f32>` (r, g, b, σ;
 //! then, with view-dependent colour, each node's further coefficients as
-//! (r, g, b, 0), node-major), and the occupancy cells as u32.
+//! (r, g, b, 0), node-major), and the occupancy cells as u32. A field whose
+//! nodes do not fit one storage binding is stored sparsely
+//! ([`super::bricks`]): only its non-zero bricks, their table after the
+//! occupancy cells.
 
 use std::sync::Arc;
 
@@ -10,6 +13,7 @@ use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, Context, DeviceInfo};
 
+use super::bricks::{BrickLayout, BRICK_SIDE};
 use super::grid::GridField;
 
 inlay_engine::gpu_struct! {
@@ -31,7 +35,28 @@ inlay_engine::gpu_struct! {
         pub occupancy_dims: [u32; 3],
         /// Padding.
         pub _pad2: u32,
+        /// Bricks per axis of a sparse field (0: dense).
+        pub brick_dims: [u32; 3],
+        /// Nodes before the further colour coefficients in `grid_nodes`:
+        /// the pool's of a sparse field, all of a dense one's.
+        pub pool_nodes: u32,
     }
+}
+
+/// The define (bool) that tells the field's shaders that the field may be
+/// sparse: false leaves the brick lookup out of every pipeline, so a dense
+/// field costs nothing for it.
+pub const SPARSE_DEFINE: &str = "FIELD_SPARSE";
+
+/// How a field's nodes are laid out on the device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FieldLayout {
+    /// Every node, in grid order.
+    Dense,
+    /// Only the non-zero bricks ([`super::bricks`]).
+    Sparse,
+    /// Dense where it fits the device, else sparse.
+    Auto,
 }
 
 /// The define (bool) that tells the march whether the field it reads may
@@ -43,7 +68,10 @@ pub const VIEW_DEPENDENT_DEFINE: &str = "FIELD_VIEW_DEPENDENT";
 /// colour where the field has it (checked per sample). What
 /// [`crate::shaders::library`] gives.
 pub fn general_field_library(lib: &ShaderLibrary) -> ShaderLibrary {
-    lib.with_defines(&[Define::Bool(VIEW_DEPENDENT_DEFINE, true)])
+    lib.with_defines(&[
+        Define::Bool(VIEW_DEPENDENT_DEFINE, true),
+        Define::Bool(SPARSE_DEFINE, true),
+    ])
 }
 
 /// Device copies of a grid field's data (bindings 0, 1, 2 of set 0).
@@ -64,6 +92,10 @@ pub struct GpuGridField {
     pub emitters: Vec<super::FieldEmitter>,
     /// Degree of the view-dependent colour (0: none).
     pub sh_degree: u32,
+    /// Whether its nodes are stored sparsely.
+    pub sparse: bool,
+    /// Bytes its node array takes on the device.
+    pub node_bytes: u64,
 }
 
 /// The field's buffers as imported into one frame's graph.
@@ -77,6 +109,8 @@ pub struct GridBindings {
     pub occupancy: BufferHandle,
     /// Degree of the field's view-dependent colour.
     pub sh_degree: u32,
+    /// Whether the field is stored sparsely.
+    pub sparse: bool,
 }
 
 impl GridBindings {
@@ -84,8 +118,9 @@ impl GridBindings {
     /// `shaders/field/grid.wgsl`).
     ///
     /// Panics if the dispatch's pipeline was compiled for fields without
-    /// view-dependent colour ([`GpuGridField::library`] of another field)
-    /// and this field has it: its colour would be read wrong.
+    /// view-dependent colour or for dense fields ([`GpuGridField::library`]
+    /// of another field) and this field has it or is sparse: it would be
+    /// read wrong.
     pub fn bind<'p, 'g>(&self, dispatch: Dispatch<'p, 'g>) -> Dispatch<'p, 'g> {
         assert!(
             self.sh_degree == 0
@@ -93,6 +128,12 @@ impl GridBindings {
                     != Some(&Define::Bool(VIEW_DEPENDENT_DEFINE, false)),
             "a pass compiled for fields without view-dependent colour was given one of degree {}",
             self.sh_degree
+        );
+        assert!(
+            !self.sparse
+                || dispatch.pipeline().define(SPARSE_DEFINE)
+                    != Some(&Define::Bool(SPARSE_DEFINE, false)),
+            "a pass compiled for dense fields was given a sparse one"
         );
         dispatch
             .read("grid_info", self.info)
@@ -116,8 +157,58 @@ pub fn check_field_fits(
     resolution: UVec3,
     sh_degree: u32,
 ) -> anyhow::Result<()> {
+    check_nodes_fit(info, resolution, sh_degree, None)
+}
+
+/// Fails unless a field of `resolution` nodes with colour of `sh_degree`
+/// could fit `info`'s largest memory heap; it may still need the sparse
+/// layout to fit one storage binding, which only its nodes tell
+/// ([`GpuGridField::upload`] checks that). For checks before a bake or a
+/// file is read, where the sparse layout is unknown.
+pub fn check_field_may_fit(
+    info: &DeviceInfo,
+    resolution: UVec3,
+    sh_degree: u32,
+) -> anyhow::Result<()> {
     let per_node = node_bytes_on_device(sh_degree);
     let node_bytes = per_node * resolution.as_u64vec3().element_product();
+    let heap = info.device_heap_bytes;
+    if node_bytes > heap {
+        anyhow::bail!(
+            "the field's {}x{}x{} nodes{} take {} MiB, more than {}'s largest memory heap \
+             ({} MiB); use a field of at most {} nodes",
+            resolution.x,
+            resolution.y,
+            resolution.z,
+            degree_words(sh_degree),
+            node_bytes >> 20,
+            info.name,
+            heap >> 20,
+            heap / per_node
+        );
+    }
+    Ok(())
+}
+
+fn degree_words(sh_degree: u32) -> String {
+    if sh_degree > 0 {
+        format!(" with view-dependent colour of degree {sh_degree}")
+    } else {
+        String::new()
+    }
+}
+
+/// [`check_field_fits`] for the layout that holds `pool` of the
+/// resolution's nodes (None: all of them, dense).
+fn check_nodes_fit(
+    info: &DeviceInfo,
+    resolution: UVec3,
+    sh_degree: u32,
+    pool: Option<u64>,
+) -> anyhow::Result<()> {
+    let per_node = node_bytes_on_device(sh_degree);
+    let all = resolution.as_u64vec3().element_product();
+    let node_bytes = per_node * pool.unwrap_or(all);
     let (limit, what) = (
         info.max_storage_buffer_range as u64,
         "largest storage binding",
@@ -125,17 +216,20 @@ pub fn check_field_fits(
     let (heap, heap_what) = (info.device_heap_bytes, "largest memory heap");
     for (limit, what) in [(limit, what), (heap, heap_what)] {
         if node_bytes > limit {
+            let stored = match pool {
+                Some(p) => format!(
+                    ", stored sparsely ({:.0} % of them in non-zero bricks),",
+                    100.0 * p as f64 / all as f64
+                ),
+                None => String::new(),
+            };
             anyhow::bail!(
-                "the field's {}x{}x{} nodes{} take {} MiB, more than {}'s {what} ({} MiB); \
-                 use a field of at most {} nodes",
+                "the field's {}x{}x{} nodes{}{stored} take {} MiB, more than {}'s {what} \
+                 ({} MiB); use a field of at most {} nodes",
                 resolution.x,
                 resolution.y,
                 resolution.z,
-                if sh_degree > 0 {
-                    format!(" with view-dependent colour of degree {sh_degree}")
-                } else {
-                    String::new()
-                },
+                degree_words(sh_degree),
                 node_bytes >> 20,
                 info.name,
                 limit >> 20,
@@ -159,10 +253,37 @@ pub fn device_values(field: &GridField) -> Vec<[f32; 4]> {
 }
 
 impl GpuGridField {
-    /// Uploads `field`. Fails with a clear message when the node array is
-    /// larger than the device can bind ([`check_field_fits`]).
+    /// Uploads `field`, dense where it fits the device and sparse where
+    /// only that fits ([`FieldLayout::Auto`]). Fails with a clear message
+    /// when neither does ([`check_field_fits`]).
     pub fn upload(ctx: &Arc<Context>, field: &GridField) -> anyhow::Result<Self> {
-        check_field_fits(ctx.info(), field.resolution, field.sh_degree)?;
+        Self::upload_as(ctx, field, FieldLayout::Auto)
+    }
+
+    /// Uploads `field` in `layout`.
+    pub fn upload_as(
+        ctx: &Arc<Context>,
+        field: &GridField,
+        layout: FieldLayout,
+    ) -> anyhow::Result<Self> {
+        let dense_fits = check_field_fits(ctx.info(), field.resolution, field.sh_degree);
+        let bricks = match (layout, dense_fits) {
+            (FieldLayout::Dense, fits) => {
+                fits?;
+                None
+            }
+            (FieldLayout::Auto, Ok(())) => None,
+            (FieldLayout::Sparse | FieldLayout::Auto, _) => {
+                let bricks = BrickLayout::of(field);
+                check_nodes_fit(
+                    ctx.info(),
+                    field.resolution,
+                    field.sh_degree,
+                    Some(bricks.pool_nodes()),
+                )?;
+                Some(bricks)
+            }
+        };
         let b = field.bounds;
         let occ = &field.occupancy;
         let info = GridInfo {
@@ -174,9 +295,36 @@ impl GpuGridField {
             _pad1: 0,
             occupancy_dims: occ.dims.to_array(),
             _pad2: 0,
+            brick_dims: bricks.as_ref().map_or([0; 3], |l| l.dims.to_array()),
+            pool_nodes: bricks
+                .as_ref()
+                .map_or(field.nodes.len() as u64, |l| l.pool_nodes())
+                as u32,
         };
-        let nodes: Vec<u8> = bytemuck::cast_slice(&device_values(field)).to_vec();
-        let cells: Vec<u8> = occ.cells.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let mut values = match &bricks {
+            Some(l) => l.device_values(field),
+            None => device_values(field),
+        };
+        if values.is_empty() {
+            values.push([0.0; 4]); // a field with no bricks: a buffer is never empty
+        }
+        let nodes: Vec<u8> = bytemuck::cast_slice(&values).to_vec();
+        if let Some(l) = &bricks {
+            log::info!(
+                "field stored sparsely: {} of {} bricks of {BRICK_SIDE}³ nodes, {} MiB (dense: {} MiB)",
+                l.slots,
+                l.table.len(),
+                nodes.len() >> 20,
+                (node_bytes_on_device(field.sh_degree) * field.nodes.len() as u64) >> 20
+            );
+        }
+        let table = bricks.as_ref().map_or(&[][..], |l| &l.table[..]);
+        let cells: Vec<u8> = occ
+            .cells
+            .iter()
+            .chain(table)
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         Ok(Self {
             info: Arc::new(Buffer::with_data(
@@ -192,6 +340,8 @@ impl GpuGridField {
             resolution: field.resolution,
             emitters: super::find_emitters(field),
             sh_degree: field.sh_degree,
+            sparse: bricks.is_some(),
+            node_bytes: nodes.len() as u64,
         })
     }
 
@@ -199,7 +349,10 @@ impl GpuGridField {
     /// [`VIEW_DEPENDENT_DEFINE`] false when it has no view-dependent
     /// colour (the march leaves that code out), true when it has.
     pub fn library(&self, lib: &ShaderLibrary) -> ShaderLibrary {
-        lib.with_defines(&[Define::Bool(VIEW_DEPENDENT_DEFINE, self.sh_degree > 0)])
+        lib.with_defines(&[
+            Define::Bool(VIEW_DEPENDENT_DEFINE, self.sh_degree > 0),
+            Define::Bool(SPARSE_DEFINE, self.sparse),
+        ])
     }
 
     /// Imports the buffers into a frame's graph (read-only).
@@ -209,6 +362,7 @@ impl GpuGridField {
             nodes: graph.import_buffer(&self.nodes, None),
             occupancy: graph.import_buffer(&self.occupancy, None),
             sh_degree: self.sh_degree,
+            sparse: self.sparse,
         }
     }
 }

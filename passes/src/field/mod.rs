@@ -6,6 +6,7 @@
 //! harmonics of degree ≤ 2, [`sh_basis`]); fields trained from photos and instant-ngp snapshots are
 //! later kinds behind the same trait.
 
+pub mod bricks;
 mod emitters;
 mod format;
 pub(crate) mod gpu_grid;
@@ -20,8 +21,9 @@ pub use format::{
     FieldHeader, FIELD_MAGIC, FIELD_VERSION,
 };
 pub use gpu_grid::{
-    check_field_fits, device_values, general_field_library, node_bytes_on_device, GpuGridField,
-    GridBindings, VIEW_DEPENDENT_DEFINE,
+    check_field_fits, check_field_may_fit, device_values, general_field_library,
+    node_bytes_on_device, FieldLayout, GpuGridField, GridBindings, SPARSE_DEFINE,
+    VIEW_DEPENDENT_DEFINE,
 };
 pub use grid::GridField;
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
