@@ -368,14 +368,27 @@ fn train_small(
     dataset: &inlay_passes::dataset::Dataset,
     learn_exposure: bool,
 ) -> inlay_passes::train::Trained {
+    train_small_with(ctx, lib, dataset, learn_exposure, (24, false))
+}
+
+/// [`train_small`] at `resolution` nodes, its second stage trained
+/// sparsely or not.
+fn train_small_with(
+    ctx: &std::sync::Arc<inlay_engine::Context>,
+    lib: &inlay_engine::shader::ShaderLibrary,
+    dataset: &inlay_passes::dataset::Dataset,
+    learn_exposure: bool,
+    (resolution, sparse): (u32, bool),
+) -> inlay_passes::train::Trained {
     use inlay_passes::train::{train, TrainKnobs};
     let knobs = TrainKnobs {
-        resolution: 24,
+        resolution,
         stages: 2,
         iterations: 600,
         batch: 2048,
         samples_per_ray: 128,
         learn_exposure,
+        sparse,
         ..TrainKnobs::default()
     };
     let control = inlay_passes::train::TrainControl::default();
@@ -443,6 +456,27 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
         .iter()
         .flatten()
         .all(|v| v.is_finite() && *v >= 0.0));
+    assert_eq!(trained.bricks, None);
+
+    // The second stage trained in bricks (`--sparse`; at this size every
+    // brick lies around what the first stage made visible, so all are
+    // kept): the same training, the held-out views within 0.3 dB.
+    let sparse = train_small_with(&ctx, &lib, &dataset, false, (24, true));
+    common::assert_no_validation_errors(&ctx);
+    assert_eq!(sparse.bricks, Some((18, 18)));
+    for (s, d) in sparse.held_out.iter().zip(&trained.held_out) {
+        eprintln!(
+            "held-out {}: sparse {:.2} dB, dense {:.2} dB",
+            s.frame, s.psnr, d.psnr
+        );
+        assert!(
+            (s.psnr - d.psnr).abs() < 0.3,
+            "frame {}: {} vs {}",
+            s.frame,
+            s.psnr,
+            d.psnr
+        );
+    }
 }
 
 /// `train-tv` and `train-descend` take the CPU reference's total-variation
@@ -574,4 +608,175 @@ fn exposure_gains_are_learnt_for_photographs_of_unknown_exposure() {
         // Measured: +0.93 and +1.35 dB.
         assert!(a.psnr > fitted.psnr + 0.3, "{} vs {}", a.psnr, fitted.psnr);
     }
+}
+
+/// A 20 × 11 × 13 field of random values (degree 2) whose nodes with
+/// x < 8 are zero: a sparse layout drops the four bricks there.
+fn field_with_empty_bricks() -> GridField {
+    let res = UVec3::new(20, 11, 13);
+    let mut rng = Pcg32::new(5, 3);
+    let mut nodes = Vec::new();
+    for _z in 0..res.z {
+        for _y in 0..res.y {
+            for x in 0..res.x {
+                let v: [f32; 4] = std::array::from_fn(|c| {
+                    let r = rng.next_f64() as f32;
+                    if c == 3 {
+                        3.0 * r * r
+                    } else {
+                        2.0 * r
+                    }
+                });
+                nodes.push(if x < 8 { [0.0; 4] } else { v });
+            }
+        }
+    }
+    let field = GridField::new(
+        res,
+        Aabb::new(DVec3::new(-1.0, -0.5, -0.7), DVec3::new(1.0, 0.6, 0.7)),
+        nodes,
+        2,
+    );
+    let k = inlay_passes::field::sh_extra_coefficients(2);
+    let sh = (0..field.nodes.len() * k)
+        .map(|i| {
+            let x = (i / k) as u32 % res.x;
+            let r = (2.0 * (rng.next_f64() - 0.5)) as f32;
+            if x < 8 {
+                [0.0; 3]
+            } else {
+                [r, -0.5 * r, 0.25 * r]
+            }
+        })
+        .collect();
+    field.with_sh(2, sh)
+}
+
+/// A trainer of only some bricks (`field::bricks`, for grids whose dense
+/// values do not fit one binding): its gradient at every node it trains is
+/// the dense CPU reference's there (the dropped bricks' nodes are zero on
+/// both sides, and get no gradient), and its total-variation step moves
+/// the trained nodes as the CPU's step does, the dropped ones held at
+/// zero.
+#[test]
+fn a_sparse_grid_trains_as_the_dense_one_where_it_has_bricks() {
+    use inlay_passes::field::bricks::BrickLayout;
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let field = field_with_empty_bricks();
+    let layout = BrickLayout::of(&field);
+    assert_eq!((layout.slots, layout.table.len()), (8, 12));
+    let knobs = MarchKnobs {
+        samples_per_ray: 48,
+        termination: 1e-4,
+        skip_empty: false,
+    };
+    let (bg, eps) = (DVec3::new(0.2, 0.1, 0.3), 0.05);
+    let batch = rays(&field, 96);
+    let mut trainer =
+        GpuTrainer::with_layout(&ctx, &lib, &field, knobs, Some(layout.clone())).unwrap();
+    let mut renderer = Renderer::new(&ctx, 1).unwrap();
+    let records: Vec<TrainRay> = batch
+        .iter()
+        .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
+        .collect();
+    let out = trainer
+        .run_batch(&mut renderer, &records, bg, eps, None)
+        .unwrap();
+    let n = field.nodes.len();
+    let k = field.sh_count();
+    let mut cpu_grad = vec![0.0f64; 4 * n * (1 + k)];
+    for ((ray, target, w), gpu) in batch.iter().zip(&out) {
+        let r = render_ray_with_gradient(&field, ray, &knobs, bg, 0.0, |c| {
+            *w * pixel_loss(c, *target, eps).1
+        });
+        let pixel = DVec3::new(gpu[0] as f64, gpu[1] as f64, gpu[2] as f64);
+        assert!(
+            (pixel - r.colour).abs().max_element() < 1e-4 * (1.0 + r.colour.length()),
+            "{pixel} vs {}",
+            r.colour
+        );
+        for (i, g) in &r.values {
+            for c in 0..4 {
+                cpu_grad[4 * i + c] += g[c];
+            }
+        }
+    }
+    let gpu_grad = trainer.gradient(&mut renderer).unwrap();
+    let pool = layout.pool_nodes() as usize;
+    let scale = cpu_grad.iter().fold(0.0f64, |a, g| a.max(g.abs()));
+    let (mut worst, mut dropped_with_gradient) = (0.0f64, 0);
+    let r = field.resolution;
+    for z in 0..r.z {
+        for y in 0..r.y {
+            for x in 0..r.x {
+                let d = field.index(x, y, z);
+                let Some(p) = layout.pool_index(UVec3::new(x, y, z)) else {
+                    if (0..4).any(|c| cpu_grad[4 * d + c] != 0.0) {
+                        dropped_with_gradient += 1;
+                    }
+                    continue;
+                };
+                let p = p as usize;
+                let mut pairs: Vec<(usize, usize)> =
+                    (0..4).map(|c| (4 * p + c, 4 * d + c)).collect();
+                for j in 0..k {
+                    for c in 0..3 {
+                        pairs.push((4 * (pool + p * k + j) + c, 4 * (n + d * k + j) + c));
+                    }
+                }
+                for (g, c) in pairs {
+                    worst = worst.max((gpu_grad[g] as f64 - cpu_grad[c]).abs() / scale);
+                }
+            }
+        }
+    }
+    // As the dense test: f32 sums over ~100 rays, 1e-3 of the largest.
+    assert!(
+        worst < 1e-3,
+        "gradient differs by {worst} of its largest value"
+    );
+    // The rays cross the dropped bricks (the dense grid would train them).
+    assert!(dropped_with_gradient > 50, "{dropped_with_gradient}");
+
+    // Total variation alone, from the GPU's values (Adam's rates zero).
+    let still = AdamKnobs {
+        rate: 0.0,
+        density_rate: 0.0,
+        beta1: 0.9,
+        beta2: 0.99,
+    };
+    trainer.tv_weights = (0.03, 0.07);
+    let quiet = [TrainRay::new(
+        batch[0].0.origin,
+        batch[0].0.dir,
+        batch[0].1,
+        0.0,
+    )];
+    trainer
+        .run_batch(&mut renderer, &quiet, bg, eps, Some((&still, 1.0)))
+        .unwrap();
+    let gpu = trainer.field(&mut renderer).unwrap().nodes;
+    let mut cpu = field.nodes.clone();
+    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, 0.03, 0.07);
+    for z in 0..r.z {
+        for y in 0..r.y {
+            for x in 0..r.x {
+                let d = field.index(x, y, z);
+                let (g, c) = (gpu[d], cpu[d]);
+                if x < 8 {
+                    assert_eq!(g, [0.0; 4], "node ({x}, {y}, {z}) held at zero");
+                } else {
+                    for ch in 0..4 {
+                        assert!(
+                            (g[ch] - c[ch]).abs() < 1e-5 * (1.0 + c[ch].abs()),
+                            "node ({x}, {y}, {z}): {g:?} vs {c:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert_ne!(gpu, field.nodes);
+    common::assert_no_validation_errors(&ctx);
 }

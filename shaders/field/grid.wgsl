@@ -10,6 +10,7 @@
 
 #include "field/trilinear.wgsl"
 #include "field/sh.wgsl"
+#include "field/bricks.wgsl"
 
 struct GridInfo {
     bounds_min: vec3<f32>,
@@ -30,51 +31,27 @@ struct GridInfo {
 
 #include "field/sh_trilinear.wgsl"
 
-// Nodes per brick side, and the table's entry of a dropped brick (mirrors
-// BRICK_SIDE and EMPTY_BRICK).
-const GRID_BRICK_SIDE: u32 = 8u;
-const GRID_EMPTY_BRICK: u32 = 0xffffffffu;
-
-// Where node i lies in grid_nodes, or GRID_EMPTY_BRICK where its brick was
+// Where node i lies in grid_nodes, or EMPTY_BRICK where its brick was
 // dropped (the node is zero). Mirrors BrickLayout::pool_index.
-fn grid_node_index(i: vec3<u32>) -> u32 {
+fn field_node_index(i: vec3<u32>) -> u32 {
     if FIELD_SPARSE && grid_info.brick_dims.x != 0u {
-        let d = grid_info.brick_dims;
-        let b = i / GRID_BRICK_SIDE;
         let o = grid_info.occupancy_dims;
-        let slot = grid_occupancy[o.x * o.y * o.z + b.x + d.x * (b.y + d.y * b.z)];
-        if slot == GRID_EMPTY_BRICK {
-            return GRID_EMPTY_BRICK;
+        let slot = grid_occupancy[o.x * o.y * o.z + brick_table_index(i, grid_info.brick_dims)];
+        if slot == EMPTY_BRICK {
+            return EMPTY_BRICK;
         }
-        let l = i % GRID_BRICK_SIDE;
-        return slot * (GRID_BRICK_SIDE * GRID_BRICK_SIDE * GRID_BRICK_SIDE) + l.x + GRID_BRICK_SIDE * (l.y + GRID_BRICK_SIDE * l.z);
+        return brick_pool_index(slot, i);
     }
     let r = grid_info.resolution;
     return i.x + r.x * (i.y + r.y * i.z);
 }
 
 fn grid_node(i: vec3<u32>) -> vec4<f32> {
-    let n = grid_node_index(i);
-    if FIELD_SPARSE && n == GRID_EMPTY_BRICK {
+    let n = field_node_index(i);
+    if FIELD_SPARSE && n == EMPTY_BRICK {
         return vec4<f32>(0.0);
     }
     return grid_nodes[n];
-}
-
-// The view-dependent part at a cell: Σ over its corners of weight ×
-// sh_node (a dropped brick's coefficients are zero). The coefficients
-// follow the pool_nodes nodes.
-fn grid_sh(cell: TrilinearCell, basis: array<f32, 8>) -> vec3<f32> {
-    let count = sh_count(grid_info.sh_degree);
-    var c = vec3<f32>(0.0);
-    for (var k = 0u; k < 8u; k++) {
-        let n = grid_node_index(cell.base + trilinear_corner(k));
-        if FIELD_SPARSE && n == GRID_EMPTY_BRICK {
-            continue;
-        }
-        c += trilinear_weight(cell.f, k) * sh_node(grid_info.pool_nodes + count * n, count, basis);
-    }
-    return c;
 }
 
 // Trilinear (r, g, b, σ) at x; zero outside the bounds.
@@ -104,7 +81,7 @@ fn grid_view_colour(x: vec3<f32>, basis: array<f32, 8>, base: vec3<f32>) -> vec3
     if !cell.inside {
         return base;
     }
-    return max(base + grid_sh(cell, basis), vec3<f32>(0.0));
+    return max(base + sh_trilinear(cell, grid_info.sh_degree, grid_info.pool_nodes, basis), vec3<f32>(0.0));
 }
 
 // When the coarse cell holding x is empty: the distance along dir from x to

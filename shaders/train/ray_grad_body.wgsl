@@ -2,8 +2,8 @@
 // march's quadrature over the trained grid (no empty-space skipping), the
 // pixel's loss, and the loss's gradient with respect to every value the
 // ray read. The trained values are laid out as a field's on the device:
-// the nodes, then the view-dependent colour's coefficients
-// (field/sh_trilinear.wgsl). A photograph records its frame's exposure gain
+// the nodes (a sparse grid's pool of bricks, field/bricks.wgsl), then the
+// view-dependent colour's coefficients (field/sh_trilinear.wgsl). A photograph records its frame's exposure gain
 // (RGB) times the pixel (1 unless learnt); with learn_gains, the loss's
 // gradient with respect to the gain of every frame but the first is
 // scattered too. With pc.distortion > 0, the distortion loss of the ray's
@@ -33,6 +33,10 @@ struct TrainPush {
     // The distortion loss's weight over the field's diagonal, λ/D (0: none).
     distortion: f32,
     pad2: u32,
+    // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
+    brick_dims: vec3<u32>,
+    // Nodes before the view-dependent coefficients.
+    pool_nodes: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -54,10 +58,22 @@ var<immediate> pc: TrainPush;
 @group(0) @binding(1) var<storage, read> rays: array<TrainRay>;
 @group(0) @binding(3) var<storage, read_write> ray_out: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> gains: array<vec4<f32>>;
+// A sparse grid's brick table (one unused entry for a dense grid).
+@group(0) @binding(6) var<storage, read> bricks: array<u32>;
 
+#include "field/bricks.wgsl"
 #include "field/sh_trilinear.wgsl"
 
-fn node_index(i: vec3<u32>) -> u32 {
+// Where node i's values lie (4 a node), or EMPTY_BRICK where its brick
+// is not trained (the node is zero).
+fn field_node_index(i: vec3<u32>) -> u32 {
+    if pc.brick_dims.x != 0u {
+        let slot = bricks[brick_table_index(i, pc.brick_dims)];
+        if slot == EMPTY_BRICK {
+            return EMPTY_BRICK;
+        }
+        return brick_pool_index(slot, i);
+    }
     let r = pc.resolution;
     return i.x + r.x * (i.y + r.y * i.z);
 }
@@ -68,7 +84,10 @@ fn sample_at(cell: TrilinearCell) -> vec4<f32> {
         return v;
     }
     for (var k = 0u; k < 8u; k++) {
-        v += trilinear_weight(cell.f, k) * grid_nodes[node_index(cell.base + trilinear_corner(k))];
+        let n = field_node_index(cell.base + trilinear_corner(k));
+        if n != EMPTY_BRICK {
+            v += trilinear_weight(cell.f, k) * grid_nodes[n];
+        }
     }
     return v;
 }
@@ -79,7 +98,7 @@ fn unclamped_colour(cell: TrilinearCell, base: vec3<f32>, basis: array<f32, 8>) 
     if pc.sh_degree == 0u || !cell.inside {
         return base;
     }
-    return base + sh_trilinear(cell, pc.resolution, pc.sh_degree, basis);
+    return base + sh_trilinear(cell, pc.sh_degree, pc.pool_nodes, basis);
 }
 
 // The colour seen: clamped at zero where the grid has view-dependent
@@ -195,14 +214,17 @@ fn train_ray(index: u32) {
             if wk == 0.0 {
                 continue;
             }
-            let corner = cell.base + trilinear_corner(k);
-            let n = 4u * node_index(corner);
+            let node = field_node_index(cell.base + trilinear_corner(k));
+            if node == EMPTY_BRICK {
+                continue;
+            }
+            let n = 4u * node;
             add_float(n, d_c.x * wk);
             add_float(n + 1u, d_c.y * wk);
             add_float(n + 2u, d_c.z * wk);
             add_float(n + 3u, d_sigma * wk);
             if count > 0u {
-                let s = 4u * sh_first(corner, pc.resolution, pc.sh_degree);
+                let s = 4u * (pc.pool_nodes + count * node);
                 for (var j = 0u; j < count; j++) {
                     let e = d_c * (wk * y[j]);
                     add_float(s + 4u * j, e.x);

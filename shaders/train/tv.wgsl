@@ -2,7 +2,8 @@
 // six neighbours, Σ_nb (v − v_nb) per channel, weighted per channel group
 // (colour, density) and added to the accumulated gradient before Adam
 // (scaled by the inverse of Adam's gradient scale, so that it reaches Adam
-// at its weight). Mirrors passes/src/train/tv.rs tv_gradient.
+// at its weight). A sparse grid's nodes are its pool's, a dropped brick's
+// neighbours zero (held so). Mirrors passes/src/train/tv.rs tv_gradient.
 
 struct TvPush {
     resolution: vec3<u32>,
@@ -11,11 +12,33 @@ struct TvPush {
     density_weight: f32,
     unscale: f32,
     pad: u32,
+    // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
+    brick_dims: vec3<u32>,
+    pad1: u32,
 }
 
 var<immediate> pc: TvPush;
 @group(0) @binding(0) var<storage, read> params: array<vec4<f32>>;
 @group(0) @binding(1) var<storage, read_write> grad: array<vec4<f32>>;
+// A sparse grid's brick table, and each slot's index in it (one unused
+// entry each for a dense grid).
+@group(0) @binding(2) var<storage, read> bricks: array<u32>;
+@group(0) @binding(3) var<storage, read> slot_bricks: array<u32>;
+
+#include "field/bricks.wgsl"
+
+// A neighbour's values: zero where a sparse grid dropped its brick.
+fn neighbour(m: vec3<u32>) -> vec4<f32> {
+    let r = pc.resolution;
+    if pc.brick_dims.x == 0u {
+        return params[m.x + r.x * (m.y + r.y * m.z)];
+    }
+    let slot = bricks[brick_table_index(m, pc.brick_dims)];
+    if slot == EMPTY_BRICK {
+        return vec4<f32>(0.0);
+    }
+    return params[brick_pool_index(slot, m)];
+}
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -24,19 +47,23 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let r = pc.resolution;
-    let i = vec3<u32>(n % r.x, (n / r.x) % r.y, n / (r.x * r.y));
+    var i = vec3<u32>(n % r.x, (n / r.x) % r.y, n / (r.x * r.y));
+    if pc.brick_dims.x != 0u {
+        i = brick_node(slot_bricks[n / BRICK_NODES], pc.brick_dims, n % BRICK_NODES);
+        if any(i >= r) {
+            return; // a partial brick's padding: stays zero
+        }
+    }
     let v = params[n];
     var acc = vec4<f32>(0.0);
     for (var a = 0u; a < 3u; a++) {
         var e = vec3<u32>(0u);
         e[a] = 1u;
         if i[a] + 1u < r[a] {
-            let m = i + e;
-            acc += v - params[m.x + r.x * (m.y + r.y * m.z)];
+            acc += v - neighbour(i + e);
         }
         if i[a] > 0u {
-            let m = i - e;
-            acc += v - params[m.x + r.x * (m.y + r.y * m.z)];
+            acc += v - neighbour(i - e);
         }
     }
     let w = vec4<f32>(pc.colour_weight, pc.colour_weight, pc.colour_weight, pc.density_weight);

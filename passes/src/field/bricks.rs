@@ -4,7 +4,8 @@
 //! coefficient) are kept, in a pool; a table with one entry per brick gives
 //! its slot in the pool, or [`EMPTY_BRICK`]. A dropped brick reads as
 //! zeros, which is what its nodes held, so the sparse field is the dense
-//! one exactly. Mirrored in `shaders/field/grid.wgsl` (`grid_node_index`).
+//! one exactly. Mirrored in `shaders/field/bricks.wgsl`, which
+//! `field/grid.wgsl` and the trainer read through.
 //!
 //! Device layout ([`BrickLayout::device_values`]): the pool's nodes, slot
 //! by slot, each brick's nodes x fastest, then y, then z (a partial brick
@@ -37,10 +38,37 @@ pub struct BrickLayout {
 }
 
 impl BrickLayout {
+    /// Bricks per axis over a grid of `resolution` nodes.
+    pub fn dims_of(resolution: UVec3) -> UVec3 {
+        (resolution + UVec3::splat(BRICK_SIDE - 1)) / BRICK_SIDE
+    }
+
+    /// The layout keeping the bricks `keep` says (one per brick of
+    /// [`Self::dims_of`] `resolution`, x fastest), in table order.
+    ///
+    /// Panics if `keep` has the wrong length.
+    pub fn from_kept(resolution: UVec3, keep: &[bool]) -> Self {
+        let dims = Self::dims_of(resolution);
+        assert_eq!(keep.len(), (dims.x * dims.y * dims.z) as usize);
+        let mut slots = 0;
+        let table = keep
+            .iter()
+            .map(|&kept| {
+                if kept {
+                    slots += 1;
+                    slots - 1
+                } else {
+                    EMPTY_BRICK
+                }
+            })
+            .collect();
+        Self { dims, table, slots }
+    }
+
     /// The layout of `field`: every brick with a non-zero node kept.
     pub fn of(field: &GridField) -> Self {
         let r = field.resolution;
-        let dims = (r + UVec3::splat(BRICK_SIDE - 1)) / BRICK_SIDE;
+        let dims = Self::dims_of(r);
         let mut keep = vec![false; (dims.x * dims.y * dims.z) as usize];
         let k = field.sh_count();
         for z in 0..r.z {
@@ -57,19 +85,18 @@ impl BrickLayout {
                 }
             }
         }
-        let mut slots = 0;
-        let table = keep
-            .iter()
-            .map(|&kept| {
-                if kept {
-                    slots += 1;
-                    slots - 1
-                } else {
-                    EMPTY_BRICK
-                }
-            })
-            .collect();
-        Self { dims, table, slots }
+        Self::from_kept(r, &keep)
+    }
+
+    /// Each slot's index in the table.
+    pub fn slot_bricks(&self) -> Vec<u32> {
+        let mut out = vec![0; self.slots as usize];
+        for (b, &slot) in self.table.iter().enumerate() {
+            if slot != EMPTY_BRICK {
+                out[slot as usize] = b as u32;
+            }
+        }
+        out
     }
 
     /// Nodes the pool holds.
@@ -110,6 +137,40 @@ impl BrickLayout {
             }
         }
         out
+    }
+}
+
+impl BrickLayout {
+    /// The dense nodes and further coefficients (`sh_count` a node) of a
+    /// grid of `resolution` nodes from `values` in this layout (the
+    /// inverse of [`Self::device_values`]; a dropped brick's nodes zero).
+    pub fn dense_values(
+        &self,
+        values: &[[f32; 4]],
+        resolution: UVec3,
+        sh_count: usize,
+    ) -> (Vec<[f32; 4]>, Vec<[f32; 3]>) {
+        let pool = self.pool_nodes() as usize;
+        let count = (resolution.x * resolution.y * resolution.z) as usize;
+        let mut nodes = vec![[0.0f32; 4]; count];
+        let mut sh = vec![[0.0f32; 3]; count * sh_count];
+        for z in 0..resolution.z {
+            for y in 0..resolution.y {
+                for x in 0..resolution.x {
+                    let Some(p) = self.pool_index(UVec3::new(x, y, z)) else {
+                        continue;
+                    };
+                    let p = p as usize;
+                    let n = (x + resolution.x * (y + resolution.y * z)) as usize;
+                    nodes[n] = values[p];
+                    for j in 0..sh_count {
+                        let v = values[pool + p * sh_count + j];
+                        sh[n * sh_count + j] = [v[0], v[1], v[2]];
+                    }
+                }
+            }
+        }
+        (nodes, sh)
     }
 }
 
@@ -183,6 +244,17 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_dense_values_come_back_from_the_pool() {
+        let field = blob();
+        let layout = BrickLayout::of(&field);
+        let (nodes, sh) = layout.dense_values(&layout.device_values(&field), field.resolution, 3);
+        assert_eq!(nodes, field.nodes);
+        assert_eq!(sh, field.sh);
+        let slots = layout.slot_bricks();
+        assert_eq!(slots, [1, 9]);
     }
 
     #[test]

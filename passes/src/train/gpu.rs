@@ -13,6 +13,7 @@ use inlay_engine::{
 };
 
 use super::adam::AdamKnobs;
+use crate::field::bricks::BrickLayout;
 use crate::field::{device_values, GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
@@ -45,6 +46,10 @@ inlay_engine::gpu_struct! {
         pub distortion: f32,
         /// Padding.
         pub pad2: u32,
+        /// Bricks per axis of a sparse grid (0: dense).
+        pub brick_dims: [u32; 3],
+        /// Nodes before the view-dependent coefficients.
+        pub pool_nodes: u32,
     }
 }
 
@@ -121,6 +126,10 @@ inlay_engine::gpu_struct! {
         pub unscale: f32,
         /// Padding.
         pub pad: u32,
+        /// Bricks per axis of a sparse grid (0: dense).
+        pub brick_dims: [u32; 3],
+        /// Padding.
+        pub pad1: u32,
     }
 }
 
@@ -231,9 +240,13 @@ pub const TRAIN_TV: &str = "train-tv";
 pub const TRAIN_DESCEND: &str = "train-descend";
 
 /// A grid being trained on the GPU: its values (laid out as a field's on
-/// the device, [`device_values`]), their gradient and Adam's moments, and
-/// the pipelines that step them.
+/// the device, [`device_values`], or only the bricks of a
+/// [`BrickLayout`]), their gradient and Adam's moments, and the pipelines
+/// that step them.
 pub struct GpuTrainer {
+    layout: Option<BrickLayout>,
+    table: Arc<Buffer>,
+    slot_bricks: Arc<Buffer>,
     ray_grad: Arc<ComputePipeline>,
     adam: Arc<ComputePipeline>,
     tv: Arc<ComputePipeline>,
@@ -267,22 +280,52 @@ pub struct GpuTrainer {
 
 impl GpuTrainer {
     /// A trainer starting from `field` (its nodes and view-dependent
-    /// colour; its occupancy is not used).
+    /// colour; its occupancy is not used), every node trained.
     pub fn new(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
         field: &GridField,
         march: MarchKnobs,
     ) -> anyhow::Result<Self> {
+        Self::with_layout(ctx, lib, field, march, None)
+    }
+
+    /// Whether a trainer of every node of a grid of `resolution` nodes
+    /// with colour of `sh_degree` fits `info`: its values and Adam's
+    /// moments each in one storage binding.
+    pub fn dense_fits(info: &inlay_engine::DeviceInfo, resolution: UVec3, sh_degree: u32) -> bool {
+        let values = resolution.as_u64vec3().element_product()
+            * (1 + crate::field::sh_extra_coefficients(sh_degree) as u64);
+        crate::field::check_field_fits(info, resolution, sh_degree).is_ok()
+            && values * 32 <= info.max_storage_buffer_range as u64
+    }
+
+    /// A trainer starting from `field` that trains only the bricks of
+    /// `layout` (None: every node), the others held at zero.
+    pub fn with_layout(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        field: &GridField,
+        march: MarchKnobs,
+        layout: Option<BrickLayout>,
+    ) -> anyhow::Result<Self> {
         let resolution = field.resolution;
-        let values = device_values(field);
+        let mut values = match &layout {
+            Some(l) => l.device_values(field),
+            None => device_values(field),
+        };
+        if values.is_empty() {
+            values.push([0.0; 4]); // no brick kept: a buffer is never empty
+        }
         let n = values.len();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
         let bytes = |v: &[f32]| bytemuck::cast_slice::<f32, u8>(v).to_vec();
         let flat: Vec<f32> = values.iter().flatten().copied().collect();
-        crate::field::check_field_fits(ctx.info(), resolution, field.sh_degree)?;
+        if layout.is_none() {
+            crate::field::check_field_fits(ctx.info(), resolution, field.sh_degree)?;
+        }
         let limit = ctx.info().max_storage_buffer_range as u64;
         anyhow::ensure!(
             (n as u64) * 32 <= limit,
@@ -293,7 +336,27 @@ impl GpuTrainer {
             limit >> 20
         );
         let [gains, gain_grad, gain_moments] = gain_buffers(ctx, &[DVec3::ONE])?;
+        let u32_buffer = |name: &str, v: &[u32]| -> anyhow::Result<Arc<Buffer>> {
+            let v = if v.is_empty() { &[0u32][..] } else { v };
+            Ok(Arc::new(Buffer::with_data(
+                ctx,
+                name,
+                bytemuck::cast_slice(v),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?))
+        };
+        let table = u32_buffer(
+            "train-bricks",
+            layout.as_ref().map_or(&[][..], |l| &l.table),
+        )?;
+        let slot_bricks = u32_buffer(
+            "train-slot-bricks",
+            &layout.as_ref().map_or(Vec::new(), BrickLayout::slot_bricks),
+        )?;
         Ok(Self {
+            layout,
+            table,
+            slot_bricks,
             ray_grad: lib.compute_pipeline(
                 ctx,
                 GradientScatter::best(ctx.info()).file(),
@@ -387,18 +450,33 @@ impl GpuTrainer {
             learn_gains: self.gain_rate.is_some() as u32,
             distortion: (self.distortion / self.bounds.diagonal()) as f32,
             pad2: 0,
+            brick_dims: self.brick_dims(),
+            pool_nodes: self.node_count(),
         }
     }
 
-    /// Nodes in the grid.
+    fn brick_dims(&self) -> [u32; 3] {
+        self.layout.as_ref().map_or([0; 3], |l| l.dims.to_array())
+    }
+
+    /// Nodes trained: the grid's, or the pool's of a sparse grid (its
+    /// bricks' padding past the grid included).
     pub fn node_count(&self) -> u32 {
-        self.resolution.x * self.resolution.y * self.resolution.z
+        match &self.layout {
+            Some(l) => l.pool_nodes() as u32,
+            None => self.resolution.x * self.resolution.y * self.resolution.z,
+        }
     }
 
     /// Values trained: 4 per node and 4 per view-dependent colour
     /// coefficient (r, g, b and an unused fourth).
     pub fn value_count(&self) -> u32 {
         4 * self.node_count() * (1 + crate::field::sh_extra_coefficients(self.sh_degree) as u32)
+    }
+
+    /// The bricks trained (None: every node).
+    pub fn layout(&self) -> Option<&BrickLayout> {
+        self.layout.as_ref()
     }
 
     /// Runs one batch: renders `rays` over `background`, adds their loss's
@@ -426,6 +504,8 @@ impl GpuTrainer {
         let graph_gains = graph.import_buffer(&self.gains, None);
         let gain_grad = graph.import_buffer(&self.gain_grad, None);
         let gain_moments = graph.import_buffer(&self.gain_moments, None);
+        let graph_table = graph.import_buffer(&self.table, None);
+        let graph_slots = graph.import_buffer(&self.slot_bricks, None);
         // A host-visible buffer per batch (a batch outgrows the 64 KiB a
         // graph upload takes); the frame finishes before the next is made.
         let bytes: &[u8] = bytemuck::cast_slice(rays);
@@ -451,6 +531,8 @@ impl GpuTrainer {
         let gains = graph_gains;
         pass.buffer_at("gains", gains, BufferAccess::StorageRead);
         let gain_grad = pass.buffer_at("gain_grad", gain_grad, BufferAccess::StorageReadWrite);
+        let table = graph_table;
+        pass.buffer_at("bricks", table, BufferAccess::StorageRead);
         pass.dispatch(&self.ray_grad)
             .push(&push)
             .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
@@ -484,7 +566,7 @@ impl GpuTrainer {
             ]);
             pass.finish();
             if self.tv_weights != (0.0, 0.0) {
-                self.add_tv_step(&mut graph, params, grad);
+                self.add_tv_step(&mut graph, params, grad, (graph_table, graph_slots));
             }
             if let Some(rate) = self.gain_rate {
                 let count = (self.gains.size() / 4) as u32;
@@ -516,7 +598,13 @@ impl GpuTrainer {
 
     /// Adds `train-tv` (the total variation's gradient into `grad`, empty
     /// after Adam) and `train-descend` (one plain step along it).
-    fn add_tv_step(&self, graph: &mut FrameGraph, params: BufferHandle, grad: BufferHandle) {
+    fn add_tv_step(
+        &self,
+        graph: &mut FrameGraph,
+        params: BufferHandle,
+        grad: BufferHandle,
+        (table, slots): (BufferHandle, BufferHandle),
+    ) {
         let nodes = self.node_count();
         let t = TvPush {
             resolution: self.resolution.to_array(),
@@ -525,11 +613,15 @@ impl GpuTrainer {
             density_weight: self.tv_weights.1,
             unscale: 1.0,
             pad: 0,
+            brick_dims: self.brick_dims(),
+            pad1: 0,
         };
         let groups = nodes.div_ceil(64);
         let mut pass = graph.compute_pass(TRAIN_TV);
         pass.buffer_at("params", params, BufferAccess::StorageRead);
         let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
+        pass.buffer_at("bricks", table, BufferAccess::StorageRead);
+        pass.buffer_at("slot_bricks", slots, BufferAccess::StorageRead);
         pass.dispatch(&self.tv)
             .push(&t)
             .groups([groups.min(65535), groups.div_ceil(65535), 1]);
@@ -570,16 +662,34 @@ impl GpuTrainer {
         self.read(renderer, &self.params)
     }
 
-    /// The grid now, as a field (occupancy built from its densities).
+    /// The grid now, as a field (occupancy built from its densities; a
+    /// sparse grid's dropped bricks zero).
     pub fn field(&self, renderer: &mut Renderer) -> anyhow::Result<GridField> {
         let v = self.values(renderer)?;
         let n = self.node_count() as usize;
-        let (nodes, sh) = v.split_at(4 * n);
-        let nodes = nodes
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect();
-        let sh = sh.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect();
+        let (nodes, sh) = match &self.layout {
+            Some(l) => {
+                let values: Vec<[f32; 4]> = v
+                    .chunks_exact(4)
+                    .map(|c| [c[0], c[1], c[2], c[3]])
+                    .collect();
+                l.dense_values(
+                    &values,
+                    self.resolution,
+                    crate::field::sh_extra_coefficients(self.sh_degree),
+                )
+            }
+            None => {
+                let (nodes, sh) = v.split_at(4 * n);
+                (
+                    nodes
+                        .chunks_exact(4)
+                        .map(|c| [c[0], c[1], c[2], c[3]])
+                        .collect(),
+                    sh.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect(),
+                )
+            }
+        };
         Ok(
             GridField::new(self.resolution, self.bounds, nodes, DEFAULT_OCCUPANCY_BLOCK)
                 .with_sh(self.sh_degree, sh),

@@ -53,6 +53,11 @@ pub struct TrainKnobs {
     /// CUPS' held-out views by 0.2 dB and left DOG's within 0.2 dB
     /// (`docs/benchmarks.md`, "Pruning").
     pub prune: f64,
+    /// Train the stages after the first only in the bricks of 8³ nodes
+    /// where the stage before left density, and their neighbours
+    /// ([`super::sparse_stage`]); the rest held empty. A stage whose dense
+    /// grid would not fit one storage binding is trained so always.
+    pub sparse: bool,
     /// Seed of every random choice.
     pub seed: u64,
 }
@@ -75,6 +80,7 @@ impl Default for TrainKnobs {
             sh_degree: 0,
             learn_exposure: false,
             prune: 0.01,
+            sparse: false,
             seed: 1,
         }
     }

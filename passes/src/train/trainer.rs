@@ -1,5 +1,7 @@
-//! The training loop: a dense grid trained coarse to fine on the GPU
-//! (`train-rays`, `train-adam`), step sizes decaying exponentially, then the
+//! The training loop: a grid trained coarse to fine on the GPU
+//! (`train-rays`, `train-adam`; a stage too large for one binding only in
+//! the bricks around what the stage before made visible,
+//! [`super::sparse_stage`]), step sizes decaying exponentially, then the
 //! held-out views rendered with the march and scored.
 
 use std::sync::Arc;
@@ -79,6 +81,9 @@ pub struct Trained {
     /// Each frame's exposure gain (all 1 unless
     /// [`TrainKnobs::learn_exposure`]; held-out frames' stay 1).
     pub gains: Vec<DVec3>,
+    /// Bricks trained and bricks in the grid, where the last stage was
+    /// trained sparsely ([`TrainKnobs::sparse`]).
+    pub bricks: Option<(u32, u32)>,
 }
 
 /// Nodes per axis for `nodes` along the bounds' longest axis.
@@ -212,7 +217,7 @@ pub fn train(
     } else {
         knobs.stages
     };
-    crate::field::check_field_fits(ctx.info(), final_res, knobs.sh_degree)?;
+    crate::field::check_field_may_fit(ctx.info(), final_res, knobs.sh_degree)?;
     let stage_res = |s: u32| {
         let shift = stages - 1 - s;
         (final_res.as_dvec3() / (1u32 << shift) as f64)
@@ -238,13 +243,35 @@ pub fn train(
     let mut history = Vec::new();
     let mut rays_done = 0u64;
     let mut step = 0u32;
+    let mut bricks = None;
+    let view_march = MarchKnobs {
+        skip_empty: true,
+        ..march
+    };
     'stages: for s in 0..stages {
         let target = stage_res(s);
+        let sparse =
+            s > 0 && (knobs.sparse || !GpuTrainer::dense_fits(ctx.info(), target, knobs.sh_degree));
+        // The bricks around what the stage before made visible.
+        let layout = sparse.then(|| {
+            let rays = super::prune::training_rays(dataset, &pool);
+            let visibility = super::prune::node_visibility(&field, &rays, &view_march);
+            super::sparse_stage::stage_bricks(&field, &visibility, knobs.prune, target)
+        });
         if target != field.resolution {
             field = resample(&field, target);
         }
         let res = field.resolution;
-        let mut gpu = GpuTrainer::new(ctx, lib, &field, march)?;
+        bricks = layout.as_ref().map(|l| (l.slots, l.table.len() as u32));
+        if let Some(l) = &layout {
+            log::info!(
+                "stage {} at {res}: {} of {} bricks of 8³ nodes trained",
+                s + 1,
+                l.slots,
+                l.table.len()
+            );
+        }
+        let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, march, layout)?;
         gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
@@ -293,10 +320,6 @@ pub fn train(
         field = gpu.field(&mut renderer)?;
         gains = gpu.gains(&mut renderer)?;
     }
-    let view_march = MarchKnobs {
-        skip_empty: true,
-        ..march
-    };
     // Pruned unless Ctrl-C ended the run (the field so far, at once).
     let mut pruned = 0;
     if knobs.prune > 0.0 && !(control.stop)() {
@@ -326,6 +349,7 @@ pub fn train(
         mean_radiance: scale,
         pruned,
         gains,
+        bricks,
     })
 }
 

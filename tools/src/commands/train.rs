@@ -82,6 +82,11 @@ pub struct TrainArgs {
     /// photograph sees (0 keeps every node).
     #[arg(long, default_value_t = TrainKnobs::default().prune)]
     pub prune: f64,
+    /// Train the stages after the first only in the bricks of 8³ nodes
+    /// around what the stage before made visible (always where a stage's
+    /// dense grid would not fit the device's storage binding).
+    #[arg(long)]
+    pub sparse: bool,
     /// Views never trained on, scored at the end.
     #[arg(long, default_value_t = 2)]
     pub hold_out: u32,
@@ -138,6 +143,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                 .map_or(TrainKnobs::default().sh_degree, |f| f.sh_degree),
         ),
         prune: args.prune,
+        sparse: args.sparse,
         learn_exposure: args.learn_exposure,
         seed: args.seed,
         ..TrainKnobs::default()
@@ -233,6 +239,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             luma.iter().copied().fold(f64::INFINITY, f64::min),
             luma.iter().copied().fold(0.0, f64::max)
         );
+    }
+    if let Some((kept, all)) = trained.bricks {
+        eprintln!("the last stage trained {kept} of {all} bricks of 8³ nodes (sparse)");
     }
     if knobs.prune > 0.0 {
         eprintln!(
