@@ -458,12 +458,15 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
         .all(|v| v.is_finite() && *v >= 0.0));
     assert_eq!(trained.bricks, None);
 
-    // The second stage trained in bricks (`--sparse`; at this size every
-    // brick lies around what the first stage made visible, so all are
-    // kept): the same training, the held-out views within 0.3 dB.
+    // The second stage trained in bricks (`--sparse`), only around the
+    // surfaces the first made visible (measured: 17 of 18 bricks; more
+    // drop on larger grids, docs/benchmarks.md): the held-out views within
+    // 0.3 dB of the dense run's (measured: 0.02 dB better).
     let sparse = train_small_with(&ctx, &lib, &dataset, false, (24, true));
     common::assert_no_validation_errors(&ctx);
-    assert_eq!(sparse.bricks, Some((18, 18)));
+    let (kept, all) = sparse.bricks.unwrap();
+    eprintln!("sparse: {kept} of {all} bricks");
+    assert!(kept < all && kept > all / 2, "{kept} of {all} bricks");
     for (s, d) in sparse.held_out.iter().zip(&trained.held_out) {
         eprintln!(
             "held-out {}: sparse {:.2} dB, dense {:.2} dB",

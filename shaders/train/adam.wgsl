@@ -21,7 +21,10 @@ struct AdamPush {
 var<immediate> pc: AdamPush;
 @group(0) @binding(0) var<storage, read_write> params: array<f32>;
 @group(0) @binding(1) var<storage, read_write> grad: array<f32>;
-@group(0) @binding(2) var<storage, read_write> moments: array<vec2<f32>>;
+// The first and second moments, one binding each (each the size of
+// `params`: a sparse grid's values may fill a binding).
+@group(0) @binding(2) var<storage, read_write> first: array<f32>;
+@group(0) @binding(3) var<storage, read_write> second: array<f32>;
 
 const ADAM_EPSILON: f32 = 1e-8;
 
@@ -33,10 +36,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let g = grad[i] * pc.grad_scale;
     grad[i] = 0.0;
-    var m = moments[i];
+    var m = vec2<f32>(first[i], second[i]);
     m.x = pc.beta1 * m.x + (1.0 - pc.beta1) * g;
     m.y = pc.beta2 * m.y + (1.0 - pc.beta2) * g * g;
-    moments[i] = m;
+    first[i] = m.x;
+    second[i] = m.y;
     let base = i < pc.base_values;
     let rate = select(pc.rate, pc.density_rate, base && (i & 3u) == 3u);
     let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);

@@ -148,8 +148,9 @@ inlay_engine::gpu_struct! {
 }
 
 /// The exposure gains' buffers: the gains as the shader reads them
-/// ((r, g, b, 0) per frame), their gradient and Adam's moments (zero).
-fn gain_buffers(ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<[Arc<Buffer>; 3]> {
+/// ((r, g, b, 0) per frame), their gradient and Adam's first and second
+/// moments (zero).
+fn gain_buffers(ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<[Arc<Buffer>; 4]> {
     anyhow::ensure!(!gains.is_empty(), "no frame");
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER
         | vk::BufferUsageFlags::TRANSFER_SRC
@@ -165,7 +166,8 @@ fn gain_buffers(ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<[Arc<Buff
     Ok([
         buffer("train-gains", &bytes)?,
         buffer("train-gain-grad", &vec![0u8; 16 * gains.len()])?,
-        buffer("train-gain-moments", &vec![0u8; 32 * gains.len()])?,
+        buffer("train-gain-first", &vec![0u8; 16 * gains.len()])?,
+        buffer("train-gain-second", &vec![0u8; 16 * gains.len()])?,
     ])
 }
 
@@ -253,10 +255,10 @@ pub struct GpuTrainer {
     descend: Arc<ComputePipeline>,
     params: Arc<Buffer>,
     grad: Arc<Buffer>,
-    moments: Arc<Buffer>,
+    moments: [Arc<Buffer>; 2],
     gains: Arc<Buffer>,
     gain_grad: Arc<Buffer>,
-    gain_moments: Arc<Buffer>,
+    gain_moments: [Arc<Buffer>; 2],
     /// Nodes per axis.
     pub resolution: UVec3,
     /// The region the nodes span.
@@ -291,13 +293,11 @@ impl GpuTrainer {
     }
 
     /// Whether a trainer of every node of a grid of `resolution` nodes
-    /// with colour of `sh_degree` fits `info`: its values and Adam's
-    /// moments each in one storage binding.
+    /// with colour of `sh_degree` fits `info`: its values, their gradient
+    /// and Adam's two moments each the size of the field's node array, in
+    /// a binding of its own ([`crate::field::check_field_fits`]).
     pub fn dense_fits(info: &inlay_engine::DeviceInfo, resolution: UVec3, sh_degree: u32) -> bool {
-        let values = resolution.as_u64vec3().element_product()
-            * (1 + crate::field::sh_extra_coefficients(sh_degree) as u64);
         crate::field::check_field_fits(info, resolution, sh_degree).is_ok()
-            && values * 32 <= info.max_storage_buffer_range as u64
     }
 
     /// A trainer starting from `field` that trains only the bricks of
@@ -327,15 +327,23 @@ impl GpuTrainer {
             crate::field::check_field_fits(ctx.info(), resolution, field.sh_degree)?;
         }
         let limit = ctx.info().max_storage_buffer_range as u64;
+        let what = match &layout {
+            Some(l) => format!(
+                "{} of the {} bricks of a {resolution} grid",
+                l.slots,
+                l.table.len()
+            ),
+            None => format!("a {resolution} grid"),
+        };
         anyhow::ensure!(
-            (n as u64) * 32 <= limit,
-            "training a {resolution} grid (view-dependent colour of degree {}) needs Adam's moments in one binding of {} MiB, more than {}'s {} MiB; train a smaller grid",
+            (n as u64) * 16 <= limit,
+            "training {what} (view-dependent colour of degree {}) needs its values in one binding of {} MiB, more than {}'s {} MiB; train a smaller grid",
             field.sh_degree,
-            (n as u64 * 32) >> 20,
+            (n as u64 * 16) >> 20,
             ctx.info().name,
             limit >> 20
         );
-        let [gains, gain_grad, gain_moments] = gain_buffers(ctx, &[DVec3::ONE])?;
+        let [gains, gain_grad, gain_first, gain_second] = gain_buffers(ctx, &[DVec3::ONE])?;
         let u32_buffer = |name: &str, v: &[u32]| -> anyhow::Result<Arc<Buffer>> {
             let v = if v.is_empty() { &[0u32][..] } else { v };
             Ok(Arc::new(Buffer::with_data(
@@ -378,15 +386,23 @@ impl GpuTrainer {
                 &vec![0u8; n * 16],
                 usage,
             )?),
-            moments: Arc::new(Buffer::with_data(
-                ctx,
-                "train-moments",
-                &vec![0u8; n * 32],
-                usage,
-            )?),
+            moments: [
+                Arc::new(Buffer::with_data(
+                    ctx,
+                    "train-first-moments",
+                    &vec![0u8; n * 16],
+                    usage,
+                )?),
+                Arc::new(Buffer::with_data(
+                    ctx,
+                    "train-second-moments",
+                    &vec![0u8; n * 16],
+                    usage,
+                )?),
+            ],
             gains,
             gain_grad,
-            gain_moments,
+            gain_moments: [gain_first, gain_second],
             resolution,
             bounds: field.bounds,
             sh_degree: field.sh_degree,
@@ -419,7 +435,8 @@ impl GpuTrainer {
     /// times its pixel; frame 0's stays as given when gains are learnt),
     /// their gradient and moments cleared.
     pub fn set_gains(&mut self, ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<()> {
-        [self.gains, self.gain_grad, self.gain_moments] = gain_buffers(ctx, gains)?;
+        let [g, grad, first, second] = gain_buffers(ctx, gains)?;
+        (self.gains, self.gain_grad, self.gain_moments) = (g, grad, [first, second]);
         Ok(())
     }
 
@@ -500,10 +517,13 @@ impl GpuTrainer {
         let mut graph = FrameGraph::new();
         let params = graph.import_buffer(&self.params, None);
         let grad = graph.import_buffer(&self.grad, None);
-        let moments = graph.import_buffer(&self.moments, None);
+        let moments = self.moments.clone().map(|m| graph.import_buffer(&m, None));
         let graph_gains = graph.import_buffer(&self.gains, None);
         let gain_grad = graph.import_buffer(&self.gain_grad, None);
-        let gain_moments = graph.import_buffer(&self.gain_moments, None);
+        let gain_moments = self
+            .gain_moments
+            .clone()
+            .map(|m| graph.import_buffer(&m, None));
         let graph_table = graph.import_buffer(&self.table, None);
         let graph_slots = graph.import_buffer(&self.slot_bricks, None);
         // A host-visible buffer per batch (a batch outgrows the 64 KiB a
@@ -558,7 +578,8 @@ impl GpuTrainer {
             let mut pass = graph.compute_pass(TRAIN_ADAM);
             let params = pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
             let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
-            pass.buffer_at("moments", moments, BufferAccess::StorageReadWrite);
+            pass.buffer_at("first", moments[0], BufferAccess::StorageReadWrite);
+            pass.buffer_at("second", moments[1], BufferAccess::StorageReadWrite);
             pass.dispatch(&self.adam).push(&a).groups([
                 groups.min(65535),
                 groups.div_ceil(65535),
@@ -580,7 +601,8 @@ impl GpuTrainer {
                 let mut pass = graph.compute_pass(TRAIN_GAINS);
                 pass.buffer_at("params", gains, BufferAccess::StorageReadWrite);
                 pass.buffer_at("grad", gain_grad, BufferAccess::StorageReadWrite);
-                pass.buffer_at("moments", gain_moments, BufferAccess::StorageReadWrite);
+                pass.buffer_at("first", gain_moments[0], BufferAccess::StorageReadWrite);
+                pass.buffer_at("second", gain_moments[1], BufferAccess::StorageReadWrite);
                 pass.dispatch(&self.adam)
                     .push(&g)
                     .groups([count.div_ceil(64), 1, 1]);

@@ -1,9 +1,9 @@
 //! Which bricks a sparse stage of the trainer trains: those around what the
 //! stage before made visible. A node of the coarser grid whose rendering
 //! weight in some training ray reaches the threshold ([`super::prune`]'s
-//! visibility) marks the brick of 8³ nodes of the finer grid that holds
-//! its place, and the 26 around it (the finer surface may move by up to a
-//! brick as it sharpens). Everything else is held empty: space no
+//! visibility), and whose density is a surface's, marks the bricks of 8³ nodes of the finer grid that its
+//! trilinear reach covers (one coarse cell each way: where the finer
+//! surface can sharpen). Everything else is held empty: space no
 //! photograph sees into, which the dense grid would have pruned at the end.
 
 use glam::{IVec3, UVec3};
@@ -11,9 +11,15 @@ use glam::{IVec3, UVec3};
 use crate::field::bricks::{BrickLayout, BRICK_SIDE};
 use crate::field::GridField;
 
+/// The least optical depth per node spacing of a node that marks its
+/// bricks: a surface's, not the haze a coarse stage leaves in the air
+/// (which its rays see, and which the finer stage would only clear).
+pub const MIN_DEPTH: f64 = 0.05;
+
 /// The bricks of a grid of `target` nodes over `coarse`'s bounds to train,
 /// from `coarse`'s nodes whose `visibility` (one per node) is at least
-/// `threshold` (above zero where it is zero).
+/// `threshold` (above zero where it is zero) and whose density is at least
+/// [`MIN_DEPTH`] per node spacing.
 pub fn stage_bricks(
     coarse: &GridField,
     visibility: &[f32],
@@ -23,24 +29,31 @@ pub fn stage_bricks(
     let dims = BrickLayout::dims_of(target);
     let mut keep = vec![false; (dims.x * dims.y * dims.z) as usize];
     let r = coarse.resolution;
+    let h = coarse.spacing().min_element();
     let scale = (target - UVec3::ONE).as_dvec3() / (r - UVec3::ONE).as_dvec3();
     for z in 0..r.z {
         for y in 0..r.y {
             for x in 0..r.x {
-                let v = visibility[coarse.index(x, y, z)] as f64;
-                if v <= 0.0 || v < threshold {
+                let n = coarse.index(x, y, z);
+                let v = visibility[n] as f64;
+                if v <= 0.0 || v < threshold || (coarse.nodes[n][3] as f64) * h < MIN_DEPTH {
                     continue;
                 }
-                let fine = (UVec3::new(x, y, z).as_dvec3() * scale).round().as_ivec3();
-                let b = fine / BRICK_SIDE as i32;
-                for dz in -1..=1 {
-                    for dy in -1..=1 {
-                        for dx in -1..=1 {
-                            let n = b + IVec3::new(dx, dy, dz);
-                            if n.cmpge(IVec3::ZERO).all() && n.cmplt(dims.as_ivec3()).all() {
-                                let n = n.as_uvec3();
-                                keep[(n.x + dims.x * (n.y + dims.y * n.z)) as usize] = true;
-                            }
+                // The finer nodes the coarse node's trilinear reach
+                // covers (one coarse cell each way), and the bricks they lie
+                // in.
+                let p = UVec3::new(x, y, z).as_dvec3();
+                let lo = ((p - 1.0) * scale).floor().as_ivec3().max(IVec3::ZERO);
+                let hi = ((p + 1.0) * scale)
+                    .ceil()
+                    .as_ivec3()
+                    .min(target.as_ivec3() - IVec3::ONE);
+                let (lo, hi) = (lo / BRICK_SIDE as i32, hi / BRICK_SIDE as i32);
+                for bz in lo.z..=hi.z {
+                    for by in lo.y..=hi.y {
+                        for bx in lo.x..=hi.x {
+                            let b = UVec3::new(bx as u32, by as u32, bz as u32);
+                            keep[(b.x + dims.x * (b.y + dims.y * b.z)) as usize] = true;
                         }
                     }
                 }
@@ -57,16 +70,18 @@ mod tests {
     use glam::DVec3;
 
     #[test]
-    fn a_visible_node_keeps_its_brick_and_the_ones_around() {
+    fn a_visible_node_keeps_the_bricks_of_its_reach() {
         let r = UVec3::new(17, 17, 17);
         let coarse = GridField::new(
             r,
             Aabb::new(DVec3::ZERO, DVec3::ONE),
-            vec![[0.0; 4]; (r.x * r.y * r.z) as usize],
+            vec![[0.5, 0.5, 0.5, 40.0]; (r.x * r.y * r.z) as usize],
             4,
         );
         let mut visibility = vec![0.0f32; coarse.nodes.len()];
-        // Node (8, 0, 16): the finer grid's (32, 0, 64), brick (4, 0, 8).
+        // Node (8, 0, 16) reaches the finer grid's nodes 28..36 along x
+        // (bricks 3 and 4), 0..4 along y (brick 0), 60..64 along z (brick
+        // 7; 64 is the last node, alone in brick 8).
         visibility[coarse.index(8, 0, 16)] = 0.5;
         visibility[coarse.index(1, 1, 1)] = 0.001; // under the threshold
         let layout = stage_bricks(&coarse, &visibility, 0.01, UVec3::splat(65));
@@ -75,10 +90,14 @@ mod tests {
             .filter(|&b| layout.table[b as usize] != crate::field::bricks::EMPTY_BRICK)
             .map(|b| UVec3::new(b % 9, (b / 9) % 9, b / 81))
             .collect();
-        // 3 × 2 × 2 around brick (4, 0, 8): y and z clipped at the grid.
-        assert_eq!(kept.len(), 12, "{kept:?}");
-        assert!(kept
-            .iter()
-            .all(|b| (3..=5).contains(&b.x) && b.y <= 1 && b.z >= 7));
+        assert_eq!(
+            kept,
+            [
+                UVec3::new(3, 0, 7),
+                UVec3::new(4, 0, 7),
+                UVec3::new(3, 0, 8),
+                UVec3::new(4, 0, 8)
+            ]
+        );
     }
 }
