@@ -149,9 +149,11 @@ pub fn node_bytes_on_device(sh_degree: u32) -> u64 {
 }
 
 /// Fails, naming the limit and what to change, unless a field of
-/// `resolution` nodes with colour of `sh_degree` fits the device: its node
-/// array ([`node_bytes_on_device`] a node) in one storage binding and in
-/// the largest device heap. For checks before a bake or a file is read.
+/// `resolution` nodes with colour of `sh_degree` fits the device dense:
+/// its node array ([`node_bytes_on_device`] a node) in one storage binding
+/// and in the largest device heap. Whether the upload and the trainer
+/// need the sparse layout; before the nodes are known,
+/// [`check_field_may_fit`].
 pub fn check_field_fits(
     info: &DeviceInfo,
     resolution: UVec3,

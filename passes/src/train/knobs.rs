@@ -54,7 +54,7 @@ pub struct TrainKnobs {
     /// (`docs/benchmarks.md`, "Pruning").
     pub prune: f64,
     /// Train the stages after the first only in the bricks of 8³ nodes
-    /// where the stage before left density, and their neighbours
+    /// around the surfaces the stage before made visible
     /// ([`super::sparse_stage`]); the rest held empty. A stage whose dense
     /// grid would not fit one storage binding is trained so always.
     pub sparse: bool,
