@@ -172,24 +172,8 @@ pub fn check_field_may_fit(
     resolution: UVec3,
     sh_degree: u32,
 ) -> anyhow::Result<()> {
-    let per_node = node_bytes_on_device(sh_degree);
-    let node_bytes = per_node * resolution.as_u64vec3().element_product();
-    let heap = info.device_heap_bytes;
-    if node_bytes > heap {
-        anyhow::bail!(
-            "the field's {}x{}x{} nodes{} take {} MiB, more than {}'s largest memory heap \
-             ({} MiB); use a field of at most {} nodes",
-            resolution.x,
-            resolution.y,
-            resolution.z,
-            degree_words(sh_degree),
-            node_bytes >> 20,
-            info.name,
-            heap >> 20,
-            heap / per_node
-        );
-    }
-    Ok(())
+    let heap = (info.device_heap_bytes, "largest memory heap");
+    check_nodes_within(info, resolution, sh_degree, None, &[heap])
 }
 
 fn degree_words(sh_degree: u32) -> String {
@@ -208,15 +192,29 @@ fn check_nodes_fit(
     sh_degree: u32,
     pool: Option<u64>,
 ) -> anyhow::Result<()> {
+    let limits = [
+        (
+            info.max_storage_buffer_range as u64,
+            "largest storage binding",
+        ),
+        (info.device_heap_bytes, "largest memory heap"),
+    ];
+    check_nodes_within(info, resolution, sh_degree, pool, &limits)
+}
+
+/// Fails, naming the first of `limits` (bytes, what it is) that the node
+/// array of `pool` of the resolution's nodes (None: all) exceeds.
+fn check_nodes_within(
+    info: &DeviceInfo,
+    resolution: UVec3,
+    sh_degree: u32,
+    pool: Option<u64>,
+    limits: &[(u64, &str)],
+) -> anyhow::Result<()> {
     let per_node = node_bytes_on_device(sh_degree);
     let all = resolution.as_u64vec3().element_product();
     let node_bytes = per_node * pool.unwrap_or(all);
-    let (limit, what) = (
-        info.max_storage_buffer_range as u64,
-        "largest storage binding",
-    );
-    let (heap, heap_what) = (info.device_heap_bytes, "largest memory heap");
-    for (limit, what) in [(limit, what), (heap, heap_what)] {
+    for &(limit, what) in limits {
         if node_bytes > limit {
             let stored = match pool {
                 Some(p) => format!(

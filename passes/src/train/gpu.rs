@@ -353,6 +353,15 @@ impl GpuTrainer {
                 vk::BufferUsageFlags::STORAGE_BUFFER,
             )?))
         };
+        // A buffer of the values' size, zero (the gradient, each moment).
+        let zeros = |name: &str| -> anyhow::Result<Arc<Buffer>> {
+            Ok(Arc::new(Buffer::with_data(
+                ctx,
+                name,
+                &vec![0u8; n * 16],
+                usage,
+            )?))
+        };
         let table = u32_buffer(
             "train-bricks",
             layout.as_ref().map_or(&[][..], |l| &l.table),
@@ -380,25 +389,10 @@ impl GpuTrainer {
                 &bytes(&flat),
                 usage,
             )?),
-            grad: Arc::new(Buffer::with_data(
-                ctx,
-                "train-grad",
-                &vec![0u8; n * 16],
-                usage,
-            )?),
+            grad: zeros("train-grad")?,
             moments: [
-                Arc::new(Buffer::with_data(
-                    ctx,
-                    "train-first-moments",
-                    &vec![0u8; n * 16],
-                    usage,
-                )?),
-                Arc::new(Buffer::with_data(
-                    ctx,
-                    "train-second-moments",
-                    &vec![0u8; n * 16],
-                    usage,
-                )?),
+                zeros("train-first-moments")?,
+                zeros("train-second-moments")?,
             ],
             gains,
             gain_grad,
