@@ -195,9 +195,10 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
     assert!(left.is_empty(), "{left:?}");
 }
 
-/// A field file whose header asks for more nodes than the device can bind
+/// A field file whose header asks for more nodes than the device can hold
 /// is refused from its header: a sparse 16 GiB file (1024³ nodes, more than
-/// any device binds in one buffer) is never read.
+/// the device's largest heap; a smaller one may fit the storage binding
+/// once stored sparsely, which only its nodes tell) is never read.
 #[test]
 fn a_field_too_large_for_the_device_is_refused_from_its_header() {
     let dir = scratch("huge-field");
@@ -233,7 +234,7 @@ fn a_field_too_large_for_the_device_is_refused_from_its_header() {
             "huge.inlayfield",
             "resolution",
             "1024x1024x1024",
-            "largest storage binding",
+            "largest memory heap",
         ],
     );
     // A file shorter than its header says is refused before it is read.
