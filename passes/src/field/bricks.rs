@@ -175,7 +175,7 @@ impl BrickLayout {
 }
 
 /// Index of brick `b` in a table of `dims` bricks.
-fn brick_index(dims: UVec3, b: UVec3) -> usize {
+pub fn brick_index(dims: UVec3, b: UVec3) -> usize {
     (b.x + dims.x * (b.y + dims.y * b.z)) as usize
 }
 

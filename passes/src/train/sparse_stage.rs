@@ -8,7 +8,7 @@
 
 use glam::{IVec3, UVec3};
 
-use crate::field::bricks::{BrickLayout, BRICK_SIDE};
+use crate::field::bricks::{brick_index, BrickLayout, BRICK_SIDE};
 use crate::field::GridField;
 
 /// The least optical depth per node spacing of a node that marks its
@@ -53,7 +53,7 @@ pub fn stage_bricks(
                     for by in lo.y..=hi.y {
                         for bx in lo.x..=hi.x {
                             let b = UVec3::new(bx as u32, by as u32, bz as u32);
-                            keep[(b.x + dims.x * (b.y + dims.y * b.z)) as usize] = true;
+                            keep[brick_index(dims, b)] = true;
                         }
                     }
                 }
