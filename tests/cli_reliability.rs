@@ -242,6 +242,49 @@ fn a_field_too_large_for_the_device_is_refused_from_its_header() {
     std::fs::write(&short, &header).unwrap();
     let e = inlay_passes::field::load_field(&short).unwrap_err();
     assert!(e.to_string().contains("truncated"), "{e}");
+    // A sparse file (version 2) whose kept bricks hold more than one
+    // storage binding, though the heap would take them, is refused from
+    // its header too: its header says how many bricks it keeps.
+    let binding = common::gpu().info().max_storage_buffer_range as u64;
+    let bricks = binding / (512 * 16) + 1;
+    let mut sparse = Vec::new();
+    sparse.extend_from_slice(b"INLAYFLD");
+    for v in [2u32, 0, 1024, 1024, 1024] {
+        sparse.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [-1f32, -1.0, -1.0, 1.0, 1.0, 1.0] {
+        sparse.extend_from_slice(&v.to_le_bytes());
+    }
+    sparse.extend_from_slice(&1u32.to_le_bytes());
+    sparse.extend_from_slice(&(bricks as u32).to_le_bytes());
+    sparse.extend_from_slice(&1f32.to_le_bytes());
+    assert_eq!(sparse.len(), 64);
+    let path = dir.join("sparse.inlayfield");
+    std::fs::write(&path, &sparse).unwrap();
+    let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+    file.set_len(64 + 4 * 128u64.pow(3) + 16 * 512 * bricks)
+        .unwrap();
+    drop(file);
+    let o = inlay(
+        &[
+            "render",
+            &scene_path("dog.toml"),
+            "--field",
+            s(&path),
+            "--out",
+            s(&dir.join("x.png")),
+        ],
+        &dir,
+    );
+    refused_before_work(
+        &o,
+        &[
+            "sparse.inlayfield",
+            "resolution",
+            "stored sparsely",
+            "largest storage binding",
+        ],
+    );
 }
 
 /// `inlay reference` killed at many points of its run (tracing, or writing
@@ -474,7 +517,14 @@ fn bake_scene_refuses_a_field_the_device_cannot_render() {
     let scene =
         inlay_passes::scene::load_scene(std::path::Path::new(&scene_path("dog.toml"))).unwrap();
     let res = inlay_passes::bake::grid_resolution(scene.recipe().unwrap(), 512);
-    if inlay_passes::field::check_field_may_fit(&info, res, 0).is_ok() {
+    if inlay_passes::field::check_field_may_fit(
+        &info,
+        res,
+        0,
+        inlay_passes::field::NodeStorage::Render,
+    )
+    .is_ok()
+    {
         eprintln!(
             "{} may render a 512-node field: nothing to refuse here",
             info.name

@@ -256,18 +256,37 @@ fn gpu_march_matches_the_cpu_reference_with_view_dependent_colour() {
         skip_empty: true,
     };
     let (base, _) = gpu_march(&ctx, &plain, &camera, knobs, None);
-    for degree in [1, 2] {
+    // The third case is as bright as a field may be: its coefficients pass
+    // f16's range, so the device's halves are scaled (`sh_half`).
+    for (degree, gain) in [(1, 1.0f32), (2, 1.0), (1, 1.0e5)] {
         let k = sh_extra_coefficients(degree);
         let mut rng = Pcg32::new(degree as u64, 7);
-        let sh = (0..plain.nodes.len() * k)
+        let mut bright = plain.clone();
+        for n in &mut bright.nodes {
+            n[..3].iter_mut().for_each(|c| *c *= gain);
+        }
+        let sh: Vec<[f32; 3]> = (0..plain.nodes.len() * k)
             .map(|i| {
-                let c = plain.nodes[i / k];
+                let c = bright.nodes[i / k];
                 std::array::from_fn(|ch| (3.0 * (rng.next_f64() - 0.5)) as f32 * c[ch])
             })
             .collect();
-        let field = plain.clone().with_sh(degree, sh);
-        let (colour, max_colour) =
-            march_matches_cpu(&ctx, &field, &camera, knobs, &format!("degree {degree}"));
+        if gain > 1.0 {
+            assert!(inlay_passes::field::sh_half::sh_unscale(&sh) > 1.0);
+        }
+        let field = bright.clone().with_sh(degree, sh);
+        let base = if gain > 1.0 {
+            gpu_march(&ctx, &bright, &camera, knobs, None).0
+        } else {
+            base.clone()
+        };
+        let (colour, max_colour) = march_matches_cpu(
+            &ctx,
+            &field,
+            &camera,
+            knobs,
+            &format!("degree {degree}, gain {gain}"),
+        );
         let moved = (0..camera.height)
             .flat_map(|y| (0..camera.width).map(move |x| (x, y)))
             .map(|(x, y)| {

@@ -9,7 +9,9 @@ use inlay::commands::on_device;
 use inlay::outputs::Outputs;
 use inlay_engine::graph::{BufferAccess, FrameGraph, PassKind};
 use inlay_engine::{vk, Buffer, BufferLocation, ContextOptions, DeviceInfo, Renderer, SubmitSync};
-use inlay_passes::field::{check_field_fits, check_field_may_fit};
+use inlay_passes::field::{check_field_fits, check_field_may_fit, NodeStorage};
+
+const RENDER: NodeStorage = NodeStorage::Render;
 use inlay_passes::object::check_mesh_fits;
 use inlay_passes::ssdf::{check_bake_fits, BAKE_BYTES_PER_TRIANGLE};
 
@@ -105,20 +107,37 @@ fn limits_come_from_the_device_and_say_what_fits() {
     assert!(e.to_string().contains("simplify the mesh"), "{e}");
     // A field: the binding first, then the heap.
     let res = glam::UVec3::new(64, 64, 64);
-    check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 0).unwrap();
-    let e = check_field_fits(&small_device(&real, (16 << 18) - 16, 1 << 40), res, 0).unwrap_err();
+    check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 0, RENDER).unwrap();
+    let e = check_field_fits(
+        &small_device(&real, (16 << 18) - 16, 1 << 40),
+        res,
+        0,
+        RENDER,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("largest storage binding"), "{e}");
-    let e = check_field_fits(&small_device(&real, u32::MAX, 1 << 20), res, 0).unwrap_err();
+    let e = check_field_fits(&small_device(&real, u32::MAX, 1 << 20), res, 0, RENDER).unwrap_err();
     assert!(e.to_string().contains("largest memory heap"), "{e}");
-    // View-dependent colour of degree 1 takes four times the bytes a node.
-    let e = check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 1).unwrap_err();
+    // View-dependent colour of degree 1 takes 18 more bytes a node (f16)
+    // in a binding of its own, and the trainer 64 a node in one.
+    let e = check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 1, RENDER).unwrap_err();
     assert!(e.to_string().contains("degree 1"), "{e}");
-    check_field_fits(&small_device(&real, 64 << 18, 1 << 40), res, 1).unwrap();
+    check_field_fits(&small_device(&real, 18 << 18, 1 << 40), res, 1, RENDER).unwrap();
+    let training = NodeStorage::Training;
+    let e =
+        check_field_fits(&small_device(&real, 18 << 18, 1 << 40), res, 1, training).unwrap_err();
+    assert!(e.to_string().contains("largest storage binding"), "{e}");
+    check_field_fits(&small_device(&real, 64 << 18, 1 << 40), res, 1, training).unwrap();
     // Before the nodes are known, only the heap refuses: the sparse layout
     // may fit the binding.
-    check_field_may_fit(&small_device(&real, 1024, 16 << 18), res, 0).unwrap();
-    let e =
-        check_field_may_fit(&small_device(&real, u32::MAX, (16 << 18) - 16), res, 0).unwrap_err();
+    check_field_may_fit(&small_device(&real, 1024, 16 << 18), res, 0, RENDER).unwrap();
+    let e = check_field_may_fit(
+        &small_device(&real, u32::MAX, (16 << 18) - 16),
+        res,
+        0,
+        RENDER,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("largest memory heap"), "{e}");
 }
 

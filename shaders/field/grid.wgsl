@@ -1,6 +1,7 @@
 // The voxel-grid radiance field: trilinear lookup of (r, g, b, σ) nodes,
 // the view-dependent colour's further coefficients where the field has
-// them, and the coarse occupancy grid for empty-space skipping. Mirrors
+// them (f16 in a binding of their own, passes/src/field/sh_half.rs), and
+// the coarse occupancy grid for empty-space skipping. Mirrors
 // passes/src/field/grid.rs and passes/src/field/occupancy.rs; the layout of
 // `GridInfo` and of `grid_nodes` is written by passes/src/field/gpu_grid.rs.
 // A sparse field (FIELD_SPARSE, a define of the pass's shader library, and
@@ -18,18 +19,35 @@ struct GridInfo {
     bounds_max: vec3<f32>,
     sh_degree: u32,
     resolution: vec3<u32>,
-    _pad1: u32,
+    sh_unscale: f32,
     occupancy_dims: vec3<u32>,
     _pad2: u32,
     brick_dims: vec3<u32>,
-    pool_nodes: u32,
+    _pad3: u32,
 }
 
 @group(0) @binding(0) var<uniform> grid_info: GridInfo;
 @group(0) @binding(1) var<storage, read> grid_nodes: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> grid_occupancy: array<u32>;
+// The further coefficients: three halves (r, g, b) each, node after node
+// in the pool's order, two halves a word, a word of padding at the end.
+@group(0) @binding(31) var<storage, read> grid_sh: array<u32>;
 
 #include "field/sh_trilinear.wgsl"
+
+// Further coefficient j of pool node n (sh_trilinear.wgsl's accessor).
+// Mirrors sh_half::unpack_sh.
+fn field_sh_coefficient(n: u32, j: u32) -> vec3<f32> {
+    let h = 3u * (sh_count(grid_info.sh_degree) * n + j);
+    let w = h >> 1u;
+    let a = unpack2x16float(grid_sh[w]);
+    let b = unpack2x16float(grid_sh[w + 1u]);
+    var c = vec3<f32>(a.y, b.x, b.y);
+    if (h & 1u) == 0u {
+        c = vec3<f32>(a.x, a.y, b.x);
+    }
+    return c * grid_info.sh_unscale;
+}
 
 // Where node i lies in grid_nodes, or EMPTY_BRICK where its brick was
 // dropped (the node is zero). Mirrors BrickLayout::pool_index.
@@ -81,7 +99,7 @@ fn grid_view_colour(x: vec3<f32>, basis: array<f32, 8>, base: vec3<f32>) -> vec3
     if !cell.inside {
         return base;
     }
-    return max(base + sh_trilinear(cell, grid_info.sh_degree, grid_info.pool_nodes, basis), vec3<f32>(0.0));
+    return max(base + sh_trilinear(cell, grid_info.sh_degree, basis), vec3<f32>(0.0));
 }
 
 // When the coarse cell holding x is empty: the distance along dir from x to

@@ -78,6 +78,12 @@ fn field_node_index(i: vec3<u32>) -> u32 {
     return i.x + r.x * (i.y + r.y * i.z);
 }
 
+// Further coefficient j of the node at pool index n: f32, after the
+// pool's values (sh_trilinear.wgsl's accessor).
+fn field_sh_coefficient(n: u32, j: u32) -> vec3<f32> {
+    return grid_nodes[pc.pool_nodes + sh_count(pc.sh_degree) * n + j].xyz;
+}
+
 fn sample_at(cell: TrilinearCell) -> vec4<f32> {
     var v = vec4<f32>(0.0);
     if !cell.inside {
@@ -98,7 +104,7 @@ fn unclamped_colour(cell: TrilinearCell, base: vec3<f32>, basis: array<f32, 8>) 
     if pc.sh_degree == 0u || !cell.inside {
         return base;
     }
-    return base + sh_trilinear(cell, pc.sh_degree, pc.pool_nodes, basis);
+    return base + sh_trilinear(cell, pc.sh_degree, basis);
 }
 
 // The colour seen: clamped at zero where the grid has view-dependent

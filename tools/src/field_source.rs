@@ -9,7 +9,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use inlay_engine::DeviceInfo;
 use inlay_passes::bake::{bake_grid, BakeKnobs};
 use inlay_passes::field::{
-    check_field_may_fit, field_bytes, load_field, read_field_header, GridField, FIELD_VERSION,
+    check_field_may_fit, check_sparse_field_fits, field_bytes, load_field, read_field_header,
+    GridField, NodeStorage, FIELD_VERSION,
 };
 use inlay_passes::scene::{FieldSource, Scene};
 
@@ -78,13 +79,18 @@ fn cache_entry(scene: &Scene, knobs: &BakeKnobs) -> anyhow::Result<Option<PathBu
 }
 
 /// Fails unless the field file at `path` may fit `device` (read from its
-/// header, before the nodes are; whether it needs the sparse layout, the
-/// upload finds).
+/// header, before the nodes are): a sparse file's kept bricks in the
+/// device's bindings and heap; a dense file's nodes in its heap (whether
+/// it needs the sparse layout, the upload finds).
 fn check_file_fits(path: &Path, device: Option<&DeviceInfo>) -> anyhow::Result<()> {
     let header = read_field_header(path)?;
     if let Some(info) = device {
-        check_field_may_fit(info, header.resolution, header.sh_degree)
-            .with_context(|| format!("{}: resolution", path.display()))?;
+        let (res, degree, render) = (header.resolution, header.sh_degree, NodeStorage::Render);
+        match header.bricks {
+            Some(_) => check_sparse_field_fits(info, res, degree, render, header.stored_nodes()),
+            None => check_field_may_fit(info, res, degree, render),
+        }
+        .with_context(|| format!("{}: resolution", path.display()))?;
     }
     Ok(())
 }
@@ -111,7 +117,7 @@ pub fn scene_field(
         FieldSource::Recipe(recipe) => {
             if let Some(info) = device {
                 let res = inlay_passes::bake::grid_resolution(recipe, scene.bake.resolution);
-                check_field_may_fit(info, res, 0).with_context(|| {
+                check_field_may_fit(info, res, 0, NodeStorage::Render).with_context(|| {
                     format!(
                         "{}: [bake] resolution {}",
                         scene.path.display(),

@@ -87,9 +87,14 @@ pub fn compile(
         let loc = e.location(&composed.source);
         located(&composed, loc, e.message().to_owned())
     })?;
+    // `SHADER_FLOAT16_IN_FLOAT32` allows `unpack2x16float` (f16 storage
+    // read into f32): SPIR-V's GLSL.std.450 UnpackHalf2x16, core Vulkan,
+    // no device feature needed.
     let mut validator = Validator::new(
         ValidationFlags::all(),
-        Capabilities::IMMEDIATES | Capabilities::SHADER_FLOAT32_ATOMIC,
+        Capabilities::IMMEDIATES
+            | Capabilities::SHADER_FLOAT32_ATOMIC
+            | Capabilities::SHADER_FLOAT16_IN_FLOAT32,
     );
     let info = validator.validate(&module).map_err(|e| {
         let loc = e.location(&composed.source);

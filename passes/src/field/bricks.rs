@@ -7,11 +7,13 @@
 //! one exactly. Mirrored in `shaders/field/bricks.wgsl`, which
 //! `field/grid.wgsl` and the trainer read through.
 //!
-//! Device layout ([`BrickLayout::device_values`]): the pool's nodes, slot
-//! by slot, each brick's nodes x fastest, then y, then z (a partial brick
-//! at the grid's far faces keeps its full size, the nodes past the grid
-//! zero); then, with view-dependent colour, each pool node's further
-//! coefficients in the same order.
+//! The pool ([`BrickLayout::pool_values`]) holds the kept bricks' nodes,
+//! slot by slot, each brick's nodes x fastest, then y, then z (a partial
+//! brick at the grid's far faces keeps its full size, the nodes past the
+//! grid zero), and each pool node's further coefficients in the same
+//! order. The device holds the coefficients in a binding of their own, as
+//! f16 (`super::gpu_grid`, `super::sh_half`); the trainer holds them as
+//! f32 after the nodes ([`BrickLayout::device_values`]).
 
 use glam::UVec3;
 
@@ -114,12 +116,13 @@ impl BrickLayout {
         })
     }
 
-    /// The field's node array as the device holds it in this layout (the
-    /// module's doc).
-    pub fn device_values(&self, field: &GridField) -> Vec<[f32; 4]> {
+    /// The field's nodes in the pool, slot by slot, and their further
+    /// coefficients (`sh_count` a node) in the same order.
+    pub fn pool_values(&self, field: &GridField) -> (Vec<[f32; 4]>, Vec<[f32; 3]>) {
         let pool = self.pool_nodes() as usize;
         let k = field.sh_count();
-        let mut out = vec![[0.0f32; 4]; pool * (1 + k)];
+        let mut nodes = vec![[0.0f32; 4]; pool];
+        let mut sh = vec![[0.0f32; 3]; pool * k];
         let r = field.resolution;
         for z in 0..r.z {
             for y in 0..r.y {
@@ -128,15 +131,22 @@ impl BrickLayout {
                         continue;
                     };
                     let (p, n) = (p as usize, field.index(x, y, z));
-                    out[p] = field.nodes[n];
-                    for j in 0..k {
-                        let c = field.sh[n * k + j];
-                        out[pool + p * k + j] = [c[0], c[1], c[2], 0.0];
-                    }
+                    nodes[p] = field.nodes[n];
+                    sh[p * k..(p + 1) * k].copy_from_slice(&field.sh[n * k..(n + 1) * k]);
                 }
             }
         }
-        out
+        (nodes, sh)
+    }
+
+    /// The field's node array as the trainer holds it in this layout (the
+    /// module's doc).
+    pub fn device_values(&self, field: &GridField) -> Vec<[f32; 4]> {
+        let (nodes, sh) = self.pool_values(field);
+        nodes
+            .into_iter()
+            .chain(sh.into_iter().map(|c| [c[0], c[1], c[2], 0.0]))
+            .collect()
     }
 }
 

@@ -1,10 +1,10 @@
 //! A grid field uploaded to the GPU, laid out for `shaders/field/grid.wgsl`:
-//! a uniform block of bounds and sizes, the nodes as `vec4<f32>` (r, g, b, σ;
-//! then, with view-dependent colour, each node's further coefficients as
-//! (r, g, b, 0), node-major), and the occupancy cells as u32. A field whose
-//! nodes do not fit one storage binding is stored sparsely
-//! ([`super::bricks`]): only its non-zero bricks, their table after the
-//! occupancy cells.
+//! a uniform block of bounds and sizes, the nodes as `vec4<f32>` (r, g, b,
+//! σ), the occupancy cells as u32, and, with view-dependent colour, each
+//! node's further coefficients in a binding of their own as f16
+//! ([`super::sh_half`], node-major). A field whose nodes do not fit one
+//! storage binding is stored sparsely ([`super::bricks`]): only its
+//! non-zero bricks, their table after the occupancy cells.
 
 use std::sync::Arc;
 
@@ -15,6 +15,7 @@ use inlay_engine::{vk, Buffer, Context, DeviceInfo};
 
 use super::bricks::{BrickLayout, BRICK_SIDE};
 use super::grid::GridField;
+use super::sh_half::{pack_sh, sh_unscale, SH_HALF_BYTES};
 
 inlay_engine::gpu_struct! {
     /// `GridInfo` of `shaders/field/grid.wgsl` (the uniform block).
@@ -29,17 +30,17 @@ inlay_engine::gpu_struct! {
         pub sh_degree: u32,
         /// Nodes per axis.
         pub resolution: [u32; 3],
-        /// Padding.
-        pub _pad1: u32,
+        /// What the stored halves of the further coefficients are
+        /// multiplied by ([`super::sh_half::sh_unscale`]).
+        pub sh_unscale: f32,
         /// Occupancy cells per axis.
         pub occupancy_dims: [u32; 3],
         /// Padding.
         pub _pad2: u32,
         /// Bricks per axis of a sparse field (0: dense).
         pub brick_dims: [u32; 3],
-        /// Nodes before the further colour coefficients in `grid_nodes`:
-        /// the pool's of a sparse field, all of a dense one's.
-        pub pool_nodes: u32,
+        /// Padding.
+        pub _pad3: u32,
     }
 }
 
@@ -74,13 +75,15 @@ pub fn general_field_library(lib: &ShaderLibrary) -> ShaderLibrary {
     ])
 }
 
-/// Device copies of a grid field's data (bindings 0, 1, 2 of set 0).
+/// Device copies of a grid field's data (bindings 0, 1, 2 and 31 of set
+/// 0).
 /// Clones share the device buffers (several views of one upload).
 #[derive(Clone)]
 pub struct GpuGridField {
     info: Arc<Buffer>,
     nodes: Arc<Buffer>,
     occupancy: Arc<Buffer>,
+    sh: Arc<Buffer>,
     /// Bounds diagonal, for step sizes.
     pub diagonal: f64,
     /// The field's bounds.
@@ -94,7 +97,7 @@ pub struct GpuGridField {
     pub sh_degree: u32,
     /// Whether its nodes are stored sparsely.
     pub sparse: bool,
-    /// Bytes its node array takes on the device.
+    /// Bytes its nodes and further coefficients take on the device.
     pub node_bytes: u64,
 }
 
@@ -107,6 +110,9 @@ pub struct GridBindings {
     pub nodes: BufferHandle,
     /// `grid_occupancy` (storage, read).
     pub occupancy: BufferHandle,
+    /// `grid_sh` (storage, read; a word of padding when the field has no
+    /// view-dependent colour).
+    pub sh: BufferHandle,
     /// Degree of the field's view-dependent colour.
     pub sh_degree: u32,
     /// Whether the field is stored sparsely.
@@ -114,7 +120,7 @@ pub struct GridBindings {
 }
 
 impl GridBindings {
-    /// Binds the three buffers for reading on a dispatch (by their names in
+    /// Binds the four buffers for reading on a dispatch (by their names in
     /// `shaders/field/grid.wgsl`).
     ///
     /// Panics if the dispatch's pipeline was compiled for fields without
@@ -139,41 +145,87 @@ impl GridBindings {
             .read("grid_info", self.info)
             .read("grid_nodes", self.nodes)
             .read("grid_occupancy", self.occupancy)
+            .read("grid_sh", self.sh)
     }
 }
 
-/// Bytes a node takes on the device: 16 for (r, g, b, σ) and 16 for each
-/// further colour coefficient of view-dependent colour of `sh_degree`.
-pub fn node_bytes_on_device(sh_degree: u32) -> u64 {
-    16 * (1 + super::sh_extra_coefficients(sh_degree) as u64)
+/// How a field's nodes are held on the device, which decides the bytes a
+/// node takes in each storage binding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeStorage {
+    /// For rendering ([`GpuGridField`]): (r, g, b, σ) as f32 in one
+    /// binding, the further coefficients as f16 in another.
+    Render,
+    /// For training (`crate::train`): values, gradient and Adam's moments
+    /// each one binding of f32 (r, g, b, σ) and (r, g, b, 0) a further
+    /// coefficient ([`device_values`]); a check sees one of the four.
+    Training,
+}
+
+impl NodeStorage {
+    /// Bytes a node of a field of `sh_degree` takes in each binding.
+    pub fn bytes_per_node(self, sh_degree: u32) -> Vec<u64> {
+        let k = super::sh_extra_coefficients(sh_degree) as u64;
+        match self {
+            Self::Render if k == 0 => vec![16],
+            Self::Render => vec![16, SH_HALF_BYTES * k],
+            Self::Training => vec![16 * (1 + k)],
+        }
+    }
 }
 
 /// Fails, naming the limit and what to change, unless a field of
-/// `resolution` nodes with colour of `sh_degree` fits the device dense:
-/// its node array ([`node_bytes_on_device`] a node) in one storage binding
-/// and in the largest device heap. Whether the upload and the trainer
+/// `resolution` nodes with colour of `sh_degree` fits the device dense, held
+/// as `storage` says: each of its arrays in one storage binding and all of
+/// them in the largest device heap. Whether the upload and the trainer
 /// need the sparse layout; before the nodes are known,
 /// [`check_field_may_fit`].
 pub fn check_field_fits(
     info: &DeviceInfo,
     resolution: UVec3,
     sh_degree: u32,
+    storage: NodeStorage,
 ) -> anyhow::Result<()> {
-    check_nodes_fit(info, resolution, sh_degree, None)
+    check_nodes_fit(info, resolution, sh_degree, storage, None)
 }
 
 /// Fails unless a field of `resolution` nodes with colour of `sh_degree`
-/// could fit `info`'s largest memory heap; it may still need the sparse
-/// layout to fit one storage binding, which only its nodes tell
-/// ([`GpuGridField::upload`] checks that). For checks before a bake or a
-/// file is read, where the sparse layout is unknown.
+/// could fit `info`'s largest memory heap held as `storage` says; it may
+/// still need the sparse layout to fit one storage binding, which only its
+/// nodes tell ([`GpuGridField::upload`] checks that). For checks before a
+/// bake or a file is read, where the sparse layout is unknown.
 pub fn check_field_may_fit(
     info: &DeviceInfo,
     resolution: UVec3,
     sh_degree: u32,
+    storage: NodeStorage,
 ) -> anyhow::Result<()> {
+    let per_node: u64 = storage.bytes_per_node(sh_degree).iter().sum();
+    let all = resolution.as_u64vec3().element_product();
     let heap = (info.device_heap_bytes, "largest memory heap");
-    check_nodes_within(info, resolution, sh_degree, None, &[heap])
+    check_bytes_within(
+        info,
+        resolution,
+        sh_degree,
+        None,
+        per_node * all,
+        per_node,
+        heap,
+    )
+}
+
+/// Fails unless a field of `resolution` nodes with colour of `sh_degree`,
+/// stored sparsely with `pool` nodes in its kept bricks, fits the device
+/// held as `storage` says: each array in one binding, all in the heap.
+/// What a sparse field file's header allows checking before it is read.
+pub fn check_sparse_field_fits(
+    info: &DeviceInfo,
+    resolution: UVec3,
+    sh_degree: u32,
+    storage: NodeStorage,
+    pool: u64,
+) -> anyhow::Result<()> {
+    check_nodes_fit(info, resolution, sh_degree, storage, Some(pool))
 }
 
 fn degree_words(sh_degree: u32) -> String {
@@ -185,64 +237,67 @@ fn degree_words(sh_degree: u32) -> String {
 }
 
 /// [`check_field_fits`] for the layout that holds `pool` of the
-/// resolution's nodes (None: all of them, dense).
+/// resolution's nodes (None: all of them, dense): each binding, then the
+/// heap.
 fn check_nodes_fit(
     info: &DeviceInfo,
     resolution: UVec3,
     sh_degree: u32,
+    storage: NodeStorage,
     pool: Option<u64>,
 ) -> anyhow::Result<()> {
-    let limits = [
-        (
-            info.max_storage_buffer_range as u64,
-            "largest storage binding",
-        ),
-        (info.device_heap_bytes, "largest memory heap"),
-    ];
-    check_nodes_within(info, resolution, sh_degree, pool, &limits)
+    let nodes = pool.unwrap_or(resolution.as_u64vec3().element_product());
+    let per_binding = storage.bytes_per_node(sh_degree);
+    let binding = (
+        info.max_storage_buffer_range as u64,
+        "largest storage binding",
+    );
+    for &b in &per_binding {
+        check_bytes_within(info, resolution, sh_degree, pool, b * nodes, b, binding)?;
+    }
+    let all: u64 = per_binding.iter().sum();
+    let heap = (info.device_heap_bytes, "largest memory heap");
+    check_bytes_within(info, resolution, sh_degree, pool, all * nodes, all, heap)
 }
 
-/// Fails, naming the first of `limits` (bytes, what it is) that the node
-/// array of `pool` of the resolution's nodes (None: all) exceeds.
-fn check_nodes_within(
+/// Fails, naming `limit` (bytes, what it is), when `bytes` (`per_node` a
+/// node) of `pool` of the resolution's nodes (None: all) exceed it.
+fn check_bytes_within(
     info: &DeviceInfo,
     resolution: UVec3,
     sh_degree: u32,
     pool: Option<u64>,
-    limits: &[(u64, &str)],
+    bytes: u64,
+    per_node: u64,
+    (limit, what): (u64, &str),
 ) -> anyhow::Result<()> {
-    let per_node = node_bytes_on_device(sh_degree);
-    let all = resolution.as_u64vec3().element_product();
-    let node_bytes = per_node * pool.unwrap_or(all);
-    for &(limit, what) in limits {
-        if node_bytes > limit {
-            let stored = match pool {
-                Some(p) => format!(
-                    ", stored sparsely ({:.0} % of them in non-zero bricks),",
-                    100.0 * p as f64 / all as f64
-                ),
-                None => String::new(),
-            };
-            anyhow::bail!(
-                "the field's {}x{}x{} nodes{}{stored} take {} MiB, more than {}'s {what} \
-                 ({} MiB); use a field of at most {} nodes",
-                resolution.x,
-                resolution.y,
-                resolution.z,
-                degree_words(sh_degree),
-                node_bytes >> 20,
-                info.name,
-                limit >> 20,
-                limit / per_node
-            );
-        }
+    if bytes <= limit {
+        return Ok(());
     }
-    Ok(())
+    let all = resolution.as_u64vec3().element_product();
+    let stored = match pool {
+        Some(p) => format!(
+            ", stored sparsely ({:.0} % of them in non-zero bricks),",
+            100.0 * p as f64 / all as f64
+        ),
+        None => String::new(),
+    };
+    anyhow::bail!(
+        "the field's {}x{}x{} nodes{}{stored} take {} MiB, more than {}'s {what} \
+         ({} MiB); use a field of at most {} nodes",
+        resolution.x,
+        resolution.y,
+        resolution.z,
+        degree_words(sh_degree),
+        bytes >> 20,
+        info.name,
+        limit >> 20,
+        limit / per_node.max(1)
+    )
 }
 
-/// The field's node array as the device holds it (and as the trainer
-/// trains it): (r, g, b, σ) per node, then each node's further colour
-/// coefficients as (r, g, b, 0).
+/// The field's node array as the trainer holds it: (r, g, b, σ) per node,
+/// then each node's further colour coefficients as (r, g, b, 0).
 pub fn device_values(field: &GridField) -> Vec<[f32; 4]> {
     field
         .nodes
@@ -266,7 +321,8 @@ impl GpuGridField {
         field: &GridField,
         layout: FieldLayout,
     ) -> anyhow::Result<Self> {
-        let dense_fits = check_field_fits(ctx.info(), field.resolution, field.sh_degree);
+        let render = NodeStorage::Render;
+        let dense_fits = check_field_fits(ctx.info(), field.resolution, field.sh_degree, render);
         let bricks = match (layout, dense_fits) {
             (FieldLayout::Dense, fits) => {
                 fits?;
@@ -279,6 +335,7 @@ impl GpuGridField {
                     ctx.info(),
                     field.resolution,
                     field.sh_degree,
+                    render,
                     Some(bricks.pool_nodes()),
                 )?;
                 Some(bricks)
@@ -286,36 +343,37 @@ impl GpuGridField {
         };
         let b = field.bounds;
         let occ = &field.occupancy;
+        let unscale = sh_unscale(&field.sh);
         let info = GridInfo {
             bounds_min: b.min.as_vec3().to_array(),
             occupancy_block: occ.block,
             bounds_max: b.max.as_vec3().to_array(),
             sh_degree: field.sh_degree,
             resolution: field.resolution.to_array(),
-            _pad1: 0,
+            sh_unscale: unscale,
             occupancy_dims: occ.dims.to_array(),
             _pad2: 0,
             brick_dims: bricks.as_ref().map_or([0; 3], |l| l.dims.to_array()),
-            pool_nodes: bricks
-                .as_ref()
-                .map_or(field.nodes.len() as u64, |l| l.pool_nodes())
-                as u32,
+            _pad3: 0,
         };
-        let mut values = match &bricks {
-            Some(l) => l.device_values(field),
-            None => device_values(field),
+        let (mut values, sh) = match &bricks {
+            Some(l) => l.pool_values(field),
+            None => (field.nodes.clone(), field.sh.clone()),
         };
         if values.is_empty() {
             values.push([0.0; 4]); // a field with no bricks: a buffer is never empty
         }
         let nodes: Vec<u8> = bytemuck::cast_slice(&values).to_vec();
+        let sh_words = pack_sh(&sh, unscale);
         if let Some(l) = &bricks {
             log::info!(
                 "field stored sparsely: {} of {} bricks of {BRICK_SIDE}³ nodes, {} MiB (dense: {} MiB)",
                 l.slots,
                 l.table.len(),
-                nodes.len() >> 20,
-                (node_bytes_on_device(field.sh_degree) * field.nodes.len() as u64) >> 20
+                (nodes.len() + 4 * sh_words.len()) >> 20,
+                (render.bytes_per_node(field.sh_degree).iter().sum::<u64>()
+                    * field.nodes.len() as u64)
+                    >> 20
             );
         }
         let table = bricks.as_ref().map_or(&[][..], |l| &l.table[..]);
@@ -335,13 +393,19 @@ impl GpuGridField {
             )?),
             nodes: Arc::new(Buffer::with_data(ctx, "grid-nodes", &nodes, storage)?),
             occupancy: Arc::new(Buffer::with_data(ctx, "grid-occupancy", &cells, storage)?),
+            sh: Arc::new(Buffer::with_data(
+                ctx,
+                "grid-sh",
+                bytemuck::cast_slice(&sh_words),
+                storage,
+            )?),
             diagonal: field.bounds.diagonal(),
             bounds: field.bounds,
             resolution: field.resolution,
             emitters: super::find_emitters(field),
             sh_degree: field.sh_degree,
             sparse: bricks.is_some(),
-            node_bytes: nodes.len() as u64,
+            node_bytes: (nodes.len() + 4 * sh_words.len()) as u64,
         })
     }
 
@@ -361,6 +425,7 @@ impl GpuGridField {
             info: graph.import_buffer(&self.info, None),
             nodes: graph.import_buffer(&self.nodes, None),
             occupancy: graph.import_buffer(&self.occupancy, None),
+            sh: graph.import_buffer(&self.sh, None),
             sh_degree: self.sh_degree,
             sparse: self.sparse,
         }

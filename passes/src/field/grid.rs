@@ -7,6 +7,7 @@ use glam::{DVec3, UVec3};
 
 use super::occupancy::Occupancy;
 use super::sh::{sh_colour_unclamped, sh_extra_coefficients, MAX_SH_DEGREE};
+use super::sh_half::quantise_sh;
 use super::RadianceField;
 use crate::geometry::Aabb;
 
@@ -26,7 +27,8 @@ pub struct GridField {
     pub sh_degree: u32,
     /// The further RGB coefficients of each node
     /// ([`sh_extra_coefficients`] of them, node-major): coefficient k of
-    /// node n at `n · count + k`. Empty at degree 0.
+    /// node n at `n · count + k`. Empty at degree 0. Held at f16
+    /// precision ([`Self::with_sh`]).
     pub sh: Vec<[f32; 3]>,
     /// Empty-space structure built from the nodes.
     pub occupancy: Occupancy,
@@ -61,7 +63,9 @@ impl GridField {
     }
 
     /// The same field with view-dependent colour of `degree`, `sh` holding
-    /// each node's further coefficients ([`Self::sh`]).
+    /// each node's further coefficients ([`Self::sh`]), rounded to the
+    /// precision fields store them in ([`super::sh_half`]: f16 under a
+    /// power-of-two scale), so the CPU reads what the device reads.
     ///
     /// Panics if the degree is above [`MAX_SH_DEGREE`] or `sh` has the
     /// wrong length (the loader checks both before calling).
@@ -74,6 +78,7 @@ impl GridField {
         );
         self.sh_degree = degree;
         self.sh = sh;
+        quantise_sh(&mut self.sh);
         self
     }
 

@@ -14,6 +14,7 @@ mod grid;
 mod occupancy;
 mod perturb;
 mod sh;
+pub mod sh_half;
 
 pub use emitters::{find_emitters, FieldEmitter, MAX_FIELD_EMITTERS, MIN_EMITTER_RATIO};
 pub use format::{
@@ -21,8 +22,8 @@ pub use format::{
     FieldHeader, FIELD_MAGIC, FIELD_VERSION,
 };
 pub use gpu_grid::{
-    check_field_fits, check_field_may_fit, device_values, general_field_library,
-    node_bytes_on_device, FieldLayout, GpuGridField, GridBindings, SPARSE_DEFINE,
+    check_field_fits, check_field_may_fit, check_sparse_field_fits, device_values,
+    general_field_library, FieldLayout, GpuGridField, GridBindings, NodeStorage, SPARSE_DEFINE,
     VIEW_DEPENDENT_DEFINE,
 };
 pub use grid::GridField;

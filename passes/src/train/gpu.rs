@@ -14,7 +14,7 @@ use inlay_engine::{
 
 use super::adam::AdamKnobs;
 use crate::field::bricks::BrickLayout;
-use crate::field::{device_values, GridField, DEFAULT_OCCUPANCY_BLOCK};
+use crate::field::{device_values, GridField, NodeStorage, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
 
@@ -297,7 +297,7 @@ impl GpuTrainer {
     /// and Adam's two moments each the size of the field's node array, in
     /// a binding of its own ([`crate::field::check_field_fits`]).
     pub fn dense_fits(info: &inlay_engine::DeviceInfo, resolution: UVec3, sh_degree: u32) -> bool {
-        crate::field::check_field_fits(info, resolution, sh_degree).is_ok()
+        crate::field::check_field_fits(info, resolution, sh_degree, NodeStorage::Training).is_ok()
     }
 
     /// A trainer starting from `field` that trains only the bricks of
@@ -324,7 +324,12 @@ impl GpuTrainer {
         let bytes = |v: &[f32]| bytemuck::cast_slice::<f32, u8>(v).to_vec();
         let flat: Vec<f32> = values.iter().flatten().copied().collect();
         if layout.is_none() {
-            crate::field::check_field_fits(ctx.info(), resolution, field.sh_degree)?;
+            crate::field::check_field_fits(
+                ctx.info(),
+                resolution,
+                field.sh_degree,
+                NodeStorage::Training,
+            )?;
         }
         let limit = ctx.info().max_storage_buffer_range as u64;
         let what = match &layout {

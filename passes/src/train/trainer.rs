@@ -217,7 +217,12 @@ pub fn train(
     } else {
         knobs.stages
     };
-    crate::field::check_field_may_fit(ctx.info(), final_res, knobs.sh_degree)?;
+    crate::field::check_field_may_fit(
+        ctx.info(),
+        final_res,
+        knobs.sh_degree,
+        crate::field::NodeStorage::Training,
+    )?;
     let stage_res = |s: u32| {
         let shift = stages - 1 - s;
         (final_res.as_dvec3() / (1u32 << shift) as f64)

@@ -7,7 +7,7 @@ use clap::Args;
 use glam::DVec3;
 use inlay_engine::DeviceInfo;
 use inlay_passes::bake::grid_resolution;
-use inlay_passes::field::{check_field_may_fit, field_bytes};
+use inlay_passes::field::{check_field_may_fit, field_bytes, NodeStorage};
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::bake_with_progress;
@@ -50,8 +50,13 @@ pub fn run(device: &DeviceInfo, args: &BakeSceneArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from(format!("{}.inlayfield", scene.name)));
     check_output("--out", &out, &["inlayfield"])?;
     if let Some(recipe) = scene.recipe() {
-        check_field_may_fit(device, grid_resolution(recipe, knobs.resolution), 0)
-            .with_context(|| format!("--resolution {}", knobs.resolution))?;
+        check_field_may_fit(
+            device,
+            grid_resolution(recipe, knobs.resolution),
+            0,
+            NodeStorage::Render,
+        )
+        .with_context(|| format!("--resolution {}", knobs.resolution))?;
     }
     let field = bake_with_progress(&scene, &knobs)?;
     let mut outputs = Outputs::new();
