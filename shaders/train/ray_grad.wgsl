@@ -37,6 +37,71 @@ fn add_gain_float(i: u32, value: f32) {
     }
 }
 
+// The gradient's pages (train/sh_pages.wgsl).
+@group(0) @binding(15) var<storage, read_write> sh_grad_0: array<atomic<u32>>;
+@group(0) @binding(16) var<storage, read_write> sh_grad_1: array<atomic<u32>>;
+@group(0) @binding(17) var<storage, read_write> sh_grad_2: array<atomic<u32>>;
+@group(0) @binding(18) var<storage, read_write> sh_grad_3: array<atomic<u32>>;
+@group(0) @binding(19) var<storage, read_write> sh_grad_4: array<atomic<u32>>;
+@group(0) @binding(20) var<storage, read_write> sh_grad_5: array<atomic<u32>>;
+@group(0) @binding(21) var<storage, read_write> sh_grad_6: array<atomic<u32>>;
+@group(0) @binding(22) var<storage, read_write> sh_grad_7: array<atomic<u32>>;
+
+// One compare-and-swap of word i of the gradient's page j: (1, _) when it
+// took, else (0, the word found there).
+fn sh_grad_swap(j: u32, i: u32, old: u32, swapped: u32) -> vec2<u32> {
+    switch j {
+        case 0u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_0[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        case 1u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_1[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        case 2u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_2[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        case 3u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_3[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        case 4u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_4[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        case 5u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_5[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        case 6u: {
+            let r = atomicCompareExchangeWeak(&sh_grad_6[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+        default: {
+            let r = atomicCompareExchangeWeak(&sh_grad_7[i], old, swapped);
+            return vec2<u32>(u32(r.exchanged), r.old_value);
+        }
+    }
+}
+
+// add_float into word i of the gradient's page j (the first swap guesses
+// the word is zero, and learns it otherwise).
+fn add_sh_float(j: u32, i: u32, value: f32) {
+    if value == 0.0 {
+        return;
+    }
+    var old = 0u;
+    loop {
+        let r = sh_grad_swap(j, i, old, bitcast<u32>(bitcast<f32>(old) + value));
+        if r.x == 1u {
+            break;
+        }
+        old = r.y;
+    }
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     train_ray(id.x);

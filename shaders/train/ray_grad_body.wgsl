@@ -1,17 +1,19 @@
 // The body of the training kernel: one training ray per invocation, the
 // march's quadrature over the trained grid (no empty-space skipping), the
 // pixel's loss, and the loss's gradient with respect to every value the
-// ray read. The trained values are laid out as a field's on the device:
-// the nodes (a sparse grid's pool of bricks, field/bricks.wgsl), then the
-// view-dependent colour's coefficients (field/sh_trilinear.wgsl). A photograph records its frame's exposure gain
+// ray read. The trained nodes are laid out as a field's on the device (a
+// sparse grid's pool of bricks, field/bricks.wgsl), the view-dependent
+// colour's coefficients in pages of their own (train/sh_pages.wgsl). A
+// photograph records its frame's exposure gain
 // (RGB) times the pixel (1 unless learnt); with learn_gains, the loss's
 // gradient with respect to the gain of every frame but the first is
 // scattered too. With pc.distortion > 0, the distortion loss of the ray's
 // weights is added, and its gradient with respect to the densities.
 // Mirrors passes/src/train/render.rs render_ray_with_gradient.
-// Needs from the includer: the bindings `grad` (2) and `gain_grad` (5) and
-// `add_float(i, v)`, `add_gain_float(i, v)` that add v to their element i
-// atomically (train/ray_grad.wgsl: a compare-and-swap loop, core WGSL;
+// Needs from the includer: the bindings `grad` (2), `gain_grad` (5) and
+// the gradient's pages `sh_grad_j` (15..22), and `add_float(i, v)`,
+// `add_gain_float(i, v)`, `add_sh_float(j, i, v)` that add v to their
+// element i atomically (train/ray_grad.wgsl: a compare-and-swap loop, core WGSL;
 // train/ray_grad_float.wgsl: atomicAdd on f32, VK_EXT_shader_atomic_float).
 
 #include "common/ray_box.wgsl"
@@ -35,8 +37,7 @@ struct TrainPush {
     pad2: u32,
     // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
     brick_dims: vec3<u32>,
-    // Nodes before the view-dependent coefficients.
-    pool_nodes: u32,
+    pad3: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -62,6 +63,7 @@ var<immediate> pc: TrainPush;
 @group(0) @binding(6) var<storage, read> bricks: array<u32>;
 
 #include "field/bricks.wgsl"
+#include "train/sh_pages.wgsl"
 #include "field/sh_trilinear.wgsl"
 
 // Where node i's values lie (4 a node), or EMPTY_BRICK where its brick
@@ -76,12 +78,6 @@ fn field_node_index(i: vec3<u32>) -> u32 {
     }
     let r = pc.resolution;
     return i.x + r.x * (i.y + r.y * i.z);
-}
-
-// Further coefficient j of the node at pool index n: f32, after the
-// pool's values (sh_trilinear.wgsl's accessor).
-fn field_sh_coefficient(n: u32, j: u32) -> vec3<f32> {
-    return grid_nodes[pc.pool_nodes + sh_count(pc.sh_degree) * n + j].xyz;
 }
 
 fn sample_at(cell: TrilinearCell) -> vec4<f32> {
@@ -230,12 +226,11 @@ fn train_ray(index: u32) {
             add_float(n + 2u, d_c.z * wk);
             add_float(n + 3u, d_sigma * wk);
             if count > 0u {
-                let s = 4u * (pc.pool_nodes + count * node);
                 for (var j = 0u; j < count; j++) {
                     let e = d_c * (wk * y[j]);
-                    add_float(s + 4u * j, e.x);
-                    add_float(s + 4u * j + 1u, e.y);
-                    add_float(s + 4u * j + 2u, e.z);
+                    add_sh_float(j, n, e.x);
+                    add_sh_float(j, n + 1u, e.y);
+                    add_sh_float(j, n + 2u, e.z);
                 }
             }
         }

@@ -157,8 +157,9 @@ pub enum NodeStorage {
     /// binding, the further coefficients as f16 in another.
     Render,
     /// For training (`crate::train`): values, gradient and Adam's moments
-    /// each one binding of f32 (r, g, b, σ) and (r, g, b, 0) a further
-    /// coefficient ([`device_values`]); a check sees one of the four.
+    /// each one binding of f32 (r, g, b, σ) and one binding a further
+    /// coefficient, (r, g, b, 0) f32 (`crate::train::sh_pages`); a check
+    /// sees one of the four.
     Training,
 }
 
@@ -169,7 +170,7 @@ impl NodeStorage {
         match self {
             Self::Render if k == 0 => vec![16],
             Self::Render => vec![16, SH_HALF_BYTES * k],
-            Self::Training => vec![16 * (1 + k)],
+            Self::Training => vec![16; 1 + k as usize],
         }
     }
 }
@@ -296,8 +297,9 @@ fn check_bytes_within(
     )
 }
 
-/// The field's node array as the trainer holds it: (r, g, b, σ) per node,
-/// then each node's further colour coefficients as (r, g, b, 0).
+/// The field's values in the trainer's order (`GpuTrainer::values`):
+/// (r, g, b, σ) per node, then each node's further colour coefficients as
+/// (r, g, b, 0).
 pub fn device_values(field: &GridField) -> Vec<[f32; 4]> {
     field
         .nodes

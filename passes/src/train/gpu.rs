@@ -13,8 +13,9 @@ use inlay_engine::{
 };
 
 use super::adam::AdamKnobs;
+use super::sh_pages::{interleave, ShPages};
 use crate::field::bricks::BrickLayout;
-use crate::field::{device_values, GridField, NodeStorage, DEFAULT_OCCUPANCY_BLOCK};
+use crate::field::{GridField, NodeStorage, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
 
@@ -48,8 +49,8 @@ inlay_engine::gpu_struct! {
         pub pad2: u32,
         /// Bricks per axis of a sparse grid (0: dense).
         pub brick_dims: [u32; 3],
-        /// Nodes before the view-dependent coefficients.
-        pub pool_nodes: u32,
+        /// Padding.
+        pub pad3: u32,
     }
 }
 
@@ -83,7 +84,7 @@ inlay_engine::gpu_struct! {
 inlay_engine::gpu_struct! {
     /// `AdamPush` of `shaders/train/adam.wgsl`.
     pub struct AdamPush = "train/adam.wgsl" : "AdamPush" {
-        /// Values (4 per node, then the view-dependent colour's).
+        /// Values (4 per node, or per coefficient of a page).
         pub count: u32,
         /// Colour step size.
         pub rate: f32,
@@ -99,8 +100,8 @@ inlay_engine::gpu_struct! {
         pub correction1: f32,
         /// 1 − β2^t.
         pub correction2: f32,
-        /// Values of the nodes (4 per node), kept non-negative; the rest
-        /// are view-dependent colour coefficients.
+        /// Values kept non-negative (the nodes'; 0 for a page of
+        /// view-dependent colour coefficients).
         pub base_values: u32,
         /// Padding.
         pub pad0: u32,
@@ -241,12 +242,13 @@ pub const TRAIN_TV: &str = "train-tv";
 /// Name of the pass stepping along total variation's gradient.
 pub const TRAIN_DESCEND: &str = "train-descend";
 
-/// A grid being trained on the GPU: its values (laid out as a field's on
-/// the device, [`device_values`], or only the bricks of a
-/// [`BrickLayout`]), their gradient and Adam's moments, and the pipelines
-/// that step them.
+/// A grid being trained on the GPU: its nodes' values (laid out as a
+/// field's on the device, or only the bricks of a [`BrickLayout`]), its
+/// view-dependent coefficients in pages ([`ShPages`]), their gradients and
+/// Adam's moments, and the pipelines that step them.
 pub struct GpuTrainer {
     layout: Option<BrickLayout>,
+    sh_pages: ShPages,
     table: Arc<Buffer>,
     slot_bricks: Arc<Buffer>,
     ray_grad: Arc<ComputePipeline>,
@@ -294,8 +296,8 @@ impl GpuTrainer {
 
     /// Whether a trainer of every node of a grid of `resolution` nodes
     /// with colour of `sh_degree` fits `info`: its values, their gradient
-    /// and Adam's two moments each the size of the field's node array, in
-    /// a binding of its own ([`crate::field::check_field_fits`]).
+    /// and Adam's two moments each in bindings of their own, 16 bytes a
+    /// node each ([`crate::field::check_field_fits`]).
     pub fn dense_fits(info: &inlay_engine::DeviceInfo, resolution: UVec3, sh_degree: u32) -> bool {
         crate::field::check_field_fits(info, resolution, sh_degree, NodeStorage::Training).is_ok()
     }
@@ -310,14 +312,15 @@ impl GpuTrainer {
         layout: Option<BrickLayout>,
     ) -> anyhow::Result<Self> {
         let resolution = field.resolution;
-        let mut values = match &layout {
-            Some(l) => l.device_values(field),
-            None => device_values(field),
+        let (mut values, sh) = match &layout {
+            Some(l) => l.pool_values(field),
+            None => (field.nodes.clone(), field.sh.clone()),
         };
         if values.is_empty() {
             values.push([0.0; 4]); // no brick kept: a buffer is never empty
         }
         let n = values.len();
+        let sh_count = crate::field::sh_extra_coefficients(field.sh_degree);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
@@ -342,7 +345,7 @@ impl GpuTrainer {
         };
         anyhow::ensure!(
             (n as u64) * 16 <= limit,
-            "training {what} (view-dependent colour of degree {}) needs its values in one binding of {} MiB, more than {}'s {} MiB; train a smaller grid",
+            "training {what} (view-dependent colour of degree {}) needs bindings of {} MiB, more than {}'s {} MiB; train a smaller grid",
             field.sh_degree,
             (n as u64 * 16) >> 20,
             ctx.info().name,
@@ -375,8 +378,10 @@ impl GpuTrainer {
             "train-slot-bricks",
             &layout.as_ref().map_or(Vec::new(), BrickLayout::slot_bricks),
         )?;
+        let sh_pages = ShPages::new(ctx, &sh, sh_count)?;
         Ok(Self {
             layout,
+            sh_pages,
             table,
             slot_bricks,
             ray_grad: lib.compute_pipeline(
@@ -467,7 +472,7 @@ impl GpuTrainer {
             distortion: (self.distortion / self.bounds.diagonal()) as f32,
             pad2: 0,
             brick_dims: self.brick_dims(),
-            pool_nodes: self.node_count(),
+            pad3: 0,
         }
     }
 
@@ -487,7 +492,7 @@ impl GpuTrainer {
     /// Values trained: 4 per node and 4 per view-dependent colour
     /// coefficient (r, g, b and an unused fourth).
     pub fn value_count(&self) -> u32 {
-        4 * self.node_count() * (1 + crate::field::sh_extra_coefficients(self.sh_degree) as u32)
+        4 * self.node_count() * (1 + self.sh_pages.count() as u32)
     }
 
     /// The bricks trained (None: every node).
@@ -524,6 +529,7 @@ impl GpuTrainer {
             .clone()
             .map(|m| graph.import_buffer(&m, None));
         let graph_table = graph.import_buffer(&self.table, None);
+        let mut pages = self.sh_pages.import(&mut graph);
         let graph_slots = graph.import_buffer(&self.slot_bricks, None);
         // A host-visible buffer per batch (a batch outgrows the 64 KiB a
         // graph upload takes); the frame finishes before the next is made.
@@ -552,6 +558,7 @@ impl GpuTrainer {
         let gain_grad = pass.buffer_at("gain_grad", gain_grad, BufferAccess::StorageReadWrite);
         let table = graph_table;
         pass.buffer_at("bricks", table, BufferAccess::StorageRead);
+        pages.bind_to_batch(&mut pass);
         pass.dispatch(&self.ray_grad)
             .push(&push)
             .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
@@ -560,7 +567,7 @@ impl GpuTrainer {
             self.steps += 1;
             let t = self.steps as i32;
             let a = AdamPush {
-                count: self.value_count(),
+                count: 4 * self.node_count(),
                 rate: knobs.rate as f32,
                 density_rate: knobs.density_rate as f32,
                 grad_scale,
@@ -573,18 +580,29 @@ impl GpuTrainer {
                 pad1: 0,
                 pad2: 0,
             };
-            let groups = self.value_count().div_ceil(64);
+            let groups = (4 * self.node_count()).div_ceil(64);
+            let groups = [groups.min(65535), groups.div_ceil(65535), 1];
             let mut pass = graph.compute_pass(TRAIN_ADAM);
             let params = pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
             let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
             pass.buffer_at("first", moments[0], BufferAccess::StorageReadWrite);
             pass.buffer_at("second", moments[1], BufferAccess::StorageReadWrite);
-            pass.dispatch(&self.adam).push(&a).groups([
-                groups.min(65535),
-                groups.div_ceil(65535),
-                1,
-            ]);
+            pass.dispatch(&self.adam).push(&a).groups(groups);
             pass.finish();
+            // Each page of coefficients: free of sign, at the colour's rate.
+            let page_step = AdamPush {
+                base_values: 0,
+                ..a
+            };
+            for (j, [values, grad, first, second]) in pages.trained.iter().enumerate() {
+                let mut pass = graph.compute_pass(&format!("{TRAIN_ADAM}-sh-{j}"));
+                pass.buffer_at("params", *values, BufferAccess::StorageReadWrite);
+                pass.buffer_at("grad", *grad, BufferAccess::StorageReadWrite);
+                pass.buffer_at("first", *first, BufferAccess::StorageReadWrite);
+                pass.buffer_at("second", *second, BufferAccess::StorageReadWrite);
+                pass.dispatch(&self.adam).push(&page_step).groups(groups);
+                pass.finish();
+            }
             if self.tv_weights != (0.0, 0.0) {
                 self.add_tv_step(&mut graph, params, grad, (graph_table, graph_slots));
             }
@@ -678,9 +696,14 @@ impl GpuTrainer {
         Ok(readback.read_f32()?)
     }
 
-    /// Every value now, as laid out on the device ([`device_values`]).
+    /// Every value now, in [`crate::field::device_values`]' order (the nodes', then each
+    /// node's coefficients together).
     pub fn values(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
-        self.read(renderer, &self.params)
+        let base = self.read(renderer, &self.params)?;
+        let pages = (0..self.sh_pages.count())
+            .map(|j| self.read(renderer, self.sh_pages.values(j)))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        Ok(interleave(base, &pages))
     }
 
     /// The grid now, as a field (occupancy built from its densities; a
@@ -719,6 +742,10 @@ impl GpuTrainer {
 
     /// The accumulated gradient (as [`Self::values`]).
     pub fn gradient(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
-        self.read(renderer, &self.grad)
+        let base = self.read(renderer, &self.grad)?;
+        let pages = (0..self.sh_pages.count())
+            .map(|j| self.read(renderer, self.sh_pages.gradient(j)))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        Ok(interleave(base, &pages))
     }
 }

@@ -12,6 +12,7 @@ pub mod loss;
 pub mod pixels;
 pub mod prune;
 pub mod render;
+pub mod sh_pages;
 pub mod sparse_stage;
 pub mod trainer;
 pub mod tv;
