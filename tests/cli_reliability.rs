@@ -195,6 +195,25 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
     assert!(left.is_empty(), "{left:?}");
 }
 
+/// Writes a field file of format `version` for 1024³ nodes over [−1, 1]³,
+/// `tail` after the bounds (the flags and what follows), `len` bytes long,
+/// its data zero (sparse on disk); returns its header.
+fn huge_field_file(path: &std::path::Path, version: u32, tail: &[[u8; 4]], len: u64) -> Vec<u8> {
+    let mut header = Vec::new();
+    header.extend_from_slice(b"INLAYFLD");
+    for v in [version, 0, 1024, 1024, 1024] {
+        header.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [-1f32, -1.0, -1.0, 1.0, 1.0, 1.0] {
+        header.extend_from_slice(&v.to_le_bytes());
+    }
+    tail.iter().for_each(|w| header.extend_from_slice(w));
+    std::fs::write(path, &header).unwrap();
+    let file = std::fs::OpenOptions::new().write(true).open(path).unwrap();
+    file.set_len(len).unwrap();
+    header
+}
+
 /// A field file whose header asks for more nodes than the device can hold
 /// is refused from its header: a sparse 16 GiB file (1024³ nodes, more than
 /// the device's largest heap; a smaller one may fit the storage binding
@@ -203,20 +222,8 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
 fn a_field_too_large_for_the_device_is_refused_from_its_header() {
     let dir = scratch("huge-field");
     let path = dir.join("huge.inlayfield");
-    let mut header = Vec::new();
-    header.extend_from_slice(b"INLAYFLD");
-    for v in [1u32, 0, 1024, 1024, 1024] {
-        header.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [-1f32, -1.0, -1.0, 1.0, 1.0, 1.0] {
-        header.extend_from_slice(&v.to_le_bytes());
-    }
-    header.extend_from_slice(&0u32.to_le_bytes());
+    let header = huge_field_file(&path, 1, &[0u32.to_le_bytes()], 56 + 16 * 1024u64.pow(3));
     assert_eq!(header.len(), 56);
-    std::fs::write(&path, &header).unwrap();
-    let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
-    file.set_len(56 + 16 * 1024u64.pow(3)).unwrap();
-    drop(file);
     let o = inlay(
         &[
             "render",
@@ -247,24 +254,14 @@ fn a_field_too_large_for_the_device_is_refused_from_its_header() {
     // its header too: its header says how many bricks it keeps.
     let binding = common::gpu().info().max_storage_buffer_range as u64;
     let bricks = binding / (512 * 16) + 1;
-    let mut sparse = Vec::new();
-    sparse.extend_from_slice(b"INLAYFLD");
-    for v in [2u32, 0, 1024, 1024, 1024] {
-        sparse.extend_from_slice(&v.to_le_bytes());
-    }
-    for v in [-1f32, -1.0, -1.0, 1.0, 1.0, 1.0] {
-        sparse.extend_from_slice(&v.to_le_bytes());
-    }
-    sparse.extend_from_slice(&1u32.to_le_bytes());
-    sparse.extend_from_slice(&(bricks as u32).to_le_bytes());
-    sparse.extend_from_slice(&1f32.to_le_bytes());
-    assert_eq!(sparse.len(), 64);
     let path = dir.join("sparse.inlayfield");
-    std::fs::write(&path, &sparse).unwrap();
-    let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
-    file.set_len(64 + 4 * 128u64.pow(3) + 16 * 512 * bricks)
-        .unwrap();
-    drop(file);
+    let tail = [
+        1u32.to_le_bytes(),
+        (bricks as u32).to_le_bytes(),
+        1f32.to_le_bytes(),
+    ];
+    let len = 64 + 4 * 128u64.pow(3) + 16 * 512 * bricks;
+    assert_eq!(huge_field_file(&path, 2, &tail, len).len(), 64);
     let o = inlay(
         &[
             "render",

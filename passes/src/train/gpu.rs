@@ -231,6 +231,28 @@ impl GradientScatter {
     }
 }
 
+/// A host-visible storage buffer holding `bytes`: a batch's records, which
+/// outgrow the 64 KiB a graph upload takes. One a frame; the frame
+/// finishes before the next is made.
+pub(crate) fn host_storage(
+    ctx: &Arc<Context>,
+    name: &str,
+    bytes: &[u8],
+) -> anyhow::Result<Arc<Buffer>> {
+    let mut upload = Buffer::new(
+        ctx,
+        name,
+        bytes.len() as u64,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        BufferLocation::Upload,
+    )?;
+    upload
+        .mapped_mut()
+        .ok_or_else(|| anyhow::anyhow!("{name} is not host-visible"))?[..bytes.len()]
+        .copy_from_slice(bytes);
+    Ok(Arc::new(upload))
+}
+
 /// Name of the batch pass in the frame graph.
 pub const TRAIN_RAYS: &str = "train-rays";
 /// Name of the optimiser pass.
@@ -531,21 +553,8 @@ impl GpuTrainer {
         let graph_table = graph.import_buffer(&self.table, None);
         let mut pages = self.sh_pages.import(&mut graph);
         let graph_slots = graph.import_buffer(&self.slot_bricks, None);
-        // A host-visible buffer per batch (a batch outgrows the 64 KiB a
-        // graph upload takes); the frame finishes before the next is made.
-        let bytes: &[u8] = bytemuck::cast_slice(rays);
-        let mut upload = Buffer::new(
-            &ctx,
-            "train-batch",
-            bytes.len() as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            BufferLocation::Upload,
-        )?;
-        upload
-            .mapped_mut()
-            .ok_or_else(|| anyhow::anyhow!("the batch buffer is not host-visible"))?[..bytes.len()]
-            .copy_from_slice(bytes);
-        let batch = graph.import_buffer(&Arc::new(upload), None);
+        let batch = host_storage(&ctx, "train-batch", bytemuck::cast_slice(rays))?;
+        let batch = graph.import_buffer(&batch, None);
         let out = graph.create_buffer("train-ray-out", out_bytes);
         let push = self.push(rays.len() as u32, background, epsilon);
         let mut pass = graph.compute_pass(TRAIN_RAYS);

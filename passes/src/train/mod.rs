@@ -16,6 +16,7 @@ pub mod sh_pages;
 pub mod sparse_stage;
 pub mod trainer;
 pub mod tv;
+pub mod visibility;
 
 pub use adam::{adam_step, AdamKnobs};
 pub use gpu::{GpuTrainer, GradientScatter, TrainRay};

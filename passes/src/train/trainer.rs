@@ -16,8 +16,10 @@ use super::adam::AdamKnobs;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::pixels::{is_bracket, pixel_ray, PixelPool};
+use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
+use crate::field::FieldLayout::Auto;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::march::{march_ray, MarchKnobs};
 use crate::sgfit::model::luminance;
@@ -258,11 +260,19 @@ pub fn train(
         let sparse =
             s > 0 && (knobs.sparse || !GpuTrainer::dense_fits(ctx.info(), target, knobs.sh_degree));
         // The bricks around what the stage before made visible.
-        let layout = sparse.then(|| {
+        let layout = if sparse {
             let rays = super::prune::training_rays(dataset, &pool);
-            let visibility = super::prune::node_visibility(&field, &rays, &view_march);
-            super::sparse_stage::stage_bricks(&field, &visibility, knobs.prune, target)
-        });
+            let visibility =
+                node_visibility_gpu(&mut renderer, lib, &field, &rays, &view_march, Auto)?;
+            Some(super::sparse_stage::stage_bricks(
+                &field,
+                &visibility,
+                knobs.prune,
+                target,
+            ))
+        } else {
+            None
+        };
         if target != field.resolution {
             field = resample(&field, target);
         }
@@ -329,7 +339,7 @@ pub fn train(
     let mut pruned = 0;
     if knobs.prune > 0.0 && !(control.stop)() {
         let rays = super::prune::training_rays(dataset, &pool);
-        let visibility = super::prune::node_visibility(&field, &rays, &view_march);
+        let visibility = node_visibility_gpu(&mut renderer, lib, &field, &rays, &view_march, Auto)?;
         (field, pruned) = super::prune::prune(&field, &visibility, knobs.prune);
     }
     let held_out = pool
