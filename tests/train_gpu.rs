@@ -874,3 +874,47 @@ fn the_gpu_visibility_matches_the_cpu_reference() {
     }
     common::assert_no_validation_errors(&ctx);
 }
+
+/// A sparse stage that keeps no brick of a grid with view-dependent colour
+/// (every buffer would be empty) still trains: its rays see the
+/// background, and the grid stays zero.
+#[test]
+fn a_grid_with_no_brick_kept_still_trains() {
+    use inlay_passes::field::bricks::BrickLayout;
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let field = sh_field(1);
+    let dims = BrickLayout::dims_of(field.resolution);
+    let none = BrickLayout::from_kept(
+        field.resolution,
+        &vec![false; (dims.x * dims.y * dims.z) as usize],
+    );
+    let knobs = MarchKnobs {
+        samples_per_ray: 16,
+        termination: 1e-4,
+        skip_empty: false,
+    };
+    let mut trainer = GpuTrainer::with_layout(&ctx, &lib, &field, knobs, Some(none)).unwrap();
+    let mut renderer = Renderer::new(&ctx, 1).unwrap();
+    let records: Vec<TrainRay> = rays(&field, 8)
+        .iter()
+        .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
+        .collect();
+    let bg = DVec3::new(0.2, 0.1, 0.3);
+    let adam = AdamKnobs {
+        rate: 0.01,
+        density_rate: 0.01,
+        beta1: 0.9,
+        beta2: 0.99,
+    };
+    let out = trainer
+        .run_batch(&mut renderer, &records, bg, 0.05, Some((&adam, 0.125)))
+        .unwrap();
+    for o in &out {
+        assert!((DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64) - bg).length() < 1e-6);
+    }
+    let trained = trainer.field(&mut renderer).unwrap();
+    assert!(trained.nodes.iter().flatten().all(|&v| v == 0.0));
+    assert!(trained.sh.iter().flatten().all(|&v| v == 0.0));
+    common::assert_no_validation_errors(&ctx);
+}

@@ -61,13 +61,14 @@ impl ShPages {
             spare: Vec::new(),
         };
         for j in 0..count {
-            let page: Vec<u8> = coefficients
+            let mut page: Vec<u8> = coefficients
                 .iter()
                 .skip(j)
                 .step_by(count)
                 .flat_map(|c| [c[0], c[1], c[2], 0.0])
                 .flat_map(f32::to_le_bytes)
                 .collect();
+            page.resize(16 * nodes, 0); // no node kept: a buffer is never empty
             pages.values.push(buffer(format!("train-sh-{j}"), &page)?);
             pages
                 .grad
