@@ -126,6 +126,22 @@ impl Buffer {
             .map(|s| &s[..self.size as usize])
     }
 
+    /// A host-visible buffer of `usage` holding `bytes`, written through its
+    /// mapping (no transfer): staging, or records the GPU reads once.
+    pub fn host_with_data(
+        ctx: &Arc<Context>,
+        name: &str,
+        bytes: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self> {
+        let mut buffer = Self::new(ctx, name, bytes.len() as u64, usage, BufferLocation::Upload)?;
+        buffer
+            .mapped_mut()
+            .expect("upload buffers are host-visible")[..bytes.len()]
+            .copy_from_slice(bytes);
+        Ok(buffer)
+    }
+
     /// The mapped bytes of a host-visible buffer, for writing uploads.
     pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
         let size = self.size as usize;

@@ -156,18 +156,7 @@ impl Image {
 
 /// A host-visible transfer source holding `bytes`.
 fn staging_buffer(ctx: &Arc<Context>, name: &str, bytes: &[u8]) -> Result<Buffer> {
-    let mut staging = Buffer::new(
-        ctx,
-        name,
-        bytes.len() as u64,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        BufferLocation::Upload,
-    )?;
-    staging
-        .mapped_mut()
-        .expect("upload buffers are host-visible")[..bytes.len()]
-        .copy_from_slice(bytes);
-    Ok(staging)
+    Buffer::host_with_data(ctx, name, bytes, vk::BufferUsageFlags::TRANSFER_SRC)
 }
 
 /// Records `record` into a fresh command buffer, submits it and waits.

@@ -8,9 +8,7 @@ use std::sync::Arc;
 use glam::{DVec3, UVec3};
 use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph};
 use inlay_engine::shader::ShaderLibrary;
-use inlay_engine::{
-    vk, Buffer, BufferLocation, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync,
-};
+use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
 use super::adam::AdamKnobs;
 use super::sh_pages::{interleave, ShPages};
@@ -239,18 +237,8 @@ pub(crate) fn host_storage(
     name: &str,
     bytes: &[u8],
 ) -> anyhow::Result<Arc<Buffer>> {
-    let mut upload = Buffer::new(
-        ctx,
-        name,
-        bytes.len() as u64,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        BufferLocation::Upload,
-    )?;
-    upload
-        .mapped_mut()
-        .ok_or_else(|| anyhow::anyhow!("{name} is not host-visible"))?[..bytes.len()]
-        .copy_from_slice(bytes);
-    Ok(Arc::new(upload))
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    Ok(Arc::new(Buffer::host_with_data(ctx, name, bytes, usage)?))
 }
 
 /// Name of the batch pass in the frame graph.
