@@ -814,6 +814,53 @@ fn profile_prints_table_1_and_writes_json_and_a_trace() {
     assert!(events.iter().any(|e| e["name"] == "sg-fit skipped"));
 }
 
+/// `inlay profile --viewer` on PLANTS (small field, tiny image, shadows
+/// off, the object dragged): the viewer's pacing, the dragged frames
+/// fitting in turn with tracing (the cold fit, then every other frame) and
+/// the kept march's copies and the object's rectangle timed as the march.
+#[test]
+fn profile_paces_frames_as_the_viewer_does() {
+    let dir = scratch("profile-viewer");
+    let (field, _) = bake_small_plants(&dir);
+    let (json, trace) = (dir.join("p.json"), dir.join("p.trace.json"));
+    let o = inlay(
+        &[
+            "--validate",
+            "profile",
+            &scene_path("plants.toml"),
+            "--field",
+            s(&field),
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--frames",
+            "6",
+            "--no-shadows",
+            "--viewer",
+            "--json",
+            s(&json),
+            "--trace",
+            s(&trace),
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("3 of 6 frames; otherwise skipped (interleaved: the probe traced this frame, fitted the next)"),
+        "{t}"
+    );
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();
+    let events = trace["traceEvents"].as_array().unwrap();
+    let marches = events.iter().filter(|e| e["name"] == "nerf-march").count();
+    assert!(
+        marches > 6,
+        "the kept march's copies are march passes: {marches}"
+    );
+}
+
 /// `inlay sweep` over a small full grid (two march step counts × two PCA
 /// component counts on DOG at 32×18, a test-size field): every
 /// configuration gets a time per Table 1 module and a finite error against

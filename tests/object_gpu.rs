@@ -616,3 +616,96 @@ fn composite_hides_the_object_partly_behind_foliage() {
     eprintln!("object pixels partly hidden {partly}, fully visible {fully}");
     assert!(partly >= 3 && fully >= 3, "partly {partly}, fully {fully}");
 }
+
+/// A march kept across frames from a still camera gives the frames a
+/// whole march gives, pixel for pixel, as the object moves, the camera
+/// moves and stops again, and the occlusion is switched off; and the kept
+/// frames do march less (only the object's rectangle).
+#[test]
+fn a_kept_march_gives_the_frames_a_whole_march_gives() {
+    let ctx = common::gpu();
+    let mut scene = common::bundled_scene("dog.toml");
+    scene.shadows.cast = false;
+    scene.shadows.self_shadow = false;
+    let field = common::bake_small(&scene, 24, 4, 1);
+    let lib = inlay_passes::shaders::library().unwrap();
+    let camera = scene.cameras[0].clone();
+    let open = || {
+        inlay::scene_view::view_over_field(
+            &ctx,
+            &lib,
+            &scene,
+            scene.march,
+            &field,
+            camera.clone(),
+            true,
+        )
+        .unwrap()
+    };
+    let (mut whole, mut kept) = (open(), open());
+    kept.frame.set_reuse_march(&ctx, true);
+    let start = whole.placed(0).unwrap();
+    let (_, radius) = start.sphere();
+    let mut moved_camera = camera.clone();
+    moved_camera.position += DVec3::new(0.05, 0.02, 0.0);
+    // (camera moved, object offset in radii, occlusion): the second frame
+    // from a camera fills the cache, the later ones copy it.
+    let steps = [
+        (false, 0.0, true),
+        (false, 0.3, true),
+        (false, 0.6, true),
+        (false, 0.6, false),
+        (true, 0.9, true),
+        (true, 1.2, true),
+        (true, 1.5, true),
+    ];
+    let (w, h) = (64, 40);
+    let mut kept_marches = Vec::new();
+    for (i, (moved, offset, occlusion)) in steps.into_iter().enumerate() {
+        let mut p = start.clone();
+        p.pose.position += DVec3::new(offset * radius, 0.0, 0.0);
+        let cam = if moved { &moved_camera } else { &camera };
+        for view in [&mut whole, &mut kept] {
+            view.set_placed(0, p.clone());
+            view.set_camera(cam.clone());
+            let mut effects = view.effects();
+            effects.occlusion = occlusion;
+            view.set_effects(effects);
+        }
+        let a = inlay::headless::run_headless(&ctx, &mut whole, w, h, 1, 0.0).unwrap();
+        let b = inlay::headless::run_headless(&ctx, &mut kept, w, h, 1, 0.0).unwrap();
+        common::assert_no_validation_errors(&ctx);
+        assert_eq!(a.image.pixels.len(), b.image.pixels.len());
+        let differing = a
+            .image
+            .pixels
+            .iter()
+            .zip(&b.image.pixels)
+            .filter(|(x, y)| x.map(f32::to_bits) != y.map(f32::to_bits))
+            .count();
+        assert_eq!(differing, 0, "step {i}: {differing} pixels differ");
+        let marches = |run: &inlay::headless::HeadlessRun| {
+            let named = |names: &mut dyn Iterator<Item = &String>| {
+                names
+                    .filter(|n| n.as_str() == inlay_passes::march::NERF_MARCH)
+                    .count()
+            };
+            let t = &run.timings[0];
+            (
+                named(&mut t.passes.iter().map(|p| &p.name)),
+                named(&mut t.culled.iter()),
+            )
+        };
+        assert_eq!(marches(&a), (1, 0), "step {i}: the whole march is one pass");
+        kept_marches.push(marches(&b));
+    }
+    // (passes run, passes culled) named nerf-march: the first frame from
+    // a camera marches the whole image; the second also keeps the
+    // unclipped march (the whole image, two copies, the object's
+    // rectangle); the later ones copy and march the rectangle. With the
+    // occlusion off nothing reads the depth, so its copy is culled.
+    assert_eq!(
+        kept_marches,
+        [(1, 0), (4, 0), (3, 0), (1, 1), (1, 0), (4, 0), (3, 0)]
+    );
+}

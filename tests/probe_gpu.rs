@@ -286,7 +286,9 @@ fn traced_probe_fits_alike_on_gpu_and_cpu_and_reruns_only_on_change() {
 /// `stride`² − 1 + (warm − frame) / frame iterations = 4 frames after the
 /// stop here (6 at the scene defaults, 8 warm iterations). The lobes it
 /// settles on fit the probe as well as those of a light traced whole at
-/// every frame (relative residual within 10 % + 0.01).
+/// every frame (relative residual within 10 % + 0.01). Interleaved, the
+/// dragged frames trace and fit in turn and the lighting settles as
+/// quickly.
 #[test]
 fn a_strided_probe_settles_within_its_phases_after_the_object_stops() {
     let ctx = common::gpu();
@@ -374,6 +376,65 @@ fn a_strided_probe_settles_within_its_phases_after_the_object_stops() {
         b.relative_residual()
     );
     assert!(a.relative_residual() <= 1.1 * b.relative_residual() + 0.01);
+    // Interleaved (the viewer's pacing): the dragged frames trace a share
+    // and fit in turn; once the object stops, the shares not traced where
+    // it stands and the update's end follow as above, and the lobes fit
+    // the probe as well.
+    let mut interleaved = light_with(2);
+    interleaved.set_interleave(true);
+    let mut dragged = Vec::new();
+    for &c in &path {
+        dragged.push(frame(&mut interleaved, c));
+    }
+    let works: Vec<LightingWork> = dragged.iter().map(|(w, _)| *w).collect();
+    assert_eq!(
+        works[1..],
+        [
+            LightingWork::Trace {
+                texels: ProbeTexels::Phase(0)
+            },
+            LightingWork::Fit { iterations: 2 },
+            LightingWork::Trace {
+                texels: ProbeTexels::Phase(1)
+            },
+        ]
+    );
+    for (work, executed) in &dragged[1..] {
+        let traced = executed.iter().any(|p| p == "probe-trace");
+        let fitted = executed.iter().any(|p| p == "sg-fit");
+        assert_eq!(
+            (traced, fitted),
+            (
+                matches!(work, LightingWork::Trace { .. }),
+                matches!(work, LightingWork::Fit { .. })
+            ),
+            "{work:?}: {executed:?}"
+        );
+    }
+    let mut after = Vec::new();
+    loop {
+        let (work, _) = frame(&mut interleaved, stop);
+        if work == LightingWork::Reuse {
+            break;
+        }
+        after.push(work);
+        assert!(after.len() <= 10, "{after:?}");
+    }
+    assert_eq!(
+        after,
+        [
+            warm(2),
+            warm(3),
+            warm(0),
+            LightingWork::Continue { iterations: 2 }
+        ]
+    );
+    let c = interleaved.fit.read_report().unwrap();
+    eprintln!(
+        "interleaved, strided probe settled at residual {:.4}",
+        c.relative_residual()
+    );
+    assert!(c.relative_residual() <= 1.1 * b.relative_residual() + 0.01);
 }
 
 #[test]

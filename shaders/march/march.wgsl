@@ -1,7 +1,9 @@
 // The NeRF ray-march pass: one camera ray per pixel through the grid field,
 // writing (Ĉ, Ô) and D̂. `main_clipped` cuts each ray at the object's depth
 // (distance along the ray, Fig. 2); `main_unclipped` is the same pass with
-// no object in the frame (no depth image is read).
+// no object in the frame (no depth image is read). Either may march a
+// rectangle of the image alone: invocation (x, y) marches pixel
+// `origin` + (x, y).
 #include "common/camera.wgsl"
 #include "common/ray_box.wgsl"
 #include "field/grid.wgsl"
@@ -11,6 +13,7 @@ struct MarchPush {
     camera: CameraRays,
     step: f32,
     termination: f32,
+    origin: vec2<u32>,
 }
 
 var<immediate> pc: MarchPush;
@@ -31,16 +34,18 @@ fn march_pixel(pixel: vec2<u32>, t_object: f32) {
 
 @compute @workgroup_size(8, 8, 1)
 fn main_unclipped(@builtin(global_invocation_id) id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy) {
+    let pixel = id.xy + pc.origin;
+    if camera_outside(pc.camera, pixel) {
         return;
     }
-    march_pixel(id.xy, NO_OBJECT);
+    march_pixel(pixel, NO_OBJECT);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_clipped(@builtin(global_invocation_id) id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy) {
+    let pixel = id.xy + pc.origin;
+    if camera_outside(pc.camera, pixel) {
         return;
     }
-    march_pixel(id.xy, textureLoad(object_depth, id.xy, 0).r);
+    march_pixel(pixel, textureLoad(object_depth, pixel, 0).r);
 }

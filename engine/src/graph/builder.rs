@@ -291,6 +291,16 @@ impl FrameGraph {
         }
     }
 
+    /// Adds a transfer pass `name` copying the whole of `src` into `dst`
+    /// (same size and format); returns the new version of `dst`.
+    pub fn copy_image(&mut self, name: &str, src: ImageHandle, dst: ImageHandle) -> ImageHandle {
+        let mut pass = self.add_pass(name, PassKind::Transfer);
+        let read = pass.image(src, ImageAccess::TransferSrc);
+        let written = pass.image(dst, ImageAccess::TransferDst);
+        pass.exec(move |ctx| ctx.copy_image(read, written));
+        written
+    }
+
     /// Marks this version of an image as a result of the frame: the passes
     /// producing it are not culled.
     pub fn mark_output_image(&mut self, image: ImageHandle) {

@@ -555,6 +555,41 @@ impl PassContext<'_> {
         Ok(())
     }
 
+    /// Copies the whole of image `src` into `dst`, which has the same
+    /// size and format.
+    pub fn copy_image(&mut self, src: ImageHandle, dst: ImageHandle) -> Result<()> {
+        let s = self.image(src, |a| a == ImageAccess::TransferSrc, "a copy source")?;
+        let d = self.image(dst, |a| a == ImageAccess::TransferDst, "a copy destination")?;
+        if s.desc != d.desc {
+            return Err(self.error(format!(
+                "copy_image needs images of one size and format: {:?} into {:?}",
+                s.desc, d.desc
+            )));
+        }
+        let layers = vk::ImageSubresourceLayers::default()
+            .aspect_mask(whole(s.desc.format).aspect_mask)
+            .layer_count(1);
+        let region = vk::ImageCopy::default()
+            .src_subresource(layers)
+            .dst_subresource(layers)
+            .extent(vk::Extent3D {
+                width: s.desc.width,
+                height: s.desc.height,
+                depth: 1,
+            });
+        unsafe {
+            self.ctx.device.cmd_copy_image(
+                self.cmd,
+                s.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                d.image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+        Ok(())
+    }
+
     /// Copies `src` into `dst` (the smaller of the two sizes).
     pub fn copy_buffer(&mut self, src: BufferHandle, dst: BufferHandle) -> Result<()> {
         let s = self.buffer(src, |a| a == BufferAccess::TransferSrc, "a copy source")?;

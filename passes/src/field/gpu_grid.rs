@@ -101,6 +101,23 @@ pub struct GpuGridField {
     pub node_bytes: u64,
 }
 
+/// A field on the device, as [`GpuGridField::identity`] gives it: equal
+/// when it is the same upload.
+#[derive(Clone)]
+pub struct FieldIdentity(Arc<Buffer>);
+
+impl PartialEq for FieldIdentity {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl std::fmt::Debug for FieldIdentity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "FieldIdentity({:p})", Arc::as_ptr(&self.0))
+    }
+}
+
 /// The field's buffers as imported into one frame's graph.
 #[derive(Debug, Clone, Copy)]
 pub struct GridBindings {
@@ -419,6 +436,13 @@ impl GpuGridField {
             Define::Bool(VIEW_DEPENDENT_DEFINE, self.sh_degree > 0),
             Define::Bool(SPARSE_DEFINE, self.sparse),
         ])
+    }
+
+    /// What tells this field apart from any other on the device (it keeps
+    /// the field's node buffer alive, so no later field can take its
+    /// place): a cache of something rendered from it compares these.
+    pub fn identity(&self) -> FieldIdentity {
+        FieldIdentity(self.nodes.clone())
     }
 
     /// Imports the buffers into a frame's graph (read-only).

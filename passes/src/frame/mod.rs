@@ -29,7 +29,7 @@ use crate::edge_aa::{EdgeAaKnobs, EdgeAaPass, OBJECT_EDGE_AA};
 use crate::field::GpuGridField;
 use crate::gbuffer::{GBufferPass, ObjectDraw, OBJECT_GBUFFER};
 use crate::lighting::IncidentLight;
-use crate::march::MarchPass;
+use crate::march::{MarchClip, MarchPass, MarchReuse};
 use crate::object::{GpuObject, ObjectRecords, PlacedObject};
 use crate::probe::PROBE_TRACE;
 use crate::scene::{Scene as SceneFile, ShadowKnobs};
@@ -126,6 +126,7 @@ pub struct InsertionFrame {
     edge_aa: EdgeAaPass,
     cast: Option<CastShadowPass>,
     fh: Option<GpuFhTable>,
+    reuse: Option<MarchReuse>,
 }
 
 /// The format of a frame's image.
@@ -225,7 +226,64 @@ impl InsertionFrame {
             march,
             field,
             objects,
+            reuse: None,
         })
+    }
+
+    /// Keeps the field's march across frames from a still camera
+    /// ([`MarchReuse`]): each such frame copies it and marches only the
+    /// pixels its objects can cover. The images are the same either way;
+    /// what changes is the march's cost, so Table 1 (which reads the
+    /// march as the cost of rendering the field) is taken without it.
+    pub fn set_reuse_march(&mut self, ctx: &Arc<Context>, on: bool) {
+        self.reuse = on.then(|| MarchReuse::new(ctx));
+    }
+
+    /// Whether the march is kept across frames ([`Self::set_reuse_march`]).
+    pub fn reuses_march(&self) -> bool {
+        self.reuse.is_some()
+    }
+
+    /// Interleaves each moving object's lighting
+    /// ([`IncidentLight::set_interleave`](crate::lighting::IncidentLight::set_interleave)):
+    /// a frame traces the probe's share or runs the fit, in turn. The
+    /// lobes follow the object a frame later; once it stops they reach the
+    /// same fit. Table 1, which times a whole update per frame as the
+    /// paper does, is taken without it.
+    pub fn set_interleave_lighting(&mut self, on: bool) {
+        for o in &mut self.objects {
+            o.light.set_interleave(on);
+        }
+    }
+
+    /// How the viewer paces its frames: the march kept while the camera
+    /// holds still and a moving object's lighting interleaved (on), or a
+    /// whole march and a whole update every frame, as Table 1 times them
+    /// (off).
+    pub fn set_viewer_pacing(&mut self, ctx: &Arc<Context>, on: bool) {
+        self.set_reuse_march(ctx, on);
+        self.set_interleave_lighting(on);
+    }
+
+    /// The field's march for this frame, kept or afresh.
+    fn march_field(
+        &mut self,
+        graph: &mut FrameGraph,
+        frame: &CameraFrame,
+        clip: MarchClip,
+    ) -> anyhow::Result<crate::march::MarchOutputs> {
+        match self.reuse.as_mut() {
+            Some(reuse) => reuse.add(&self.march, graph, &self.field, frame, clip),
+            None => Ok(self.march.add(
+                graph,
+                &self.field,
+                frame,
+                match clip {
+                    MarchClip::None => None,
+                    MarchClip::Objects { depth, .. } => Some(depth),
+                },
+            )),
+        }
     }
 
     /// Whether any object has an SSDF field (shadows can be drawn).
@@ -244,8 +302,7 @@ impl InsertionFrame {
     ) -> anyhow::Result<ImageHandle> {
         if self.objects.is_empty() {
             return Ok(self
-                .march
-                .add(graph, &self.field, frame, None)
+                .march_field(graph, frame, MarchClip::None)?
                 .colour_opacity);
         }
         anyhow::ensure!(
@@ -327,7 +384,7 @@ impl InsertionFrame {
             graph.note_skipped(OBJECT_GBUFFER, "objects off screen");
             graph.note_skipped(OBJECT_SHADE, "objects off screen");
             graph.note_skipped(OBJECT_EDGE_AA, "objects off screen");
-            let field = self.march.add(graph, &self.field, frame, None);
+            let field = self.march_field(graph, frame, MarchClip::None)?;
             let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
             return Ok(match shadow {
                 Some(s) => self
@@ -348,8 +405,35 @@ impl InsertionFrame {
             })
             .collect();
         let g = self.gbuffer.add(graph, frame, &draws, records)?;
-        let clip = effects.occlusion.then_some(g.distance_id);
-        let field = self.march.add(graph, &self.field, frame, clip);
+        let clip = if effects.occlusion {
+            // The pixels the shown objects can cover (None: any pixel).
+            let region = shown
+                .iter()
+                .map(|&i| {
+                    let (c, r) = placed[i].sphere();
+                    frame.sphere_pixels(c, r)
+                })
+                .try_fold(None, |acc: Option<[u32; 4]>, r| {
+                    let r = r?;
+                    Some(Some(match acc {
+                        None => r,
+                        Some(a) => [
+                            a[0].min(r[0]),
+                            a[1].min(r[1]),
+                            a[2].max(r[2]),
+                            a[3].max(r[3]),
+                        ],
+                    }))
+                })
+                .flatten();
+            MarchClip::Objects {
+                depth: g.distance_id,
+                region,
+            }
+        } else {
+            MarchClip::None
+        };
+        let field = self.march_field(graph, frame, clip)?;
         let shown_lobes: Vec<_> = shown.iter().filter_map(|&i| lobes[i]).collect();
         let self_shadow: Vec<Option<SelfShadow>> = shown
             .iter()

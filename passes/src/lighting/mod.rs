@@ -49,6 +49,19 @@ pub enum LightingWork {
         /// Iterations this frame.
         iterations: u32,
     },
+    /// A moving object's frame with its lighting interleaved
+    /// ([`IncidentLight::set_interleave`]): trace this update's share of
+    /// the probe where the object now is; the lobes stand as they are.
+    Trace {
+        /// The texels traced.
+        texels: ProbeTexels,
+    },
+    /// The frame after a [`LightingWork::Trace`] while the object still
+    /// moves: a warm update of `iterations` on the probe as it stands.
+    Fit {
+        /// Iterations this frame.
+        iterations: u32,
+    },
 }
 
 /// The lobes an object is shaded with, as a frame sees them: a buffer of
@@ -116,6 +129,10 @@ pub struct IncidentLight {
     /// Of the probe's `stride`² shares, how many were traced where the
     /// object now is, for the lighting it now has.
     fresh: u32,
+    /// Whether a moving object's frames trace and fit in turn.
+    interleave: bool,
+    /// With `interleave`: the last frame traced, so this one fits.
+    fit_due: bool,
 }
 
 impl IncidentLight {
@@ -158,7 +175,21 @@ impl IncidentLight {
             pending: 0,
             phase: 0,
             fresh: 0,
+            interleave: false,
+            fit_due: false,
         })
+    }
+
+    /// Interleaves a moving object's lighting (not in the paper): each
+    /// frame while it moves either traces its share of the probe
+    /// ([`LightingWork::Trace`]) or runs the warm update's iterations on
+    /// the probe as it stands ([`LightingWork::Fit`]), in turn, so a frame
+    /// carries about half of the lighting's work and the lobes follow the
+    /// object a frame later. Once it stops, the frames go on as without
+    /// (a share and the update's iterations each frame), to the same lobes.
+    pub fn set_interleave(&mut self, on: bool) {
+        self.interleave = on;
+        self.fit_due = false;
     }
 
     /// Whether any environment light is evaluated (broad lobes in the
@@ -178,7 +209,8 @@ impl IncidentLight {
     /// traces the next share and starts the update again from the lobes it
     /// has, until the probe is whole where the object stands (s² − 1
     /// frames after it stopped), and the update on the whole probe then
-    /// runs to its end as above.
+    /// runs to its end as above. Interleaved ([`Self::set_interleave`]),
+    /// a moving object's frames trace a share and fit in turn.
     pub fn plan(&mut self, centre: DVec3, version: u64) -> LightingWork {
         let key = (centre.to_array().map(f64::to_bits), version);
         let knobs = *self.fit.knobs();
@@ -218,11 +250,32 @@ impl IncidentLight {
                     texels: ProbeTexels::All,
                 }
             }
+            Some(last) if last != key && self.interleave && self.fit_due => {
+                self.fresh = 0;
+                self.fit_due = false;
+                self.pending = 0;
+                LightingWork::Fit {
+                    iterations: chunk(knobs.warm_iterations),
+                }
+            }
+            Some(last) if last != key && self.interleave => {
+                self.fresh = 0;
+                self.fit_due = true;
+                let texels = match share(self) {
+                    LightingWork::Update { texels, .. } => texels,
+                    _ => unreachable!("a share is an update"),
+                };
+                self.pending = 0;
+                LightingWork::Trace { texels }
+            }
             Some(last) if last != key => {
                 self.fresh = 0;
                 share(self)
             }
-            Some(_) if self.fresh < phases => share(self),
+            Some(_) if self.fresh < phases => {
+                self.fit_due = false;
+                share(self)
+            }
             Some(_) if self.pending > 0 => {
                 let n = chunk(self.pending);
                 self.pending -= n;
@@ -239,6 +292,7 @@ impl IncidentLight {
         self.last = None;
         self.pending = 0;
         self.fresh = 0;
+        self.fit_due = false;
     }
 
     /// Adds the probe trace (with L_env) and the fit when `work` asks for
@@ -317,6 +371,41 @@ impl IncidentLight {
                 let lobes = self.fit.add(graph, probe, FitStart::Continue, iterations)?;
                 Ok(match direct {
                     Some(d) => d.add_with(graph, field, centre, lobes, environment, true),
+                    None => LightLobes {
+                        buffer: lobes,
+                        count: fitted,
+                        direct: None,
+                        environment: None,
+                    },
+                })
+            }
+            LightingWork::Trace { texels } => {
+                graph.note_skipped(
+                    SG_FIT,
+                    "interleaved: the probe traced this frame, fitted the next",
+                );
+                self.probe
+                    .add_with(graph, field, centre, environment, texels);
+                let lobes = graph.import_buffer(self.fit.lobes(), None);
+                Ok(match direct {
+                    Some(d) => d.add(graph, field, centre, lobes, environment),
+                    None => LightLobes {
+                        buffer: lobes,
+                        count: fitted,
+                        direct: None,
+                        environment: None,
+                    },
+                })
+            }
+            LightingWork::Fit { iterations } => {
+                graph.note_skipped(
+                    PROBE_TRACE,
+                    "interleaved: fitted on the probe traced last frame",
+                );
+                let probe = self.probe.import(graph);
+                let lobes = self.fit.add(graph, probe, FitStart::Warm, iterations)?;
+                Ok(match direct {
+                    Some(d) => d.add(graph, field, centre, lobes, environment),
                     None => LightLobes {
                         buffer: lobes,
                         count: fitted,

@@ -5,6 +5,7 @@
 mod knobs;
 pub(crate) mod pass;
 mod reference;
+mod reuse;
 
 pub use knobs::MarchKnobs;
 pub use pass::{
@@ -12,3 +13,4 @@ pub use pass::{
     OCCLUSION_SWITCH,
 };
 pub use reference::{march_image, march_ray, march_samples, MarchResult, MarchSample};
+pub use reuse::{MarchClip, MarchReuse};

@@ -20,8 +20,9 @@ inlay_engine::gpu_struct! {
         pub step: f32,
         /// Early-termination transmittance.
         pub termination: f32,
-        /// Padding (the struct's size rounds up to 16 bytes).
-        pub _pad: [u32; 2],
+        /// The first pixel the dispatch marches (invocation (x, y)
+        /// marches pixel origin + (x, y)).
+        pub origin: [u32; 2],
     }
 }
 
@@ -96,46 +97,67 @@ impl MarchPass {
         camera: &CameraFrame,
         object_depth: Option<ImageHandle>,
     ) -> MarchOutputs {
-        let (width, height) = (camera.width, camera.height);
+        let mut out = MarchOutputs::create(graph, camera.width, camera.height);
+        let whole = [0, 0, camera.width, camera.height];
+        self.record(graph, field, camera, object_depth, whole, &mut out, false);
+        out
+    }
+
+    /// Records one `nerf-march` dispatch over the pixels `region` (x0, y0,
+    /// x1, y1, ends exclusive) into `out`; with `keep`, the pixels outside
+    /// the region keep what `out` held.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        camera: &CameraFrame,
+        object_depth: Option<ImageHandle>,
+        region: [u32; 4],
+        out: &mut MarchOutputs,
+        keep: bool,
+    ) {
         let grid = field.import(graph);
-        let colour = graph.create_image(
-            "nerf-colour",
-            ImageDesc {
-                width,
-                height,
-                format: MARCH_COLOUR_FORMAT,
-            },
-        );
-        let depth = graph.create_image(
-            "nerf-depth",
-            ImageDesc {
-                width,
-                height,
-                format: MARCH_DEPTH_FORMAT,
-            },
-        );
-        let step = self.knobs.step(field.diagonal) as f32;
-        let termination = self.knobs.termination as f32;
         let push = MarchPush {
             camera: camera.rays(),
-            step,
-            termination,
-            _pad: [0; 2],
+            step: self.knobs.step(field.diagonal) as f32,
+            termination: self.knobs.termination as f32,
+            origin: [region[0], region[1]],
         };
         let pipeline = match object_depth {
             Some(_) => &self.clipped,
             None => &self.unclipped,
         };
-        let (mut colour, mut depth) = (colour, depth);
-        grid.bind(graph.compute(NERF_MARCH, pipeline))
-            .write("out_colour", &mut colour)
-            .write("out_depth", &mut depth)
-            .read_opt("object_depth", object_depth)
+        let pass = grid.bind(graph.compute(NERF_MARCH, pipeline));
+        let pass = if keep {
+            pass.read_write("out_colour", &mut out.colour_opacity)
+                .read_write("out_depth", &mut out.depth)
+        } else {
+            pass.write("out_colour", &mut out.colour_opacity)
+                .write("out_depth", &mut out.depth)
+        };
+        pass.read_opt("object_depth", object_depth)
             .push(&push)
-            .threads([width, height, 1]);
-        MarchOutputs {
-            colour_opacity: colour,
-            depth,
+            .threads([region[2] - region[0], region[3] - region[1], 1]);
+    }
+}
+
+impl MarchOutputs {
+    /// The frame's transient march images for a `width`×`height` image.
+    pub(crate) fn create(graph: &mut FrameGraph, width: u32, height: u32) -> Self {
+        let image = |graph: &mut FrameGraph, name: &str, format| {
+            graph.create_image(
+                name,
+                ImageDesc {
+                    width,
+                    height,
+                    format,
+                },
+            )
+        };
+        Self {
+            colour_opacity: image(graph, "nerf-colour", MARCH_COLOUR_FORMAT),
+            depth: image(graph, "nerf-depth", MARCH_DEPTH_FORMAT),
         }
     }
 }

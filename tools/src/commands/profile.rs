@@ -102,6 +102,13 @@ pub struct ProfileArgs {
     /// Draw no shadows (no SSDF is loaded or baked; Shadow shows as skipped).
     #[arg(long)]
     pub no_shadows: bool,
+    /// Pace the frames as the viewer does: the field's march kept while
+    /// the camera holds still (NeRF rendering then times a copy and the
+    /// objects' rectangle) and a moving object's lighting interleaved (a
+    /// frame traces its probe share or runs the fit, in turn). The frame
+    /// rate is the viewer's; the ratios are not Table 1's.
+    #[arg(long)]
+    pub viewer: bool,
 }
 
 /// What a profile run measured.
@@ -200,6 +207,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
         &args.camera,
         !args.no_cache,
     )?;
+    view.frame.set_viewer_pacing(ctx, args.viewer);
     let run = profile_view(
         ctx,
         &mut view,

@@ -145,6 +145,10 @@ impl Viewer {
             camera.clone(),
             use_cache,
         )?;
+        // The camera holds still while an object is dragged: the field's
+        // march is kept between such frames, and the dragged object's
+        // lighting is traced and fitted in turn.
+        view.frame.set_viewer_pacing(ctx, true);
         view.set_effects(effects);
         Ok(Self {
             controls: Controls::new(OrbitCamera::from_spec(&camera), &authored, overlay),
@@ -186,7 +190,7 @@ impl Viewer {
             Some(i) => self.parked.swap_remove(i).1,
             None => {
                 let scene = preset.apply(&self.authored);
-                view_over_gpu_field(
+                let mut view = view_over_gpu_field(
                     ctx,
                     lib,
                     &scene,
@@ -194,7 +198,9 @@ impl Viewer {
                     self.gpu_field.clone(),
                     camera.clone(),
                     self.use_cache,
-                )?
+                )?;
+                view.frame.set_viewer_pacing(ctx, true);
+                view
             }
         };
         view.set_camera(camera);
