@@ -118,12 +118,14 @@ fn limits_come_from_the_device_and_say_what_fits() {
     assert!(e.to_string().contains("largest storage binding"), "{e}");
     let e = check_field_fits(&small_device(&real, u32::MAX, 1 << 20), res, 0, RENDER).unwrap_err();
     assert!(e.to_string().contains("largest memory heap"), "{e}");
-    // View-dependent colour of degree 1 takes 18 more bytes a node (f16)
-    // in a binding of its own; the trainer takes 16 a node in each of four
-    // bindings, 64 in the heap.
-    let e = check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 1, RENDER).unwrap_err();
-    assert!(e.to_string().contains("degree 1"), "{e}");
-    check_field_fits(&small_device(&real, 18 << 18, 1 << 40), res, 1, RENDER).unwrap();
+    // View-dependent colour of degree 2 takes 48 more bytes a node (f16),
+    // split over two bindings of 24; the trainer takes 16 a node in each
+    // of four bindings at degree 1, 64 in the heap.
+    let e = check_field_fits(&small_device(&real, 16 << 18, 1 << 40), res, 2, RENDER).unwrap_err();
+    assert!(e.to_string().contains("degree 2"), "{e}");
+    check_field_fits(&small_device(&real, 24 << 18, 1 << 40), res, 2, RENDER).unwrap();
+    let e = check_field_fits(&small_device(&real, 24 << 18, 63 << 18), res, 2, RENDER).unwrap_err();
+    assert!(e.to_string().contains("largest memory heap"), "{e}");
     let training = NodeStorage::Training;
     check_field_fits(&small_device(&real, 16 << 18, 64 << 18), res, 1, training).unwrap();
     let e =

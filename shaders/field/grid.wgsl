@@ -30,18 +30,30 @@ struct GridInfo {
 @group(0) @binding(1) var<storage, read> grid_nodes: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> grid_occupancy: array<u32>;
 // The further coefficients: three halves (r, g, b) each, node after node
-// in the pool's order, two halves a word, a word of padding at the end.
+// in the pool's order, two halves a word, a word of padding at the end;
+// the first half of each node's (rounded up) in `grid_sh`, the rest in
+// `grid_sh_rest`, so that no binding holds more than half of them.
 @group(0) @binding(31) var<storage, read> grid_sh: array<u32>;
+@group(0) @binding(32) var<storage, read> grid_sh_rest: array<u32>;
 
 #include "field/sh_trilinear.wgsl"
 
 // Further coefficient j of pool node n (sh_trilinear.wgsl's accessor).
-// Mirrors sh_half::unpack_sh.
+// Mirrors sh_half::unpack_split_sh.
 fn field_sh_coefficient(n: u32, j: u32) -> vec3<f32> {
-    let h = 3u * (sh_count(grid_info.sh_degree) * n + j);
-    let w = h >> 1u;
-    let a = unpack2x16float(grid_sh[w]);
-    let b = unpack2x16float(grid_sh[w + 1u]);
+    let count = sh_count(grid_info.sh_degree);
+    let first = (count + 1u) / 2u;
+    var h: u32;
+    var words: vec2<u32>;
+    if j < first {
+        h = 3u * (first * n + j);
+        words = vec2<u32>(grid_sh[h >> 1u], grid_sh[(h >> 1u) + 1u]);
+    } else {
+        h = 3u * ((count - first) * n + j - first);
+        words = vec2<u32>(grid_sh_rest[h >> 1u], grid_sh_rest[(h >> 1u) + 1u]);
+    }
+    let a = unpack2x16float(words.x);
+    let b = unpack2x16float(words.y);
     var c = vec3<f32>(a.y, b.x, b.y);
     if (h & 1u) == 0u {
         c = vec3<f32>(a.x, a.y, b.x);

@@ -15,7 +15,7 @@ use inlay_engine::{vk, Buffer, Context, DeviceInfo};
 
 use super::bricks::{BrickLayout, BRICK_SIDE};
 use super::grid::GridField;
-use super::sh_half::{pack_sh, sh_unscale, SH_HALF_BYTES};
+use super::sh_half::{pack_sh, sh_first_count, sh_unscale, split_sh, SH_HALF_BYTES};
 
 inlay_engine::gpu_struct! {
     /// `GridInfo` of `shaders/field/grid.wgsl` (the uniform block).
@@ -84,6 +84,7 @@ pub struct GpuGridField {
     nodes: Arc<Buffer>,
     occupancy: Arc<Buffer>,
     sh: Arc<Buffer>,
+    sh_rest: Arc<Buffer>,
     /// Bounds diagonal, for step sizes.
     pub diagonal: f64,
     /// The field's bounds.
@@ -127,9 +128,12 @@ pub struct GridBindings {
     pub nodes: BufferHandle,
     /// `grid_occupancy` (storage, read).
     pub occupancy: BufferHandle,
-    /// `grid_sh` (storage, read; a word of padding when the field has no
+    /// `grid_sh` (storage, read): the first half of each node's further
+    /// coefficients (a word of padding when the field has no
     /// view-dependent colour).
     pub sh: BufferHandle,
+    /// `grid_sh_rest` (storage, read): the rest of them.
+    pub sh_rest: BufferHandle,
     /// Degree of the field's view-dependent colour.
     pub sh_degree: u32,
     /// Whether the field is stored sparsely.
@@ -137,7 +141,7 @@ pub struct GridBindings {
 }
 
 impl GridBindings {
-    /// Binds the four buffers for reading on a dispatch (by their names in
+    /// Binds the five buffers for reading on a dispatch (by their names in
     /// `shaders/field/grid.wgsl`).
     ///
     /// Panics if the dispatch's pipeline was compiled for fields without
@@ -163,6 +167,7 @@ impl GridBindings {
             .read("grid_nodes", self.nodes)
             .read("grid_occupancy", self.occupancy)
             .read("grid_sh", self.sh)
+            .read("grid_sh_rest", self.sh_rest)
     }
 }
 
@@ -171,7 +176,9 @@ impl GridBindings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NodeStorage {
     /// For rendering ([`GpuGridField`]): (r, g, b, σ) as f32 in one
-    /// binding, the further coefficients as f16 in another.
+    /// binding, the further coefficients as f16 in two more (each node's
+    /// first half in one, the rest in the other,
+    /// [`super::sh_half::split_sh`]).
     Render,
     /// For training (`crate::train`): values, gradient and Adam's moments
     /// each one binding of f32 (r, g, b, σ) and one binding a further
@@ -186,7 +193,10 @@ impl NodeStorage {
         let k = super::sh_extra_coefficients(sh_degree) as u64;
         match self {
             Self::Render if k == 0 => vec![16],
-            Self::Render => vec![16, SH_HALF_BYTES * k],
+            Self::Render => {
+                let first = sh_first_count(k as usize) as u64;
+                vec![16, SH_HALF_BYTES * first, SH_HALF_BYTES * (k - first)]
+            }
             Self::Training => vec![16; 1 + k as usize],
         }
     }
@@ -383,13 +393,15 @@ impl GpuGridField {
             values.push([0.0; 4]); // a field with no bricks: a buffer is never empty
         }
         let nodes: Vec<u8> = bytemuck::cast_slice(&values).to_vec();
-        let sh_words = pack_sh(&sh, unscale);
+        let count = super::sh_extra_coefficients(field.sh_degree);
+        let (first, rest) = split_sh(&sh, count);
+        let (sh_words, rest_words) = (pack_sh(&first, unscale), pack_sh(&rest, unscale));
         if let Some(l) = &bricks {
             log::info!(
                 "field stored sparsely: {} of {} bricks of {BRICK_SIDE}³ nodes, {} MiB (dense: {} MiB)",
                 l.slots,
                 l.table.len(),
-                (nodes.len() + 4 * sh_words.len()) >> 20,
+                (nodes.len() + 4 * (sh_words.len() + rest_words.len())) >> 20,
                 (render.bytes_per_node(field.sh_degree).iter().sum::<u64>()
                     * field.nodes.len() as u64)
                     >> 20
@@ -418,13 +430,19 @@ impl GpuGridField {
                 bytemuck::cast_slice(&sh_words),
                 storage,
             )?),
+            sh_rest: Arc::new(Buffer::with_data(
+                ctx,
+                "grid-sh-rest",
+                bytemuck::cast_slice(&rest_words),
+                storage,
+            )?),
             diagonal: field.bounds.diagonal(),
             bounds: field.bounds,
             resolution: field.resolution,
             emitters: super::find_emitters(field),
             sh_degree: field.sh_degree,
             sparse: bricks.is_some(),
-            node_bytes: (nodes.len() + 4 * sh_words.len()) as u64,
+            node_bytes: (nodes.len() + 4 * (sh_words.len() + rest_words.len())) as u64,
         })
     }
 
@@ -452,6 +470,7 @@ impl GpuGridField {
             nodes: graph.import_buffer(&self.nodes, None),
             occupancy: graph.import_buffer(&self.occupancy, None),
             sh: graph.import_buffer(&self.sh, None),
+            sh_rest: graph.import_buffer(&self.sh_rest, None),
             sh_degree: self.sh_degree,
             sparse: self.sparse,
         }

@@ -2,8 +2,9 @@
 //! halves (r, g, b) a coefficient, after dividing by a power of two, the
 //! field's `unscale`, chosen so that the largest magnitude stays within
 //! [`SH_HALF_LIMIT`] (a field within the radiance limit, 1e6, would
-//! otherwise overflow f16's 65 504). The device holds them so (`grid_sh`
-//! in `shaders/field/grid.wgsl`), and so do field files, version 2; a
+//! otherwise overflow f16's 65 504). The device holds them so, each node's
+//! split over two bindings ([`split_sh`]; `grid_sh` and `grid_sh_rest` in
+//! `shaders/field/grid.wgsl`), and so do field files, version 2; a
 //! [`super::GridField`] holds them already rounded to this precision
 //! ([`quantise_sh`]), so the CPU references read what the device reads.
 //!
@@ -74,6 +75,45 @@ pub fn unpack_sh(words: &[u32], unscale: f32, count: usize, n: usize, j: usize) 
     [half(h), half(h + 1), half(h + 2)]
 }
 
+/// Of a node's `count` further coefficients, how many the first of the
+/// device's two coefficient bindings holds (the rest are in the second):
+/// split so that degree 2 at 256³ nodes fits lavapipe's 128 MiB bindings
+/// where one binding of all eight would not.
+pub fn sh_first_count(count: usize) -> usize {
+    count.div_ceil(2)
+}
+
+/// `coefficients` (`count` a node, node after node) split per node into
+/// the first [`sh_first_count`] of each node's and the rest.
+pub fn split_sh(coefficients: &[[f32; 3]], count: usize) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let first = sh_first_count(count);
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for node in coefficients.chunks(count.max(1)) {
+        a.extend_from_slice(&node[..first.min(node.len())]);
+        b.extend_from_slice(&node[first.min(node.len())..]);
+    }
+    (a, b)
+}
+
+/// Coefficient `j` of the `count` of pool node `n` from the two bindings'
+/// words, [`pack_sh`] of each half of [`split_sh`] (the CPU mirror of
+/// `field_sh_coefficient` in grid.wgsl).
+pub fn unpack_split_sh(
+    first: &[u32],
+    rest: &[u32],
+    unscale: f32,
+    count: usize,
+    n: usize,
+    j: usize,
+) -> [f32; 3] {
+    let a = sh_first_count(count);
+    if j < a {
+        unpack_sh(first, unscale, a, n, j)
+    } else {
+        unpack_sh(rest, unscale, count - a, n, j - a)
+    }
+}
+
 /// The halves as little-endian bytes, three a coefficient, no padding (a
 /// field file's layout).
 pub fn sh_half_bytes(coefficients: &[[f32; 3]], unscale: f32) -> Vec<u8> {
@@ -98,6 +138,36 @@ pub fn sh_from_half_bytes(bytes: &[u8], unscale: f32) -> Vec<[f32; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Split over two bindings, every coefficient of every node reads back
+    /// as from one, for each degree's count (3 and 8) and one.
+    #[test]
+    fn split_coefficients_read_back_as_unsplit() {
+        for count in [1usize, 3, 8] {
+            let nodes = 5;
+            let coefficients: Vec<[f32; 3]> = (0..count * nodes)
+                .map(|i| {
+                    let x = i as f32;
+                    [0.25 * x - 3.0, -0.125 * x, 0.5 + x]
+                })
+                .collect();
+            let unscale = sh_unscale(&coefficients);
+            let whole = pack_sh(&coefficients, unscale);
+            let (a, b) = split_sh(&coefficients, count);
+            assert_eq!(a.len(), sh_first_count(count) * nodes);
+            assert_eq!(a.len() + b.len(), coefficients.len());
+            let (a, b) = (pack_sh(&a, unscale), pack_sh(&b, unscale));
+            for n in 0..nodes {
+                for j in 0..count {
+                    assert_eq!(
+                        unpack_split_sh(&a, &b, unscale, count, n, j),
+                        unpack_sh(&whole, unscale, count, n, j),
+                        "count {count}, node {n}, coefficient {j}"
+                    );
+                }
+            }
+        }
+    }
 
     /// Quantised values come back exactly through both layouts, and the
     /// rounding is within half a unit in the last place of a half.
