@@ -750,40 +750,44 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
     );
 }
 
+/// Runs `inlay --validate profile` on PLANTS at 32 × 18 over a small
+/// field in a scratch folder `name`, shadows off, with `extra` arguments;
+/// returns its output and where it wrote the JSON and the trace.
+fn profile_plants(name: &str, extra: &[&str]) -> (String, PathBuf, PathBuf) {
+    let dir = scratch(name);
+    let (field, _) = bake_small_plants(&dir);
+    let (json, trace) = (dir.join("p.json"), dir.join("p.trace.json"));
+    let scene = scene_path("plants.toml");
+    let mut args = vec![
+        "--validate",
+        "profile",
+        &scene,
+        "--field",
+        s(&field),
+        "--width",
+        "32",
+        "--height",
+        "18",
+        "--no-shadows",
+        "--json",
+        s(&json),
+        "--trace",
+        s(&trace),
+    ];
+    args.extend_from_slice(extra);
+    let o = inlay(&args, &dir);
+    let t = common::output_text(&o);
+    assert!(o.status.success(), "{t}");
+    (t, json, trace)
+}
+
 /// `inlay profile` on PLANTS (small field, tiny image, shadows off, the
 /// object still): the Table 1 layout with the probe and fit run once and
 /// skipped after, the cast shadow reported as skipped with its reason, and
 /// JSON and Chrome-trace files that parse and agree with the table.
 #[test]
 fn profile_prints_table_1_and_writes_json_and_a_trace() {
-    let dir = scratch("profile");
-    let (field, _) = bake_small_plants(&dir);
-    let (json, trace) = (dir.join("p.json"), dir.join("p.trace.json"));
-    let o = inlay(
-        &[
-            "--validate",
-            "profile",
-            &scene_path("plants.toml"),
-            "--field",
-            s(&field),
-            "--width",
-            "32",
-            "--height",
-            "18",
-            "--frames",
-            "4",
-            "--motion",
-            "still",
-            "--no-shadows",
-            "--json",
-            s(&json),
-            "--trace",
-            s(&trace),
-        ],
-        &dir,
-    );
-    let t = common::output_text(&o);
-    assert!(o.status.success(), "{t}");
+    let (t, json, trace) = profile_plants("profile", &["--frames", "4", "--motion", "still"]);
     for module in [
         "NeRF rendering",
         "Lighting",
@@ -820,33 +824,7 @@ fn profile_prints_table_1_and_writes_json_and_a_trace() {
 /// the kept march's copies and the object's rectangle timed as the march.
 #[test]
 fn profile_paces_frames_as_the_viewer_does() {
-    let dir = scratch("profile-viewer");
-    let (field, _) = bake_small_plants(&dir);
-    let (json, trace) = (dir.join("p.json"), dir.join("p.trace.json"));
-    let o = inlay(
-        &[
-            "--validate",
-            "profile",
-            &scene_path("plants.toml"),
-            "--field",
-            s(&field),
-            "--width",
-            "32",
-            "--height",
-            "18",
-            "--frames",
-            "6",
-            "--no-shadows",
-            "--viewer",
-            "--json",
-            s(&json),
-            "--trace",
-            s(&trace),
-        ],
-        &dir,
-    );
-    let t = common::output_text(&o);
-    assert!(o.status.success(), "{t}");
+    let (t, _, trace) = profile_plants("profile-viewer", &["--frames", "6", "--viewer"]);
     assert!(
         t.contains("3 of 6 frames; otherwise skipped (interleaved: the probe traced this frame, fitted the next)"),
         "{t}"

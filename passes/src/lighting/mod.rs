@@ -369,15 +369,7 @@ impl IncidentLight {
                 graph.note_skipped(PROBE_TRACE, "the fit goes on with the last probe");
                 let probe = self.probe.import(graph);
                 let lobes = self.fit.add(graph, probe, FitStart::Continue, iterations)?;
-                Ok(match direct {
-                    Some(d) => d.add_with(graph, field, centre, lobes, environment, true),
-                    None => LightLobes {
-                        buffer: lobes,
-                        count: fitted,
-                        direct: None,
-                        environment: None,
-                    },
-                })
+                Ok(self.with_direct(graph, field, centre, lobes, environment, direct, true))
             }
             LightingWork::Trace { texels } => {
                 graph.note_skipped(
@@ -387,15 +379,7 @@ impl IncidentLight {
                 self.probe
                     .add_with(graph, field, centre, environment, texels);
                 let lobes = graph.import_buffer(self.fit.lobes(), None);
-                Ok(match direct {
-                    Some(d) => d.add(graph, field, centre, lobes, environment),
-                    None => LightLobes {
-                        buffer: lobes,
-                        count: fitted,
-                        direct: None,
-                        environment: None,
-                    },
-                })
+                Ok(self.with_direct(graph, field, centre, lobes, environment, direct, false))
             }
             LightingWork::Fit { iterations } => {
                 graph.note_skipped(
@@ -404,15 +388,7 @@ impl IncidentLight {
                 );
                 let probe = self.probe.import(graph);
                 let lobes = self.fit.add(graph, probe, FitStart::Warm, iterations)?;
-                Ok(match direct {
-                    Some(d) => d.add(graph, field, centre, lobes, environment),
-                    None => LightLobes {
-                        buffer: lobes,
-                        count: fitted,
-                        direct: None,
-                        environment: None,
-                    },
-                })
+                Ok(self.with_direct(graph, field, centre, lobes, environment, direct, false))
             }
             LightingWork::Update {
                 start,
@@ -423,16 +399,35 @@ impl IncidentLight {
                     .probe
                     .add_with(graph, field, centre, environment, texels);
                 let lobes = self.fit.add(graph, probe, start, iterations)?;
-                Ok(match direct {
-                    Some(d) => d.add(graph, field, centre, lobes, environment),
-                    None => LightLobes {
-                        buffer: lobes,
-                        count: fitted,
-                        direct: None,
-                        environment: None,
-                    },
-                })
+                Ok(self.with_direct(graph, field, centre, lobes, environment, direct, false))
             }
+        }
+    }
+
+    /// The shading lobes from the fit's `lobes` as written this frame:
+    /// with the `direct` light's pass, its sharp lobes and local lights
+    /// assembled after them (only the fitted lobes copied, with
+    /// `fitted_only`, when the object has not moved); without, the fit's
+    /// lobes alone.
+    #[allow(clippy::too_many_arguments)]
+    fn with_direct(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        centre: DVec3,
+        lobes: BufferHandle,
+        environment: bool,
+        direct: Option<&DirectLightPass>,
+        fitted_only: bool,
+    ) -> LightLobes {
+        match direct {
+            Some(d) => d.add_with(graph, field, centre, lobes, environment, fitted_only),
+            None => LightLobes {
+                buffer: lobes,
+                count: self.fit.knobs().lobes,
+                direct: None,
+                environment: None,
+            },
         }
     }
 
