@@ -211,6 +211,9 @@ fn train_ray(index: u32) {
             w_before += w;
             wt_before += w * t;
         }
+        // A sample with no weight (empty space: σ = 0) moves no colour:
+        // its colour and coefficient adds would add zeros, one atomic each.
+        let colour_moves = any(d_c != vec3<f32>(0.0));
         for (var k = 0u; k < 8u; k++) {
             let wk = trilinear_weight(cell.f, k);
             if wk == 0.0 {
@@ -221,10 +224,13 @@ fn train_ray(index: u32) {
                 continue;
             }
             let n = 4u * node;
+            add_float(n + 3u, d_sigma * wk);
+            if !colour_moves {
+                continue;
+            }
             add_float(n, d_c.x * wk);
             add_float(n + 1u, d_c.y * wk);
             add_float(n + 2u, d_c.z * wk);
-            add_float(n + 3u, d_sigma * wk);
             if count > 0u {
                 for (var j = 0u; j < count; j++) {
                     let e = d_c * (wk * y[j]);
