@@ -239,11 +239,6 @@ impl InsertionFrame {
         self.reuse = on.then(|| MarchReuse::new(ctx));
     }
 
-    /// Whether the march is kept across frames ([`Self::set_reuse_march`]).
-    pub fn reuses_march(&self) -> bool {
-        self.reuse.is_some()
-    }
-
     /// Interleaves each moving object's lighting
     /// ([`IncidentLight::set_interleave`](crate::lighting::IncidentLight::set_interleave)):
     /// a frame traces the probe's share or runs the fit, in turn. The

@@ -79,13 +79,6 @@ impl MarchReuse {
         }
     }
 
-    /// Whether the next frame from `camera` over `field` would copy a kept
-    /// march rather than march the whole image.
-    pub fn holds(&self, camera: &CameraFrame, field: &GpuGridField) -> bool {
-        let key = MarchKey::new(camera, field);
-        self.kept.as_ref().is_some_and(|k| k.key == key)
-    }
-
     /// Adds the frame's march to `graph` (passes named `nerf-march`), kept
     /// or marched afresh as the module says.
     pub fn add(
