@@ -435,6 +435,31 @@ fn a_strided_probe_settles_within_its_phases_after_the_object_stops() {
         c.relative_residual()
     );
     assert!(c.relative_residual() <= 1.1 * b.relative_residual() + 0.01);
+    // Interleaved with the whole probe traced each time: a drag that ends
+    // on a traced frame has that probe's update begun when it stops.
+    let mut whole_interleaved = light_with(1);
+    whole_interleaved.set_interleave(true);
+    for &c in &path {
+        frame(&mut whole_interleaved, c);
+    }
+    let mut after = Vec::new();
+    loop {
+        let (work, _) = frame(&mut whole_interleaved, stop);
+        if work == LightingWork::Reuse {
+            break;
+        }
+        after.push(work);
+        assert!(after.len() <= 10, "{after:?}");
+    }
+    assert_eq!(
+        after,
+        [
+            LightingWork::Fit { iterations: 2 },
+            LightingWork::Continue { iterations: 2 }
+        ]
+    );
+    let d = whole_interleaved.fit.read_report().unwrap();
+    assert!(d.relative_residual() <= 1.1 * b.relative_residual() + 0.01);
 }
 
 #[test]

@@ -272,6 +272,15 @@ impl IncidentLight {
                 self.fresh = 0;
                 share(self)
             }
+            // Interleaved, the object stopped right after a frame that
+            // traced the last share of a whole probe: its update, which no
+            // frame has begun, runs now.
+            Some(_) if self.fit_due && self.fresh == phases => {
+                self.fit_due = false;
+                let n = chunk(knobs.warm_iterations);
+                self.pending = knobs.warm_iterations - n;
+                LightingWork::Fit { iterations: n }
+            }
             Some(_) if self.fresh < phases => {
                 self.fit_due = false;
                 share(self)
