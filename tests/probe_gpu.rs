@@ -411,17 +411,20 @@ fn a_strided_probe_settles_within_its_phases_after_the_object_stops() {
             "{work:?}: {executed:?}"
         );
     }
-    let mut after = Vec::new();
-    loop {
-        let (work, _) = frame(&mut interleaved, stop);
-        if work == LightingWork::Reuse {
-            break;
+    // The work of each frame after the object stops, until nothing runs.
+    let settle = |light: &mut IncidentLight| {
+        let mut after = Vec::new();
+        loop {
+            let (work, _) = frame(light, stop);
+            if work == LightingWork::Reuse {
+                return after;
+            }
+            after.push(work);
+            assert!(after.len() <= 10, "{after:?}");
         }
-        after.push(work);
-        assert!(after.len() <= 10, "{after:?}");
-    }
+    };
     assert_eq!(
-        after,
+        settle(&mut interleaved),
         [
             warm(2),
             warm(3),
@@ -442,17 +445,8 @@ fn a_strided_probe_settles_within_its_phases_after_the_object_stops() {
     for &c in &path {
         frame(&mut whole_interleaved, c);
     }
-    let mut after = Vec::new();
-    loop {
-        let (work, _) = frame(&mut whole_interleaved, stop);
-        if work == LightingWork::Reuse {
-            break;
-        }
-        after.push(work);
-        assert!(after.len() <= 10, "{after:?}");
-    }
     assert_eq!(
-        after,
+        settle(&mut whole_interleaved),
         [
             LightingWork::Fit { iterations: 2 },
             LightingWork::Continue { iterations: 2 }
