@@ -46,7 +46,10 @@ fn image(ctx: &Arc<inlay_engine::Context>, name: &str, format: vk::Format) -> Ar
         height: H,
         format,
     };
-    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    // TRANSFER_SRC: with a region, the pass copies the frame first.
+    let usage = vk::ImageUsageFlags::SAMPLED
+        | vk::ImageUsageFlags::TRANSFER_DST
+        | vk::ImageUsageFlags::TRANSFER_SRC;
     Arc::new(Image::new(ctx, name, desc, usage).unwrap())
 }
 
@@ -76,13 +79,27 @@ fn edge_aa_gpu_matches_cpu() {
         },
     )
     .unwrap();
-    common::run_frame(&ctx, |graph| {
-        let c = graph.import_image(&colour_img, "colour", None);
-        let d = graph.import_image(&ids, "distance-id", None);
-        let out = pass.add(graph, c, d);
-        readback.add_to_graph(graph, out);
-    });
-    let gpu = readback.read().unwrap().pixels;
+    // The whole image, and the objects' region widened by a pixel (the
+    // disc reaches 4..24 × 3..22, the square 19..34 × 10..25): the rest is
+    // copied, and the image must be the same.
+    let regions = [None, Some([3, 2, 35, 26])];
+    let gpu: Vec<Vec<[f32; 4]>> = regions
+        .iter()
+        .map(|&region| {
+            common::run_frame(&ctx, |graph| {
+                let c = graph.import_image(&colour_img, "colour", None);
+                let d = graph.import_image(&ids, "distance-id", None);
+                let out = pass.add(graph, c, d, region);
+                readback.add_to_graph(graph, out);
+            });
+            readback.read().unwrap().pixels
+        })
+        .collect();
+    assert_eq!(
+        gpu[0], gpu[1],
+        "the region's image differs from the whole image's"
+    );
+    let gpu = &gpu[0];
     // The CPU mirror on the f32 inputs the GPU saw.
     let seen: Vec<[f64; 4]> = texels.iter().map(|c| c.map(|v| v as f64)).collect();
     let cpu = edge_aa_reference(&seen, &object, W as usize, H as usize, &knobs);

@@ -256,7 +256,15 @@ fn bad_scene_files_name_the_key() {
             "shadows.cast_scale",
         ),
         (
-            format!("{base}\n[shadows]\ncast_scale = 5\n"),
+            format!("{base}\n[shadows]\ncast_scale = 9\n"),
+            "shadows.cast_scale",
+        ),
+        (
+            format!("{base}\n[shadows]\ncast_scale = \"half\"\n"),
+            "shadows.cast_scale",
+        ),
+        (
+            format!("{base}\n[shadows]\ncast_scale = -2\n"),
             "shadows.cast_scale",
         ),
         (

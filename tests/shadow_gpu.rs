@@ -64,8 +64,8 @@ use inlay_passes::probe::EnvironmentLobes;
 use inlay_passes::rng::Pcg32;
 use inlay_passes::sg::Sg64;
 use inlay_passes::shadow::{
-    cast_shadow_factor, hemisphere_integral, self_shadow_factors, shadow_point, CastShadowPass,
-    DirectOcclusion, GpuFhTable, GpuSsdf, SHADOW_FORMAT,
+    cast_shadow_factor, hemisphere_integral, self_shadow_factors, shadow_point, CastScale,
+    CastShadowPass, DirectOcclusion, GpuFhTable, GpuSsdf, SHADOW_FORMAT,
 };
 use inlay_passes::ssdf::reference::{hits, ssdf_by_ray_casting};
 use inlay_passes::ssdf::{OutsideMode, SsdfField, SsdfKnobs};
@@ -361,7 +361,7 @@ fn compare_cast_shadow(
     let (w, h) = (48u32, 36u32);
     let cam = CameraFrame::new(&spec, w, h);
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
-    let cast = CastShadowPass::new(&ctx, &lib, march_knobs, 1, 1.0).unwrap();
+    let cast = CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(1), 1.0).unwrap();
     let desc = |format| ImageDesc {
         width: w,
         height: h,
@@ -507,12 +507,13 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
     let (lw, lh) = low_size(w, h, 2);
     let cam = CameraFrame::new(&spec, w, h);
     let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
-    let full = CastShadowPass::new(&ctx, &lib, march_knobs, 1, 1.0).unwrap();
-    let half = CastShadowPass::new(&ctx, &lib, march_knobs, 2, 1.0).unwrap();
+    let full = CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(1), 1.0).unwrap();
+    let half = CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(2), 1.0).unwrap();
     let spread = 0.02;
-    let refined = CastShadowPass::new(&ctx, &lib, march_knobs, 2, spread).unwrap();
+    let refined =
+        CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(2), spread).unwrap();
     assert!(!half.refines() && refined.refines());
-    assert!(CastShadowPass::new(&ctx, &lib, march_knobs, 9, 1.0).is_err());
+    assert!(CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(9), 1.0).is_err());
     let desc = |width, height, format| ImageDesc {
         width,
         height,

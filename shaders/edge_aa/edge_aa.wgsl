@@ -11,6 +11,10 @@
 struct EdgeAaPush {
     width: u32,
     height: u32,
+    // The dispatch covers the pixels from here on (the objects' region;
+    // the pixels outside it were copied).
+    origin_x: u32,
+    origin_y: u32,
     // FXAA's sub-pixel strength (0: off, 1: full blend).
     subpixel: f32,
     // Contrast below max(threshold_min, threshold × brightest) is left alone.
@@ -38,10 +42,11 @@ fn luma(c: vec4<f32>) -> f32 {
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    let pixel = id.xy + vec2<u32>(pc.origin_x, pc.origin_y);
+    if pixel.x >= pc.width || pixel.y >= pc.height {
         return;
     }
-    let p = vec2<i32>(id.xy);
+    let p = vec2<i32>(pixel);
     let centre = textureLoad(colour, p, 0);
     let here = object_at(p);
     let outline = object_at(p + vec2<i32>(1, 0)) != here || object_at(p - vec2<i32>(1, 0)) != here

@@ -30,6 +30,10 @@ inlay_engine::gpu_struct! {
         pub width: u32,
         /// Image height.
         pub height: u32,
+        /// The first pixel the dispatch covers (x).
+        pub origin_x: u32,
+        /// The first pixel the dispatch covers (y).
+        pub origin_y: u32,
         /// [`EdgeAaKnobs::subpixel`].
         pub subpixel: f32,
         /// [`EdgeAaKnobs::threshold`].
@@ -165,12 +169,18 @@ impl EdgeAaPass {
 
     /// Adds `object-edge-aa`: `colour` (the composited frame) with the
     /// outlines of the objects in `distance_id` (the G-buffer's distance
-    /// and object index) blended; returns the new image.
+    /// and object index) blended; returns the new image. With `region`
+    /// (x0, y0, x1, y1, ends exclusive: the pixels the objects can cover,
+    /// widened by a pixel, as [`crate::camera::CameraFrame::sphere_pixels`]
+    /// gives them), the frame is copied and only the region's pixels are
+    /// taken: an outline lies on an object or beside one, and every other
+    /// pixel is a copy either way.
     pub fn add(
         &self,
         graph: &mut FrameGraph,
         colour: ImageHandle,
         distance_id: ImageHandle,
+        region: Option<[u32; 4]>,
     ) -> ImageHandle {
         let (width, height) = graph
             .image_desc(colour)
@@ -181,21 +191,41 @@ impl EdgeAaPass {
             format: COMPOSITE_FORMAT,
         };
         let mut out = graph.create_image("edge-aa", desc);
+        let whole = [0, 0, width, height];
+        let r = region.map_or(whole, |r| {
+            [
+                r[0].min(width),
+                r[1].min(height),
+                r[2].min(width),
+                r[3].min(height),
+            ]
+        });
+        if r != whole {
+            out = graph.copy_image(OBJECT_EDGE_AA, colour, out);
+        }
         let k = &self.knobs;
         let push = EdgeAaPush {
             width,
             height,
+            origin_x: r[0],
+            origin_y: r[1],
             subpixel: k.subpixel as f32,
             threshold: k.threshold as f32,
             threshold_min: k.threshold_min as f32,
         };
-        graph
+        if r[2] <= r[0] || r[3] <= r[1] {
+            return out;
+        }
+        let pass = graph
             .compute(OBJECT_EDGE_AA, &self.pipeline)
             .read("colour", colour)
-            .read("distance_id", distance_id)
-            .write("out_colour", &mut out)
-            .push(&push)
-            .threads([width, height, 1]);
+            .read("distance_id", distance_id);
+        let pass = if r == whole {
+            pass.write("out_colour", &mut out)
+        } else {
+            pass.read_write("out_colour", &mut out)
+        };
+        pass.push(&push).threads([r[2] - r[0], r[3] - r[1], 1]);
         out
     }
 }

@@ -400,27 +400,9 @@ impl InsertionFrame {
             })
             .collect();
         let g = self.gbuffer.add(graph, frame, &draws, records)?;
+        // The pixels the shown objects can cover (None: any pixel).
+        let region = objects_region(frame, placed, &shown);
         let clip = if effects.occlusion {
-            // The pixels the shown objects can cover (None: any pixel).
-            let region = shown
-                .iter()
-                .map(|&i| {
-                    let (c, r) = placed[i].sphere();
-                    frame.sphere_pixels(c, r)
-                })
-                .try_fold(None, |acc: Option<[u32; 4]>, r| {
-                    let r = r?;
-                    Some(Some(match acc {
-                        None => r,
-                        Some(a) => [
-                            a[0].min(r[0]),
-                            a[1].min(r[1]),
-                            a[2].max(r[2]),
-                            a[3].max(r[3]),
-                        ],
-                    }))
-                })
-                .flatten();
             MarchClip::Objects {
                 depth: g.distance_id,
                 region,
@@ -463,8 +445,38 @@ impl InsertionFrame {
             graph.note_skipped(OBJECT_EDGE_AA, "edge anti-aliasing off");
             return Ok(composite);
         }
-        Ok(self.edge_aa.add(graph, composite, g.distance_id))
+        Ok(self.edge_aa.add(graph, composite, g.distance_id, region))
     }
+}
+
+/// The pixels the objects `shown` (indices into `placed`) can cover: the
+/// union of their bounding spheres' rectangles
+/// ([`CameraFrame::sphere_pixels`]), None where one of them may cover any
+/// pixel.
+fn objects_region(
+    frame: &CameraFrame,
+    placed: &[PlacedObject],
+    shown: &[usize],
+) -> Option<[u32; 4]> {
+    shown
+        .iter()
+        .map(|&i| {
+            let (c, r) = placed[i].sphere();
+            frame.sphere_pixels(c, r)
+        })
+        .try_fold(None, |acc: Option<[u32; 4]>, r| {
+            let r = r?;
+            Some(Some(match acc {
+                None => r,
+                Some(a) => [
+                    a[0].min(r[0]),
+                    a[1].min(r[1]),
+                    a[2].max(r[2]),
+                    a[3].max(r[3]),
+                ],
+            }))
+        })
+        .flatten()
 }
 
 impl InsertionFrame {

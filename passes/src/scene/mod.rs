@@ -39,6 +39,7 @@ use crate::camera::CameraSpec;
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
 use crate::object::{load_gltf, ObjectMesh, PlacedObject, Pose};
+pub use crate::shadow::CastScale;
 use spec::SceneSpec;
 
 /// Why a scene file could not be used: the file, the key and the problem.
@@ -196,13 +197,14 @@ pub struct ShadowKnobs {
     pub outside: crate::ssdf::OutsideMode,
     /// Knobs of the SSDF bakes this scene triggers.
     pub bake: crate::ssdf::SsdfKnobs,
-    /// The cast shadow is taken at one pixel of each `cast_scale` ×
-    /// `cast_scale` block and brought back to full resolution (1: every
-    /// pixel, the paper; [`crate::shadow::upsample`]). The default, 2 with
-    /// `cast_refine` 0.02, keeps ρ within 0.01 of the full resolution's on
-    /// all but 0–21 pixels of a 640 × 360 view of each bundled scene
-    /// (docs/benchmarks.md, "Issue 26, third pass").
-    pub cast_scale: u32,
+    /// The cast shadow is taken at one pixel of each s × s block and
+    /// brought back to full resolution (1: every pixel, the paper;
+    /// [`crate::shadow::upsample`]), s fixed or growing with the image
+    /// ([`CastScale`]). The default, automatic (2 up to 640 × 360, 4 at
+    /// 1280 × 720) with `cast_refine` 0.02, keeps ρ within 0.01 of the
+    /// full resolution's on all but a few pixels of each bundled scene
+    /// (docs/benchmarks.md, issue 26's third and seventh passes).
+    pub cast_scale: CastScale,
     /// Above 1 `cast_scale`, a pixel whose neighbouring blocks' ρ spread
     /// by more than this (or of which fewer than two blocks lie on its
     /// surface) is taken at full resolution (`shadow-refine`); ≥ 1 refines
@@ -217,7 +219,7 @@ impl Default for ShadowKnobs {
             cast: true,
             outside: crate::ssdf::OutsideMode::Correct,
             bake: crate::ssdf::SsdfKnobs::default(),
-            cast_scale: 2,
+            cast_scale: CastScale::Auto,
             cast_refine: DEFAULT_CAST_REFINE,
         }
     }
@@ -538,16 +540,26 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         if let Some((k, m)) = bake.problem() {
             return Err(e(&format!("shadows.{k}"), m));
         }
-        let cast_scale = sp.and_then(|s| s.cast_scale).unwrap_or(d.cast_scale);
-        if !(1..=crate::shadow::MAX_CAST_SCALE).contains(&cast_scale) {
-            return Err(e(
-                "shadows.cast_scale",
-                format!(
-                    "{cast_scale} must be in 1..={}",
-                    crate::shadow::MAX_CAST_SCALE
-                ),
-            ));
-        }
+        let max = crate::shadow::MAX_CAST_SCALE;
+        let cast_scale = match sp.and_then(|s| s.cast_scale.as_ref()) {
+            None => d.cast_scale,
+            Some(spec::CastScaleSpec::Word(w)) if w == "auto" => CastScale::Auto,
+            Some(spec::CastScaleSpec::Number(n)) if (1..=max as i64).contains(n) => {
+                CastScale::Fixed(*n as u32)
+            }
+            Some(spec::CastScaleSpec::Number(n)) => {
+                return Err(e(
+                    "shadows.cast_scale",
+                    format!("{n} must be in 1..={max}, or \"auto\""),
+                ));
+            }
+            Some(spec::CastScaleSpec::Word(w)) => {
+                return Err(e(
+                    "shadows.cast_scale",
+                    format!("\"{w}\" must be \"auto\" or a number in 1..={max}"),
+                ));
+            }
+        };
         let cast_refine = sp.and_then(|s| s.cast_refine).unwrap_or(d.cast_refine);
         if !(cast_refine.is_finite() && cast_refine >= 0.0) {
             return Err(e(

@@ -51,8 +51,16 @@ pub(crate) struct ShadowsSpec {
     pub grid: Option<u32>,
     pub directions: Option<u32>,
     pub components: Option<u32>,
-    pub cast_scale: Option<u32>,
+    pub cast_scale: Option<CastScaleSpec>,
     pub cast_refine: Option<f64>,
+}
+
+/// `[shadows] cast_scale`: a number of pixels, or a word (`"auto"`).
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum CastScaleSpec {
+    Number(i64),
+    Word(String),
 }
 
 #[derive(Debug, Deserialize)]

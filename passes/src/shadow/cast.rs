@@ -157,7 +157,7 @@ pub struct CastShadowPass {
     upsample: Arc<ComputePipeline>,
     upsample_listed: Arc<ComputePipeline>,
     march: MarchKnobs,
-    scale: u32,
+    scale: super::CastScale,
     refine_spread: f64,
 }
 
@@ -190,7 +190,8 @@ impl PixelList {
 impl CastShadowPass {
     /// Compiles the pass; a pixel whose point lies off any surface is
     /// marched again with `march` ([`super::shadow_point`]); ρ is taken at
-    /// one pixel of each `scale` × `scale` block (1: every pixel) and
+    /// one pixel of each s × s block, s as `scale` says for the frame's
+    /// image ([`super::CastScale::at`]; 1: every pixel), and
     /// brought back by [`Self::finish`], which takes it exactly where the
     /// blocks a pixel blends spread by more than `refine_spread` (≥ 1:
     /// nowhere).
@@ -198,14 +199,16 @@ impl CastShadowPass {
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
         march: MarchKnobs,
-        scale: u32,
+        scale: super::CastScale,
         refine_spread: f64,
     ) -> anyhow::Result<Self> {
-        anyhow::ensure!(
-            (1..=super::MAX_CAST_SCALE).contains(&scale),
-            "cast-shadow scale {scale}: must be in 1..={}",
-            super::MAX_CAST_SCALE
-        );
+        if let super::CastScale::Fixed(s) = scale {
+            anyhow::ensure!(
+                (1..=super::MAX_CAST_SCALE).contains(&s),
+                "cast-shadow scale {s}: must be in 1..={}",
+                super::MAX_CAST_SCALE
+            );
+        }
         let mut defines = shadow_defines();
         defines.push(inlay_engine::shader::Define::Bool(
             "SKIP_EMPTY",
@@ -233,14 +236,14 @@ impl CastShadowPass {
         })
     }
 
-    /// The scale ρ is taken at.
-    pub fn scale(&self) -> u32 {
-        self.scale
+    /// The scale ρ is taken at for a `width` × `height` image.
+    pub fn scale_at(&self, width: u32, height: u32) -> u32 {
+        self.scale.at(width, height)
     }
 
     /// Whether [`Self::finish`] refines.
     pub fn refines(&self) -> bool {
-        self.scale > 1 && self.refine_spread < 1.0
+        !self.scale.is_full() && self.refine_spread < 1.0
     }
 
     /// The full-resolution ρ from the last [`Self::add`]'s `low` image: as
@@ -256,10 +259,11 @@ impl CastShadowPass {
         low: ImageHandle,
         objects: &[CastInputs],
     ) -> ImageHandle {
-        if self.scale == 1 {
+        let (width, height) = (camera.width, camera.height);
+        let scale = self.scale_at(width, height);
+        if scale == 1 {
             return low;
         }
-        let (width, height) = (camera.width, camera.height);
         let mut up = graph.create_image(
             "shadow-full",
             ImageDesc {
@@ -271,7 +275,7 @@ impl CastShadowPass {
         let push = UpsamplePush {
             width,
             height,
-            scale: self.scale,
+            scale,
             refine_spread: self.refine_spread.min(1.0) as f32,
         };
         // The list shadow-refine runs over.
@@ -330,7 +334,8 @@ impl CastShadowPass {
             fh_table,
             ssdf,
         };
-        let (width, height) = super::upsample::low_size(camera.width, camera.height, self.scale);
+        let scale = self.scale_at(camera.width, camera.height);
+        let (width, height) = super::upsample::low_size(camera.width, camera.height, scale);
         let list = PixelList::new(graph, "cast-shadow", width as u64 * height as u64);
         let mut classify = Target::Classify { previous, list };
         let image = self.dispatch(graph, field, camera, march, inputs, &mut classify);
@@ -341,7 +346,7 @@ impl CastShadowPass {
             image,
             list,
             chained: previous.is_some(),
-            scale: self.scale,
+            scale,
         };
         self.dispatch(graph, field, camera, march, inputs, &mut listed)
     }
@@ -358,8 +363,9 @@ impl CastShadowPass {
         inputs: CastInputs,
         target: &mut Target,
     ) -> ImageHandle {
+        let frame_scale = self.scale_at(camera.width, camera.height);
         let scale = match *target {
-            Target::Classify { .. } => self.scale,
+            Target::Classify { .. } => frame_scale,
             Target::Listed { scale, .. } => scale,
         };
         let (width, height) = super::upsample::low_size(camera.width, camera.height, scale);
@@ -403,7 +409,7 @@ impl CastShadowPass {
                 self.classify.pick(previous.is_some(), direct.is_some()),
             ),
             Target::Listed { chained, scale, .. } => (
-                if scale == 1 && self.scale > 1 {
+                if scale == 1 && frame_scale > 1 {
                     SHADOW_REFINE
                 } else {
                     CAST_SHADOW

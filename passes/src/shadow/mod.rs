@@ -29,4 +29,4 @@ pub use runtime::{
     cast_shadow_factor, field_normal, self_shadow_factors, shadow_point, sphere_clear_of,
     sphere_share, world_ssdf, ShadowPoint, SphereView, CAST_SKIP_SHARE, HORIZON_FLOOR,
 };
-pub use upsample::{upsample_shadow, MAX_CAST_SCALE};
+pub use upsample::{upsample_shadow, CastScale, MAX_CAST_SCALE};

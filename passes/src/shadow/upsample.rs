@@ -16,7 +16,45 @@
 use glam::DVec3;
 
 /// Largest cast-shadow scale a scene may ask for.
-pub const MAX_CAST_SCALE: u32 = 4;
+pub const MAX_CAST_SCALE: u32 = 8;
+
+/// The low image [`CastScale::Auto`] keeps the cast shadow's at most: the
+/// scale grows with the image so that about this many pixels of it are
+/// taken (320 × 180 at 1280 × 720, scale 4).
+pub const AUTO_LOW_SIZE: (u32, u32) = (320, 180);
+
+/// How coarsely the cast shadow is taken (`[shadows] cast_scale`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CastScale {
+    /// At one pixel of each s × s block, whatever the image's size (1:
+    /// every pixel, the paper's).
+    Fixed(u32),
+    /// At a scale that grows with the image ([`Self::at`]): a shadow's
+    /// extent in pixels grows with the image, and its edges are refined
+    /// at full resolution either way, so a 1280 × 720 image is taken at 4
+    /// with the error of 2 (docs/benchmarks.md, issue 26's seventh pass).
+    Auto,
+}
+
+impl CastScale {
+    /// The scale for a `width` × `height` image: a fixed one as it is;
+    /// automatic, the smallest that keeps the low image within
+    /// [`AUTO_LOW_SIZE`], at least 2 and at most [`MAX_CAST_SCALE`].
+    pub fn at(self, width: u32, height: u32) -> u32 {
+        match self {
+            CastScale::Fixed(s) => s,
+            CastScale::Auto => width
+                .div_ceil(AUTO_LOW_SIZE.0)
+                .max(height.div_ceil(AUTO_LOW_SIZE.1))
+                .clamp(2, MAX_CAST_SCALE),
+        }
+    }
+
+    /// Whether every pixel is taken (a fixed scale of 1).
+    pub fn is_full(self) -> bool {
+        self == CastScale::Fixed(1)
+    }
+}
 
 /// Relative depth difference at which a block's weight reaches zero
 /// (`UPSAMPLE_DEPTH_FALLOFF` in the shader).
@@ -121,6 +159,33 @@ pub fn upsample_with_flags(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The automatic scale keeps the low image within `AUTO_LOW_SIZE`,
+    /// never under 2 nor over the largest; a fixed one stays.
+    #[test]
+    fn the_automatic_scale_follows_the_image() {
+        let auto = CastScale::Auto;
+        assert_eq!(auto.at(160, 90), 2);
+        assert_eq!(auto.at(320, 180), 2);
+        assert_eq!(auto.at(640, 360), 2);
+        assert_eq!(auto.at(1280, 720), 4);
+        assert_eq!(auto.at(1281, 720), 5);
+        assert_eq!(auto.at(1920, 1080), 6);
+        assert_eq!(auto.at(720, 1280), 8);
+        assert_eq!(auto.at(7680, 4320), MAX_CAST_SCALE);
+        for (w, h) in [(321, 181), (1000, 700), (2560, 1440)] {
+            let s = auto.at(w, h);
+            let (lw, lh) = low_size(w, h, s);
+            assert!(s == MAX_CAST_SCALE || (lw <= AUTO_LOW_SIZE.0 && lh <= AUTO_LOW_SIZE.1));
+            assert!(
+                s == 2
+                    || low_size(w, h, s - 1).0 > AUTO_LOW_SIZE.0
+                    || low_size(w, h, s - 1).1 > AUTO_LOW_SIZE.1
+            );
+        }
+        assert_eq!(CastScale::Fixed(1).at(1280, 720), 1);
+        assert!(CastScale::Fixed(1).is_full() && !auto.is_full());
+    }
 
     /// At scale 1 the image passes through; a constant ρ stays constant; a
     /// pixel on a near surface beside a far one takes the near blocks alone.

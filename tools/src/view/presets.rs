@@ -3,7 +3,7 @@
 //! trading accuracy for speed. `Scene` keeps what the scene file says.
 
 use clap::ValueEnum;
-use inlay_passes::scene::{Scene, DEFAULT_CAST_REFINE};
+use inlay_passes::scene::{CastScale, Scene, DEFAULT_CAST_REFINE};
 
 /// A quality preset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -54,7 +54,10 @@ impl Preset {
         s.lighting.fit.lobes = s.lighting.fit.lobes.min(lobes);
         s.lighting.fit.cold_iterations = s.lighting.fit.cold_iterations.min(cold);
         s.lighting.fit.warm_iterations = s.lighting.fit.warm_iterations.min(warm);
-        s.shadows.cast_scale = s.shadows.cast_scale.max(cast_scale);
+        // The automatic scale is never under 2, the presets' floor.
+        if let CastScale::Fixed(f) = s.shadows.cast_scale {
+            s.shadows.cast_scale = CastScale::Fixed(f.max(cast_scale));
+        }
         s.shadows.cast_refine = s.shadows.cast_refine.max(cast_refine);
         s.shading.field_light = s.shading.field_light.min(field_light);
         s
