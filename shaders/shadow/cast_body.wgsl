@@ -396,6 +396,18 @@ fn cast_source(id: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(p);
 }
 
+// The depth along the ray at full-resolution pixel p, or −1 where the
+// field is empty: what shadow-upsample weighs each block by (upsample.wgsl
+// upsample_depth, the same expression), kept in the alpha of the image at
+// the cast scale so that the upsampling reads one texel a corner.
+fn cast_source_depth(p: vec2<i32>) -> f32 {
+    let o = textureLoad(field_colour, p, 0).a;
+    if o <= 1e-4 {
+        return -1.0;
+    }
+    return textureLoad(field_depth, p, 0).r / o;
+}
+
 // The width of the image at pc.scale (upsample.rs low_size).
 fn cast_low_width() -> u32 {
     return (pc.camera.width + pc.scale - 1u) / pc.scale;
@@ -415,10 +427,12 @@ fn refine_listed(i: u32, chained: bool) {
     let width = cast_low_width();
     let at = vec2<u32>(p % width, p / width);
     var rho = pixel_factor(cast_source(at));
+    let here = textureLoad(refined, vec2<i32>(at));
     if chained {
-        rho *= textureLoad(refined, vec2<i32>(at)).rgb;
+        rho *= here.rgb;
     }
-    textureStore(refined, vec2<i32>(at), vec4<f32>(rho, 1.0));
+    // The alpha stays: the source pixel's depth at the cast scale.
+    textureStore(refined, vec2<i32>(at), vec4<f32>(rho, here.a));
 }
 
 // Whether invocation `id` of a classification lies off the image.
@@ -442,8 +456,9 @@ fn cast_previous(id: vec3<u32>) -> vec3<f32> {
 // even one that returns at once (docs/benchmarks.md, issue 26's fifth
 // pass).
 fn cast_classify(id: vec3<u32>, previous_rho: vec3<f32>) {
-    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(previous_rho, 1.0));
-    if pixel_unshadowed(cast_source(id.xy)) {
+    let source = cast_source(id.xy);
+    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(previous_rho, cast_source_depth(source)));
+    if pixel_unshadowed(source) {
         return;
     }
     let width = cast_low_width();

@@ -10,7 +10,8 @@
 // also appends each flagged pixel's index (y·width + x) to refine_list,
 // counting them in refine_count and their workgroups of
 // REFINE_WORKGROUP in refine_args (shadow-refine's indirect dispatch,
-// which so runs over those pixels alone).
+// which so runs over those pixels alone). Each block's depth is read from
+// the alpha of `low_shadow`, where cast-shadow keeps its source pixel's.
 
 struct UpsamplePush {
     width: u32,
@@ -40,10 +41,6 @@ fn upsample_depth(p: vec2<u32>) -> f32 {
         return -1.0;
     }
     return textureLoad(field_depth, vec2<i32>(p), 0).r / o;
-}
-
-fn upsample_source(c: vec2<u32>) -> vec2<u32> {
-    return min(c * pc.scale + vec2<u32>(pc.scale / 2u), vec2<u32>(pc.width - 1u, pc.height - 1u));
 }
 
 // ρ at full-resolution pixel p, and whether shadow-refine takes it again.
@@ -99,11 +96,15 @@ fn upsample_pixel(p: vec2<u32>) -> Upsampled {
         let c = vec2<u32>(select(i0.x, i1.x, (k & 1u) != 0u), select(i0.y, i1.y, (k & 2u) != 0u));
         let wx = select(1.0 - f.x, f.x, (k & 1u) != 0u);
         let wy = select(1.0 - f.y, f.y, (k & 2u) != 0u);
-        let zq = upsample_depth(upsample_source(c));
+        // ρ, and the depth at the block's source pixel (its upsample_depth,
+        // which cast-shadow keeps in alpha: cast_body.wgsl
+        // cast_source_depth).
+        let block = textureLoad(low_shadow, vec2<i32>(c), 0);
+        let zq = block.a;
         if zq < 0.0 {
             continue;
         }
-        let rho = textureLoad(low_shadow, vec2<i32>(c), 0).rgb;
+        let rho = block.rgb;
         let gap = abs(zq - z) / max(z, 1e-30);
         if gap < nearest_gap {
             nearest = rho;
