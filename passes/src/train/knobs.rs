@@ -86,6 +86,25 @@ impl Default for TrainKnobs {
     }
 }
 
+/// The steps `inlay train` takes when not told: 2000 for a grid of up to
+/// 128 nodes along its longest axis, and four times as many for each
+/// doubling above (256 nodes: 8000), as many as the finest grid's nodes
+/// grow per view. On DOG's 64 views of 256², 2000 steps left a 256-node
+/// degree-1 field hazy where the training views never looked through
+/// (held-out 27.75 and 31.47 dB); 8000 cleared it (31.60, 30.74 dB) and
+/// 16 000 fitted the views' noise (31.03, 30.04 dB), while a 128-node field
+/// gained nothing from 8000 (29.26, 31.84 against 29.24, 32.21 dB;
+/// `docs/benchmarks.md`, issue 25's seventh pass).
+pub fn default_iterations(resolution: u32) -> u32 {
+    let r = resolution.clamp(FEW_STEPS_RESOLUTION, 512) as u64;
+    (TrainKnobs::default().iterations as u64 * r * r
+        / (FEW_STEPS_RESOLUTION as u64 * FEW_STEPS_RESOLUTION as u64)) as u32
+}
+
+/// Up to this many nodes along the longest axis the default steps stay at
+/// [`TrainKnobs::default`]'s.
+pub const FEW_STEPS_RESOLUTION: u32 = 128;
+
 impl TrainKnobs {
     /// Why the knobs cannot be used: (knob, message).
     pub fn check(&self) -> Result<(), (String, String)> {
@@ -142,5 +161,24 @@ impl TrainKnobs {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The default steps: 2000 up to 128 nodes, ×4 per doubling above.
+    #[test]
+    fn default_steps_grow_with_the_grid() {
+        assert_eq!(default_iterations(32), 2000);
+        assert_eq!(default_iterations(128), 2000);
+        assert_eq!(default_iterations(192), 4500);
+        assert_eq!(default_iterations(256), 8000);
+        assert_eq!(default_iterations(512), 32000);
+        assert_eq!(
+            default_iterations(TrainKnobs::default().resolution),
+            TrainKnobs::default().iterations
+        );
     }
 }

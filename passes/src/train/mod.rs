@@ -20,7 +20,7 @@ pub mod visibility;
 
 pub use adam::{adam_step, AdamKnobs};
 pub use gpu::{GpuTrainer, GradientScatter, TrainRay};
-pub use knobs::TrainKnobs;
+pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
 pub use trainer::{

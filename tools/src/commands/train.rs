@@ -16,7 +16,7 @@ use inlay_engine::{Context, HdrImage};
 use inlay_passes::dataset::{load_dataset, LoadOptions};
 use inlay_passes::field::field_bytes;
 use inlay_passes::geometry::Aabb;
-use inlay_passes::train::{train, TrainControl, TrainKnobs};
+use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
 
 use crate::commands::dataset::{parse_bounds, parse_rgb};
 use crate::field_source::progress_bar;
@@ -36,9 +36,11 @@ pub struct TrainArgs {
     /// Coarse-to-fine stages (the grid doubles between them).
     #[arg(long, default_value_t = TrainKnobs::default().stages)]
     pub stages: u32,
-    /// Optimiser steps.
-    #[arg(long, default_value_t = TrainKnobs::default().iterations)]
-    pub iterations: u32,
+    /// Optimiser steps. Default: 2000 up to 128 nodes along the longest
+    /// axis, four times as many per doubling above (256: 8000), for the
+    /// `--resume` field's resolution when resuming.
+    #[arg(long)]
+    pub iterations: Option<u32>,
     /// Rays per step.
     #[arg(long, default_value_t = TrainKnobs::default().batch)]
     pub batch: u32,
@@ -128,7 +130,13 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     let knobs = TrainKnobs {
         resolution: args.resolution,
         stages: args.stages,
-        iterations: args.iterations,
+        iterations: args.iterations.unwrap_or_else(|| {
+            default_iterations(
+                resume
+                    .as_ref()
+                    .map_or(args.resolution, |f| f.resolution.max_element()),
+            )
+        }),
         batch: args.batch,
         samples_per_ray: args.samples_per_ray,
         rate: args.rate,
