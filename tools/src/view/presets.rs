@@ -9,13 +9,15 @@ use inlay_passes::scene::{CastScale, Scene, DEFAULT_CAST_REFINE};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Preset {
     /// 128 samples per ray, a 16×16 probe, 8 lobes, 20 cold and 2 warm
-    /// LM iterations, the cast shadow at half resolution without
-    /// refinement, the object lit by its lobes alone (no field light at
-    /// its surface): interactive on a CPU device at small sizes.
+    /// LM iterations, the cast shadow at half resolution (or coarser, as
+    /// the scene's scale is) without refinement, the object lit by its
+    /// lobes alone (no field light at its surface): interactive on a CPU
+    /// device at small sizes.
     Fast,
     /// 256 samples per ray, a 32×32 probe, 16 lobes, 40 cold and 4 warm
-    /// iterations, the cast shadow at half resolution, the field's light at
-    /// the object's surface from 12 × 12 rays a tile.
+    /// iterations, the cast shadow at half resolution (or coarser, as the
+    /// scene's scale is), the field's light at the object's surface from
+    /// 12 × 12 rays a tile.
     Balanced,
     /// The scene file's knobs (the paper's defaults unless it says otherwise).
     Scene,
