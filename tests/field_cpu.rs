@@ -268,6 +268,10 @@ fn bad_scene_files_name_the_key() {
             "shadows.cast_scale",
         ),
         (
+            format!("{base}\n[shadows]\ncast_scale = 2.5\n"),
+            "shadows.cast_scale",
+        ),
+        (
             format!("{base}\n[shadows]\ncast_refine = -0.5\n"),
             "shadows.cast_refine",
         ),

@@ -559,6 +559,12 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
                     format!("\"{w}\" must be \"auto\" or a number in 1..={max}"),
                 ));
             }
+            Some(spec::CastScaleSpec::Other(_)) => {
+                return Err(e(
+                    "shadows.cast_scale",
+                    format!("must be \"auto\" or a whole number in 1..={max}"),
+                ));
+            }
         };
         let cast_refine = sp.and_then(|s| s.cast_refine).unwrap_or(d.cast_refine);
         if !(cast_refine.is_finite() && cast_refine >= 0.0) {

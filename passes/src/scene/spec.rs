@@ -55,12 +55,14 @@ pub(crate) struct ShadowsSpec {
     pub cast_refine: Option<f64>,
 }
 
-/// `[shadows] cast_scale`: a number of pixels, or a word (`"auto"`).
+/// `[shadows] cast_scale`: a number of pixels, or a word (`"auto"`);
+/// anything else is kept to be refused by name.
 #[derive(Debug, Deserialize)]
 #[serde(untagged)]
 pub(crate) enum CastScaleSpec {
     Number(i64),
     Word(String),
+    Other(serde::de::IgnoredAny),
 }
 
 #[derive(Debug, Deserialize)]
