@@ -10,6 +10,7 @@ mod shape;
 pub(crate) mod spec;
 pub mod vec3;
 
+pub use crate::shadow::CastScale;
 pub use checker::Checker;
 pub use environment::{Environment, EquirectMap};
 pub use face::Face;
@@ -39,7 +40,6 @@ use crate::camera::CameraSpec;
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;
 use crate::object::{load_gltf, ObjectMesh, PlacedObject, Pose};
-pub use crate::shadow::CastScale;
 use spec::SceneSpec;
 
 /// Why a scene file could not be used: the file, the key and the problem.
@@ -547,22 +547,13 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             Some(spec::CastScaleSpec::Number(n)) if (1..=max as i64).contains(n) => {
                 CastScale::Fixed(*n as u32)
             }
-            Some(spec::CastScaleSpec::Number(n)) => {
+            Some(other) => {
                 return Err(e(
                     "shadows.cast_scale",
-                    format!("{n} must be in 1..={max}, or \"auto\""),
-                ));
-            }
-            Some(spec::CastScaleSpec::Word(w)) => {
-                return Err(e(
-                    "shadows.cast_scale",
-                    format!("\"{w}\" must be \"auto\" or a number in 1..={max}"),
-                ));
-            }
-            Some(spec::CastScaleSpec::Other(_)) => {
-                return Err(e(
-                    "shadows.cast_scale",
-                    format!("must be \"auto\" or a whole number in 1..={max}"),
+                    format!(
+                        "{}must be \"auto\" or a whole number in 1..={max}",
+                        other.shown()
+                    ),
                 ));
             }
         };

@@ -65,6 +65,18 @@ pub(crate) enum CastScaleSpec {
     Other(serde::de::IgnoredAny),
 }
 
+impl CastScaleSpec {
+    /// The value as an error message starts with it (`3 `, `"half" `), or
+    /// nothing for a value of another type.
+    pub(crate) fn shown(&self) -> String {
+        match self {
+            CastScaleSpec::Number(n) => format!("{n} "),
+            CastScaleSpec::Word(w) => format!("\"{w}\" "),
+            CastScaleSpec::Other(_) => String::new(),
+        }
+    }
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct ShadingSpec {
