@@ -51,6 +51,8 @@ pub struct SurfaceSample {
     pub emitters: usize,
     /// Covered pixels left out as mixed, over all kept views.
     pub mixed: usize,
+    /// Covered pixels left out as on a crease, over all kept views.
+    pub creased: usize,
     /// Reading radiance from the photographs: the median, over the points
     /// read, of the reading's luminance over the field's pixel's (how far
     /// the field's colour is from its photographs').
@@ -131,6 +133,7 @@ pub fn sample_surface(
         scores: Vec::new(),
         emitters: 0,
         mixed: 0,
+        creased: 0,
         unseen: 0,
         photo_ratio: None,
     };
@@ -166,6 +169,7 @@ pub fn sample_surface(
                 out.views_tried - 1,
                 &march,
                 knobs.surface_test,
+                knobs.max_crease,
             );
             if let Some(w) = seen_from {
                 // Twice the points drawn, for those left out as lights.
@@ -216,6 +220,7 @@ pub fn sample_surface(
         let drawn = draw_points(candidates, limit, knobs.pixels_per_view as usize, &mut rng);
         out.emitters += drawn.emitters;
         out.mixed += drawn.mixed;
+        out.creased += drawn.creased;
         out.points.extend(drawn.points);
     }
     if !photo_ratios.is_empty() {

@@ -11,7 +11,11 @@
 //! point differ by at most
 //! [`MAX_MIXED_DIFFERENCE`] of the larger: a ray that grazes a lamp's glow
 //! or a silhouette on its way collects light the point does not reflect),
-//! and the radiance is no more than `emitter_ratio` × the median
+//! on a trained field the surface does not bend sharply within a node
+//! spacing of the point ([`crease_angle`]: on an edge the field has
+//! rounded, the normal is a blend of two faces' and the colour the
+//! brighter face's), and the radiance is no more than `emitter_ratio` ×
+//! the median
 //! candidate's luminance over all the views (brighter points are light
 //! sources in the field, which no reflector explains). The median was
 //! each view's own: a view that saw mostly the dark outside of ROOM's
@@ -62,7 +66,9 @@ pub enum SurfaceTest {
     /// of its expected depth. Asks nothing of the density's scale, so it
     /// holds on trained fields; but a bake's dense foliage passes it
     /// (PLANTS' all-visible estimate 6.9 % of the lamp's light against
-    /// under 2 % with the gradient), so it is not the default.
+    /// under 2 % with the gradient), so it is not the default. It also
+    /// leaves out points on creases
+    /// ([`super::knobs::EnvEstimateKnobs::max_crease`]).
     Weight,
 }
 
@@ -72,6 +78,36 @@ pub enum SurfaceTest {
 /// most of the fit's loss); unmixed pixels of the bundled recipes stay
 /// under 0.45.
 pub const MAX_MIXED_DIFFERENCE: f64 = 0.5;
+
+/// How far from a point, in node spacings, [`crease_angle`] compares
+/// normals.
+pub const CREASE_REACH: f64 = 1.0;
+
+/// The largest angle, in degrees, between the normal at surface point `x`
+/// (unit `normal`) and the normals [`CREASE_REACH`] node spacings away
+/// from it in its tangent plane, four ways: how sharply the field's
+/// surface bends at the field's own resolution. A flat surface reads 0, a
+/// sphere of radius R spacings about asin(1/R), an edge the field blurred
+/// over a few nodes tens of degrees. There the point's normal is a blend
+/// of two faces' while its colour is mostly the brighter face's: on DOG
+/// trained at 128 nodes, the rims of the body's end caps face away from
+/// the bulb yet are as bright as its lit top, and the environment fit
+/// gave them light from below the horizon (docs/fidelity.md,
+/// "Twenty-third pass"). Meant for trained fields, whose density rises
+/// over a few nodes: a bake's is zero a node off a curved surface, where
+/// the gradient gives no normal, so its round surfaces read as creases.
+pub fn crease_angle(field: &GridField, x: DVec3, normal: DVec3) -> f64 {
+    let reach = CREASE_REACH * field.spacing().min_element();
+    let t1 = normal.any_orthonormal_vector();
+    let t2 = normal.cross(t1);
+    [t1, -t1, t2, -t2]
+        .iter()
+        .map(|t| {
+            let n = -field.density_gradient(x + *t * reach).normalize_or_zero();
+            normal.dot(n).clamp(-1.0, 1.0).acos().to_degrees()
+        })
+        .fold(0.0, f64::max)
+}
 
 /// One surface point of the field.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,6 +135,8 @@ pub struct ViewPoints {
     pub not_surface: usize,
     /// Covered pixels left out as mixed ([`MAX_MIXED_DIFFERENCE`]).
     pub mixed: usize,
+    /// Covered pixels left out as on a crease ([`crease_angle`]).
+    pub creased: usize,
     /// Candidates tried and left out as seen by no photograph
     /// ([`super::witnesses`]).
     pub unseen: usize,
@@ -138,8 +176,9 @@ fn surface_share(
 }
 
 /// Every candidate surface point of `view` (rendered from `frame` with
-/// `knobs`), `view_index` naming it, surfaces told by `test`, before light
-/// sources are left out.
+/// `knobs`), `view_index` naming it, surfaces told by `test` (under
+/// [`SurfaceTest::Weight`], those whose [`crease_angle`] exceeds
+/// `max_crease` degrees left out), before light sources are left out.
 pub fn view_candidates(
     field: &GridField,
     frame: &CameraFrame,
@@ -147,6 +186,7 @@ pub fn view_candidates(
     view_index: u32,
     knobs: &MarchKnobs,
     test: SurfaceTest,
+    max_crease: f64,
 ) -> ViewPoints {
     let h = field.spacing().min_element();
     let mut out = ViewPoints::default();
@@ -178,6 +218,13 @@ pub fn view_candidates(
         }
         if is_mixed(field, x, ray.dir, radiance) {
             out.mixed += 1;
+            continue;
+        }
+        if test == SurfaceTest::Weight
+            && max_crease < 180.0
+            && crease_angle(field, x, normal) > max_crease
+        {
+            out.creased += 1;
             continue;
         }
         out.points.push(SurfacePoint {
@@ -312,6 +359,147 @@ mod tests {
                 "thin {thin}: {share}"
             );
         }
+    }
+
+    /// A field whose density rises linearly over two node spacings about
+    /// the surface `sdf` = 0 (a trained field's soft surface), on 33³ nodes
+    /// over the unit cube.
+    fn solid(sdf: impl Fn(DVec3) -> f64) -> GridField {
+        use crate::geometry::Aabb;
+        use glam::UVec3;
+        let n = 33u32;
+        let h = 1.0 / (n - 1) as f64;
+        let nodes = (0..n * n * n)
+            .map(|i| {
+                let p = DVec3::new((i % n) as f64, ((i / n) % n) as f64, (i / (n * n)) as f64) * h;
+                let sigma = 100.0 * ((h - sdf(p)) / (2.0 * h)).clamp(0.0, 1.0);
+                [0.5, 0.5, 0.5, sigma as f32]
+            })
+            .collect();
+        GridField::new(
+            UVec3::splat(n),
+            Aabb::new(DVec3::ZERO, DVec3::ONE),
+            nodes,
+            4,
+        )
+    }
+
+    /// A flat floor does not bend, a sphere of radius R spacings bends by
+    /// about asin(1/R), and a box's edge, rounded by the field, bends by
+    /// tens of degrees: the crease test leaves out the edge and keeps the
+    /// rest.
+    #[test]
+    fn crease_angle_tells_an_edge_from_a_flat_or_round_surface() {
+        let h = 1.0 / 32.0;
+        let floor = solid(|p| p.y - 0.5);
+        let x = DVec3::new(0.41, 0.5, 0.57);
+        let n = -floor.density_gradient(x).normalize();
+        assert!(n.dot(DVec3::Y) > 0.999, "{n}");
+        let flat = crease_angle(&floor, x, n);
+        assert!(flat < 1.0, "flat {flat}");
+
+        let c = DVec3::splat(0.5);
+        let r = 10.0 * h;
+        let ball = solid(|p| (p - c).length() - r);
+        for d in [DVec3::Y, DVec3::new(1.0, 1.0, 0.3).normalize()] {
+            let x = c + d * r;
+            let n = -ball.density_gradient(x).normalize();
+            let bend = crease_angle(&ball, x, n);
+            let expect = (0.1f64).asin().to_degrees();
+            assert!(
+                (bend - expect).abs() < 3.0,
+                "sphere {bend} against {expect}"
+            );
+            assert!(bend < 15.0);
+        }
+
+        // A box's edge along z at (0.65, 0.65), its faces x = 0.65 and y = 0.65.
+        let cube = solid(|p| {
+            let q = (p - c).abs() - DVec3::splat(0.15);
+            q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
+        });
+        let x = DVec3::new(0.65, 0.65, 0.5);
+        let n = -cube.density_gradient(x).normalize();
+        let edge = crease_angle(&cube, x, n);
+        assert!(edge > 30.0, "edge {edge}");
+        // Three spacings from the edge the face is flat again.
+        let x = DVec3::new(0.65 - 3.0 * h, 0.65, 0.5);
+        let n = -cube.density_gradient(x).normalize();
+        let face = crease_angle(&cube, x, n);
+        assert!(face < 5.0, "face {face}");
+    }
+
+    /// Under the weight test, a view of a cube drops the points on its
+    /// rounded edges, counted as creased, and keeps its faces; a
+    /// `max_crease` of 180 and the gradient test keep every point.
+    #[test]
+    fn the_weight_test_leaves_out_a_cube_s_edges() {
+        let c = DVec3::splat(0.5);
+        let cube = solid(|p| {
+            let q = (p - c).abs() - DVec3::splat(0.2);
+            q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
+        });
+        let spec = crate::camera::CameraSpec {
+            name: None,
+            position: DVec3::new(1.6, 1.3, 1.45),
+            look_at: c,
+            up: DVec3::Y,
+            fov_y: 35.0,
+        };
+        let side = 40;
+        let frame = CameraFrame::new(&spec, side, side);
+        let knobs = MarchKnobs::default();
+        let (mut colour_opacity, mut depth) = (Vec::new(), Vec::new());
+        for py in 0..side {
+            for px in 0..side {
+                let m =
+                    crate::march::march_ray(&cube, &frame.pixel_ray(px, py), f64::INFINITY, &knobs);
+                let c = m.colour.as_vec3();
+                colour_opacity.push([c.x, c.y, c.z, m.opacity as f32]);
+                depth.push(m.depth as f32);
+            }
+        }
+        let view = ViewImage {
+            width: side,
+            height: side,
+            colour_opacity,
+            depth,
+        };
+        let run =
+            |test, max_crease| view_candidates(&cube, &frame, &view, 0, &knobs, test, max_crease);
+        let all = run(SurfaceTest::Weight, 180.0);
+        let kept = run(SurfaceTest::Weight, 15.0);
+        assert_eq!(all.creased, 0);
+        assert!(all.points.len() > 200, "{}", all.points.len());
+        assert!(kept.creased > 20, "{} creased", kept.creased);
+        assert_eq!(kept.points.len() + kept.creased, all.points.len());
+        // Faces are kept and edges left out: the distance to the nearest
+        // edge of the point's closest point on the cube (the points lie
+        // ahead of the faces, where this field's density starts to rise).
+        let edge_distance = |x: DVec3| {
+            let q = (x - c).clamp(DVec3::splat(-0.2), DVec3::splat(0.2));
+            let mut d = (DVec3::splat(0.2) - q.abs()).to_array();
+            d.sort_by(f64::total_cmp);
+            d[1]
+        };
+        let h = 1.0 / 32.0;
+        let near_edge = |v: &ViewPoints| {
+            v.points
+                .iter()
+                .filter(|p| edge_distance(p.position) < h)
+                .count()
+        };
+        let on_face = |v: &ViewPoints| {
+            v.points
+                .iter()
+                .filter(|p| edge_distance(p.position) > 3.0 * h)
+                .count()
+        };
+        assert_eq!(on_face(&kept), on_face(&all));
+        assert!(on_face(&all) > 100);
+        assert!(4 * near_edge(&kept) < near_edge(&all));
+        let gradient = run(SurfaceTest::Gradient, 15.0);
+        assert_eq!(gradient.creased, 0);
     }
 
     /// A view of mostly dark surfaces does not make the lit ones light

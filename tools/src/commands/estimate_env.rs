@@ -104,6 +104,13 @@ pub struct EstimateEnvArgs {
     /// gradient).
     #[arg(long, value_enum, default_value = "gradient")]
     pub surface_test: SurfaceTestArg,
+    /// With `--surface-test weight`, the largest bend of the surface, in
+    /// degrees, within a node spacing of a surface point for it to be
+    /// used: on an edge a trained field has rounded, a point's normal is a
+    /// blend of two faces' and its colour the brighter face's (180 keeps
+    /// every point).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().max_crease)]
+    pub max_crease: f64,
     /// Point lights near the field fitted beside the lobes (0: the paper's
     /// distant model alone).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().near_lights)]
@@ -168,6 +175,7 @@ impl EstimateEnvArgs {
             batch: self.batch,
             env_samples: self.env_samples,
             share_prior: self.share_prior,
+            max_crease: self.max_crease,
             seed: self.seed,
             ..EnvEstimateKnobs::default()
         }
@@ -311,13 +319,14 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     bars.iter().for_each(|b| b.finish_and_clear());
     let s = &estimate.surface;
     println!(
-        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources, {} as mixed, {} as seen by no camera)",
+        "views: {} kept of {} rendered ({} rejected by the quality score); {} surface points ({} pixels left out as light sources, {} as mixed, {} on creases, {} as seen by no camera)",
         s.views_kept,
         s.views_tried,
         s.scores.iter().filter(|(_, k)| !k).count(),
         s.points.len(),
         s.emitters,
         s.mixed,
+        s.creased,
         s.unseen
     );
     if let Some(r) = s.photo_ratio {
