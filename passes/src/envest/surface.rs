@@ -71,8 +71,7 @@ pub enum SurfaceTest {
     /// holds on trained fields; but a bake's dense foliage passes it
     /// (PLANTS' all-visible estimate 6.9 % of the lamp's light against
     /// under 2 % with the gradient, at a share of 0.5), so it is not the
-    /// default. It also
-    /// leaves out points on creases
+    /// default. It also leaves out points on creases
     /// ([`super::knobs::EnvEstimateKnobs::max_crease`]).
     Weight,
 }
