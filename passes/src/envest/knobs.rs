@@ -92,7 +92,7 @@ pub struct EnvEstimateKnobs {
     /// face's, and the fit lights it from where no light is. On DOG
     /// trained at 128 nodes, 15° took the error at the test points from
     /// 39 % to 30 % over four seeds (docs/fidelity.md, "Twenty-third
-    /// pass"; 23 % with the surface share of 0.65). The gradient test (bakes) ignores it: a bake's density is
+    /// pass"). The gradient test (bakes) ignores it: a bake's density is
     /// zero a node off its round surfaces, which then read as creases
     /// (DOG's bake 4.2 → 11.6 % on seed 1 with it).
     pub max_crease: f64,
