@@ -300,6 +300,7 @@ pub fn draw_points(mut view: ViewPoints, limit: f64, count: usize, rng: &mut Pcg
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Shape;
 
     fn view(index: u32, luminances: &[f64]) -> ViewPoints {
         ViewPoints {
@@ -388,6 +389,15 @@ mod tests {
         )
     }
 
+    /// An axis-aligned cube of half-edge `half` about `centre`.
+    fn cube(centre: DVec3, half: f64) -> Shape {
+        Shape::Box {
+            centre,
+            half: DVec3::splat(half),
+            rotation: glam::DMat3::IDENTITY,
+        }
+    }
+
     /// A flat floor does not bend, a sphere of radius R spacings bends by
     /// about asin(1/R), and a box's edge, rounded by the field, bends by
     /// tens of degrees: the crease test leaves out the edge and keeps the
@@ -404,7 +414,13 @@ mod tests {
 
         let c = DVec3::splat(0.5);
         let r = 10.0 * h;
-        let ball = solid(|p| (p - c).length() - r);
+        let ball = solid(|p| {
+            Shape::Sphere {
+                centre: c,
+                radius: r,
+            }
+            .sdf(p)
+        });
         for d in [DVec3::Y, DVec3::new(1.0, 1.0, 0.3).normalize()] {
             let x = c + d * r;
             let n = -ball.density_gradient(x).normalize();
@@ -418,10 +434,7 @@ mod tests {
         }
 
         // A box's edge along z at (0.65, 0.65), its faces x = 0.65 and y = 0.65.
-        let cube = solid(|p| {
-            let q = (p - c).abs() - DVec3::splat(0.15);
-            q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
-        });
+        let cube = solid(|p| cube(c, 0.15).sdf(p));
         let x = DVec3::new(0.65, 0.65, 0.5);
         let n = -cube.density_gradient(x).normalize();
         let edge = crease_angle(&cube, x, n);
@@ -439,10 +452,7 @@ mod tests {
     #[test]
     fn the_weight_test_leaves_out_a_cube_s_edges() {
         let c = DVec3::splat(0.5);
-        let cube = solid(|p| {
-            let q = (p - c).abs() - DVec3::splat(0.2);
-            q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
-        });
+        let cube = solid(|p| cube(c, 0.2).sdf(p));
         let spec = crate::camera::CameraSpec {
             name: None,
             position: DVec3::new(1.6, 1.3, 1.45),

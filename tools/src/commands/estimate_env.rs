@@ -98,8 +98,8 @@ pub struct EstimateEnvArgs {
     #[arg(long, default_value_t = EnvEstimateKnobs::default().emitter_ratio)]
     pub emitter_ratio: f64,
     /// How surface points are told from points inside a medium: `gradient`
-    /// (the density rises steeply; for baked fields) or `weight` (half
-    /// the pixel's opacity within two node spacings of its depth; for trained
+    /// (the density rises steeply; for baked fields) or `weight` (half the
+    /// pixel's opacity within two node spacings of its depth; for trained
     /// fields, whose surfaces are as opaque with a hundredth of a bake's
     /// gradient).
     #[arg(long, value_enum, default_value = "gradient")]
