@@ -85,8 +85,9 @@ pub struct EnvEstimateKnobs {
     /// trained fields).
     pub surface_test: super::surface::SurfaceTest,
     /// Under the `weight` surface test (trained fields), the largest bend
-    /// of the surface, in degrees, within a node spacing of a surface
-    /// point for it to be kept ([`super::surface::crease_angle`]); 180
+    /// of the surface, in degrees, within a node spacing (at least 1/128
+    /// of the field's extent) of a surface point for it to be kept
+    /// ([`super::surface::crease_angle`]); 180
     /// keeps every point. On an edge the field has rounded, the point's
     /// normal is a blend of two faces' and its colour mostly the brighter
     /// face's, and the fit lights it from where no light is. On DOG

@@ -123,9 +123,15 @@ impl GridField {
     /// ∇σ at `x` by central differences one node spacing (the smallest
     /// axis's) wide. The field's surface normal is −∇σ normalised.
     pub fn density_gradient(&self, x: DVec3) -> DVec3 {
-        let h = self.spacing().min_element();
-        let d = |e: DVec3| self.density(x + e * h) - self.density(x - e * h);
-        DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * h)
+        self.density_gradient_over(x, self.spacing().min_element())
+    }
+
+    /// ∇σ at `x` by central differences `step` either side: over more
+    /// than a node spacing it reads the slope of a surface blurred over
+    /// several nodes rather than of the nodes nearest `x`.
+    pub fn density_gradient_over(&self, x: DVec3, step: f64) -> DVec3 {
+        let d = |e: DVec3| self.density(x + e * step) - self.density(x - e * step);
+        DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z)) / (2.0 * step)
     }
 
     /// Index of node (i, j, k) in [`Self::nodes`].

@@ -98,14 +98,16 @@ pub struct EstimateEnvArgs {
     #[arg(long, default_value_t = EnvEstimateKnobs::default().emitter_ratio)]
     pub emitter_ratio: f64,
     /// How surface points are told from points inside a medium: `gradient`
-    /// (the density rises steeply; for baked fields) or `weight` (half the
-    /// pixel's opacity within two node spacings of its depth; for trained
-    /// fields, whose surfaces are as opaque with a hundredth of a bake's
-    /// gradient).
+    /// (the density rises steeply; for baked fields) or `weight` (65 % of
+    /// the pixel's opacity within two node spacings of its depth, at least
+    /// 1/64 of the field's extent; for trained fields, whose surfaces are
+    /// as opaque with a hundredth of a bake's gradient, and whose normals
+    /// it reads over two spacings).
     #[arg(long, value_enum, default_value = "gradient")]
     pub surface_test: SurfaceTestArg,
     /// With `--surface-test weight`, the largest bend of the surface, in
-    /// degrees, within a node spacing of a surface point for it to be
+    /// degrees, within a node spacing (at least 1/128 of the field's
+    /// extent) of a surface point for it to be
     /// used: on an edge a trained field has rounded, a point's normal is a
     /// blend of two faces' and its colour the brighter face's (180 keeps
     /// every point).
