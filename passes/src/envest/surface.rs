@@ -62,10 +62,11 @@ pub const SURFACE_HALF_WIDTH: f64 = 2.0;
 
 /// How far either side of a point, in [`trained_surface_scale`]s, the
 /// central differences reach that give its normal under
-/// [`SurfaceTest::Weight`]. One node spacing reads the trainer's
-/// node-to-node noise: on DOG trained at 128 nodes the head's normals
-/// leaned 0.09 down on average, and two spacings took the estimate's
-/// error from 29.8 % to 24.6 % over four seeds (and from 21.8 % to 17.4 %
+/// [`SurfaceTest::Weight`]. A trained surface rises over several nodes
+/// and carries the trainer's node-to-node noise: one spacing reads a node
+/// pair's noise against a small part of the rise, two read twice the rise
+/// against the same noise. On DOG trained at 128 nodes two spacings took
+/// the estimate's error from 29.8 % to 24.6 % over four seeds (and from 21.8 % to 17.4 %
 /// with a [`MIN_SURFACE_SHARE`] of 0.65; three spacings 23.6 %;
 /// docs/fidelity.md, "Twenty-fourth pass"). A bake's surfaces are sharp,
 /// so the gradient test keeps one spacing.
