@@ -72,15 +72,21 @@ pub const SURFACE_HALF_WIDTH: f64 = 2.0;
 /// so the gradient test keeps one spacing.
 pub const NORMAL_REACH: f64 = 2.0;
 
-/// The unit normal −∇σ/|∇σ| at `x` under `test`: central differences one
-/// node spacing either side for [`SurfaceTest::Gradient`], [`NORMAL_REACH`]
-/// scales for [`SurfaceTest::Weight`].
-pub fn surface_normal(field: &GridField, x: DVec3, test: SurfaceTest) -> DVec3 {
+/// ∇σ at `x` as `test` reads it: central differences one node spacing
+/// either side for [`SurfaceTest::Gradient`] (whose steepness test reads
+/// its length), [`NORMAL_REACH`] scales for [`SurfaceTest::Weight`].
+fn surface_gradient(field: &GridField, x: DVec3, test: SurfaceTest) -> DVec3 {
     let step = match test {
         SurfaceTest::Gradient => field.spacing().min_element(),
         SurfaceTest::Weight => NORMAL_REACH * trained_surface_scale(field),
     };
-    -field.density_gradient_over(x, step).normalize_or_zero()
+    field.density_gradient_over(x, step)
+}
+
+/// The unit normal −∇σ/|∇σ| at `x` under `test`, ∇σ as
+/// [`surface_gradient`] reads it.
+pub fn surface_normal(field: &GridField, x: DVec3, test: SurfaceTest) -> DVec3 {
+    -surface_gradient(field, x, test).normalize_or_zero()
 }
 
 /// Smallest share of a pixel's opacity within [`SURFACE_HALF_WIDTH`]
@@ -252,8 +258,8 @@ pub fn view_candidates(
         let depth = *d as f64 / opacity;
         let x = ray.at(depth);
         let radiance = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) / opacity;
-        let g = field.density_gradient(x);
-        let normal = surface_normal(field, x, test);
+        let g = surface_gradient(field, x, test);
+        let normal = -g.normalize_or_zero();
         let surface = normal.dot(ray.dir) < 0.0
             && radiance.is_finite()
             && match test {
