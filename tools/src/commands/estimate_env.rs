@@ -98,7 +98,7 @@ pub struct EstimateEnvArgs {
     #[arg(long, default_value_t = EnvEstimateKnobs::default().emitter_ratio)]
     pub emitter_ratio: f64,
     /// How surface points are told from points inside a medium: `gradient`
-    /// (the density rises steeply; for baked fields) or `weight` (half the
+    /// (the density rises steeply; for baked fields) or `weight` (65 % of the
     /// pixel's opacity within two node spacings of its depth, at least
     /// 1/64 of the field's extent; for trained fields, whose surfaces are
     /// as opaque with a hundredth of a bake's gradient, and whose normals
