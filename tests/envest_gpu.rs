@@ -5,7 +5,7 @@
 mod common;
 
 use inlay_passes::envest::near_field_reference::{irradiance_reference, opacity_map_reference};
-use inlay_passes::envest::{sample_surface, EnvEstimateKnobs, NearFieldTracer};
+use inlay_passes::envest::{sample_surface, EnvEstimateKnobs, NearFieldTracer, SurfaceTest};
 use inlay_passes::field::GpuGridField;
 
 /// PLANTS baked small, on the GPU.
@@ -74,7 +74,17 @@ fn near_field_kernels_match_the_cpu_mirror() {
     let (rays, side) = (256, 8);
     let near = NearFieldTracer::new(ctx, lib, scene.march)
         .unwrap()
-        .trace(ctx, field, gpu, &surface.points, rays, side, 7, &|_, _| {})
+        .trace(
+            ctx,
+            field,
+            gpu,
+            &surface.points,
+            knobs.surface_test,
+            rays,
+            side,
+            7,
+            &|_, _| {},
+        )
         .unwrap();
     common::assert_no_validation_errors(ctx);
     // The same rays in f32 and f64: they part only where a ray grazes the
@@ -83,7 +93,15 @@ fn near_field_kernels_match_the_cpu_mirror() {
     let mut worst_e: f64 = 0.0;
     let mut opacity_off = 0;
     for (i, p) in surface.points.iter().enumerate() {
-        let (e, covered) = irradiance_reference(field, &scene.march, p, i as u32, rays, 7);
+        let (e, covered) = irradiance_reference(
+            field,
+            &scene.march,
+            p,
+            knobs.surface_test,
+            i as u32,
+            rays,
+            7,
+        );
         let scale = e.max_element().max(1e-3);
         worst_e = worst_e.max((near.irradiance[i] - e).abs().max_element() / scale);
         assert!(
@@ -91,7 +109,7 @@ fn near_field_kernels_match_the_cpu_mirror() {
             "point {i}: Ô {} vs {covered}",
             near.covered[i]
         );
-        let map = opacity_map_reference(field, &scene.march, p, side);
+        let map = opacity_map_reference(field, &scene.march, p, knobs.surface_test, side);
         let texels = (side * side) as usize;
         for (t, o) in map.iter().enumerate() {
             if (near.opacity[i * texels + t] as f64 - o).abs() > 0.02 {
@@ -128,10 +146,28 @@ fn near_field_sums_many_rays_per_point() {
     let rays = 1 << 17;
     let near = NearFieldTracer::new(&ctx, &lib, scene.march)
         .unwrap()
-        .trace(&ctx, &field, &gpu, &[point], rays, 4, 3, &|_, _| {})
+        .trace(
+            &ctx,
+            &field,
+            &gpu,
+            &[point],
+            SurfaceTest::Gradient,
+            rays,
+            4,
+            3,
+            &|_, _| {},
+        )
         .unwrap();
     common::assert_no_validation_errors(&ctx);
-    let (e, covered) = irradiance_reference(&field, &scene.march, &point, 0, rays, 3);
+    let (e, covered) = irradiance_reference(
+        &field,
+        &scene.march,
+        &point,
+        SurfaceTest::Gradient,
+        0,
+        rays,
+        3,
+    );
     assert!(e.max_element() > 0.1, "the floor sees the lamp: {e}");
     let off = (near.irradiance[0] - e).abs().max_element() / e.max_element();
     assert!(off < 0.02, "E_nerf {} vs mirror {e}", near.irradiance[0]);

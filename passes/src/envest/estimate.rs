@@ -279,6 +279,7 @@ pub fn estimate_environment(
         field,
         &gpu,
         &surface.points,
+        knobs.surface_test,
         knobs.rays_per_point,
         knobs.opacity_map,
         knobs.seed,

@@ -13,7 +13,7 @@ use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
-use super::surface::SurfacePoint;
+use super::surface::{trained_surface_scale, SurfacePoint, SurfaceTest};
 use crate::field::{GpuGridField, GridField};
 use crate::march::MarchKnobs;
 use crate::probe::octahedral_bilinear;
@@ -41,7 +41,8 @@ inlay_engine::gpu_struct! {
 }
 
 /// A point's rays leave the surface point itself but start marching
-/// where they have risen this many node spacings above it: the expected
+/// where they have risen this many node spacings above it (on a trained
+/// field, this many [`trained_surface_scale`]s: [`ray_rise`]): the expected
 /// depth lies at the front of the density's smooth edge (about 1.5
 /// spacings wide in the bundled recipes), so rays marched from the point
 /// would see its own surface. Rising along each ray rather than lifting
@@ -93,10 +94,20 @@ impl NearField {
     }
 }
 
-/// How far above the surface a point's rays start marching (see
-/// [`SURFACE_OFFSET_SPACINGS`]).
-pub fn ray_rise(field: &GridField) -> f64 {
-    SURFACE_OFFSET_SPACINGS * field.spacing().min_element()
+/// How far above the surface a point's rays start marching:
+/// [`SURFACE_OFFSET_SPACINGS`] node spacings where surfaces are told by
+/// `test` = [`SurfaceTest::Gradient`] (bakes), as many
+/// [`trained_surface_scale`]s under [`SurfaceTest::Weight`]. A trained
+/// surface's blur is a length in the scene, not a count of nodes: on DOG
+/// trained at 256 nodes, rays risen two of its own spacings started
+/// within the blur, and rising two scales put the lobes near the bulb at
+/// its light (0.57× → 1.04×; docs/fidelity.md, "Twenty-fifth pass").
+pub fn ray_rise(field: &GridField, test: SurfaceTest) -> f64 {
+    let unit = match test {
+        SurfaceTest::Gradient => field.spacing().min_element(),
+        SurfaceTest::Weight => trained_surface_scale(field),
+    };
+    SURFACE_OFFSET_SPACINGS * unit
 }
 
 /// Where the ray from `p` along `dir` starts marching: `rise` above the
@@ -137,7 +148,8 @@ impl NearFieldTracer {
     }
 
     /// E_nerf and the opacity maps of `points` in `field` (already
-    /// uploaded as `gpu`), `rays` rays per point, maps `map_side` wide;
+    /// uploaded as `gpu`; their surfaces told by `test`, which sets the
+    /// rays' [`ray_rise`]), `rays` rays per point, maps `map_side` wide;
     /// `progress(done, total)` after each batch.
     #[allow(clippy::too_many_arguments)]
     pub fn trace(
@@ -146,13 +158,14 @@ impl NearFieldTracer {
         field: &GridField,
         gpu: &GpuGridField,
         points: &[SurfacePoint],
+        test: SurfaceTest,
         rays: u32,
         map_side: u32,
         seed: u64,
         progress: &dyn Fn(usize, usize),
     ) -> anyhow::Result<NearField> {
         let mut packed = Vec::with_capacity(points.len() * 8);
-        let rise = ray_rise(field) as f32;
+        let rise = ray_rise(field, test) as f32;
         for p in points {
             let o = p.position;
             packed.extend([o.x as f32, o.y as f32, o.z as f32, rise]);

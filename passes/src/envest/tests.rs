@@ -541,3 +541,30 @@ fn rays_start_on_their_line_through_the_point_risen_off_the_surface() {
         }
     }
 }
+
+/// Under the weight test (trained fields) the rays rise the same length
+/// of the scene on a 257-node grid as on a 129-node one, twice their own
+/// spacings; the gradient test (bakes) keeps node spacings.
+#[test]
+fn a_trained_surface_s_rays_rise_over_a_length_of_the_scene() {
+    use super::near_field::{ray_rise, SURFACE_OFFSET_SPACINGS};
+    use super::surface::SurfaceTest;
+    use crate::field::GridField;
+    let line = |nodes: u32| {
+        let res = glam::UVec3::new(nodes, 2, 2);
+        let bounds = Aabb::new(DVec3::ZERO, DVec3::new(1.0, 0.01, 0.01));
+        let count = (res.x * res.y * res.z) as usize;
+        GridField::new(res, bounds, vec![[0.5, 0.5, 0.5, 0.0]; count], 4)
+    };
+    let (coarse, fine) = (line(129), line(257));
+    let (h_coarse, h_fine) = (1.0 / 128.0, 1.0 / 256.0);
+    for (field, h) in [(&coarse, h_coarse), (&fine, h_fine)] {
+        let bake = ray_rise(field, SurfaceTest::Gradient);
+        assert!((bake - SURFACE_OFFSET_SPACINGS * h).abs() < 1e-12, "{bake}");
+        let trained = ray_rise(field, SurfaceTest::Weight);
+        assert!(
+            (trained - SURFACE_OFFSET_SPACINGS * h_coarse).abs() < 1e-12,
+            "{trained}"
+        );
+    }
+}
