@@ -13,7 +13,7 @@ use inlay_engine::graph::FrameGraph;
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
-use super::surface::{trained_surface_scale, SurfacePoint, SurfaceTest};
+use super::surface::{surface_unit, SurfacePoint, SurfaceTest};
 use crate::field::{GpuGridField, GridField};
 use crate::march::MarchKnobs;
 use crate::probe::octahedral_bilinear;
@@ -42,7 +42,8 @@ inlay_engine::gpu_struct! {
 
 /// A point's rays leave the surface point itself but start marching
 /// where they have risen this many node spacings above it (on a trained
-/// field, this many [`trained_surface_scale`]s: [`ray_rise`]): the expected
+/// field, this many [`super::surface::trained_surface_scale`]s:
+/// [`ray_rise`]): the expected
 /// depth lies at the front of the density's smooth edge (about 1.5
 /// spacings wide in the bundled recipes), so rays marched from the point
 /// would see its own surface. Rising along each ray rather than lifting
@@ -97,17 +98,14 @@ impl NearField {
 /// How far above the surface a point's rays start marching:
 /// [`SURFACE_OFFSET_SPACINGS`] node spacings where surfaces are told by
 /// `test` = [`SurfaceTest::Gradient`] (bakes), as many
-/// [`trained_surface_scale`]s under [`SurfaceTest::Weight`]. A trained
+/// [`super::surface::trained_surface_scale`]s under
+/// [`SurfaceTest::Weight`] ([`surface_unit`]). A trained
 /// surface's blur is a length in the scene, not a count of nodes: on DOG
 /// trained at 256 nodes, rays risen two of its own spacings started
 /// within the blur, and rising two scales put the lobes near the bulb at
 /// its light (0.57× → 1.04×; docs/fidelity.md, "Twenty-fifth pass").
 pub fn ray_rise(field: &GridField, test: SurfaceTest) -> f64 {
-    let unit = match test {
-        SurfaceTest::Gradient => field.spacing().min_element(),
-        SurfaceTest::Weight => trained_surface_scale(field),
-    };
-    SURFACE_OFFSET_SPACINGS * unit
+    SURFACE_OFFSET_SPACINGS * surface_unit(field, test)
 }
 
 /// Where the ray from `p` along `dir` starts marching: `rise` above the

@@ -72,19 +72,30 @@ pub const SURFACE_HALF_WIDTH: f64 = 2.0;
 /// so the gradient test keeps one spacing.
 pub const NORMAL_REACH: f64 = 2.0;
 
+/// The length in which `test` measures a surface's reaches: a node
+/// spacing for [`SurfaceTest::Gradient`] (a bake's surfaces are sharp),
+/// [`trained_surface_scale`] for [`SurfaceTest::Weight`].
+pub fn surface_unit(field: &GridField, test: SurfaceTest) -> f64 {
+    match test {
+        SurfaceTest::Gradient => field.spacing().min_element(),
+        SurfaceTest::Weight => trained_surface_scale(field),
+    }
+}
+
 /// ∇σ at `x` as `test` reads it: central differences one node spacing
 /// either side for [`SurfaceTest::Gradient`] (whose steepness test reads
 /// its length), [`NORMAL_REACH`] scales for [`SurfaceTest::Weight`].
 fn surface_gradient(field: &GridField, x: DVec3, test: SurfaceTest) -> DVec3 {
-    let step = match test {
-        SurfaceTest::Gradient => field.spacing().min_element(),
-        SurfaceTest::Weight => NORMAL_REACH * trained_surface_scale(field),
+    let reach = match test {
+        SurfaceTest::Gradient => 1.0,
+        SurfaceTest::Weight => NORMAL_REACH,
     };
-    field.density_gradient_over(x, step)
+    field.density_gradient_over(x, reach * surface_unit(field, test))
 }
 
-/// The unit normal −∇σ/|∇σ| at `x` under `test`, ∇σ as
-/// [`surface_gradient`] reads it.
+/// The unit normal −∇σ/|∇σ| at `x` under `test`, ∇σ by central
+/// differences [`NORMAL_REACH`] scales either side under the weight test,
+/// one node spacing under the gradient test.
 pub fn surface_normal(field: &GridField, x: DVec3, test: SurfaceTest) -> DVec3 {
     -surface_gradient(field, x, test).normalize_or_zero()
 }
