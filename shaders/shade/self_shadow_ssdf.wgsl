@@ -10,8 +10,8 @@
 
 @group(0) @binding(6) var<storage, read> fh_table: array<f32>;
 @group(0) @binding(7) var<storage, read> ssdf: SsdfObject;
-@group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
-@group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
+@group(0) @binding(8) var<storage, read> ssdf_rows: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> ssdf_coefs: array<vec4<f32>>;
 @group(0) @binding(13) var<storage, read> objects: array<ObjectRecord>;
 
 #include "shadow/fh.wgsl"

@@ -1,17 +1,25 @@
 // The object's SG shading pass (eq. 5) without self-shadows (Γ_k = 1).
 #include "shade/shade_body.wgsl"
 
-fn shading_attenuation(k: u32) -> f32 {
+fn shading_fitted_count() -> u32 {
+    return shading_light_count();
+}
+
+fn shading_direct_lobe(k: u32, g: Sg) -> Sg {
+    return g;
+}
+
+fn shading_direct_attenuation(k: u32) -> f32 {
+    return 1.0;
+}
+
+fn shading_fitted_attenuation(k: u32) -> f32 {
     return 1.0;
 }
 
 fn shading_prepare(x: vec3<f32>, n: vec3<f32>) {}
 
-fn shading_lobe(k: u32, g: Sg) -> Sg {
-    return g;
-}
-
-fn shading_diffuse_gain(k: u32) -> vec3<f32> {
+fn shading_diffuse_gain() -> vec3<f32> {
     return vec3<f32>(1.0);
 }
 

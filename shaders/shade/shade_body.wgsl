@@ -2,14 +2,11 @@
 // dispatch per object, shading the pixels holding that object with its
 // fitted lobes.
 // Output: the object's radiance I_v with coverage in alpha. The including
-// shader (shade/shade.wgsl, shade/shade_self_shadow.wgsl) defines the
-// entry point, calling shade_pixel, and the hooks
-//   shading_attenuation(k) -> f32 (Γ_k), shading_prepare(x, n) (called
-//   with the pixel's world-space surface point and normal before shading),
-//   shading_lobe(k, g) -> Sg (lobe k as this pixel sees it: g, or a
-//   local light's lobe from the pixel's point) and shading_diffuse_gain(k)
-//   -> vec3<f32> (a factor on lobe k's diffuse light, 1 but where
-//   shade/field_light.wgsl takes the field's light at the point).
+// shader (shade/shade.wgsl, shade/shade_self_shadow.wgsl,
+// shade/shade_self_shadow_direct.wgsl) defines the entry point, calling
+// shade_pixel, shading_prepare(x, n) (called with the pixel's world-space
+// surface point and normal before shading), and the hooks of
+// brdf/sg_shading.wgsl but the light and NDF lobes, which this file reads.
 // A dispatch covers the 8 × 8 tiles from pc.tile_origin on
 // (shade_dispatched_pixel): the tiles the object's bounding sphere can
 // cover, or the whole image; the image is cleared first (shade.wgsl
@@ -64,7 +61,7 @@ fn shading_light_count() -> u32 {
 }
 
 fn shading_light(k: u32) -> Sg {
-    return shading_lobe(k, sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]));
+    return sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
 }
 
 fn shading_ndf_count() -> u32 {

@@ -3,15 +3,23 @@
 #include "shade/shade_body.wgsl"
 #include "shade/self_shadow_ssdf.wgsl"
 
-fn shading_attenuation(k: u32) -> f32 {
-    return ssdf_attenuation(k);
+fn shading_fitted_count() -> u32 {
+    return shading_light_count();
 }
 
-fn shading_lobe(k: u32, g: Sg) -> Sg {
+fn shading_direct_lobe(k: u32, g: Sg) -> Sg {
     return g;
 }
 
-fn shading_diffuse_gain(k: u32) -> vec3<f32> {
+fn shading_direct_attenuation(k: u32) -> f32 {
+    return 1.0;
+}
+
+fn shading_fitted_attenuation(k: u32) -> f32 {
+    return ssdf_attenuation(k);
+}
+
+fn shading_diffuse_gain() -> vec3<f32> {
     return vec3<f32>(1.0);
 }
 

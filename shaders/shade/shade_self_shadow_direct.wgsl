@@ -44,7 +44,15 @@ fn first_local() -> u32 {
     return pc.light_count - min(pc.local_count, pc.light_count);
 }
 
-fn shading_lobe(k: u32, g: Sg) -> Sg {
+fn shading_fitted_count() -> u32 {
+    return pc.light_count - min(pc.direct_lobes, pc.light_count);
+}
+
+fn shading_fitted_attenuation(k: u32) -> f32 {
+    return ssdf_attenuation(k);
+}
+
+fn shading_direct_lobe(k: u32, g: Sg) -> Sg {
     if k < first_local() {
         return g;
     }
@@ -81,11 +89,8 @@ fn local_visibility(l: u32) -> f32 {
     return sum / f32(max(n, 1u));
 }
 
-fn shading_attenuation(k: u32) -> f32 {
-    let first = pc.light_count - min(pc.direct_lobes, pc.light_count);
-    if k < first {
-        return ssdf_attenuation(k);
-    }
+fn shading_direct_attenuation(k: u32) -> f32 {
+    let first = shading_fitted_count();
     if k >= first_local() {
         let l = k - first_local();
         if local_lights[2u * l + 1u].w == 0.0 {
@@ -97,19 +102,13 @@ fn shading_attenuation(k: u32) -> f32 {
     return direct_clear_fraction(lifted, k - first, pc.direct_rays, shade_normal, true);
 }
 
-var<private> field_gain: vec3<f32>;
-var<private> field_gain_ready: bool;
 var<private> field_pixel: vec2<u32>;
 
-fn shading_diffuse_gain(k: u32) -> vec3<f32> {
-    if pc.field_side == 0u || k >= pc.light_count - min(pc.direct_lobes, pc.light_count) {
+fn shading_diffuse_gain() -> vec3<f32> {
+    if pc.field_side == 0u {
         return vec3<f32>(1.0);
     }
-    if !field_gain_ready {
-        field_gain = textureLoad(field_gain_in, vec2<i32>(field_pixel), 0).rgb;
-        field_gain_ready = true;
-    }
-    return field_gain;
+    return textureLoad(field_gain_in, vec2<i32>(field_pixel), 0).rgb;
 }
 
 @compute @workgroup_size(8, 8, 1)

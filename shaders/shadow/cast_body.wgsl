@@ -67,8 +67,8 @@ var<immediate> pc: CastPush;
 @group(0) @binding(5) var<storage, read> light_lobes: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> fh_table: array<f32>;
 @group(0) @binding(7) var<storage, read> ssdf: SsdfObject;
-@group(0) @binding(8) var<storage, read> ssdf_rows: array<f32>;
-@group(0) @binding(9) var<storage, read> ssdf_coefs: array<f32>;
+@group(0) @binding(8) var<storage, read> ssdf_rows: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read> ssdf_coefs: array<vec4<f32>>;
 @group(0) @binding(10) var previous: texture_2d<f32>;
 @group(0) @binding(11) var out_shadow: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(17) var refined: texture_storage_2d<rgba32float, read_write>;
@@ -175,12 +175,10 @@ fn cast_bound(view: CastSphere, cone: ptr<function, CastCone>, g: Sg, e: vec3<f3
     return most;
 }
 
-// Lobe k as x sees it: a local light's from x itself (cast_local_lobe),
-// the others as the object's centre sees them.
-fn cast_seen_lobe(x: vec3<f32>, k: u32, first_local: u32) -> Sg {
-    if k >= first_local {
-        return cast_local_lobe(x, k - first_local);
-    }
+// Lobe k of the light as stored: as the object's centre sees it (a local
+// light's, the last pc.local_count lobes, is taken from each point
+// instead: cast_local_lobe).
+fn cast_stored_lobe(k: u32) -> Sg {
     return sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]);
 }
 
@@ -211,20 +209,31 @@ fn cast_first_direct() -> u32 {
     return pc.light_count - min(pc.direct_lobes, pc.light_count);
 }
 
+// The lobes are taken in three loops, the fitted, the direct and the
+// local lights', in the order of one loop over them all: on lavapipe the
+// mere presence of the direct lobes' rays and the local lights' march in
+// a loop over every lobe costs each lobe's turn (the shading pass lost 27
+// ms of 99 to it on DOG at 1280 × 720; docs/benchmarks.md, issue 26's
+// eighth pass).
 fn cast_first_bound(x: vec3<f32>, n: vec3<f32>, view: CastSphere, cone: ptr<function, CastCone>) -> CastFirstBound {
     let cosine = sg_clamped_cosine(n);
+    let first_direct = cast_first_direct();
     let first_local = cast_first_local();
     var b = CastFirstBound(vec3<f32>(0.0), vec3<f32>(0.0));
-    for (var k = 0u; k < pc.light_count; k++) {
-        let g = cast_seen_lobe(x, k, first_local);
-        let p = sg_product(g, cosine);
+    for (var k = 0u; k < first_local; k++) {
+        let g = cast_stored_lobe(k);
         let e = sg_diffuse_irradiance(g, n);
-        if k < first_local {
-            b.den += e;
-        }
-        let share = cast_share(view, p);
+        b.den += e;
+        let share = cast_share(view, sg_product(g, cosine));
         if share >= 0.0 {
-            b.most += cast_bound(view, cone, g, e, share, k < cast_first_direct());
+            b.most += cast_bound(view, cone, g, e, share, k < first_direct);
+        }
+    }
+    for (var k = first_local; k < pc.light_count; k++) {
+        let g = cast_local_lobe(x, k - first_local);
+        let share = cast_share(view, sg_product(g, cosine));
+        if share >= 0.0 {
+            b.most += cast_bound(view, cone, g, sg_diffuse_irradiance(g, n), share, false);
         }
     }
     return b;
@@ -258,7 +267,7 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
         for (var k = first_local; k < m; k++) {
             let a = cast_local_arrival(x, n, k - first_local);
             arrivals[k - first_local] = a;
-            den += sg_diffuse_irradiance(cast_seen_lobe(x, k, first_local), n) * a.x * a.y;
+            den += sg_diffuse_irradiance(cast_local_lobe(x, k - first_local), n) * a.x * a.y;
         }
         if cast_within_tolerance(most, max(den, floor)) {
             return vec3<f32>(1.0);
@@ -266,32 +275,35 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     }
     var blocked = vec3<f32>(0.0);
     var prepared = false;
-    for (var k = 0u; k < m; k++) {
-        let g = cast_seen_lobe(x, k, first_local);
+    for (var k = 0u; k < first_direct; k++) {
+        let g = cast_stored_lobe(k);
         let p = sg_product(g, cosine);
         let share = cast_share(view, p);
-        let e = sg_diffuse_irradiance(g, n);
-        if k >= first_local {
-            if share >= 0.0 {
-                let a = arrivals[k - first_local];
-                blocked += e * a.x * (a.y - cast_local_clear(x, n, k - first_local));
-            }
-            continue;
-        }
         if share < 0.0 {
             continue;
         }
-        let bound = cast_bound(view, &cone, g, e, share, k < first_direct);
-        if k >= first_direct {
-            blocked += e * (1.0 - cast_direct_visibility(x, k - first_direct, pc.direct_rays));
-        } else {
-            if !prepared {
-                ssdf_prepare(ssdf_to_object_point(x));
-                prepared = true;
-            }
-            let q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
-            blocked += min(e * (1.0 - q), bound);
+        let e = sg_diffuse_irradiance(g, n);
+        if !prepared {
+            ssdf_prepare(ssdf_to_object_point(x));
+            prepared = true;
         }
+        let q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
+        blocked += min(e * (1.0 - q), cast_bound(view, &cone, g, e, share, true));
+    }
+    for (var k = first_direct; k < first_local; k++) {
+        let g = cast_stored_lobe(k);
+        if cast_share(view, sg_product(g, cosine)) < 0.0 {
+            continue;
+        }
+        blocked += sg_diffuse_irradiance(g, n) * (1.0 - cast_direct_visibility(x, k - first_direct, pc.direct_rays));
+    }
+    for (var k = first_local; k < m; k++) {
+        let g = cast_local_lobe(x, k - first_local);
+        if cast_share(view, sg_product(g, cosine)) < 0.0 {
+            continue;
+        }
+        let a = arrivals[k - first_local];
+        blocked += sg_diffuse_irradiance(g, n) * a.x * (a.y - cast_local_clear(x, n, k - first_local));
     }
     let total = max(den, floor);
     if max(blocked.x, max(blocked.y, blocked.z)) > 0.0 {

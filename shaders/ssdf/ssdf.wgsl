@@ -5,9 +5,12 @@
 // bilinearly and, outside, applies the mode: 0 clamp, 1 infinity (π),
 // 2 correct (turn towards the centre and shrink by the angular radii).
 // Needs: read-only storage buffers `ssdf: SsdfObject`, `ssdf_rows` (per
-// texel: mean, k basis values) and `ssdf_coefs` (per node: k values), both
-// array<f32>, and the frame's `objects: array<ObjectRecord>` (the object's
-// pose, record `ssdf.object`); define SSDF_MAX_COMPONENTS (u32). The block is storage, not
+// texel: mean, k basis values) and `ssdf_coefs` (per node: 1, k values),
+// both array<vec4<f32>> in rows of ssdf_row_vec4s() vec4s zero-padded
+// (passes/src/shadow/gpu.rs `gpu_rows`: a texel's value is the dot product
+// of its row with the blended coefficients, read a vec4 at a time), and
+// the frame's `objects: array<ObjectRecord>` (the object's pose, record
+// `ssdf.object`); define SSDF_MAX_ROW_VEC4S (u32). The block is storage, not
 // uniform, on purpose: Mesa 22.3's lavapipe recompiles (and leaks) a shader
 // at every bind when branches and loop bounds depend on uniform values
 // alone and inlining them halves the shader — this one did, ~1.2 MB and a
@@ -29,7 +32,8 @@ struct SsdfObject {
     object: u32,
 }
 
-var<private> ssdf_coef: array<f32, SSDF_MAX_COMPONENTS>;
+// The blended coefficients (1, c_1, …, c_k, 0, …).
+var<private> ssdf_coef: array<vec4<f32>, SSDF_MAX_ROW_VEC4S>;
 // 0 inside, 1 outside (nearest node), 2 outside in infinity mode.
 var<private> ssdf_state: u32;
 var<private> ssdf_x: vec3<f32>;
@@ -71,14 +75,20 @@ fn ssdf_node_index(n: vec3<u32>) -> u32 {
     return n.x + s * (n.y + s * n.z);
 }
 
+// vec4s a row of `ssdf_rows` and of `ssdf_coefs` holds (gpu.rs
+// row_vec4s: the k + 1 values padded to a whole vec4).
+fn ssdf_row_vec4s() -> u32 {
+    return (ssdf.dims.z + 4u) / 4u;
+}
+
 // Fills the coefficients for object-space point x.
 fn ssdf_prepare(x: vec3<f32>) {
-    let k = ssdf.dims.z;
+    let m = ssdf_row_vec4s();
     let top = f32(ssdf.dims.x - 1u);
     let l = (x - ssdf.grid.xyz + vec3<f32>(1.5 * ssdf.grid.w)) / ssdf_spacing();
     ssdf_x = x;
-    for (var c = 0u; c < k; c++) {
-        ssdf_coef[c] = 0.0;
+    for (var j = 0u; j < m; j++) {
+        ssdf_coef[j] = vec4<f32>(0.0);
     }
     if all(l >= vec3<f32>(0.0)) && all(l <= vec3<f32>(top)) {
         ssdf_state = 0u;
@@ -90,10 +100,12 @@ fn ssdf_prepare(x: vec3<f32>) {
             let w3 = select(vec3<f32>(1.0) - f, f, o == vec3<u32>(1u));
             let w = w3.x * w3.y * w3.z;
             let node = ssdf_node_index(b + o);
-            for (var c = 0u; c < k; c++) {
-                ssdf_coef[c] += w * ssdf_coefs[node * k + c];
+            for (var j = 0u; j < m; j++) {
+                ssdf_coef[j] += w * ssdf_coefs[node * m + j];
             }
         }
+        // The mean's weight: the corners' weights sum to 1 up to rounding.
+        ssdf_coef[0].x = 1.0;
         return;
     }
     if ssdf.dims.w == 1u {
@@ -111,8 +123,8 @@ fn ssdf_prepare(x: vec3<f32>) {
     ssdf_cb = (o - xb) / db;
     ssdf_shrink = asin(min(r / df, 1.0)) / asin(min(r / db, 1.0));
     let node = ssdf_node_index(n);
-    for (var c = 0u; c < k; c++) {
-        ssdf_coef[c] = ssdf_coefs[node * k + c];
+    for (var j = 0u; j < m; j++) {
+        ssdf_coef[j] = ssdf_coefs[node * m + j];
     }
 }
 
@@ -120,16 +132,6 @@ fn ssdf_prepare(x: vec3<f32>) {
 fn ssdf_wrap(t: vec2<i32>, n: i32) -> u32 {
     let w = oct_wrap(t, n);
     return u32(w.y * n + w.x);
-}
-
-fn ssdf_texel_value(texel: u32) -> f32 {
-    let k = ssdf.dims.z;
-    let base = texel * (k + 1u);
-    var s = ssdf_rows[base];
-    for (var c = 0u; c < k; c++) {
-        s += ssdf_coef[c] * ssdf_rows[base + 1u + c];
-    }
-    return s;
 }
 
 // Octahedral map coordinates in [0, 1]² of unit d (probe::octahedral_uv).
@@ -148,17 +150,26 @@ fn ssdf_octahedral_uv(d: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(0.5 * (a + 1.0), 0.5 * (b + 1.0));
 }
 
+// The map's value along d, bilinear over its four nearest texels: their
+// rows blended first, then one dot product with the coefficients.
 fn ssdf_direction_value(d: vec3<f32>) -> f32 {
     let n = i32(ssdf.dims.y);
+    let m = ssdf_row_vec4s();
     let p = ssdf_octahedral_uv(d) * f32(n) - vec2<f32>(0.5);
     let b = floor(p);
     let f = p - b;
     let t = vec2<i32>(b);
-    let v00 = ssdf_texel_value(ssdf_wrap(t, n));
-    let v10 = ssdf_texel_value(ssdf_wrap(t + vec2<i32>(1, 0), n));
-    let v01 = ssdf_texel_value(ssdf_wrap(t + vec2<i32>(0, 1), n));
-    let v11 = ssdf_texel_value(ssdf_wrap(t + vec2<i32>(1, 1), n));
-    return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
+    let r00 = ssdf_wrap(t, n) * m;
+    let r10 = ssdf_wrap(t + vec2<i32>(1, 0), n) * m;
+    let r01 = ssdf_wrap(t + vec2<i32>(0, 1), n) * m;
+    let r11 = ssdf_wrap(t + vec2<i32>(1, 1), n) * m;
+    let w = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+    var s = 0.0;
+    for (var j = 0u; j < m; j++) {
+        let row = w.x * ssdf_rows[r00 + j] + w.y * ssdf_rows[r10 + j] + w.z * ssdf_rows[r01 + j] + w.w * ssdf_rows[r11 + j];
+        s += dot(ssdf_coef[j], row);
+    }
+    return s;
 }
 
 // S along unit object-space direction d from the prepared point.

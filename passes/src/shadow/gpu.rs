@@ -40,11 +40,43 @@ pub fn shadow_defines() -> Vec<Define> {
         Define::U32("FH_ROWS", FH_ROWS),
         Define::F32("FH_SHARPNESS_MIN", FH_SHARPNESS_RANGE.0 as f32),
         Define::F32("FH_SHARPNESS_MAX", FH_SHARPNESS_RANGE.1 as f32),
-        Define::U32("SSDF_MAX_COMPONENTS", MAX_SSDF_COMPONENTS),
+        Define::U32("SSDF_MAX_ROW_VEC4S", row_vec4s(MAX_SSDF_COMPONENTS)),
         Define::U32("MAX_LOCAL_LIGHTS", crate::lighting::local::MAX_LOCAL_LIGHTS),
         Define::U32("CONE_POINTS", super::CONE_POINTS as u32),
         Define::F32("CONE_RESOLUTION", super::CONE_RESOLUTION as f32),
     ]
+}
+
+/// vec4s a row of the GPU's SSDF data holds for `components` PCA
+/// components: the mean (or a 1) and the k values, zero-padded to whole
+/// vec4s (`ssdf_row_vec4s` in `shaders/ssdf/ssdf.wgsl`).
+pub fn row_vec4s(components: u32) -> u32 {
+    (components + 4) / 4
+}
+
+/// `field`'s texel rows and node coefficients as the GPU reads them: each
+/// texel's (mean, basis values) and each node's (1, coefficients) in
+/// [`row_vec4s`] vec4s, zero-padded, so that a texel's value is the dot
+/// product of its row with a node's (or a blend of nodes') and the shader
+/// reads a vec4 at a time (DOG's shading read its SSDF in 36 ms of 99 at
+/// 1280 × 720 one float at a time; docs/benchmarks.md, issue 26's eighth
+/// pass).
+pub fn gpu_rows(field: &SsdfField) -> (Vec<f32>, Vec<f32>) {
+    let k = field.components as usize;
+    let stride = 4 * row_vec4s(field.components) as usize;
+    let pad = |rows: &mut Vec<f32>| rows.resize(rows.len().next_multiple_of(stride), 0.0);
+    let mut texels = Vec::with_capacity(field.texels() * stride);
+    for row in field.texel_rows.chunks_exact(k + 1) {
+        texels.extend_from_slice(row);
+        pad(&mut texels);
+    }
+    let mut nodes = Vec::with_capacity(field.grid.count() * stride);
+    for coefficients in field.coefficients.chunks_exact(k) {
+        nodes.push(1.0);
+        nodes.extend_from_slice(coefficients);
+        pad(&mut nodes);
+    }
+    (texels, nodes)
 }
 
 fn storage(ctx: &Arc<Context>, name: &str, values: &[f32]) -> anyhow::Result<Arc<Buffer>> {
@@ -133,9 +165,10 @@ impl GpuSsdf {
             bytes >> 20,
             limit >> 20
         );
+        let (rows, coefs) = gpu_rows(&field);
         Ok(Self {
-            rows: storage(ctx, "ssdf rows", &field.texel_rows)?,
-            coefs: storage(ctx, "ssdf coefficients", &field.coefficients)?,
+            rows: storage(ctx, "ssdf rows", &rows)?,
+            coefs: storage(ctx, "ssdf coefficients", &coefs)?,
             bvh_nodes: storage(ctx, "shadow bvh nodes", &nodes)?,
             bvh_triangles: storage(ctx, "shadow bvh triangles", &triangles)?,
             reflectance: super::ObjectReflectance::measure(mesh),
@@ -181,5 +214,60 @@ pub fn object_block(
         reflectance: object.of(placed).extend(object.fill).as_vec4().to_array(),
         object: record,
         _pad: [0; 3],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::{gpu_rows, row_vec4s};
+    use crate::ssdf::field::SsdfField;
+    use crate::ssdf::grid::SsdfGrid;
+
+    /// Every texel's value at every node, read as the shader reads the
+    /// padded rows (one dot product of whole vec4s), equals the field's own,
+    /// for component counts below, at and past a vec4's width.
+    #[test]
+    fn padded_rows_give_the_fields_values() {
+        for k in [1u32, 3, 4, 7, 16] {
+            let grid = SsdfGrid {
+                centre: DVec3::ZERO,
+                radius: 1.0,
+                nodes: 3,
+            };
+            let directions = 4;
+            let texels = (directions * directions) as usize;
+            let value = |i: usize| (i as f32 * 0.61).sin() * 1.7;
+            let field = SsdfField {
+                grid,
+                directions,
+                components: k,
+                texel_rows: (0..texels * (k as usize + 1)).map(value).collect(),
+                coefficients: (0..grid.count() * k as usize)
+                    .map(|i| value(i + 1000))
+                    .collect(),
+                object: 0,
+            };
+            let (rows, nodes) = gpu_rows(&field);
+            let stride = 4 * row_vec4s(k) as usize;
+            assert_eq!(rows.len(), texels * stride);
+            assert_eq!(nodes.len(), grid.count() * stride);
+            for n in 0..grid.count() {
+                for t in 0..texels {
+                    let node = &nodes[n * stride..(n + 1) * stride];
+                    let row = &rows[t * stride..(t + 1) * stride];
+                    let gpu: f64 = node
+                        .iter()
+                        .zip(row)
+                        .map(|(a, b)| *a as f64 * *b as f64)
+                        .sum();
+                    assert!(
+                        (gpu - field.node_value(n, t)).abs() < 1e-12,
+                        "k {k}, node {n}, texel {t}"
+                    );
+                }
+            }
+        }
     }
 }
