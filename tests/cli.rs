@@ -218,11 +218,18 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "256",
         "--hold-out",
         "1",
+        "--scene",
+        scene,
     ]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
     assert!(
         t.contains("held-out frame 1: PSNR") && field.is_file(),
+        "{t}"
+    );
+    // Its geometry scored against the recipe the views show.
+    assert!(
+        t.contains("held-out frame 1: geometry against") && t.contains("node spacings"),
         "{t}"
     );
     let trained = inlay_passes::field::load_field(&field).unwrap();
@@ -299,6 +306,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
         ("--prune", "nan", "--prune: NaN must be non-negative"),
         ("--out", "x.exr", ".inlayfield"),
+        (
+            "--scene",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cups.toml"),
+            "are not the dataset's",
+        ),
     ] {
         let mut args = vec![
             "train",

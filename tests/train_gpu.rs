@@ -368,17 +368,19 @@ fn train_small(
     dataset: &inlay_passes::dataset::Dataset,
     learn_exposure: bool,
 ) -> inlay_passes::train::Trained {
-    train_small_with(ctx, lib, dataset, learn_exposure, (24, false))
+    let tv_density = inlay_passes::train::TrainKnobs::default().tv_density;
+    train_small_with(ctx, lib, dataset, learn_exposure, (24, false), tv_density)
 }
 
 /// [`train_small`] at `resolution` nodes, its second stage trained
-/// sparsely or not.
+/// sparsely or not, with total variation `tv_density` on density.
 fn train_small_with(
     ctx: &std::sync::Arc<inlay_engine::Context>,
     lib: &inlay_engine::shader::ShaderLibrary,
     dataset: &inlay_passes::dataset::Dataset,
     learn_exposure: bool,
     (resolution, sparse): (u32, bool),
+    tv_density: f64,
 ) -> inlay_passes::train::Trained {
     use inlay_passes::train::{train, TrainKnobs};
     let knobs = TrainKnobs {
@@ -389,6 +391,7 @@ fn train_small_with(
         samples_per_ray: 128,
         learn_exposure,
         sparse,
+        tv_density,
         ..TrainKnobs::default()
     };
     let control = inlay_passes::train::TrainControl::default();
@@ -462,7 +465,8 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
     // surfaces the first made visible (measured: 17 of 18 bricks; more
     // drop on larger grids, docs/benchmarks.md): the held-out views within
     // 0.3 dB of the dense run's (measured: 0.02 dB better).
-    let sparse = train_small_with(&ctx, &lib, &dataset, false, (24, true));
+    let tv_density = inlay_passes::train::TrainKnobs::default().tv_density;
+    let sparse = train_small_with(&ctx, &lib, &dataset, false, (24, true), tv_density);
     common::assert_no_validation_errors(&ctx);
     let (kept, all) = sparse.bricks.unwrap();
     eprintln!("sparse: {kept} of {all} bricks");
@@ -557,8 +561,12 @@ fn exposure_gains_are_learnt_for_photographs_of_unknown_exposure() {
             *p = [p[0] * s.x as f32, p[1] * s.y as f32, p[2] * s.z as f32];
         }
     }
-    let learnt = train_small(&ctx, &lib, &dataset, true);
-    let equal = train_small(&ctx, &lib, &dataset, false);
+    // Without total variation on density (its default since issue 25's
+    // eighth pass): what this tests is the gains, and in these 600 steps
+    // of a 24-node grid it moved them (13 of 22 within 10 % of their
+    // median at 3e-3, 16 without).
+    let learnt = train_small_with(&ctx, &lib, &dataset, true, (24, false), 0.0);
+    let equal = train_small_with(&ctx, &lib, &dataset, false, (24, false), 0.0);
     common::assert_no_validation_errors(&ctx);
     // Frame 0 alone fixes the gains' common scale, and it is one frame of
     // 22: the field's scale drifts against it (all the gains by 10-20 %

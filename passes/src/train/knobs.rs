@@ -31,7 +31,11 @@ pub struct TrainKnobs {
     /// moves by 2 × this × its differences to its six neighbours (at most
     /// [`super::tv::MAX_TV_WEIGHT`]).
     pub tv_colour: f64,
-    /// The same for density.
+    /// The same for density. 3e-3 by default: DOG trained at 128 nodes
+    /// from 48 views of 160 × 120 left its surfaces painted on a haze 11–16
+    /// node spacings in front of the recipe's without it (held-out views
+    /// 24–30 dB), 2–4 with it (29–33 dB); 1e-2 and 3e-2 a little worse
+    /// (`docs/benchmarks.md`, issue 25's eighth pass).
     pub tv_density: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
@@ -75,7 +79,7 @@ impl Default for TrainKnobs {
             rate_decay: 0.1,
             epsilon: 4.0,
             tv_colour: 0.0,
-            tv_density: 0.0,
+            tv_density: 3e-3,
             distortion: 0.0,
             sh_degree: 0,
             learn_exposure: false,

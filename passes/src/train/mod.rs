@@ -6,6 +6,7 @@
 //! the gradient itself is checked by finite differences.
 
 pub mod adam;
+pub mod geometry;
 pub mod gpu;
 pub mod knobs;
 pub mod loss;
@@ -19,10 +20,11 @@ pub mod tv;
 pub mod visibility;
 
 pub use adam::{adam_step, AdamKnobs};
+pub use geometry::{geometry_score, GeometryScore};
 pub use gpu::{GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
 pub use trainer::{
-    resample, train, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
+    resample, train, view_march, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
 };

@@ -207,9 +207,8 @@ pub fn train(
     let bounds = control.resume.map_or(dataset.bounds, |f| f.bounds);
     let diag = bounds.diagonal();
     let march = MarchKnobs {
-        samples_per_ray: knobs.samples_per_ray,
-        termination: 1e-4,
         skip_empty: false,
+        ..view_march(knobs)
     };
     let final_res = control
         .resume
@@ -251,10 +250,7 @@ pub fn train(
     let mut rays_done = 0u64;
     let mut step = 0u32;
     let mut bricks = None;
-    let view_march = MarchKnobs {
-        skip_empty: true,
-        ..march
-    };
+    let view_march = view_march(knobs);
     'stages: for s in 0..stages {
         let target = stage_res(s);
         let sparse =
@@ -463,6 +459,16 @@ pub fn view_scores(rendered: &[[f32; 3]], truth: &[[f32; 3]], state: &[PixelStat
         psnr: -10.0 * mse.max(1e-12).log10(),
         relative_error: relative(diff),
         brightness: relative(ours),
+    }
+}
+
+/// The march a trained field's views are rendered and scored with: the
+/// training's samples along the diagonal, empty space skipped.
+pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
+    MarchKnobs {
+        samples_per_ray: knobs.samples_per_ray,
+        termination: 1e-4,
+        skip_empty: true,
     }
 }
 

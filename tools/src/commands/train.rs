@@ -115,6 +115,13 @@ pub struct TrainArgs {
     /// Seed of every random choice.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The recipe scene the dataset shows (one `render-views` rendered):
+    /// each held-out view's geometry is scored against its surfaces, the
+    /// field's expected depth against the first surface at each pixel, in
+    /// node spacings (a floor that floats or that the camera sees through
+    /// spoils occlusion, probes and shadows at any PSNR).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
 }
 
 /// Runs `inlay train`.
@@ -173,6 +180,36 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         ..LoadOptions::default()
     };
     let dataset = load_dataset(&args.dataset, &options)?;
+    let scene = match &args.scene {
+        Some(p) => {
+            let scene = inlay_passes::scene::load_scene(p)?;
+            let Some(recipe) = scene.recipe() else {
+                anyhow::bail!(
+                    "--scene {}: its field is a file, not a [recipe]: it has no surfaces to score \
+                     the geometry against",
+                    p.display()
+                );
+            };
+            // A dataset of another scene would be scored against surfaces
+            // it does not show: render-views writes the recipe's bounds.
+            let (r, d) = (recipe.bounds, dataset.bounds);
+            let tolerance = 1e-4 * r.diagonal();
+            anyhow::ensure!(
+                (r.min - d.min).abs().max_element() <= tolerance
+                    && (r.max - d.max).abs().max_element() <= tolerance,
+                "--scene {}: its recipe's bounds ({:.3?} to {:.3?}) are not the dataset's ({:.3?} \
+                 to {:.3?}): the geometry is scored on a dataset `inlay render-views` made of that \
+                 scene",
+                p.display(),
+                r.min.to_array(),
+                r.max.to_array(),
+                d.min.to_array(),
+                d.max.to_array()
+            );
+            Some(scene)
+        }
+        None => None,
+    };
     let b = dataset.bounds;
     eprintln!(
         "{}: {} frames ({} dialect); bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3} from {}",
@@ -265,6 +302,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             v.frame, v.psnr, v.relative_error, v.brightness
         );
     }
+    if let Some(scene) = &scene {
+        print_geometry(scene, &dataset, &trained, &knobs);
+    }
     let mut outputs = Outputs::new();
     outputs.bytes(&args.out, &field_bytes(f))?;
     if let (Some(path), false) = (&args.picture, trained.held_out.is_empty()) {
@@ -272,6 +312,38 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     }
     outputs.commit(Some(ctx))?;
     Ok(())
+}
+
+/// Prints each held-out view's geometry against `scene`'s recipe
+/// ([`inlay_passes::train::geometry_score`]).
+fn print_geometry(
+    scene: &inlay_passes::scene::Scene,
+    dataset: &inlay_passes::dataset::Dataset,
+    trained: &inlay_passes::train::Trained,
+    knobs: &TrainKnobs,
+) {
+    let Some(recipe) = scene.recipe() else {
+        return;
+    };
+    let tracer = inlay_passes::bake::PathTracer::new(recipe, &scene.environment, 0);
+    let surface = |ray: &inlay_passes::geometry::Ray, t0: f64, t1: f64| {
+        tracer.nearest_surface(ray, t0, t1).map(|(t, _)| t)
+    };
+    let march = inlay_passes::train::view_march(knobs);
+    for v in &trained.held_out {
+        let frame = &dataset.frames[v.frame as usize];
+        let g = inlay_passes::train::geometry_score(frame, &trained.field, &march, &surface);
+        println!(
+            "held-out frame {}: geometry against {}: median |depth error| {:.2} node spacings over {} pixels; \
+             seen through at {:.1} % of the surfaces' pixels, floating at {:.1} % of the others",
+            v.frame,
+            scene.path.display(),
+            g.median_error,
+            g.compared,
+            100.0 * g.see_through,
+            100.0 * g.floating
+        );
+    }
 }
 
 /// The held-out views one under another: photograph | field | |difference|.
