@@ -16,7 +16,8 @@
 // per colour channel, with its own normal n: the same rays in numerator
 // and denominator, so where the field sends what the lobes say the gain is
 // exactly 1 whatever the rays' count. Mirrors passes/src/shade/field_light.rs.
-// Needs: shade/shade_body.wgsl, shade/self_shadow_ssdf.wgsl, field/grid.wgsl,
+// Needs: shade/shade_body.wgsl, shade/self_shadow_ssdf.wgsl, the hook
+// shading_fitted_count() of brdf/sg_shading.wgsl, field/grid.wgsl,
 // march/volume_march.wgsl, lighting/local_light.wgsl, shadow/direct_rays.wgsl
 // (DIRECT_RAY_OFFSET), the binding `local_lights`.
 #include "common/fibonacci.wgsl"
@@ -53,10 +54,9 @@ fn field_light_tile(local: vec2<u32>) -> u32 {
 
 // The fitted lobes' radiance along d (the direct lobes at the end left out).
 fn field_light_fitted(d: vec3<f32>) -> vec3<f32> {
-    let fitted = pc.light_count - min(pc.direct_lobes, pc.light_count);
     var sum = vec3<f32>(0.0);
-    for (var k = 0u; k < fitted; k++) {
-        sum += sg_eval(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), d);
+    for (var k = 0u; k < shading_fitted_count(); k++) {
+        sum += sg_eval(shading_light(k), d);
     }
     return sum;
 }

@@ -325,6 +325,7 @@ fn print_geometry(
     let Some(recipe) = scene.recipe() else {
         return;
     };
+    // Its nearest_surface alone is used: no bounces.
     let tracer = inlay_passes::bake::PathTracer::new(recipe, &scene.environment, 0);
     let surface = |ray: &inlay_passes::geometry::Ray, t0: f64, t1: f64| {
         tracer.nearest_surface(ray, t0, t1).map(|(t, _)| t)
