@@ -1,7 +1,10 @@
 // One Adam step over every trained value (4 per node: r, g, b, σ, then the
 // view-dependent colour's coefficients), the gradient read and cleared; a
 // node's values kept non-negative (colour and density are physical), the
-// coefficients free. Mirrors passes/src/train/adam.rs adam_step.
+// coefficients free; a node's colour steps by the larger of `rate` and
+// `relative_rate` × its value once above `relative_floor` (an HDR
+// field's lamp is 10^4 × its walls).
+// Mirrors passes/src/train/adam.rs adam_step.
 
 struct AdamPush {
     count: u32,
@@ -13,8 +16,8 @@ struct AdamPush {
     correction1: f32,
     correction2: f32,
     base_values: u32,
-    pad0: u32,
-    pad1: u32,
+    relative_rate: f32,
+    relative_floor: f32,
     pad2: u32,
 }
 
@@ -42,7 +45,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     first[i] = m.x;
     second[i] = m.y;
     let base = i < pc.base_values;
-    let rate = select(pc.rate, pc.density_rate, base && (i & 3u) == 3u);
+    let colour_rate = select(pc.rate, max(pc.rate, pc.relative_rate * params[i] * f32(params[i] > pc.relative_floor)), base);
+    let rate = select(colour_rate, pc.density_rate, base && (i & 3u) == 3u);
     let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);
     params[i] = select(params[i] - step, max(params[i] - step, 0.0), base);
 }

@@ -1,12 +1,26 @@
 //! Adam over the trained values with a separate step size for density, each
 //! node's values kept non-negative, the view-dependent colour's
 //! coefficients free (`shaders/train/adam.wgsl` mirrors it).
+//!
+//! A colour's step is the larger of an absolute size and, above a level no
+//! surface reaches, a fraction of the colour itself: an HDR field
+//! spans radiance 10⁴ apart (a lamp of 140 in a room of 0.03), and at a
+//! step sized by the mean radiance alone a lamp's nodes would need ten
+//! thousand steps to reach its light. Below that level the steps stay
+//! absolute: larger steps on ordinary surfaces cost them accuracy and
+//! brighten them (measured in `docs/benchmarks.md`).
 
 /// Adam's knobs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AdamKnobs {
-    /// Step size of the colours.
+    /// Step size of the colours (absolute).
     pub rate: f64,
+    /// Step size of the colours above `relative_floor` as a fraction of
+    /// each: such a colour c steps by the larger of `rate` and this × c
+    /// (0: by `rate` alone).
+    pub relative_rate: f64,
+    /// The colour above which steps grow with the colour.
+    pub relative_floor: f64,
     /// Step size of the densities.
     pub density_rate: f64,
     /// First-moment decay.
@@ -41,10 +55,17 @@ pub fn adam_step(
         m[1] = b2 * m[1] + (1.0 - b2) * g * g;
         let base = i < base_values;
         let rate = if base && i % 4 == 3 {
-            knobs.density_rate
+            knobs.density_rate as f32
+        } else if base {
+            let relative = if params[i] > knobs.relative_floor as f32 {
+                knobs.relative_rate as f32 * params[i]
+            } else {
+                0.0
+            };
+            (knobs.rate as f32).max(relative)
         } else {
-            knobs.rate
-        } as f32;
+            knobs.rate as f32
+        };
         let step = rate * (m[0] / c1) / ((m[1] / c2).sqrt() + ADAM_EPSILON as f32);
         params[i] = if base {
             (params[i] - step).max(0.0)

@@ -101,10 +101,11 @@ inlay_engine::gpu_struct! {
         /// Values kept non-negative (the nodes'; 0 for a page of
         /// view-dependent colour coefficients).
         pub base_values: u32,
-        /// Padding.
-        pub pad0: u32,
-        /// Padding.
-        pub pad1: u32,
+        /// Colour step size as a fraction of each colour's value (the
+        /// nodes' colours; 0 for the pages and the gains).
+        pub relative_rate: f32,
+        /// The colour above which steps grow with the colour.
+        pub relative_floor: f32,
         /// Padding.
         pub pad2: u32,
     }
@@ -573,8 +574,8 @@ impl GpuTrainer {
                 correction1: (1.0 - knobs.beta1.powi(t)) as f32,
                 correction2: (1.0 - knobs.beta2.powi(t)) as f32,
                 base_values: 4 * self.node_count(),
-                pad0: 0,
-                pad1: 0,
+                relative_rate: knobs.relative_rate as f32,
+                relative_floor: knobs.relative_floor as f32,
                 pad2: 0,
             };
             let groups = (4 * self.node_count()).div_ceil(64);
@@ -589,6 +590,7 @@ impl GpuTrainer {
             // Each page of coefficients: free of sign, at the colour's rate.
             let page_step = AdamPush {
                 base_values: 0,
+                relative_rate: 0.0,
                 ..a
             };
             for (j, [values, grad, first, second]) in pages.trained.iter().enumerate() {
@@ -610,6 +612,7 @@ impl GpuTrainer {
                     rate,
                     density_rate: 0.0,
                     base_values: count,
+                    relative_rate: 0.0,
                     ..a
                 };
                 let mut pass = graph.compute_pass(TRAIN_GAINS);

@@ -19,7 +19,9 @@ pub struct TrainKnobs {
     pub batch: u32,
     /// The march's samples along the field's diagonal.
     pub samples_per_ray: u32,
-    /// Colour step size, as a fraction of the pixels' mean radiance.
+    /// Colour step size, as a fraction of the larger of the pixels' mean
+    /// radiance and the colour itself (an HDR lamp steps by a tenth of its
+    /// own light, not of the room's).
     pub rate: f64,
     /// Density step size, in units of 1 / the field's diagonal.
     pub density_rate: f64,

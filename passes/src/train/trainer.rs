@@ -302,6 +302,8 @@ pub fn train(
             gpu.gain_rate = knobs.learn_exposure.then_some((GAIN_RATE * decay) as f32);
             let adam = AdamKnobs {
                 rate: knobs.rate * scale * decay,
+                relative_rate: knobs.rate * decay,
+                relative_floor: RELATIVE_STEP_FLOOR * knobs.epsilon * scale,
                 density_rate: knobs.density_rate / diag * decay,
                 beta1: 0.9,
                 beta2: 0.99,
@@ -363,6 +365,14 @@ pub fn train(
         bricks,
     })
 }
+
+/// Colours more than this many × the loss's floor ε step by the colour
+/// rate's share of themselves (a tenth at the defaults;
+/// [`AdamKnobs::relative_floor`]): a lamp's, not a surface's.
+/// Every colour above 1 × ε stepping by ε's share of itself cost DOG's
+/// held-out views 0.3-0.6 dB and brightened them 3 %; a tenth of every
+/// colour, 4-5 dB on DOG and 2.5-6.5 dB on PLANTS (`docs/benchmarks.md`).
+pub const RELATIVE_STEP_FLOOR: f64 = 8.0;
 
 /// The exposure gains' Adam step size (the gains are near 1: a step of
 /// 1 % at most, decaying with the grid's).
