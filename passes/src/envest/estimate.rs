@@ -47,6 +47,10 @@ pub struct SurfaceSample {
     pub views_kept: u32,
     /// The score of every view tried, in order, and whether it was kept.
     pub scores: Vec<(QualityScore, bool)>,
+    /// Pixels whose ray passes through the field, over all kept views.
+    pub covered: usize,
+    /// Covered pixels left out as not on a surface, over all kept views.
+    pub not_surface: usize,
     /// Covered pixels left out as light sources, over all kept views.
     pub emitters: usize,
     /// Covered pixels left out as mixed, over all kept views.
@@ -131,6 +135,8 @@ pub fn sample_surface(
         views_tried: 0,
         views_kept: 0,
         scores: Vec::new(),
+        covered: 0,
+        not_surface: 0,
         emitters: 0,
         mixed: 0,
         creased: 0,
@@ -218,6 +224,8 @@ pub fn sample_surface(
     for (tried, candidates) in views {
         let mut rng = Pcg32::new(knobs.seed, 0x5E1E_C700_0000 | tried as u64);
         let drawn = draw_points(candidates, limit, knobs.pixels_per_view as usize, &mut rng);
+        out.covered += drawn.covered;
+        out.not_surface += drawn.not_surface;
         out.emitters += drawn.emitters;
         out.mixed += drawn.mixed;
         out.creased += drawn.creased;
