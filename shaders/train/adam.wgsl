@@ -45,7 +45,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     first[i] = m.x;
     second[i] = m.y;
     let base = i < pc.base_values;
-    let colour_rate = select(pc.rate, max(pc.rate, pc.relative_rate * params[i] * f32(params[i] > pc.relative_floor)), base);
+    let lamp_like = f32(params[i] > pc.relative_floor);
+    let colour_rate = select(pc.rate, max(pc.rate, pc.relative_rate * params[i] * lamp_like), base);
     let rate = select(colour_rate, pc.density_rate, base && (i & 3u) == 3u);
     let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);
     params[i] = select(params[i] - step, max(params[i] - step, 0.0), base);

@@ -19,9 +19,10 @@ pub struct TrainKnobs {
     pub batch: u32,
     /// The march's samples along the field's diagonal.
     pub samples_per_ray: u32,
-    /// Colour step size, as a fraction of the larger of the pixels' mean
-    /// radiance and the colour itself (an HDR lamp steps by a tenth of its
-    /// own light, not of the room's).
+    /// Colour step size, as a fraction of the pixels' mean radiance; a
+    /// colour above [`super::trainer::RELATIVE_STEP_FLOOR`] × the loss's
+    /// floor steps by this fraction of itself (a lamp's light, not the
+    /// room's).
     pub rate: f64,
     /// Density step size, in units of 1 / the field's diagonal.
     pub density_rate: f64,

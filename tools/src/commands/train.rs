@@ -47,7 +47,7 @@ pub struct TrainArgs {
     /// March samples along the field's diagonal.
     #[arg(long, default_value_t = TrainKnobs::default().samples_per_ray)]
     pub samples_per_ray: u32,
-    /// Colour step size (fraction of the larger of the mean radiance and the node's own colour).
+    /// Colour step size (fraction of the mean radiance; a colour above 8 × the loss's floor steps by this fraction of itself).
     #[arg(long, default_value_t = TrainKnobs::default().rate)]
     pub rate: f64,
     /// Density step size (per field diagonal).
