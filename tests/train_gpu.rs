@@ -311,13 +311,8 @@ fn gradient_and_adam_match(degree: u32, distortion: f64, scatter: GradientScatte
     common::assert_no_validation_errors(&ctx);
 }
 
-/// Views of CUPS path traced from a cap of 24 cameras (32 × 32, 8
-/// samples), as an instant-ngp dataset of EXR frames.
-fn cups_dataset() -> inlay_passes::dataset::Dataset {
-    recipe_dataset("cups.toml")
-}
-
-/// Views of bundled scene `name` as [`cups_dataset`] makes CUPS'.
+/// Views of bundled scene `name` path traced from a cap of 24 cameras
+/// (32 × 32, 8 samples), as an instant-ngp dataset of EXR frames.
 fn recipe_dataset(name: &str) -> inlay_passes::dataset::Dataset {
     use inlay_passes::bake::{render_reference, ReferenceOptions};
     use inlay_passes::camera::CameraFrame;
@@ -398,20 +393,38 @@ fn train_small_with(
     (resolution, sparse): (u32, bool),
     tv_density: f64,
 ) -> inlay_passes::train::Trained {
-    use inlay_passes::train::{train, TrainKnobs};
-    let knobs = TrainKnobs {
+    let knobs = inlay_passes::train::TrainKnobs {
         resolution,
+        learn_exposure,
+        sparse,
+        tv_density,
+        ..small_knobs()
+    };
+    train_with(ctx, lib, dataset, &knobs)
+}
+
+/// The small runs' knobs: two stages of 600 steps in all, 2048 rays a
+/// step, 128 samples along the diagonal, 24 nodes.
+fn small_knobs() -> inlay_passes::train::TrainKnobs {
+    inlay_passes::train::TrainKnobs {
+        resolution: 24,
         stages: 2,
         iterations: 600,
         batch: 2048,
         samples_per_ray: 128,
-        learn_exposure,
-        sparse,
-        tv_density,
-        ..TrainKnobs::default()
-    };
+        ..inlay_passes::train::TrainKnobs::default()
+    }
+}
+
+/// `knobs` trained on `dataset`, 2 views held out, black behind.
+fn train_with(
+    ctx: &std::sync::Arc<inlay_engine::Context>,
+    lib: &inlay_engine::shader::ShaderLibrary,
+    dataset: &inlay_passes::dataset::Dataset,
+    knobs: &inlay_passes::train::TrainKnobs,
+) -> inlay_passes::train::Trained {
     let control = inlay_passes::train::TrainControl::default();
-    train(ctx, lib, dataset, &knobs, 2, DVec3::ZERO, &control, &|_| {}).unwrap()
+    inlay_passes::train::train(ctx, lib, dataset, knobs, 2, DVec3::ZERO, &control, &|_| {}).unwrap()
 }
 
 /// End to end on lavapipe: views of CUPS path traced from a cap of
@@ -425,7 +438,7 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
     let lib = common::test_library();
     let scene = common::bundled_scene("cups.toml");
     let recipe = scene.recipe().unwrap();
-    let dataset = cups_dataset();
+    let dataset = recipe_dataset("cups.toml");
     let trained = train_small(&ctx, &lib, &dataset, false);
     common::assert_no_validation_errors(&ctx);
     let first = trained.history.first().unwrap().1;
@@ -518,31 +531,14 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
 /// first 0.37 with the floor out of reach).
 #[test]
 fn a_lamp_in_view_is_learnt_with_its_light() {
-    use inlay_passes::train::{train, TrainControl, TrainKnobs};
     let ctx = common::gpu();
     let lib = common::test_library();
     let dataset = recipe_dataset("plants.toml");
-    let knobs = TrainKnobs {
-        resolution: 24,
-        stages: 2,
-        iterations: 600,
-        batch: 2048,
-        samples_per_ray: 128,
-        rate: 3.0 * TrainKnobs::default().rate,
-        ..TrainKnobs::default()
+    let knobs = inlay_passes::train::TrainKnobs {
+        rate: 3.0 * inlay_passes::train::TrainKnobs::default().rate,
+        ..small_knobs()
     };
-    let control = TrainControl::default();
-    let trained = train(
-        &ctx,
-        &lib,
-        &dataset,
-        &knobs,
-        2,
-        DVec3::ZERO,
-        &control,
-        &|_| {},
-    )
-    .unwrap();
+    let trained = train_with(&ctx, &lib, &dataset, &knobs);
     common::assert_no_validation_errors(&ctx);
     let brightest = trained
         .field
@@ -626,7 +622,7 @@ fn exposure_gains_are_learnt_for_photographs_of_unknown_exposure() {
     use inlay_passes::train::trainer::score_view;
     let ctx = common::gpu();
     let lib = common::test_library();
-    let mut dataset = cups_dataset();
+    let mut dataset = recipe_dataset("cups.toml");
     let mut rng = Pcg32::new(3, 9);
     let factors: Vec<DVec3> = (0..dataset.frames.len())
         .map(|f| {

@@ -224,7 +224,7 @@ pub fn sample_surface(
     for (tried, candidates) in views {
         let mut rng = Pcg32::new(knobs.seed, 0x5E1E_C700_0000 | tried as u64);
         let drawn = draw_points(candidates, limit, knobs.pixels_per_view as usize, &mut rng);
-        out.covered += drawn.covered;
+        out.covered += drawn.covered_luminance.len();
         out.not_surface += drawn.not_surface;
         out.emitters += drawn.emitters;
         out.mixed += drawn.mixed;

@@ -194,10 +194,9 @@ pub struct SurfacePoint {
 pub struct ViewPoints {
     /// The points drawn (at most the number asked for).
     pub points: Vec<SurfacePoint>,
-    /// Pixels whose ray passes through the field.
-    pub covered: usize,
-    /// The luminance of each of those pixels' radiance (Ĉ/Ô): what the
-    /// light-source limit is judged against ([`emitter_limit`]).
+    /// The luminance of the radiance (Ĉ/Ô) of each pixel whose ray passes
+    /// through the field (Ô ≥ 1/2): what the light-source limit is judged
+    /// against ([`emitter_limit`]).
     pub covered_luminance: Vec<f32>,
     /// Covered pixels left out as light sources.
     pub emitters: usize,
@@ -266,7 +265,6 @@ pub fn view_candidates(
         if opacity < 0.5 {
             continue;
         }
-        out.covered += 1;
         let (px, py) = (i as u32 % view.width, i as u32 / view.width);
         let ray = frame.pixel_ray(px, py);
         let depth = *d as f64 / opacity;
@@ -386,7 +384,6 @@ mod tests {
                     view: index,
                 })
                 .collect(),
-            covered: luminances.len(),
             covered_luminance: luminances.iter().map(|&l| l as f32).collect(),
             ..Default::default()
         }
@@ -675,7 +672,6 @@ mod tests {
     fn a_light_among_few_candidates_is_still_a_light() {
         let mut view = view(0, &[30.0, 40.0, 50.0, 0.2]);
         view.covered_luminance = [0.2f32; 96].into_iter().chain([30.0, 40.0, 50.0]).collect();
-        view.covered = view.covered_luminance.len();
         let limit = emitter_limit([&view], 8.0);
         assert!((limit - 1.6).abs() < 1e-6, "{limit}");
         let drawn = draw_points(view, limit, 10, &mut Pcg32::new(1, 3));
