@@ -1,9 +1,9 @@
 // One Adam step over every trained value (4 per node: r, g, b, σ, then the
 // view-dependent colour's coefficients), the gradient read and cleared; a
-// node's values kept non-negative (colour and density are physical), the
-// coefficients free; a node's colour steps by the larger of `rate` and
-// `relative_rate` × its value once above `relative_floor` (an HDR
-// field's lamp is 10^4 × its walls).
+// node's colour kept non-negative, its density and the coefficients free
+// (a density is clamped after interpolation: density_at); a node's colour
+// steps by the larger of `rate` and `relative_rate` × its value once above
+// `relative_floor` (an HDR field's lamp is 10^4 × its walls).
 // Mirrors passes/src/train/adam.rs adam_step.
 
 struct AdamPush {
@@ -49,5 +49,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let colour_rate = select(pc.rate, max(pc.rate, pc.relative_rate * params[i] * lamp_like), base);
     let rate = select(colour_rate, pc.density_rate, base && (i & 3u) == 3u);
     let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);
-    params[i] = select(params[i] - step, max(params[i] - step, 0.0), base);
+    // A node's density is free (the clamp at zero is after interpolation:
+    // density_at); its colour is kept non-negative.
+    let colour = base && (i & 3u) != 3u;
+    params[i] = select(params[i] - step, max(params[i] - step, 0.0), colour);
 }

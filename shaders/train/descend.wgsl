@@ -1,6 +1,7 @@
-// A plain gradient step: value −= gradient, kept non-negative, the gradient
-// cleared (total variation's step after Adam's: its size is its weight, not
-// Adam's normalised step). Mirrors passes/src/train/tv.rs tv_step.
+// A plain gradient step: value −= gradient, a colour kept non-negative (a
+// density is free: density_at), the gradient cleared (total variation's
+// step after Adam's: its size is its weight, not Adam's normalised step).
+// Mirrors passes/src/train/tv.rs tv_step.
 
 struct DescendPush {
     count: u32,
@@ -19,6 +20,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if i >= pc.count {
         return;
     }
-    params[i] = max(params[i] - grad[i], 0.0);
+    let v = params[i] - grad[i];
+    // Colours kept non-negative; a density is free (density_at).
+    params[i] = select(max(v, 0.0), v, (i & 3u) == 3u);
     grad[i] = 0.0;
 }

@@ -80,6 +80,7 @@ fn field_node_index(i: vec3<u32>) -> u32 {
     return i.x + r.x * (i.y + r.y * i.z);
 }
 
+// The trilinear (r, g, b, σ) of the nodes, σ before the clamp at zero.
 fn sample_at(cell: TrilinearCell) -> vec4<f32> {
     var v = vec4<f32>(0.0);
     if !cell.inside {
@@ -139,7 +140,7 @@ fn train_ray(index: u32) {
             let b = min(a + pc.step, t1);
             let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
             let v = sample_at(cell);
-            let alpha = 1.0 - exp(-v.w * (b - a));
+            let alpha = 1.0 - exp(-max(v.w, 0.0) * (b - a));
             let w = transmittance * alpha;
             colour += w * seen_colour(unclamped_colour(cell, v.xyz, y));
             if distort {
@@ -193,11 +194,14 @@ fn train_ray(index: u32) {
         // Channels the clamp at zero holds get no colour gradient.
         let open = select(vec3<f32>(1.0), select(vec3<f32>(0.0), vec3<f32>(1.0), u > vec3<f32>(0.0)), count > 0u);
         let dt = b - a;
-        let alpha = 1.0 - exp(-v.w * dt);
+        let alpha = 1.0 - exp(-max(v.w, 0.0) * dt);
         let w = t_i * alpha;
         let t_next = t_i * (1.0 - alpha);
         so_far += w * c;
         let d_c = g * w * open;
+        // The clamp at zero after interpolation passes no gradient where
+        // it holds (density_at).
+        let open_sigma = select(0.0, 1.0, v.w > 0.0);
         var d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * pc.background);
         if distort {
             // e = ∂L_d/∂w of this sample, from the sums before and after it.
@@ -211,9 +215,14 @@ fn train_ray(index: u32) {
             w_before += w;
             wt_before += w * t;
         }
+        d_sigma *= open_sigma;
         // A sample with no weight (empty space: σ = 0) moves no colour:
         // its colour and coefficient adds would add zeros, one atomic each.
         let colour_moves = any(d_c != vec3<f32>(0.0));
+        if !colour_moves && d_sigma == 0.0 {
+            t_i = t_next;
+            continue;
+        }
         for (var k = 0u; k < 8u; k++) {
             let wk = trilinear_weight(cell.f, k);
             if wk == 0.0 {

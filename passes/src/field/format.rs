@@ -33,7 +33,10 @@
 //! limit); with view-dependent colour the node's r, g, b are its mean over
 //! directions and the further coefficients (finite, of magnitude within
 //! the radiance limit) weigh the real spherical harmonics of bands 1 and
-//! 2 (`super::sh`). σ is density per unit length (finite, ≥ 0). Node
+//! 2 (`super::sh`). σ is density per unit length (finite); a node's σ may
+//! be negative, the density at a point being the trilinear value clamped
+//! at zero (`super::density_at`: a trained surface crosses a cell where
+//! that value crosses zero). Node
 //! (0,0,0) lies at `min`, the last at `max`. Loading checks every field
 //! and names the first bad one. Saving writes version 2, sparse when a
 //! brick can be left out.
@@ -418,7 +421,10 @@ fn parse_table(
 fn check_node(path: &Path, i: UVec3, v: &[f32; 4]) -> Result<(), FieldFormatError> {
     for (c, name) in ["r", "g", "b", "density"].iter().enumerate() {
         let too_bright = c < 3 && v[c] as f64 > crate::scene::RADIANCE_LIMIT;
-        if !v[c].is_finite() || v[c] < 0.0 || too_bright {
+        // A density may be negative (clamped after interpolation:
+        // `super::density_at`); a colour may not.
+        let negative = c < 3 && v[c] < 0.0;
+        if !v[c].is_finite() || negative || too_bright {
             return Err(err(
                 path,
                 &format!("node ({}, {}, {}).{name}", i.x, i.y, i.z),
@@ -428,8 +434,10 @@ fn check_node(path: &Path, i: UVec3, v: &[f32; 4]) -> Result<(), FieldFormatErro
                         v[c],
                         crate::scene::RADIANCE_LIMIT
                     )
-                } else {
+                } else if c < 3 {
                     format!("{} is not a finite, non-negative number", v[c])
+                } else {
+                    format!("{} is not a finite number", v[c])
                 },
             ));
         }
@@ -718,7 +726,7 @@ mod tests {
                 {
                     let mut b = good.clone();
                     let at = HEADER_BYTES + 16 * 7 + 12;
-                    b[at..at + 4].copy_from_slice(&(-1.0f32).to_le_bytes());
+                    b[at..at + 4].copy_from_slice(&f32::NEG_INFINITY.to_le_bytes());
                     b
                 },
                 "node (1, 1, 1).density",

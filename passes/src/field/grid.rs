@@ -21,6 +21,11 @@ pub struct GridField {
     pub bounds: Aabb,
     /// Linear HDR colour and density per node, x fastest, then y, then z.
     /// With view-dependent colour the colour is the mean over directions.
+    /// A node's density may be negative: the density at a point is the
+    /// trilinear interpolation clamped at zero afterwards
+    /// ([`Self::density_at`]), so a node below zero moves where a surface
+    /// crosses its cell (a trained field's surfaces sharper than a node
+    /// spacing); a field of non-negative nodes reads as plain trilinear.
     pub nodes: Vec<[f32; 4]>,
     /// Degree of the view-dependent colour's spherical harmonics (0: the
     /// colour is the same in every direction).
@@ -178,13 +183,20 @@ impl GridField {
     }
 }
 
+/// The density of interpolated values `v`: their σ clamped at zero (the
+/// clamp after interpolation: [`GridField::nodes`]). Mirrored by
+/// `grid_sample` in `shaders/field/grid.wgsl`.
+pub fn density_at(v: [f64; 4]) -> f64 {
+    v[3].max(0.0)
+}
+
 impl RadianceField for GridField {
     fn bounds(&self) -> Aabb {
         self.bounds
     }
 
     fn density(&self, x: DVec3) -> f64 {
-        self.interpolate(x)[3]
+        density_at(self.interpolate(x))
     }
 
     fn colour(&self, x: DVec3, d: DVec3) -> DVec3 {
@@ -193,7 +205,7 @@ impl RadianceField for GridField {
 
     fn sample(&self, x: DVec3, d: DVec3) -> (f64, DVec3) {
         let v = self.interpolate(x);
-        (v[3], self.view_colour(v, x, d))
+        (density_at(v), self.view_colour(v, x, d))
     }
 
     fn empty_until(&self, origin: DVec3, dir: DVec3) -> Option<f64> {
@@ -235,5 +247,26 @@ mod tests {
         assert!((f.colour(x, DVec3::Z).y - 2.0 * (1.25 + 5.0 + 75.0)).abs() < 1e-12);
         assert_eq!(f.density(DVec3::new(2.5, 0.5, 0.5)), 0.0);
         assert_eq!(f.density(DVec3::new(2.0, 1.0, 1.0)), 112.0);
+    }
+
+    /// A node below zero next to one above puts the density's edge inside
+    /// the cell, where the interpolated value crosses zero; nodes at or
+    /// above zero read as plain trilinear.
+    #[test]
+    fn the_clamp_after_interpolation_puts_an_edge_inside_a_cell() {
+        let res = UVec3::new(2, 2, 2);
+        let bounds = Aabb::new(DVec3::ZERO, DVec3::ONE);
+        // σ = 30 at x = 0, −90 at x = 1: zero at x = 0.25.
+        let nodes = (0..8)
+            .map(|i| [0.1, 0.1, 0.1, if i & 1 == 0 { 30.0 } else { -90.0 }])
+            .collect();
+        let f = GridField::new(res, bounds, nodes, 1);
+        let at = |x: f64| f.density(DVec3::new(x, 0.5, 0.5));
+        assert!((at(0.1) - 18.0).abs() < 1e-9, "{}", at(0.1));
+        assert!(at(0.249) > 0.0 && at(0.251) == 0.0 && at(0.9) == 0.0);
+        assert_eq!(f.interpolate(DVec3::new(0.5, 0.5, 0.5))[3], -30.0);
+        let g = ramp();
+        let x = DVec3::new(0.3, 0.2, 0.7);
+        assert_eq!(g.density(x), g.interpolate(x)[3]);
     }
 }

@@ -26,7 +26,7 @@ pub use gpu_grid::{
     general_field_library, FieldIdentity, FieldLayout, GpuGridField, GridBindings, NodeStorage,
     SPARSE_DEFINE, VIEW_DEPENDENT_DEFINE,
 };
-pub use grid::GridField;
+pub use grid::{density_at, GridField};
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
 pub use perturb::{perturb, Perturbation};
 pub use sh::{sh_basis, sh_colour_unclamped, sh_extra_coefficients, MAX_SH_DEGREE};

@@ -105,7 +105,7 @@ pub fn perturb(field: &GridField, p: &Perturbation) -> GridField {
                 let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
                 let x = field.bounds.min + u * field.bounds.size();
                 let node = (u * (res - UVec3::ONE).as_dvec3()).round().as_uvec3();
-                (field.nodes[field.index(node.x, node.y, node.z)][3] == 0.0).then_some(x)
+                (field.nodes[field.index(node.x, node.y, node.z)][3] <= 0.0).then_some(x)
             });
             let Some(centre) = centre else { continue };
             let colour = field.nodes[occupied[rng.next_u32() as usize % occupied.len()]];

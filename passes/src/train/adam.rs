@@ -1,6 +1,7 @@
 //! Adam over the trained values with a separate step size for density, each
-//! node's values kept non-negative, the view-dependent colour's
-//! coefficients free (`shaders/train/adam.wgsl` mirrors it).
+//! node's colour kept non-negative, its density (clamped after
+//! interpolation: [`crate::field::density_at`]) and the view-dependent
+//! colour's coefficients free (`shaders/train/adam.wgsl` mirrors it).
 //!
 //! A colour's step is the larger of an absolute size and, above a level no
 //! surface reaches, a fraction of the colour itself: an HDR field
@@ -67,7 +68,7 @@ pub fn adam_step(
             knobs.rate as f32
         };
         let step = rate * (m[0] / c1) / ((m[1] / c2).sqrt() + ADAM_EPSILON as f32);
-        params[i] = if base {
+        params[i] = if base && i % 4 != 3 {
             (params[i] - step).max(0.0)
         } else {
             params[i] - step

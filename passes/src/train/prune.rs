@@ -57,6 +57,36 @@ pub fn training_rays(dataset: &Dataset, pool: &PixelPool) -> Vec<Ray> {
         .collect()
 }
 
+/// `field` with every negative density that no point's density depends on
+/// set to zero, and how many: a node below zero with no node above zero
+/// among its 26 neighbours (every cell it corners is clamped to zero
+/// throughout, [`crate::field::density_at`]). The trainer pushes empty
+/// space below zero; zeroed, it is left out of a sparse field's bricks.
+pub fn clear_inert_negatives(field: &GridField) -> (GridField, usize) {
+    let r = field.resolution;
+    let positive = |i: u32, j: u32, k: u32| field.nodes[field.index(i, j, k)][3] > 0.0;
+    let near_positive = |i: u32, j: u32, k: u32| {
+        let span = |c: u32, n: u32| c.saturating_sub(1)..=(c + 1).min(n - 1);
+        span(k, r.z).any(|c| span(j, r.y).any(|b| span(i, r.x).any(|a| positive(a, b, c))))
+    };
+    let mut nodes = field.nodes.clone();
+    let mut cleared = 0;
+    for k in 0..r.z {
+        for j in 0..r.y {
+            for i in 0..r.x {
+                let n = field.index(i, j, k);
+                if nodes[n][3] < 0.0 && !near_positive(i, j, k) {
+                    nodes[n][3] = 0.0;
+                    cleared += 1;
+                }
+            }
+        }
+    }
+    let out = GridField::new(r, field.bounds, nodes, DEFAULT_OCCUPANCY_BLOCK)
+        .with_sh(field.sh_degree, field.sh.clone());
+    (out, cleared)
+}
+
 /// `field` with the density of every node whose visibility is below
 /// `threshold` set to zero (occupancy rebuilt), and how many nodes that
 /// took density from.
@@ -148,6 +178,36 @@ mod tests {
                 a.colour,
                 b.colour
             );
+        }
+    }
+
+    /// A random field with negative densities: the negatives far from any
+    /// positive node are zeroed, the others kept, and the density at every
+    /// point read is unchanged.
+    #[test]
+    fn clearing_inert_negatives_changes_no_density() {
+        let res = UVec3::new(9, 8, 7);
+        let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::new(1.0, 0.9, 0.8));
+        let mut rng = crate::rng::Pcg32::new(4, 1);
+        let nodes: Vec<[f32; 4]> = (0..res.x * res.y * res.z)
+            .map(|_| {
+                let r = rng.next_f64();
+                // A fifth above zero: most negatives have no positive
+                // neighbour, some do.
+                let sigma = if r < 0.05 { 3.0 * r / 0.05 } else { -r };
+                [0.2, 0.3, 0.4, sigma as f32]
+            })
+            .collect();
+        let field = GridField::new(res, bounds, nodes, 2);
+        let (cleared, count) = clear_inert_negatives(&field);
+        let kept_negative = cleared.nodes.iter().filter(|n| n[3] < 0.0).count();
+        assert!(count > 0 && kept_negative > 0, "{count} {kept_negative}");
+        let mut rng = crate::rng::Pcg32::new(5, 1);
+        for _ in 0..20_000 {
+            let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            let x = bounds.min + u * bounds.size();
+            use crate::field::RadianceField;
+            assert_eq!(field.density(x), cleared.density(x), "{x}");
         }
     }
 }

@@ -139,7 +139,10 @@ pub fn render_ray_with_gradient(
             let u = sh_colour_unclamped(base, &field.interpolate_sh(x), ray.dir);
             DVec3::select(u.cmpgt(DVec3::ZERO), DVec3::ONE, DVec3::ZERO)
         };
-        let alpha = 1.0 - (-v[3] * dt).exp();
+        let sigma = crate::field::density_at(v);
+        // The clamp at zero passes no gradient where it holds.
+        let open_sigma = if v[3] > 0.0 { 1.0 } else { 0.0 };
+        let alpha = 1.0 - (-sigma * dt).exp();
         let w = t_i * alpha;
         let t_next = t_i * (1.0 - alpha);
         so_far += w * c;
@@ -150,7 +153,8 @@ pub fn render_ray_with_gradient(
         let e = lambda * (2.0 * spread + 2.0 / 3.0 * w * dt);
         e_so_far += w * e;
         let d_c = g * w * open;
-        let d_sigma = dt
+        let d_sigma = open_sigma
+            * dt
             * (g.dot(t_next * c - (colour - so_far) - transmittance * background) + t_next * e
                 - (2.0 * distortion_loss - e_so_far));
         w_before += w;
@@ -192,7 +196,8 @@ mod tests {
                     2.0 * rng.next_f64() as f32,
                     rng.next_f64() as f32,
                     5.0 * rng.next_f64() as f32,
-                    (3.0 * rng.next_f64() * rng.next_f64()) as f32,
+                    // Some below zero (the clamp after interpolation).
+                    (3.0 * rng.next_f64() * rng.next_f64() - 0.4) as f32,
                 ]
             })
             .collect();

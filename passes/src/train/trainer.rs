@@ -340,6 +340,9 @@ pub fn train(
         let visibility = node_visibility_gpu(&mut renderer, lib, &field, &rays, &view_march, Auto)?;
         (field, pruned) = super::prune::prune(&field, &visibility, knobs.prune);
     }
+    // Empty space below zero costs a sparse file its bricks; zeroing it
+    // changes no density.
+    (field, _) = super::prune::clear_inert_negatives(&field);
     let held_out = pool
         .held_out
         .iter()

@@ -70,13 +70,15 @@ pub fn tv_gradient(nodes: &[[f32; 4]], res: UVec3, colour: f64, density: f64) ->
 pub const MAX_TV_WEIGHT: f64 = 1.0 / 12.0;
 
 /// One total-variation step over `nodes`: each value minus the gradient of
-/// [`tv_loss`], kept non-negative.
+/// [`tv_loss`], the colours kept non-negative (a density may be negative:
+/// [`crate::field::density_at`]).
 pub fn tv_step(nodes: &mut [[f32; 4]], res: UVec3, colour: f64, density: f64) {
     let g = tv_gradient(nodes, res, colour, density);
     for (n, g) in nodes.iter_mut().zip(g) {
-        for c in 0..4 {
+        for c in 0..3 {
             n[c] = (n[c] - g[c] as f32).max(0.0);
         }
+        n[3] -= g[3] as f32;
     }
 }
 
