@@ -23,7 +23,7 @@ pub struct GridField {
     /// With view-dependent colour the colour is the mean over directions.
     /// A node's density may be negative: the density at a point is the
     /// trilinear interpolation clamped at zero afterwards
-    /// ([`Self::density_at`]), so a node below zero moves where a surface
+    /// ([`density_at`]), so a node below zero moves where a surface
     /// crosses its cell (a trained field's surfaces sharper than a node
     /// spacing); a field of non-negative nodes reads as plain trilinear.
     pub nodes: Vec<[f32; 4]>,
