@@ -317,8 +317,14 @@ fn field_files() {
             if f.nodes.len() != n {
                 return Err(format!("{} nodes for {n}", f.nodes.len()));
             }
-            if !f.nodes.iter().flatten().all(|v| v.is_finite() && *v >= 0.0) {
-                return Err("a loaded field holds a non-finite or negative value".into());
+            // A density may be negative (clamped after interpolation); a
+            // colour may not.
+            if !f
+                .nodes
+                .iter()
+                .all(|n| n.iter().all(|v| v.is_finite()) && n[..3].iter().all(|c| *c >= 0.0))
+            {
+                return Err("a loaded field holds a non-finite value or a negative colour".into());
             }
             if !f.bounds.is_valid() {
                 return Err("a loaded field has invalid bounds".into());
