@@ -192,8 +192,8 @@ mod tests {
         let nodes: Vec<[f32; 4]> = (0..res.x * res.y * res.z)
             .map(|_| {
                 let r = rng.next_f64();
-                // A fifth above zero: most negatives have no positive
-                // neighbour, some do.
+                // One in twenty above zero: most negatives have a
+                // positive neighbour, some do not.
                 let sigma = if r < 0.05 { 3.0 * r / 0.05 } else { -r };
                 [0.2, 0.3, 0.4, sigma as f32]
             })
