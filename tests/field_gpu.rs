@@ -201,18 +201,22 @@ fn gpu_march_matches_the_cpu_reference_with_and_without_skipping() {
     let field = small_field(&s, 24, 4);
     let camera = CameraFrame::new(&s.cameras[0], 48, 32);
     for skip_empty in [true, false] {
-        let knobs = MarchKnobs {
-            samples_per_ray: 256,
-            termination: 1e-4,
-            skip_empty,
-        };
         march_matches_cpu(
             &ctx,
             &field,
             &camera,
-            knobs,
+            fine_march(skip_empty),
             &format!("skip_empty = {skip_empty}"),
         );
+    }
+}
+
+/// 256 samples along the diagonal, with or without empty-space skipping.
+fn fine_march(skip_empty: bool) -> MarchKnobs {
+    MarchKnobs {
+        samples_per_ray: 256,
+        termination: 1e-4,
+        skip_empty,
     }
 }
 
@@ -240,11 +244,7 @@ fn gpu_march_matches_the_cpu_reference_with_negative_densities() {
     );
     let camera = CameraFrame::new(&s.cameras[0], 48, 32);
     for skip_empty in [true, false] {
-        let knobs = MarchKnobs {
-            samples_per_ray: 256,
-            termination: 1e-4,
-            skip_empty,
-        };
+        let knobs = fine_march(skip_empty);
         let (sharp, max_colour) = march_matches_cpu(
             &ctx,
             &field,
