@@ -25,6 +25,10 @@ pub struct GeometryScore {
     /// Median |D̂/Ô − t_surface| over them, in the field's node spacings
     /// (its smallest); NaN where none was compared.
     pub median_error: f64,
+    /// Median of the signed D̂/Ô − t_surface over the same pixels, in node
+    /// spacings: negative where the field's surfaces lie in front of the
+    /// known ones (NaN where none was compared).
+    pub median_signed_error: f64,
     /// Share of the pixels with a known surface inside the bounds where
     /// the field is not opaque: the camera sees through it (NaN: no such
     /// pixel).
@@ -46,7 +50,7 @@ pub fn geometry_score(
     use rayon::prelude::*;
     let spacing = field.spacing().min_element();
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
-    // Per pixel: (a known surface, the field opaque, |depth error|).
+    // Per pixel: (a known surface, the field opaque, signed depth error).
     let pixels: Vec<(bool, bool, f64)> = (0..w * h)
         .into_par_iter()
         .filter(|&p| frame.image.state[p as usize] != PixelState::Masked)
@@ -57,14 +61,16 @@ pub fn geometry_score(
             let m = march_ray(field, &ray, f64::INFINITY, march);
             let opaque = m.opacity >= SURFACE_OPACITY;
             let error = match known {
-                Some(t) if opaque => (m.depth / m.opacity - t).abs() / spacing,
+                Some(t) if opaque => (m.depth / m.opacity - t) / spacing,
                 _ => f64::NAN,
             };
             Some((known.is_some(), opaque, error))
         })
         .collect();
-    let mut errors: Vec<f64> = pixels.iter().map(|p| p.2).filter(|e| !e.is_nan()).collect();
+    let mut signed: Vec<f64> = pixels.iter().map(|p| p.2).filter(|e| !e.is_nan()).collect();
+    let mut errors: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
     errors.sort_by(f64::total_cmp);
+    signed.sort_by(f64::total_cmp);
     let share = |of: &dyn Fn(&(bool, bool, f64)) -> bool,
                  among: &dyn Fn(&(bool, bool, f64)) -> bool| {
         let n = pixels.iter().filter(|p| among(p)).count();
@@ -78,6 +84,7 @@ pub fn geometry_score(
     GeometryScore {
         compared: errors.len(),
         median_error: median(&errors),
+        median_signed_error: median(&signed),
         see_through: share(&|p| !p.1, &|p| p.0),
         floating: share(&|p| p.1, &|p| !p.0),
     }
@@ -163,7 +170,8 @@ mod tests {
     /// The slab's density falls from its last opaque nodes to zero over a
     /// node spacing: a plane half way is within half a spacing of the
     /// field's depth, one two spacings lower about two spacings off (the
-    /// rays are within 25° of vertical); nothing sees through and nothing
+    /// rays are within 25° of vertical), the field's surface in front of
+    /// it (the signed error negative); nothing sees through and nothing
     /// floats.
     #[test]
     fn a_slab_scores_its_offset_in_node_spacings() {
@@ -180,6 +188,7 @@ mod tests {
             (off.median_error - on.median_error - 2.0).abs() < 0.5,
             "{on:?} {off:?}"
         );
+        assert_eq!(off.median_signed_error, -off.median_error, "{off:?}");
     }
 
     /// An empty field is seen through wherever a surface is known, and an

@@ -335,12 +335,14 @@ fn print_geometry(
         let frame = &dataset.frames[v.frame as usize];
         let g = inlay_passes::train::geometry_score(frame, &trained.field, &march, &surface);
         println!(
-            "held-out frame {}: geometry against {}: median |depth error| {:.2} node spacings over {} pixels; \
-             seen through at {:.1} % of the surfaces' pixels, floating at {:.1} % of the others",
+            "held-out frame {}: geometry against {}: median |depth error| {:.2} node spacings over {} pixels \
+             (signed {:+.2}: in front when negative); seen through at {:.1} % of the surfaces' pixels, \
+             floating at {:.1} % of the others",
             v.frame,
             scene.path.display(),
             g.median_error,
             g.compared,
+            g.median_signed_error,
             100.0 * g.see_through,
             100.0 * g.floating
         );
