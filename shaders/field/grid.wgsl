@@ -98,8 +98,8 @@ fn grid_sample(x: vec3<f32>) -> vec4<f32> {
     let x11 = mix(grid_node(i + vec3<u32>(0u, 1u, 1u)), grid_node(i + vec3<u32>(1u, 1u, 1u)), f.x);
     let v = mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
     // A node's density may be negative; the clamp is after interpolation
-    // (a surface sharper than a node spacing). Mirrors density_at.
-    return vec4<f32>(v.xyz, max(v.w, 0.0));
+    // (a surface sharper than a node spacing).
+    return vec4<f32>(v.xyz, density_at(v.w));
 }
 
 // The colour at x along a ray whose direction's basis is `basis`

@@ -27,3 +27,10 @@ fn trilinear_weight(f: vec3<f32>, k: u32) -> f32 {
     let w = mix(vec3<f32>(1.0) - f, f, c);
     return w.x * w.y * w.z;
 }
+
+// The density of a trilinear blend of node densities: clamped at zero after
+// interpolation (a node's density may be negative). Mirrors density_at in
+// passes/src/field/grid.rs.
+fn density_at(raw: f32) -> f32 {
+    return max(raw, 0.0);
+}

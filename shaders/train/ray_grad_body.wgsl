@@ -140,7 +140,7 @@ fn train_ray(index: u32) {
             let b = min(a + pc.step, t1);
             let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
             let v = sample_at(cell);
-            let alpha = 1.0 - exp(-max(v.w, 0.0) * (b - a));
+            let alpha = 1.0 - exp(-density_at(v.w) * (b - a));
             let w = transmittance * alpha;
             colour += w * seen_colour(unclamped_colour(cell, v.xyz, y));
             if distort {
@@ -194,7 +194,7 @@ fn train_ray(index: u32) {
         // Channels the clamp at zero holds get no colour gradient.
         let open = select(vec3<f32>(1.0), select(vec3<f32>(0.0), vec3<f32>(1.0), u > vec3<f32>(0.0)), count > 0u);
         let dt = b - a;
-        let alpha = 1.0 - exp(-max(v.w, 0.0) * dt);
+        let alpha = 1.0 - exp(-density_at(v.w) * dt);
         let w = t_i * alpha;
         let t_next = t_i * (1.0 - alpha);
         so_far += w * c;

@@ -185,7 +185,7 @@ impl GridField {
 
 /// The density of interpolated values `v`: their σ clamped at zero (the
 /// clamp after interpolation: [`GridField::nodes`]). Mirrored by
-/// `grid_sample` in `shaders/field/grid.wgsl`.
+/// `density_at` in `shaders/field/trilinear.wgsl`.
 pub fn density_at(v: [f64; 4]) -> f64 {
     v[3].max(0.0)
 }
