@@ -100,9 +100,10 @@ pub struct EstimateEnvArgs {
     /// How surface points are told from points inside a medium: `gradient`
     /// (the density rises steeply; for baked fields) or `weight` (65 % of the
     /// pixel's opacity within two node spacings of its depth, at least
-    /// 1/64 of the field's extent; for trained fields, whose surfaces are
-    /// as opaque with a hundredth of a bake's gradient, and whose normals
-    /// it reads over two spacings).
+    /// 1/64 of the field's extent, and the density rising at least a
+    /// fiftieth as steeply as a bake's, which refuses a trainer's haze;
+    /// for trained fields, whose surfaces are as opaque with a hundredth
+    /// of a bake's gradient, and whose normals it reads over two spacings).
     #[arg(long, value_enum, default_value = "gradient")]
     pub surface_test: SurfaceTestArg,
     /// With `--surface-test weight`, the largest bend of the surface, in
