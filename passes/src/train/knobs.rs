@@ -32,8 +32,7 @@ pub struct TrainKnobs {
     pub epsilon: f64,
     /// Total variation's step on colour after each Adam step: each value
     /// moves by 2 × this × its differences to its six neighbours (at most
-    /// [`super::tv::MAX_TV_WEIGHT`]), at the first step; it decays with
-    /// the step sizes ([`super::trainer::StepSizes`]).
+    /// [`super::tv::MAX_TV_WEIGHT`]).
     pub tv_colour: f64,
     /// The same for density. 3e-3 by default: DOG trained at 128 nodes
     /// from 48 views of 160 × 120 left its surfaces painted on a haze 11–16

@@ -283,6 +283,7 @@ pub fn train(
             );
         }
         let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, march, layout)?;
+        gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
@@ -297,10 +298,16 @@ pub fn train(
                 .iter()
                 .map(|(r, t, f)| TrainRay::new(r.origin, r.dir, *t, 1.0).in_frame(*f))
                 .collect();
-            let sizes = StepSizes::at(knobs, step, scale, diag);
-            gpu.gain_rate = knobs.learn_exposure.then_some(sizes.gain_rate as f32);
-            gpu.tv_weights = (sizes.tv.0 as f32, sizes.tv.1 as f32);
-            let adam = sizes.adam;
+            let decay = knobs.rate_decay.powf(step as f64 / knobs.iterations as f64);
+            gpu.gain_rate = knobs.learn_exposure.then_some((GAIN_RATE * decay) as f32);
+            let adam = AdamKnobs {
+                rate: knobs.rate * scale * decay,
+                relative_rate: knobs.rate * decay,
+                relative_floor: RELATIVE_STEP_FLOOR * knobs.epsilon * scale,
+                density_rate: knobs.density_rate / diag * decay,
+                beta1: 0.9,
+                beta2: 0.99,
+            };
             let out = gpu.run_batch(
                 &mut renderer,
                 &records,
@@ -369,43 +376,6 @@ pub fn train(
 /// held-out views 0.3-0.6 dB and brightened them 3 %; a tenth of every
 /// colour, 4-5 dB on DOG and 2.5-6.5 dB on PLANTS (`docs/benchmarks.md`).
 pub const RELATIVE_STEP_FLOOR: f64 = 8.0;
-
-/// Every step size of one training step, all decaying together by
-/// `rate_decay` over the run.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StepSizes {
-    /// Adam's.
-    pub adam: AdamKnobs,
-    /// The exposure gains' step.
-    pub gain_rate: f64,
-    /// Total variation's plain step on colour and on density. It decays
-    /// with Adam's: held at its first size while Adam's fell to a tenth,
-    /// it grew tenfold against them and at the end smoothed away what
-    /// the views ask for. Decaying, DOG's held-out views (48 of 160 ×
-    /// 120, 128 nodes) gained 1.3 dB and PLANTS' 1.0 dB
-    /// (`docs/benchmarks.md`, issue 25's eleventh pass).
-    pub tv: (f64, f64),
-}
-
-impl StepSizes {
-    /// The sizes at `step` for pixels of mean radiance `scale` and a field
-    /// of diagonal `diag`.
-    pub fn at(knobs: &TrainKnobs, step: u32, scale: f64, diag: f64) -> Self {
-        let decay = knobs.rate_decay.powf(step as f64 / knobs.iterations as f64);
-        Self {
-            adam: AdamKnobs {
-                rate: knobs.rate * scale * decay,
-                relative_rate: knobs.rate * decay,
-                relative_floor: RELATIVE_STEP_FLOOR * knobs.epsilon * scale,
-                density_rate: knobs.density_rate / diag * decay,
-                beta1: 0.9,
-                beta2: 0.99,
-            },
-            gain_rate: GAIN_RATE * decay,
-            tv: (knobs.tv_colour * decay, knobs.tv_density * decay),
-        }
-    }
-}
 
 /// The exposure gains' Adam step size (the gains are near 1: a step of
 /// 1 % at most, decaying with the grid's).
@@ -578,28 +548,6 @@ pub fn score_view(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Total variation's steps fall with Adam's, by `rate_decay` over the
-    /// run.
-    #[test]
-    fn total_variation_decays_with_the_step_sizes() {
-        let knobs = TrainKnobs {
-            tv_colour: 2e-3,
-            ..TrainKnobs::default()
-        };
-        let first = StepSizes::at(&knobs, 0, 0.3, 2.0);
-        assert_eq!(first.tv, (knobs.tv_colour, knobs.tv_density));
-        for step in [500, 1000, 2000] {
-            let s = StepSizes::at(&knobs, step, 0.3, 2.0);
-            let adam = s.adam.density_rate / first.adam.density_rate;
-            assert!(adam < 1.0);
-            assert!((s.tv.0 / first.tv.0 - adam).abs() < 1e-12);
-            assert!((s.tv.1 / first.tv.1 - adam).abs() < 1e-12);
-            assert!((s.gain_rate / first.gain_rate - adam).abs() < 1e-12);
-        }
-        let last = StepSizes::at(&knobs, knobs.iterations, 0.3, 2.0);
-        assert!((last.tv.1 / first.tv.1 - knobs.rate_decay).abs() < 1e-12);
-    }
 
     /// A view 10 % too bright everywhere scores brightness 1.1 and
     /// relative error 0.1; a darker one the other way; masked pixels and

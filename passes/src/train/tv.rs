@@ -3,8 +3,7 @@
 //! It smooths what the views do not pin down, floaters above all. It is
 //! applied as a plain gradient step after Adam's ([`tv_step`]): through
 //! Adam, whose step is normalised per value, any weight moved the values no
-//! ray reads by a full step. Its weight decays with Adam's step sizes
-//! ([`super::trainer::StepSizes`]). Mirrored by `shaders/train/tv.wgsl` (the
+//! ray reads by a full step. Mirrored by `shaders/train/tv.wgsl` (the
 //! gradient) and `shaders/train/descend.wgsl` (the step).
 
 use glam::UVec3;
