@@ -143,11 +143,11 @@ pub enum SurfaceTest {
     /// The ray's weight sits on a surface: at least [`MIN_SURFACE_SHARE`]
     /// of the pixel's opacity within [`SURFACE_HALF_WIDTH`] node spacings
     /// of its expected depth, and the density there rising at least
-    /// [`MIN_TRAINED_GRADIENT`] (a trained surface's slope, a
-    /// fiftieth of a bake's). Holds on trained fields; but a bake's dense foliage passes it
-    /// (PLANTS' all-visible estimate 6.9 % of the lamp's light against
-    /// under 2 % with the gradient, at a share of 0.5), so it is not the
-    /// default. It also leaves out points on creases
+    /// [`MIN_TRAINED_GRADIENT`] (about a fiftieth of a bake's surfaces'
+    /// slope). Holds on trained fields; but a bake's dense foliage passed
+    /// the share alone (PLANTS' all-visible estimate 6.9 % of the lamp's
+    /// light against under 2 % with the gradient, at a share of 0.5), so
+    /// it is not the default. It also leaves out points on creases
     /// ([`super::knobs::EnvEstimateKnobs::max_crease`]).
     Weight,
 }
