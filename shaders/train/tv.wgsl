@@ -1,16 +1,16 @@
 // Total variation: each node's gradient of the squared differences to its
 // six neighbours, Σ_nb (v − v_nb) per channel, weighted per channel group
-// (colour, density) and added to the accumulated gradient before Adam
-// (scaled by the inverse of Adam's gradient scale, so that it reaches Adam
-// at its weight). A sparse grid's nodes are its pool's, a dropped brick's
-// neighbours zero (held so). Mirrors passes/src/train/tv.rs tv_gradient.
+// (colour, density), into the gradient buffer Adam's step left empty;
+// train/descend.wgsl then takes one plain step along it. A sparse grid's
+// nodes are its pool's, a dropped brick's neighbours zero (held so).
+// Mirrors passes/src/train/tv.rs tv_gradient.
 
 struct TvPush {
     resolution: vec3<u32>,
     count: u32,
     colour_weight: f32,
     density_weight: f32,
-    unscale: f32,
+    pad0: u32,
     pad: u32,
     // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
     brick_dims: vec3<u32>,
@@ -67,5 +67,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let w = vec4<f32>(pc.colour_weight, pc.colour_weight, pc.colour_weight, pc.density_weight);
-    grad[n] += 2.0 * w * acc * pc.unscale;
+    grad[n] += 2.0 * w * acc;
 }

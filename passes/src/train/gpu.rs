@@ -122,8 +122,8 @@ inlay_engine::gpu_struct! {
         pub colour_weight: f32,
         /// Weight of the density's differences.
         pub density_weight: f32,
-        /// 1 / Adam's gradient scale.
-        pub unscale: f32,
+        /// Padding.
+        pub pad0: u32,
         /// Padding.
         pub pad: u32,
         /// Bricks per axis of a sparse grid (0: dense).
@@ -650,7 +650,7 @@ impl GpuTrainer {
             count: nodes,
             colour_weight: self.tv_weights.0,
             density_weight: self.tv_weights.1,
-            unscale: 1.0,
+            pad0: 0,
             pad: 0,
             brick_dims: self.brick_dims(),
             pad1: 0,
