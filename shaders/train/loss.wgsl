@@ -1,10 +1,15 @@
 // The loss of a rendered pixel against what a photograph says of it, and its
 // gradient with respect to the pixel. Mirrors passes/src/train/loss.rs:
-// kind 0, a value (relative squared error, the denominator held); kind 1, a
-// lower bound (the same, only below it); kind 2, a bracket (squared error of
+// kind 0, a value (relative squared error, the denominator held, and never
+// below RENDER_FLOOR_SHARE of the photograph's value); kind 1, a lower bound
+// (the same, only below it); kind 2, a bracket (squared error of
 // srgb(clip(exposure × C)) against the recorded encoded value).
 
 #include "common/tonemap.wgsl"
+
+// A render darker than this share of its photograph is weighed as if it
+// were at it (passes/src/train/loss.rs RENDER_FLOOR_SHARE).
+const RENDER_FLOOR_SHARE: f32 = 0.0625;
 
 struct PixelLoss {
     loss: f32,
@@ -35,7 +40,7 @@ fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, e
             if kind == 1u {
                 r = min(r, 0.0);
             }
-            let d = max(c[k], 0.0) + epsilon;
+            let d = max(max(c[k], RENDER_FLOOR_SHARE * target_value[k]), 0.0) + epsilon;
             let scale = 1.0 / (d * d);
             out.loss += r * r * scale;
             out.grad[k] = 2.0 * r * scale;
