@@ -334,18 +334,45 @@ fn print_geometry(
     for v in &trained.held_out {
         let frame = &dataset.frames[v.frame as usize];
         let g = inlay_passes::train::geometry_score(frame, &trained.field, &march, &surface);
+        let depth = if g.compared == 0 {
+            "no pixel's depth compared (none both on a surface and opaque)".to_string()
+        } else {
+            format!(
+                "median |depth error| {:.2} node spacings over {} pixels (signed {:+.2}: in front when negative)",
+                g.median_error, g.compared, g.median_signed_error
+            )
+        };
         println!(
-            "held-out frame {}: geometry against {}: median |depth error| {:.2} node spacings over {} pixels \
-             (signed {:+.2}: in front when negative); seen through at {:.1} % of the surfaces' pixels, \
-             floating at {:.1} % of the others",
+            "held-out frame {}: geometry against {}: {depth}; seen through at {} of the surfaces' pixels, \
+             floating at {} of the others",
             v.frame,
             scene.path.display(),
-            g.median_error,
-            g.compared,
-            g.median_signed_error,
-            100.0 * g.see_through,
-            100.0 * g.floating
+            percent_of(g.see_through),
+            percent_of(g.floating)
         );
+    }
+}
+
+/// A share as a percentage, or "— (no such pixel)" where there was nothing
+/// to share among (the score's NaN: no pixel of that kind in the view).
+fn percent_of(share: f64) -> String {
+    if share.is_nan() {
+        "— (no such pixel)".to_string()
+    } else {
+        format!("{:.1} %", 100.0 * share)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::percent_of;
+
+    /// A view whose every pixel holds a surface has no "others" to float
+    /// among: that is said, not printed as NaN.
+    #[test]
+    fn a_share_of_nothing_is_said_not_printed_as_nan() {
+        assert_eq!(percent_of(0.0123), "1.2 %");
+        assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
     }
 }
 
