@@ -363,19 +363,6 @@ fn percent_of(share: f64) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::percent_of;
-
-    /// A view whose every pixel holds a surface has no "others" to float
-    /// among: that is said, not printed as NaN.
-    #[test]
-    fn a_share_of_nothing_is_said_not_printed_as_nan() {
-        assert_eq!(percent_of(0.0123), "1.2 %");
-        assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
-    }
-}
-
 /// The held-out views one under another: photograph | field | |difference|.
 fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
     let w = views.iter().map(|v| v.size.0).max().unwrap_or(1);
@@ -401,5 +388,18 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
         width: 3 * w,
         height: h,
         pixels,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::percent_of;
+
+    /// A view whose every pixel holds a surface has no "others" to float
+    /// among: that is said, not printed as NaN.
+    #[test]
+    fn a_share_of_nothing_is_said_not_printed_as_nan() {
+        assert_eq!(percent_of(0.0123), "1.2 %");
+        assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
     }
 }
