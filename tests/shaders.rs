@@ -18,8 +18,12 @@ fn knob_defines() -> Vec<Define> {
         Define::Bool("SKIP_EMPTY", true),
         Define::Bool("OCTAHEDRAL", true),
         Define::F32("FIT_MAX_SHARPNESS", 1024.0),
-        Define::U32("ARC_PIECES", 4),
+        Define::U32("ARC_PIECES", 16),
         Define::F32("OUTSIDE_OFFSET", 2e-3),
+        Define::F32("PIECE_ANGLE", 1e-2),
+        Define::U32("PIECE_CAPACITY", 65536),
+        Define::U32("ARC_CAPACITY", 16384),
+        Define::U32("DIRECTIONS_PER_INVOCATION", 8),
         Define::U32(
             "NF_RAYS_PER_INVOCATION",
             inlay_passes::envest::near_field::RAYS_PER_INVOCATION,

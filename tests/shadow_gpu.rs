@@ -28,7 +28,8 @@ fn bake_kernel_matches_cpu_mirror() {
         let points = lookup_points(&scene, &grid);
         let gpu = baker
             .run(&ctx, &mesh, &scene, &points, 8, &|_, _| {})
-            .unwrap();
+            .unwrap()
+            .0;
         let cpu = bake_reference(&mesh, &scene, &points, 8);
         assert_eq!(gpu.len(), cpu.len());
         let off: Vec<(usize, f64)> = gpu

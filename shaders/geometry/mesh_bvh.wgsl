@@ -30,35 +30,48 @@ fn bvh_hits_triangle(o: vec3<f32>, d: vec3<f32>, t: u32) -> bool {
     return dot(e2, qv) * inv > 0.0;
 }
 
-// Whether the ray from `o` along unit `d` hits any triangle (t > 0).
+// The ray's entry distance into node i's box, or -1 where it misses.
+fn bvh_enter(i: u32, o: vec3<f32>, inv: vec3<f32>) -> f32 {
+    let t0 = (bvh_nodes[2u * i].xyz - o) * inv;
+    let t1 = (bvh_nodes[2u * i + 1u].xyz - o) * inv;
+    let near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z));
+    let far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z));
+    return select(-1.0, max(near, 0.0), far >= max(near, 0.0));
+}
+
+// Whether the ray from `o` along unit `d` hits any triangle (t > 0). The
+// children of a node are visited nearer first.
 fn bvh_occluded(o: vec3<f32>, d: vec3<f32>) -> bool {
     if arrayLength(&bvh_triangles) < 3u {
         return false;
     }
     let safe = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
     let inv = 1.0 / safe;
+    if bvh_enter(0u, o, inv) < 0.0 {
+        return false;
+    }
     var stack: array<u32, BVH_STACK>;
     var sp = 1u;
     stack[0] = 0u;
     while sp > 0u {
         sp -= 1u;
         let i = stack[sp];
-        let lo = bvh_nodes[2u * i];
-        let hi = bvh_nodes[2u * i + 1u];
-        let t0 = (lo.xyz - o) * inv;
-        let t1 = (hi.xyz - o) * inv;
-        let near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z));
-        let far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z));
-        if far < max(near, 0.0) {
-            continue;
-        }
-        let first = bitcast<u32>(lo.w);
-        let count = bitcast<u32>(hi.w);
+        let first = bitcast<u32>(bvh_nodes[2u * i].w);
+        let count = bitcast<u32>(bvh_nodes[2u * i + 1u].w);
         if count == 0u {
-            if sp + 2u <= BVH_STACK {
-                stack[sp] = first;
-                stack[sp + 1u] = first + 1u;
+            let tl = bvh_enter(first, o, inv);
+            let tr = bvh_enter(first + 1u, o, inv);
+            // The farther child goes on the stack first, so the nearer is
+            // taken next; a child the ray misses is not pushed.
+            let left_nearer = tl >= 0.0 && (tr < 0.0 || tl <= tr);
+            let near = select(first + 1u, first, left_nearer);
+            if tl >= 0.0 && tr >= 0.0 && sp + 2u <= BVH_STACK {
+                stack[sp] = select(first, first + 1u, left_nearer);
+                stack[sp + 1u] = near;
                 sp += 2u;
+            } else if (tl >= 0.0 || tr >= 0.0) && sp + 1u <= BVH_STACK {
+                stack[sp] = near;
+                sp += 1u;
             }
             continue;
         }

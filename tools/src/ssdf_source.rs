@@ -81,6 +81,12 @@ pub fn bake_ssdf_with_progress(
         "baked the SSDF field of {} ({}³ nodes, {}² directions, {} components): {report}",
         mesh.name, knobs.grid, knobs.directions, field.components
     );
+    let kernels: Vec<String> = samples
+        .kernel_seconds
+        .iter()
+        .map(|(name, s)| format!("{} {s:.2} s", name.trim_start_matches("ssdf-")))
+        .collect();
+    eprintln!("  GPU time by kernel: {}", kernels.join(", "));
     Ok((field, report))
 }
 
@@ -92,7 +98,11 @@ fn cache_entry(object_file: &Path, knobs: &SsdfKnobs) -> anyhow::Result<Option<P
     let key = CacheKey::new("ssdf")
         .files(&files)?
         .text("knobs", &format!("{knobs:?}"))
-        .text("revision", &format!("v{SSDF_VERSION}"));
+        .text("revision", &format!("v{SSDF_VERSION}"))
+        .text(
+            "bake",
+            &format!("r{}", inlay_passes::ssdf::bake::BAKE_REVISION),
+        );
     let stem = object_file
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

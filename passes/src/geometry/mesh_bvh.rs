@@ -60,6 +60,89 @@ pub struct MeshScene {
 
 const LEAF_SIZE: usize = 4;
 
+/// Depth down to which nodes are split by the surface area heuristic;
+/// below it, at the median (balanced), so no path is deeper than this
+/// plus log2 of the triangles: within the GPU traversal's stack
+/// (`BVH_STACK` in `shaders/geometry/mesh_bvh.wgsl`, 48) for any mesh a
+/// binding holds.
+const SAH_DEPTH: u32 = 24;
+
+/// Bins per axis of the surface area heuristic.
+const SAH_BINS: usize = 16;
+
+fn centroid(t: &Triangle) -> DVec3 {
+    (t.p[0] + t.p[1] + t.p[2]) / 3.0
+}
+
+/// Half the surface area of a box (what the heuristic compares).
+fn half_area(b: &Aabb) -> f64 {
+    let e = (b.max - b.min).max(DVec3::ZERO);
+    e.x * e.y + e.y * e.z + e.z * e.x
+}
+
+/// Splits `tris` where the binned surface area heuristic says (the cost
+/// of a split: each side's box area times its triangles), partitioning
+/// them in place and returning the left side's count; `None` where the
+/// centroids do not spread (the caller splits at the median).
+/// Rays that graze a surface (the SSDF bake's outside rays) cross far
+/// fewer boxes than with median splits.
+fn sah_split(tris: &mut [Triangle], clo: DVec3, chi: DVec3) -> Option<usize> {
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in 0..3 {
+        let (a, b) = (clo[axis], chi[axis]);
+        // The centroids do not spread along this axis (or are NaN).
+        if b.partial_cmp(&a) != Some(std::cmp::Ordering::Greater) {
+            continue;
+        }
+        let bin = |t: &Triangle| {
+            (((centroid(t)[axis] - a) / (b - a) * SAH_BINS as f64) as usize).min(SAH_BINS - 1)
+        };
+        let empty = Aabb::new(DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let mut boxes = [empty; SAH_BINS];
+        let mut counts = [0usize; SAH_BINS];
+        for t in tris.iter() {
+            let k = bin(t);
+            let tb = MeshScene::tri_bounds(t);
+            boxes[k] = Aabb::new(boxes[k].min.min(tb.min), boxes[k].max.max(tb.max));
+            counts[k] += 1;
+        }
+        let grow = |acc: &Aabb, b: &Aabb| Aabb::new(acc.min.min(b.min), acc.max.max(b.max));
+        let mut right = [(0.0f64, 0usize); SAH_BINS];
+        let (mut rb, mut rn) = (empty, 0);
+        for k in (1..SAH_BINS).rev() {
+            rb = grow(&rb, &boxes[k]);
+            rn += counts[k];
+            right[k] = (half_area(&rb), rn);
+        }
+        let (mut lb, mut ln) = (empty, 0);
+        for k in 0..SAH_BINS - 1 {
+            lb = grow(&lb, &boxes[k]);
+            ln += counts[k];
+            let (ra, rn) = right[k + 1];
+            if ln == 0 || rn == 0 {
+                continue;
+            }
+            let cost = half_area(&lb) * ln as f64 + ra * rn as f64;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, k));
+            }
+        }
+    }
+    let (_, axis, k) = best?;
+    let (a, b) = (clo[axis], chi[axis]);
+    let left_of = |t: &Triangle| {
+        (((centroid(t)[axis] - a) / (b - a) * SAH_BINS as f64) as usize).min(SAH_BINS - 1) <= k
+    };
+    let mut mid = 0;
+    for i in 0..tris.len() {
+        if left_of(&tris[i]) {
+            tris.swap(i, mid);
+            mid += 1;
+        }
+    }
+    (mid > 0 && mid < tris.len()).then_some(mid)
+}
+
 impl MeshScene {
     /// Builds the hierarchy over `objects` in their poses, materials with
     /// overrides applied.
@@ -100,7 +183,7 @@ impl MeshScene {
                 count: 0,
             });
             let n = scene.triangles.len();
-            scene.build(0, 0, n);
+            scene.build(0, 0, n, 0);
         }
         scene
     }
@@ -117,7 +200,7 @@ impl MeshScene {
         )
     }
 
-    fn build(&mut self, node: usize, first: usize, count: usize) {
+    fn build(&mut self, node: usize, first: usize, count: usize, depth: u32) {
         let tris = &mut self.triangles[first..first + count];
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -139,17 +222,27 @@ impl MeshScene {
             self.nodes[node].count = count as u32;
             return;
         }
-        let extent = chi - clo;
-        let axis = if extent.x >= extent.y && extent.x >= extent.z {
-            0
-        } else if extent.y >= extent.z {
-            1
-        } else {
-            2
+        let mid = match (depth < SAH_DEPTH)
+            .then(|| sah_split(tris, clo, chi))
+            .flatten()
+        {
+            Some(mid) => mid,
+            None => {
+                let extent = chi - clo;
+                let axis = if extent.x >= extent.y && extent.x >= extent.z {
+                    0
+                } else if extent.y >= extent.z {
+                    1
+                } else {
+                    2
+                };
+                let mid = count / 2;
+                tris.select_nth_unstable_by(mid, |a, b| {
+                    centroid(a)[axis].total_cmp(&centroid(b)[axis])
+                });
+                mid
+            }
         };
-        let key = |t: &Triangle| (t.p[0][axis] + t.p[1][axis] + t.p[2][axis]) / 3.0;
-        let mid = count / 2;
-        tris.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
         let left = self.nodes.len();
         let empty = Node {
             bounds: self.nodes[node].bounds,
@@ -160,8 +253,8 @@ impl MeshScene {
         self.nodes.push(empty);
         self.nodes[node].first = left as u32;
         self.nodes[node].count = 0;
-        self.build(left, first, mid);
-        self.build(left + 1, first + mid, count - mid);
+        self.build(left, first, mid, depth + 1);
+        self.build(left + 1, first + mid, count - mid, depth + 1);
     }
 
     fn intersect_triangle(

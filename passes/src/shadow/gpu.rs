@@ -79,7 +79,13 @@ pub fn gpu_rows(field: &SsdfField) -> (Vec<f32>, Vec<f32>) {
     (texels, nodes)
 }
 
-fn storage(ctx: &Arc<Context>, name: &str, values: &[f32]) -> anyhow::Result<Arc<Buffer>> {
+/// A storage buffer holding `values` (at least 16 bytes, as a binding
+/// may not be empty).
+pub(crate) fn storage(
+    ctx: &Arc<Context>,
+    name: &str,
+    values: &[f32],
+) -> anyhow::Result<Arc<Buffer>> {
     let mut bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
     bytes.resize(bytes.len().max(16), 0);
     Ok(Arc::new(Buffer::with_data(

@@ -1,7 +1,27 @@
 //! Baking an object's SSDF field (METHOD.md "SSDF field"): S(d; x) at every
 //! direction texel of an octahedral map, at every node of the grid, on the
-//! GPU (`shaders/ssdf/ssdf_bake.wgsl`, batches of nodes per submission so
-//! progress can be shown), with [`bake_reference`] its f64 CPU mirror.
+//! GPU, with [`bake_reference`] its f64 CPU mirror. The nodes go in batches
+//! (one submission each, so progress can be shown), taken in Morton order
+//! so that a batch is a compact block; per batch five kernels run:
+//!
+//! 1. `ssdf-candidates` (`shaders/ssdf/ssdf_candidates.wgsl`, mirrored by
+//!    [`edge_candidates`]): the edges that can be on the silhouette from
+//!    some point of the batch's box, so the next kernel tests those for
+//!    each node instead of every edge.
+//! 2. `ssdf-pieces`: per node, its silhouette edges cut into pieces
+//!    ([`SilhouetteEdge::pieces`](super::SilhouetteEdge::pieces)).
+//! 3. `ssdf-outer`: one ray per piece tells the outline's pieces.
+//! 4. `ssdf-arcs`: each edge's consecutive outline pieces joined into arcs
+//!    (2–4 are [`SilhouetteMesh::view_from`]).
+//! 5. `ssdf-bake`: S at every direction from them.
+//!
+//! Each invocation does a bounded amount of work: llvmpipe silently ends
+//! all of an invocation's loops after 65535 iterations in all, which cut
+//! short the single kernel that found a node's arcs before issue 26's
+//! ninth pass (on a 100k-triangle mesh it stopped after two thirds of the
+//! edges, and the field came out wrong without a word). The per-node
+//! lists have fixed capacities ([`PIECE_CAPACITY`], [`ARC_CAPACITY`]); the
+//! counts are read back and a bake that outgrows them is refused.
 //!
 //! **Nodes inside the object** see it in every direction (S = −π
 //! everywhere), which would drag every interpolated value near the surface
@@ -14,17 +34,16 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec3;
-use inlay_engine::graph::FrameGraph;
+use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
-use inlay_engine::{
-    vk, Buffer, BufferReadback, ComputePipeline, Context, DeviceInfo, Renderer, SubmitSync,
-};
+use inlay_engine::{BufferReadback, ComputePipeline, Context, DeviceInfo, Renderer, SubmitSync};
 
 use super::grid::SsdfGrid;
-use super::silhouette::{SilhouetteMesh, ARC_PIECES, OUTSIDE_OFFSET};
+use super::silhouette::{SilhouetteMesh, ARC_PIECES, OUTSIDE_OFFSET, PIECE_ANGLE};
 use crate::geometry::MeshScene;
 use crate::object::{ObjectMesh, PlacedObject, Pose};
 use crate::probe::{DirectionMap, MapKind};
+use crate::shadow::gpu::storage;
 
 inlay_engine::gpu_struct! {
     /// `BakePush` of `shaders/ssdf/ssdf_bake.wgsl`.
@@ -37,6 +56,10 @@ inlay_engine::gpu_struct! {
         pub edge_count: u32,
         /// Nodes in the batch.
         pub node_count: u32,
+        /// The batch's points' bounding box, lower corner (xyz; w unused).
+        pub box_lo: [f32; 4],
+        /// Its upper corner.
+        pub box_hi: [f32; 4],
     }
 }
 
@@ -114,13 +137,28 @@ pub struct SsdfSamples {
     pub object: u64,
     /// Seconds the bake took.
     pub seconds: f64,
+    /// GPU seconds of each kernel over all batches, in the order they run.
+    pub kernel_seconds: KernelSeconds,
 }
 
-/// Bytes a triangle takes in the bake's largest storage buffer: a closed
-/// mesh has 1.5 edges a triangle, and one node's silhouette may hold every
-/// edge in up to `ARC_PIECES` arcs of 32 bytes (192 bytes a triangle; the
-/// edges themselves take 96 bytes each, 144 a triangle).
-pub const BAKE_BYTES_PER_TRIANGLE: u64 = 192;
+/// GPU seconds of each of the bake's kernels (pass name, seconds).
+pub type KernelSeconds = Vec<(String, f64)>;
+
+/// The bake's revision, for caches of baked fields: a change to what the
+/// bake computes bumps it. 2: S measured to the outline alone, pieces by
+/// angle, per-invocation work bounded (issue 26's ninth pass).
+pub const BAKE_REVISION: u32 = 2;
+
+/// Bytes a triangle takes in the bake's largest storage buffer, the edges:
+/// a closed mesh has 1.5 edges a triangle, of 96 bytes each.
+pub const BAKE_BYTES_PER_TRIANGLE: u64 = 144;
+
+/// Silhouette pieces one node's list holds.
+pub const PIECE_CAPACITY: u32 = 65536;
+
+/// Outline arcs one node's list holds; it bounds the bake kernel's loop
+/// over them (under llvmpipe's 65535 iterations with the ray's).
+pub const ARC_CAPACITY: u32 = 16384;
 
 /// Fails, before the silhouette and BVH are built, when `mesh` is too
 /// large for the bake's storage bindings on `info`'s device, naming the
@@ -130,7 +168,7 @@ pub fn check_bake_fits(info: &DeviceInfo, mesh: &ObjectMesh) -> anyhow::Result<(
     let need = BAKE_BYTES_PER_TRIANGLE * mesh.triangles() as u64;
     anyhow::ensure!(
         need <= limit,
-        "{}: {} triangles: the SSDF bake binds one node's silhouette arcs in one buffer of about \
+        "{}: {} triangles: the SSDF bake binds the mesh's edges in one buffer of about \
          {} MiB, more than {}'s largest storage binding ({} MiB); simplify the mesh to at \
          most {} triangles",
         mesh.name,
@@ -208,45 +246,102 @@ pub fn bake_reference(
         .collect()
 }
 
-/// The bake's two kernels: each node's silhouette arcs, then S at every
-/// direction from them.
+/// The edges of `sil` (indices) that may be on the silhouette seen from
+/// some point of the box `lo`..`hi`: all but those whose two faces both
+/// face every point of the box or both face away from every point, by a
+/// margin of 10⁻⁵ of the planes' scale (above f32 rounding, so the kernel's
+/// f32 test never drops an edge that its per-node test would find). The
+/// f64 mirror of `shaders/ssdf/ssdf_candidates.wgsl`, in edge order.
+pub fn edge_candidates(sil: &SilhouetteMesh, lo: DVec3, hi: DVec3) -> Vec<u32> {
+    let (centre, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+    let side = |plane: glam::DVec4| {
+        let n = plane.truncate();
+        let s = n.dot(centre) - plane.w;
+        let reach = n.abs().dot(half);
+        let margin = 1e-5 * (plane.w.abs() + n.abs().dot(centre.abs() + half));
+        if s - reach > margin {
+            1
+        } else if s + reach < -margin {
+            -1
+        } else {
+            0
+        }
+    };
+    (0..sil.edges.len() as u32)
+        .filter(|&i| {
+            let e = &sil.edges[i as usize];
+            let (s0, s1) = (side(e.planes[0]), side(e.planes[1]));
+            e.always || s0 == 0 || s0 != s1
+        })
+        .collect()
+}
+
+/// The order the bake takes `points` in: along a Morton curve over their
+/// bounding box (10 bits an axis), so that consecutive points, a batch,
+/// lie in a compact block (a 4 × 4 × 2 block of nodes, for a grid whose
+/// side is a power of two).
+pub fn morton_order(points: &[DVec3]) -> Vec<usize> {
+    let (lo, hi) = points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let scale = 1023.0 / (hi - lo).max_element().max(1e-300);
+    let spread = |v: u32| -> u64 {
+        (0..10).fold(0u64, |m, bit| m | ((((v >> bit) & 1) as u64) << (3 * bit)))
+    };
+    let code = |p: &DVec3| {
+        let q = ((*p - lo) * scale)
+            .round()
+            .clamp(DVec3::ZERO, DVec3::splat(1023.0));
+        spread(q.x as u32) | spread(q.y as u32) << 1 | spread(q.z as u32) << 2
+    };
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by_key(|&i| (code(&points[i]), i));
+    order
+}
+
+/// The bake's five kernels (see the module's documentation).
 pub struct SsdfBaker {
-    silhouette: Arc<ComputePipeline>,
+    candidates: Arc<ComputePipeline>,
+    pieces: Arc<ComputePipeline>,
+    outer: Arc<ComputePipeline>,
+    arcs: Arc<ComputePipeline>,
     pipeline: Arc<ComputePipeline>,
 }
 
-/// Nodes per submission at most: small enough that progress moves and no
-/// single submission runs long on a slow device (fewer when a batch's
-/// arcs would outgrow a storage binding).
+/// Nodes per submission: small enough that progress moves and no single
+/// submission runs long on a slow device (a batch's lists take 1.5 MiB a
+/// node).
 const NODES_PER_BATCH: usize = 32;
 
-/// Bytes of one arc in the buffer between the two kernels (two vec4s).
-const ARC_BYTES: u64 = 32;
+/// Directions one invocation of the bake kernel measures: 8, the kernel's
+/// two groups of four (`shaders/ssdf/ssdf_bake.wgsl`). Not a knob: 16 in
+/// a loop was as fast on lavapipe, 4 slower by a half, 1 by four times.
+const DIRECTIONS_PER_INVOCATION: u32 = 8;
+
+/// Bytes of one arc in the outline lists (four vec4s: `ssdf_prepare_arc`
+/// in `shaders/ssdf/angles.wgsl`).
+const ARC_BYTES: u64 = 64;
 
 impl SsdfBaker {
     /// Compiles the kernels.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary) -> anyhow::Result<Self> {
-        let silhouette = lib.compute_pipeline(
-            ctx,
-            "ssdf/ssdf_silhouette.wgsl",
-            "main",
-            &[
-                Define::U32("ARC_PIECES", ARC_PIECES),
-                Define::F32("OUTSIDE_OFFSET", OUTSIDE_OFFSET as f32),
-            ],
-        )?;
-        let pipeline = lib.compute_pipeline(
-            ctx,
-            "ssdf/ssdf_bake.wgsl",
-            "main",
-            &[
-                Define::U32("ARC_PIECES", ARC_PIECES),
-                Define::Bool("OCTAHEDRAL", true),
-            ],
-        )?;
+        let defines = [
+            Define::U32("ARC_PIECES", ARC_PIECES),
+            Define::F32("OUTSIDE_OFFSET", OUTSIDE_OFFSET as f32),
+            Define::F32("PIECE_ANGLE", PIECE_ANGLE as f32),
+            Define::U32("PIECE_CAPACITY", PIECE_CAPACITY),
+            Define::U32("ARC_CAPACITY", ARC_CAPACITY),
+            Define::U32("DIRECTIONS_PER_INVOCATION", DIRECTIONS_PER_INVOCATION),
+            Define::Bool("OCTAHEDRAL", true),
+        ];
+        let kernel = |file: &str| lib.compute_pipeline(ctx, file, "main", &defines);
         Ok(Self {
-            silhouette,
-            pipeline,
+            candidates: kernel("ssdf/ssdf_candidates.wgsl")?,
+            pieces: kernel("ssdf/ssdf_pieces.wgsl")?,
+            outer: kernel("ssdf/ssdf_outer.wgsl")?,
+            arcs: kernel("ssdf/ssdf_arcs.wgsl")?,
+            pipeline: kernel("ssdf/ssdf_bake.wgsl")?,
         })
     }
 
@@ -272,17 +367,20 @@ impl SsdfBaker {
         let grid = grid_for(mesh, knobs.grid);
         let scene = object_scene(mesh);
         let points = lookup_points(&scene, &grid);
-        let values = self.run(ctx, mesh, &scene, &points, knobs.directions, progress)?;
+        let (values, kernel_seconds) =
+            self.run(ctx, mesh, &scene, &points, knobs.directions, progress)?;
         Ok(SsdfSamples {
             grid,
             directions: knobs.directions,
             values,
             object: mesh.geometry_key(),
             seconds: started.elapsed().as_secs_f64(),
+            kernel_seconds,
         })
     }
 
-    /// S at every direction texel from each of `points` on the GPU.
+    /// S at every direction texel from each of `points` on the GPU, and
+    /// the GPU seconds of each kernel over all batches.
     pub fn run(
         &self,
         ctx: &Arc<Context>,
@@ -291,70 +389,84 @@ impl SsdfBaker {
         points: &[DVec3],
         directions: u32,
         progress: &dyn Fn(usize, usize),
-    ) -> anyhow::Result<Vec<f32>> {
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let bytes = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
-        let pts: Vec<f32> = points
+    ) -> anyhow::Result<(Vec<f32>, KernelSeconds)> {
+        let mut kernel_seconds: KernelSeconds = Vec::new();
+        let order = morton_order(points);
+        let sorted: Vec<DVec3> = order.iter().map(|&i| points[i]).collect();
+        let pts: Vec<f32> = sorted
             .iter()
             .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
             .collect();
         let sil = SilhouetteMesh::new(mesh);
-        let mut edges = Vec::with_capacity(sil.edges.len() * 24);
-        for e in &sil.edges {
-            let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
-            edges.extend(v4(e.a, e.always as u32 as f64));
-            edges.extend(v4(e.b, 0.0));
-            for p in e.planes {
-                edges.extend(p.to_array().map(|x| x as f32));
-            }
-            edges.extend(v4(e.opposite[0], 0.0));
-            edges.extend(v4(e.opposite[1], 0.0));
-        }
         let (nodes, tris) = scene.packed();
-        let upload = |name: &str, v: &[f32]| -> anyhow::Result<Arc<Buffer>> {
-            let mut b = bytes(v);
-            b.resize(b.len().max(16), 0);
-            Ok(Arc::new(Buffer::with_data(ctx, name, &b, storage)?))
-        };
-        let points_buf = upload("ssdf points", &pts)?;
-        let edges_buf = upload("ssdf edges", &edges)?;
-        let nodes_buf = upload("ssdf bvh nodes", &nodes)?;
-        let tris_buf = upload("ssdf bvh triangles", &tris)?;
+        let points_buf = storage(ctx, "ssdf points", &pts)?;
+        let edges_buf = storage(ctx, "ssdf edges", &pack_edges(&sil))?;
+        let nodes_buf = storage(ctx, "ssdf bvh nodes", &nodes)?;
+        let tris_buf = storage(ctx, "ssdf bvh triangles", &tris)?;
         let texels = (directions * directions) as usize;
         let edge_count = sil.edges.len() as u32;
-        let mut out = Vec::with_capacity(points.len() * texels);
+        let mut out = vec![0.0f32; points.len() * texels];
         let mut renderer = Renderer::new(ctx, 1)?;
-        let node_arc_bytes = ARC_BYTES * edge_count as u64 * ARC_PIECES as u64;
-        let limit = ctx.info().max_storage_buffer_range as u64;
-        let batch = NODES_PER_BATCH.min((limit / node_arc_bytes.max(1)).max(1) as usize);
-        for start in (0..points.len()).step_by(batch) {
-            let count = batch.min(points.len() - start);
-            let size = (count * texels * 4) as u64;
+        for start in (0..points.len()).step_by(NODES_PER_BATCH) {
+            let count = NODES_PER_BATCH.min(points.len() - start);
+            let n = count as u64;
+            let size = n * texels as u64 * 4;
             let readback = BufferReadback::new(ctx, "ssdf readback", size)?;
+            let piece_readback = BufferReadback::new(ctx, "ssdf piece counts", 4 * n)?;
+            let arc_readback = BufferReadback::new(ctx, "ssdf arc counts", 4 * n)?;
             renderer.begin_frame()?;
             let mut graph = FrameGraph::new();
-            let target = graph.create_buffer("ssdf batch", size);
             let bound = [&points_buf, &edges_buf, &nodes_buf, &tris_buf]
                 .map(|b| graph.import_buffer(b, None));
-            let push = BakePush {
-                node_offset: start as u32,
-                map_size: directions,
-                edge_count,
-                node_count: count as u32,
-            };
-            let mut arcs = graph.create_buffer("ssdf arcs", node_arc_bytes.max(16) * count as u64);
-            let mut arc_counts = graph.create_buffer("ssdf arc counts", 4 * count as u64);
+            let push = batch_push(&sorted[start..start + count], start, directions, edge_count);
+            let (candidates, candidate_count, candidate_args) =
+                self.add_candidates(&mut graph, bound[1], &push, edge_count, count as u32);
+            let zeros =
+                |graph: &mut FrameGraph, name: &str| graph.upload_buffer(name, vec![0; 4 * count]);
+            let args = [0u32, count as u32, 1]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+            let mut piece_args = graph.upload_buffer("ssdf piece args", args);
+            let mut pieces = graph.create_buffer("ssdf pieces", 4 * PIECE_CAPACITY as u64 * n);
+            let mut piece_counts = zeros(&mut graph, "ssdf piece counts");
             graph
-                .compute("ssdf-silhouette", &self.silhouette)
+                .compute("ssdf-pieces", &self.pieces)
+                .read("points", bound[0])
+                .read("edges", bound[1])
+                .read("candidates", candidates)
+                .read("candidate_count", candidate_count)
+                .write("pieces", &mut pieces)
+                .read_write("piece_counts", &mut piece_counts)
+                .read_write("piece_args", &mut piece_args)
+                .push(&push)
+                .indirect(candidate_args, 0);
+            let mut outer = graph.create_buffer("ssdf outer", 4 * PIECE_CAPACITY as u64 * n);
+            graph
+                .compute("ssdf-outer", &self.outer)
                 .read("points", bound[0])
                 .read("edges", bound[1])
                 .read("bvh_nodes", bound[2])
                 .read("bvh_triangles", bound[3])
-                .write("arcs", &mut arcs)
-                .write("arc_counts", &mut arc_counts)
+                .read("pieces", pieces)
+                .read("piece_counts", piece_counts)
+                .write("outer", &mut outer)
                 .push(&push)
-                .groups([count as u32, 1, 1]);
-            let mut written = target;
+                .indirect(piece_args, 0);
+            let mut arcs = graph.create_buffer("ssdf arcs", ARC_BYTES * ARC_CAPACITY as u64 * n);
+            let mut arc_counts = zeros(&mut graph, "ssdf arc counts");
+            graph
+                .compute("ssdf-arcs", &self.arcs)
+                .read("points", bound[0])
+                .read("edges", bound[1])
+                .read("pieces", pieces)
+                .read("piece_counts", piece_counts)
+                .read("outer", outer)
+                .write("arcs", &mut arcs)
+                .read_write("arc_counts", &mut arc_counts)
+                .push(&push)
+                .indirect(piece_args, 0);
+            let mut written = graph.create_buffer("ssdf batch", size);
             graph
                 .compute("ssdf-bake", &self.pipeline)
                 .read("points", bound[0])
@@ -364,13 +476,147 @@ impl SsdfBaker {
                 .read("arc_counts", arc_counts)
                 .write("out_ssdf", &mut written)
                 .push(&push)
-                .groups([(texels as u32).div_ceil(64), count as u32, 1]);
+                .groups([
+                    (texels as u32).div_ceil(64 * DIRECTIONS_PER_INVOCATION),
+                    count as u32,
+                    1,
+                ]);
             readback.add_to_graph(&mut graph, "ssdf readback", written);
+            piece_readback.add_to_graph(&mut graph, "ssdf piece counts readback", piece_counts);
+            arc_readback.add_to_graph(&mut graph, "ssdf arc counts readback", arc_counts);
             renderer.submit(graph, &SubmitSync::none())?;
             renderer.finish()?;
-            out.extend(readback.read_f32()?);
+            if let Some(timings) = renderer.latest_timings() {
+                for pass in timings
+                    .passes
+                    .iter()
+                    .filter(|p| p.name.starts_with("ssdf-"))
+                {
+                    match kernel_seconds.iter_mut().find(|(n, _)| *n == pass.name) {
+                        Some(k) => k.1 += pass.gpu_ms / 1e3,
+                        None => kernel_seconds.push((pass.name.clone(), pass.gpu_ms / 1e3)),
+                    }
+                }
+            }
+            for (what, counts, capacity) in [
+                ("silhouette pieces", &piece_readback, PIECE_CAPACITY),
+                ("outline arcs", &arc_readback, ARC_CAPACITY),
+            ] {
+                let most = counts
+                    .read_f32()?
+                    .into_iter()
+                    .map(f32::to_bits)
+                    .max()
+                    .unwrap_or(0);
+                anyhow::ensure!(
+                    most <= capacity,
+                    "{}: {most} {what} seen from one node of the SSDF grid, more than the bake \
+                     holds ({capacity}); simplify the mesh",
+                    mesh.name
+                );
+            }
+            let values = readback.read_f32()?;
+            for (k, row) in values.chunks_exact(texels).enumerate() {
+                let node = order[start + k];
+                out[node * texels..(node + 1) * texels].copy_from_slice(row);
+            }
             progress(start + count, points.len());
         }
-        Ok(out)
+        Ok((out, kernel_seconds))
     }
+
+    /// Adds the candidates kernel for the batch `push` describes: the
+    /// candidate list (edge indices, `edge_count` slots), its length, and
+    /// the next kernel's indirect dispatch over it for `nodes` nodes.
+    fn add_candidates(
+        &self,
+        graph: &mut FrameGraph,
+        edges: BufferHandle,
+        push: &BakePush,
+        edge_count: u32,
+        nodes: u32,
+    ) -> (BufferHandle, BufferHandle, BufferHandle) {
+        let mut candidates = graph.create_buffer("ssdf candidates", 4 * edge_count.max(1) as u64);
+        let mut candidate_count = graph.upload_buffer("ssdf candidate count", vec![0; 4]);
+        let args = [0u32, nodes, 1]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let mut candidate_args = graph.upload_buffer("ssdf candidate args", args);
+        graph
+            .compute("ssdf-candidates", &self.candidates)
+            .read("edges", edges)
+            .write("candidates", &mut candidates)
+            .read_write("candidate_count", &mut candidate_count)
+            .read_write("candidate_args", &mut candidate_args)
+            .push(push)
+            .groups([edge_count.div_ceil(64), 1, 1]);
+        (candidates, candidate_count, candidate_args)
+    }
+
+    /// The candidates kernel alone on the box `lo`..`hi` (what
+    /// [`edge_candidates`] mirrors): the edge indices it keeps, sorted.
+    pub fn candidates(
+        &self,
+        ctx: &Arc<Context>,
+        mesh: &ObjectMesh,
+        lo: DVec3,
+        hi: DVec3,
+    ) -> anyhow::Result<Vec<u32>> {
+        let sil = SilhouetteMesh::new(mesh);
+        let edge_count = sil.edges.len() as u32;
+        let edges_buf = storage(ctx, "ssdf edges", &pack_edges(&sil))?;
+        let push = batch_push(&[lo, hi], 0, 0, edge_count);
+        let mut renderer = Renderer::new(ctx, 1)?;
+        let list = BufferReadback::new(ctx, "ssdf candidates", 4 * edge_count.max(1) as u64)?;
+        let total = BufferReadback::new(ctx, "ssdf candidate count", 4)?;
+        renderer.begin_frame()?;
+        let mut graph = FrameGraph::new();
+        let edges = graph.import_buffer(&edges_buf, None);
+        let (candidates, count, _) = self.add_candidates(&mut graph, edges, &push, edge_count, 1);
+        list.add_to_graph(&mut graph, "ssdf candidates readback", candidates);
+        total.add_to_graph(&mut graph, "ssdf candidate count readback", count);
+        renderer.submit(graph, &SubmitSync::none())?;
+        renderer.finish()?;
+        let as_u32 = |v: Vec<f32>| -> Vec<u32> { v.into_iter().map(f32::to_bits).collect() };
+        let n = as_u32(total.read_f32()?)[0] as usize;
+        let mut kept = as_u32(list.read_f32()?);
+        kept.truncate(n);
+        kept.sort_unstable();
+        Ok(kept)
+    }
+}
+
+/// The push block of the batch of `points` (sorted order) from `start`.
+fn batch_push(points: &[DVec3], start: usize, directions: u32, edge_count: u32) -> BakePush {
+    let (lo, hi) = points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let v4 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
+    BakePush {
+        node_offset: start as u32,
+        map_size: directions,
+        edge_count,
+        node_count: points.len() as u32,
+        box_lo: v4(lo),
+        box_hi: v4(hi),
+    }
+}
+
+/// The edges as the kernels read them: six vec4s each, (a, always),
+/// (b, 0), the two faces' planes, the two faces' third corners.
+fn pack_edges(sil: &SilhouetteMesh) -> Vec<f32> {
+    let mut edges = Vec::with_capacity(sil.edges.len() * 24);
+    for e in &sil.edges {
+        let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+        edges.extend(v4(e.a, e.always as u32 as f64));
+        edges.extend(v4(e.b, 0.0));
+        for p in e.planes {
+            edges.extend(p.to_array().map(|x| x as f32));
+        }
+        edges.extend(v4(e.opposite[0], 0.0));
+        edges.extend(v4(e.opposite[1], 0.0));
+    }
+    edges
 }

@@ -1,22 +1,30 @@
 //! The exact spherical signed distance S(d; x) of a triangle mesh (METHOD.md
 //! "SSDF field"): the angle from direction d to the object's silhouette as
 //! seen from x, positive where the ray from x along d misses the object,
-//! negative where it hits. The f64 CPU reference of the bake kernel
-//! (`shaders/ssdf/ssdf_bake.wgsl`), which computes it the same way:
+//! negative where it hits. The f64 CPU reference of the bake kernels
+//! (`shaders/ssdf/`, see `super::bake`), which compute it the same way:
 //!
 //! - the sign is a ray cast (through the bounding-volume hierarchy);
-//! - the angle is the smallest angle from d to the great-circle arcs of the
-//!   **silhouette edges** seen from x: edges whose two faces face x on
+//! - the angle is the smallest angle from d to the **outline** seen from x:
+//!   the boundary between the directions that hit the object and those
+//!   that miss. The outline is made of pieces of the great-circle arcs of
+//!   the **silhouette edges** seen from x: edges whose two faces face x on
 //!   opposite sides, and edges with one face (open meshes) or more than
-//!   two. The outline of the projected object is made of such arcs, and
-//!   every arc lies inside the projected object, so where d misses the
-//!   smallest angle over all arcs is exact;
-//! - where d hits, arcs of inner contours (a part in front of another, a
-//!   fold) would be nearer than the outline, so only **outer** arcs count:
-//!   each arc is cut into [`ARC_PIECES`] pieces, and a piece is outer when
-//!   a ray just outside its middle (by [`OUTSIDE_OFFSET`], on the side
-//!   away from the front face) misses. A piece only partly on the outline
-//!   is judged by its middle.
+//!   two. Not every silhouette edge is on the outline (a part in front of
+//!   another, a fold: inner contours), so each silhouette edge is cut into
+//!   pieces of at most [`PIECE_ANGLE`] (but no more than [`ARC_PIECES`]),
+//!   and a piece is **outer** when a ray just outside its middle (by
+//!   [`OUTSIDE_OFFSET`], on the side away from the front face) misses; the
+//!   outer pieces are the outline. A piece only partly on the outline is
+//!   judged by its middle, so S is exact up to about one piece's angle
+//!   where the outline passes behind another part, and exact elsewhere.
+//!
+//! Every outline point is the nearest point of the hit directions to some
+//! miss and of the miss directions to some hit, so the outer pieces serve
+//! both signs. (Until issue 26's ninth pass a miss measured its angle to
+//! every silhouette arc, inner ones included, and every edge was cut into
+//! four pieces: on a mesh of 100k triangles that was five times the arcs
+//! and four times the rays, for the same values up to a piece's angle.)
 //!
 //! From inside a closed mesh nothing is a silhouette and every ray hits:
 //! S = −π. Positions are welded by their exact bits, so split vertices
@@ -48,8 +56,15 @@ pub struct SilhouetteEdge {
 /// silhouette arc from an inner contour passes outside the arc's middle.
 pub const OUTSIDE_OFFSET: f64 = 2e-3;
 
-/// Pieces each silhouette arc is cut into to tell outline from inner contour.
-pub const ARC_PIECES: u32 = 4;
+/// Most pieces a silhouette arc is cut into to tell outline from inner
+/// contour (at most 16: the kernels' piece records hold four bits).
+pub const ARC_PIECES: u32 = 16;
+
+/// The angle (radians) a piece of a silhouette arc spans at most, unless
+/// that would take more than [`ARC_PIECES`] pieces: where the outline
+/// passes behind another part, S may be off by about this much. A tenth
+/// of a 32² direction map's texel (0.11 rad).
+pub const PIECE_ANGLE: f64 = 0.01;
 
 impl SilhouetteEdge {
     /// Whether the edge is on the silhouette seen from `x`: its faces face
@@ -63,13 +78,21 @@ impl SilhouetteEdge {
         p.truncate().dot(x) - p.w > 0.0
     }
 
-    /// Piece `k` of [`ARC_PIECES`] of the edge's arc seen from `x`: its
-    /// ends, and the direction just outside its middle, on the side away
-    /// from the face that faces `x`.
-    pub fn piece(&self, x: DVec3, k: u32) -> (DVec3, DVec3, DVec3) {
+    /// How many pieces the edge's arc seen from `x` is cut into: enough
+    /// that none spans more than [`PIECE_ANGLE`], at most [`ARC_PIECES`].
+    /// Mirrored by `piece_count` in `shaders/ssdf/silhouette_edges.wgsl`.
+    pub fn pieces(&self, x: DVec3) -> u32 {
+        let angle = angle_between((self.a - x).normalize(), (self.b - x).normalize());
+        ((angle / PIECE_ANGLE).ceil() as u32).clamp(1, ARC_PIECES)
+    }
+
+    /// Piece `k` of `n` of the edge's arc seen from `x`: its ends, and the
+    /// direction just outside its middle, on the side away from the face
+    /// that faces `x`.
+    pub fn piece(&self, x: DVec3, k: u32, n: u32) -> (DVec3, DVec3, DVec3) {
         let (a, b) = (self.a - x, self.b - x);
         let at = |t: f64| (a + (b - a) * t).normalize();
-        let n = ARC_PIECES as f64;
+        let n = n as f64;
         let (p, q) = (at(k as f64 / n), at((k as f64 + 1.0) / n));
         let m = at((k as f64 + 0.5) / n);
         let front = if self.faces_x(0, x) { 0 } else { 1 };
@@ -79,27 +102,31 @@ impl SilhouetteEdge {
     }
 }
 
-/// The silhouette seen from one point: its arcs, each marked outer or not.
+/// The outline seen from one point: the outer pieces of its silhouette
+/// arcs, consecutive ones of an edge joined.
 #[derive(Debug, Clone)]
 pub struct SilhouetteView {
-    arcs: Vec<(DVec3, DVec3, bool)>,
+    arcs: Vec<(DVec3, DVec3)>,
 }
 
 impl SilhouetteView {
     /// S(d) for unit `d`, given whether the ray along `d` hits.
     pub fn signed_angle(&self, d: DVec3, hit: bool) -> f64 {
-        let mut nearest = 4.0f64;
-        for &(a, b, outer) in &self.arcs {
-            if outer || !hit {
-                nearest = nearest.min(chord2_to_arc(d, a, b));
-            }
-        }
+        let nearest = self
+            .arcs
+            .iter()
+            .fold(4.0f64, |m, &(a, b)| m.min(chord2_to_arc(d, a, b)));
         let best = angle_of_chord2(nearest);
         if hit {
             -best
         } else {
             best
         }
+    }
+
+    /// How many arcs the outline has.
+    pub fn arcs(&self) -> usize {
+        self.arcs.len()
     }
 }
 
@@ -166,26 +193,23 @@ impl SilhouetteMesh {
         Self { edges }
     }
 
-    /// The silhouette seen from `x`; `hits(x, d)` says whether the ray
-    /// from x along d hits the object (used to find the outer arcs). Each
-    /// silhouette edge is classified in [`ARC_PIECES`] pieces; consecutive
-    /// pieces of the same class are kept as one arc (they lie on one great
+    /// The outline seen from `x`; `hits(x, d)` says whether the ray from
+    /// x along d hits the object (used to find the outer pieces). Each
+    /// silhouette edge is classified in [`SilhouetteEdge::pieces`] pieces;
+    /// consecutive outer pieces are kept as one arc (they lie on one great
     /// circle, so the angle to their union is the angle to that arc).
     pub fn view_from(&self, x: DVec3, hits: impl Fn(DVec3, DVec3) -> bool) -> SilhouetteView {
-        let mut arcs: Vec<(DVec3, DVec3, bool)> = Vec::new();
+        let mut arcs: Vec<(DVec3, DVec3)> = Vec::new();
         for e in self.edges.iter().filter(|e| e.is_silhouette(x)) {
-            let mut run: Option<(DVec3, DVec3, bool)> = None;
-            for k in 0..ARC_PIECES {
-                let (a, b, probe) = e.piece(x, k);
-                let outer = !hits(x, probe);
-                run = match run {
-                    Some((start, _, o)) if o == outer => Some((start, b, o)),
-                    Some(done) => {
-                        arcs.push(done);
-                        Some((a, b, outer))
-                    }
-                    None => Some((a, b, outer)),
-                };
+            let n = e.pieces(x);
+            let mut run: Option<(DVec3, DVec3)> = None;
+            for k in 0..n {
+                let (a, b, probe) = e.piece(x, k, n);
+                if hits(x, probe) {
+                    arcs.extend(run.take());
+                } else {
+                    run = Some((run.map_or(a, |r| r.0), b));
+                }
             }
             arcs.extend(run);
         }
@@ -203,8 +227,9 @@ pub fn angle_between(u: DVec3, v: DVec3) -> f64 {
 /// projection falls within the arc, else to the nearer end. The chord,
 /// 2 sin(θ/2), grows with the angle θ, so the nearest arc is the one of
 /// smallest chord; it is accurate near θ = 0, where a cosine is not, and
-/// costs no inverse trigonometry. Mirrored by `ssdf_chord2_to_arc` in
-/// `shaders/ssdf/angles.wgsl` (which takes n precomputed).
+/// costs no inverse trigonometry. Mirrored by `ssdf_arc_chord2` and
+/// `ssdf_chord2_of` in `shaders/ssdf/angles.wgsl` (which prepare each arc
+/// once, and keep the nearest end and the nearest great circle apart).
 pub fn chord2_to_arc(d: DVec3, a: DVec3, b: DVec3) -> f64 {
     let ends = (d - a).length_squared().min((d - b).length_squared());
     let n = a.cross(b);
