@@ -14,7 +14,7 @@ use inlay_passes::object::{Material, MeshPart, MeshVertex, ObjectMesh};
 use inlay_passes::rng::Pcg32;
 use inlay_passes::shaders::embedded_library;
 use inlay_passes::ssdf::bake::{edge_candidates, morton_order};
-use inlay_passes::ssdf::{bake_reference, object_scene, SilhouetteMesh, SsdfBaker};
+use inlay_passes::ssdf::{bake_reference, object_scene, SilhouetteMesh, SsdfBaker, SsdfKnobs};
 
 /// A mesh from positions and triangles (flat normals unused by the bake).
 fn mesh(name: &str, positions: Vec<Vec3>, indices: Vec<u32>) -> Arc<ObjectMesh> {
@@ -187,10 +187,12 @@ fn morton_batches_are_blocks() {
     }
 }
 
-/// 6 000 separate small triangles in a plane, seen from in front: every
+/// 6 000 separate small triangles in a plane, seen from off it: every
 /// edge is on the outline, 18 000 arcs, more than a node's list holds.
 /// The bake is refused, naming the mesh, instead of measuring S to part
-/// of the outline.
+/// of the outline: before any GPU work when a corner of the grid sees it
+/// (`SsdfBaker::bake`), and when the batch is read back otherwise
+/// (`SsdfBaker::run` from a point of the caller's).
 #[test]
 fn an_outline_too_large_for_the_bake_is_refused() {
     let ctx = common::gpu();
@@ -219,5 +221,18 @@ fn an_outline_too_large_for_the_bake_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("confetti") && e.contains("outline arcs"), "{e}");
+    let knobs = SsdfKnobs {
+        grid: 2,
+        directions: 8,
+        components: 1,
+    };
+    let e = baker
+        .bake(&ctx, &mesh, &knobs, &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("confetti") && e.contains("outline arcs") && e.contains("corner"),
+        "{e}"
+    );
     common::assert_no_validation_errors(&ctx);
 }

@@ -181,6 +181,47 @@ pub fn check_bake_fits(info: &DeviceInfo, mesh: &ObjectMesh) -> anyhow::Result<(
     Ok(())
 }
 
+/// Fails, before any GPU work, when the outline seen from one of `grid`'s
+/// corners (its farthest nodes, which see the whole object) already
+/// outgrows a node's lists in the bake ([`PIECE_CAPACITY`],
+/// [`ARC_CAPACITY`]), naming the object. Found with the CPU mirror; a
+/// node elsewhere that outgrows them still fails the bake when its batch
+/// is read back, never silently.
+pub fn check_outline_fits(
+    mesh: &ObjectMesh,
+    scene: &MeshScene,
+    grid: &SsdfGrid,
+) -> anyhow::Result<()> {
+    let sil = SilhouetteMesh::new(mesh);
+    let top = grid.nodes - 1;
+    for corner in 0..8u32 {
+        let at = |bit: u32| if corner & bit != 0 { top } else { 0 };
+        let node = (at(1) + grid.nodes * (at(2) + grid.nodes * at(4))) as usize;
+        let x = grid.position_of(node);
+        let pieces: u32 = sil
+            .edges
+            .iter()
+            .filter(|e| e.is_silhouette(x))
+            .map(|e| e.pieces(x))
+            .sum();
+        let arcs = sil
+            .view_from(x, |o, d| super::reference::hits(scene, o, d))
+            .arcs() as u32;
+        for (what, count, capacity) in [
+            ("silhouette pieces", pieces, PIECE_CAPACITY),
+            ("outline arcs", arcs, ARC_CAPACITY),
+        ] {
+            anyhow::ensure!(
+                count <= capacity,
+                "{}: {count} {what} seen from the SSDF grid's corner {x:.3}, more than the bake \
+                 holds ({capacity}); simplify the mesh",
+                mesh.name
+            );
+        }
+    }
+    Ok(())
+}
+
 /// The object in its own frame as a ray-casting scene.
 pub fn object_scene(mesh: &Arc<ObjectMesh>) -> MeshScene {
     MeshScene::new(&[PlacedObject {
@@ -366,6 +407,7 @@ impl SsdfBaker {
         let started = Instant::now();
         let grid = grid_for(mesh, knobs.grid);
         let scene = object_scene(mesh);
+        check_outline_fits(mesh, &scene, &grid)?;
         let points = lookup_points(&scene, &grid);
         let (values, kernel_seconds) =
             self.run(ctx, mesh, &scene, &points, knobs.directions, progress)?;

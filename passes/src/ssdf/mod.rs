@@ -15,8 +15,8 @@ pub mod reference;
 pub mod silhouette;
 
 pub use bake::{
-    bake_reference, check_bake_fits, grid_for, lookup_points, object_scene, SsdfBaker, SsdfKnobs,
-    SsdfSamples, BAKE_BYTES_PER_TRIANGLE,
+    bake_reference, check_bake_fits, check_outline_fits, grid_for, lookup_points, object_scene,
+    SsdfBaker, SsdfKnobs, SsdfSamples, BAKE_BYTES_PER_TRIANGLE,
 };
 pub use field::{OutsideMode, SsdfField};
 pub use format::{
