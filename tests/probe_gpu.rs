@@ -10,9 +10,10 @@ use glam::DVec3;
 use inlay_engine::shader::{compile, Define, ShaderStage};
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::field::{GpuGridField, GridField};
+use inlay_passes::lighting::local::MAX_LOCAL_LIGHTS;
 use inlay_passes::lighting::{
     direct_lights, environment_lobes, lobe_rays, sharp_limit, split_environment, IncidentLight,
-    LightingWork,
+    LightingWork, LocalLight,
 };
 use inlay_passes::march::MarchKnobs;
 use inlay_passes::probe::{trace_probe, MapKind, ProbeKnobs, ProbePass, ProbeTexels};
@@ -690,5 +691,45 @@ fn local_lights_leave_the_probe_and_return_as_lobes() {
         assert!(lamp > 0.0);
         assert_eq!(bulb > 0.0, environment);
     }
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// More local lights than the shading and the cast shadow hold (the
+/// field's and a recipe's hidden bulbs together) are refused with the
+/// knob to lower, before any pass is built: the cast shadow keeps one
+/// arrival per light in an array of `MAX_LOCAL_LIGHTS`, and a ninth would
+/// write past it without a word.
+#[test]
+fn too_many_local_lights_are_refused() {
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let light = |i: usize| LocalLight {
+        centre: DVec3::new(0.1 * i as f64, 0.9, 0.0),
+        radius: 0.02,
+        emission: None,
+    };
+    let most = MAX_LOCAL_LIGHTS as usize;
+    let lights: Vec<LocalLight> = (0..=most).map(light).collect();
+    let build = |n: usize| {
+        IncidentLight::new(
+            &ctx,
+            &lib,
+            ProbeKnobs::default(),
+            FitKnobs::default(),
+            march(),
+            &[],
+            &lights[..n],
+            1,
+        )
+    };
+    assert!(build(most).is_ok());
+    let e = build(most + 1)
+        .err()
+        .expect("nine local lights")
+        .to_string();
+    assert!(
+        e.contains("[lighting.local] count") && e.contains(&format!("at most {most}")),
+        "{e}"
+    );
     common::assert_no_validation_errors(&ctx);
 }

@@ -15,6 +15,8 @@ pub mod meta;
 
 use std::sync::Arc;
 
+use anyhow::Context as _;
+
 use inlay_engine::graph::{FrameGraph, ImageHandle};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Context};
@@ -193,7 +195,8 @@ impl InsertionFrame {
                     &lobes,
                     &lights,
                     scene.lighting.local.rays,
-                )?,
+                )
+                .with_context(|| format!("{}: object `{}`", scene.path.display(), placed.name))?,
                 ssdf: match ssdf {
                     Some(f) => Some(GpuSsdf::upload(ctx, f, &placed.mesh)?),
                     None => None,

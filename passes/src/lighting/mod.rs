@@ -153,6 +153,16 @@ impl IncidentLight {
         local: &[LocalLight],
         local_side: u32,
     ) -> anyhow::Result<Self> {
+        // The cast shadow keeps one arrival per local light in an array of
+        // MAX_LOCAL_LIGHTS (shaders/shadow/cast_body.wgsl): more would
+        // write past it, silently.
+        anyhow::ensure!(
+            local.len() <= local::MAX_LOCAL_LIGHTS as usize,
+            "{} local lights light the object (the field's `[lighting.local] count` and the \
+             recipe's hidden bulbs together); at most {} are shaded: lower `count`",
+            local.len(),
+            local::MAX_LOCAL_LIGHTS
+        );
         let split = split_environment(environment, sharp_limit(&probe));
         let side = probe.supersampling;
         let probe = ProbePass::new(ctx, lib, probe, march, &split.broad, local)?;
