@@ -80,6 +80,11 @@ fn half_area(b: &Aabb) -> f64 {
     e.x * e.y + e.y * e.z + e.z * e.x
 }
 
+/// The bin of `t`'s centroid along `axis`, whose centroids span `a`..`b`.
+fn sah_bin(t: &Triangle, axis: usize, a: f64, b: f64) -> usize {
+    (((centroid(t)[axis] - a) / (b - a) * SAH_BINS as f64) as usize).min(SAH_BINS - 1)
+}
+
 /// Splits `tris` where the binned surface area heuristic says (the cost
 /// of a split: each side's box area times its triangles), partitioning
 /// them in place and returning the left side's count; `None` where the
@@ -94,14 +99,11 @@ fn sah_split(tris: &mut [Triangle], clo: DVec3, chi: DVec3) -> Option<usize> {
         if b.partial_cmp(&a) != Some(std::cmp::Ordering::Greater) {
             continue;
         }
-        let bin = |t: &Triangle| {
-            (((centroid(t)[axis] - a) / (b - a) * SAH_BINS as f64) as usize).min(SAH_BINS - 1)
-        };
         let empty = Aabb::new(DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         let mut boxes = [empty; SAH_BINS];
         let mut counts = [0usize; SAH_BINS];
         for t in tris.iter() {
-            let k = bin(t);
+            let k = sah_bin(t, axis, a, b);
             let tb = MeshScene::tri_bounds(t);
             boxes[k] = Aabb::new(boxes[k].min.min(tb.min), boxes[k].max.max(tb.max));
             counts[k] += 1;
@@ -130,12 +132,9 @@ fn sah_split(tris: &mut [Triangle], clo: DVec3, chi: DVec3) -> Option<usize> {
     }
     let (_, axis, k) = best?;
     let (a, b) = (clo[axis], chi[axis]);
-    let left_of = |t: &Triangle| {
-        (((centroid(t)[axis] - a) / (b - a) * SAH_BINS as f64) as usize).min(SAH_BINS - 1) <= k
-    };
     let mut mid = 0;
     for i in 0..tris.len() {
-        if left_of(&tris[i]) {
+        if sah_bin(&tris[i], axis, a, b) <= k {
             tris.swap(i, mid);
             mid += 1;
         }

@@ -189,10 +189,10 @@ pub fn check_bake_fits(info: &DeviceInfo, mesh: &ObjectMesh) -> anyhow::Result<(
 /// is read back, never silently.
 pub fn check_outline_fits(
     mesh: &ObjectMesh,
+    sil: &SilhouetteMesh,
     scene: &MeshScene,
     grid: &SsdfGrid,
 ) -> anyhow::Result<()> {
-    let sil = SilhouetteMesh::new(mesh);
     let top = grid.nodes - 1;
     for corner in 0..8u32 {
         let at = |bit: u32| if corner & bit != 0 { top } else { 0 };
@@ -317,15 +317,20 @@ pub fn edge_candidates(sil: &SilhouetteMesh, lo: DVec3, hi: DVec3) -> Vec<u32> {
         .collect()
 }
 
+/// The smallest box holding `points` (lower, upper corner).
+fn bounds_of(points: &[DVec3]) -> (DVec3, DVec3) {
+    points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
+}
+
 /// The order the bake takes `points` in: along a Morton curve over their
 /// bounding box (10 bits an axis), so that consecutive points, a batch,
 /// lie in a compact block (a 4 × 4 × 2 block of nodes, for a grid whose
 /// side is a power of two).
 pub fn morton_order(points: &[DVec3]) -> Vec<usize> {
-    let (lo, hi) = points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
+    let (lo, hi) = bounds_of(points);
     let scale = 1023.0 / (hi - lo).max_element().max(1e-300);
     let spread = |v: u32| -> u64 {
         (0..10).fold(0u64, |m, bit| m | ((((v >> bit) & 1) as u64) << (3 * bit)))
@@ -407,10 +412,11 @@ impl SsdfBaker {
         let started = Instant::now();
         let grid = grid_for(mesh, knobs.grid);
         let scene = object_scene(mesh);
-        check_outline_fits(mesh, &scene, &grid)?;
+        let sil = SilhouetteMesh::new(mesh);
+        check_outline_fits(mesh, &sil, &scene, &grid)?;
         let points = lookup_points(&scene, &grid);
         let (values, kernel_seconds) =
-            self.run(ctx, mesh, &scene, &points, knobs.directions, progress)?;
+            self.run_edges(ctx, mesh, &sil, &scene, &points, knobs.directions, progress)?;
         Ok(SsdfSamples {
             grid,
             directions: knobs.directions,
@@ -432,6 +438,22 @@ impl SsdfBaker {
         directions: u32,
         progress: &dyn Fn(usize, usize),
     ) -> anyhow::Result<(Vec<f32>, KernelSeconds)> {
+        let sil = SilhouetteMesh::new(mesh);
+        self.run_edges(ctx, mesh, &sil, scene, points, directions, progress)
+    }
+
+    /// [`Self::run`] with the mesh's edges already collected.
+    #[allow(clippy::too_many_arguments)]
+    fn run_edges(
+        &self,
+        ctx: &Arc<Context>,
+        mesh: &ObjectMesh,
+        sil: &SilhouetteMesh,
+        scene: &MeshScene,
+        points: &[DVec3],
+        directions: u32,
+        progress: &dyn Fn(usize, usize),
+    ) -> anyhow::Result<(Vec<f32>, KernelSeconds)> {
         let mut kernel_seconds: KernelSeconds = Vec::new();
         let order = morton_order(points);
         let sorted: Vec<DVec3> = order.iter().map(|&i| points[i]).collect();
@@ -439,23 +461,25 @@ impl SsdfBaker {
             .iter()
             .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
             .collect();
-        let sil = SilhouetteMesh::new(mesh);
         let (nodes, tris) = scene.packed();
         let points_buf = storage(ctx, "ssdf points", &pts)?;
-        let edges_buf = storage(ctx, "ssdf edges", &pack_edges(&sil))?;
+        let edges_buf = storage(ctx, "ssdf edges", &pack_edges(sil))?;
         let nodes_buf = storage(ctx, "ssdf bvh nodes", &nodes)?;
         let tris_buf = storage(ctx, "ssdf bvh triangles", &tris)?;
         let texels = (directions * directions) as usize;
         let edge_count = sil.edges.len() as u32;
         let mut out = vec![0.0f32; points.len() * texels];
         let mut renderer = Renderer::new(ctx, 1)?;
+        // Sized for a whole batch, reused by every batch (a shorter last
+        // batch fills their start).
+        let whole = NODES_PER_BATCH as u64;
+        let readback = BufferReadback::new(ctx, "ssdf readback", whole * texels as u64 * 4)?;
+        let piece_readback = BufferReadback::new(ctx, "ssdf piece counts", 4 * whole)?;
+        let arc_readback = BufferReadback::new(ctx, "ssdf arc counts", 4 * whole)?;
         for start in (0..points.len()).step_by(NODES_PER_BATCH) {
             let count = NODES_PER_BATCH.min(points.len() - start);
             let n = count as u64;
             let size = n * texels as u64 * 4;
-            let readback = BufferReadback::new(ctx, "ssdf readback", size)?;
-            let piece_readback = BufferReadback::new(ctx, "ssdf piece counts", 4 * n)?;
-            let arc_readback = BufferReadback::new(ctx, "ssdf arc counts", 4 * n)?;
             renderer.begin_frame()?;
             let mut graph = FrameGraph::new();
             let bound = [&points_buf, &edges_buf, &nodes_buf, &tris_buf]
@@ -547,6 +571,7 @@ impl SsdfBaker {
                 let most = counts
                     .read_f32()?
                     .into_iter()
+                    .take(count)
                     .map(f32::to_bits)
                     .max()
                     .unwrap_or(0);
@@ -558,7 +583,7 @@ impl SsdfBaker {
                 );
             }
             let values = readback.read_f32()?;
-            for (k, row) in values.chunks_exact(texels).enumerate() {
+            for (k, row) in values.chunks_exact(texels).take(count).enumerate() {
                 let node = order[start + k];
                 out[node * texels..(node + 1) * texels].copy_from_slice(row);
             }
@@ -631,10 +656,7 @@ impl SsdfBaker {
 
 /// The push block of the batch of `points` (sorted order) from `start`.
 fn batch_push(points: &[DVec3], start: usize, directions: u32, edge_count: u32) -> BakePush {
-    let (lo, hi) = points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
+    let (lo, hi) = bounds_of(points);
     let v4 = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
     BakePush {
         node_offset: start as u32,
