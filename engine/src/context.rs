@@ -70,7 +70,20 @@ pub struct DeviceInfo {
     /// (VK_EXT_shader_atomic_float's shaderBufferFloat32AtomicAdd, enabled
     /// when the device has it).
     pub float_atomic_add: bool,
+    /// The most loop iterations one shader invocation runs, all its loops
+    /// together, on devices that stop it there: Mesa's llvmpipe (lavapipe)
+    /// ends every loop of an invocation once [`LLVMPIPE_LOOP_LIMIT`]
+    /// iterations have run and carries on after them, so a kernel that
+    /// loops longer returns a wrong result with no error. None where no
+    /// such limit is known.
+    pub loop_iteration_limit: Option<u64>,
 }
+
+/// llvmpipe's limit on the loop iterations of one invocation
+/// (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS, counted over all of an
+/// invocation's loops; measured in this project on the SSDF bake, the
+/// near-field trace, the march and the probe trace).
+pub const LLVMPIPE_LOOP_LIMIT: u64 = 65535;
 
 /// A surface and its loader, present when the context was made for a window.
 pub(crate) struct SurfaceParts {
@@ -387,6 +400,7 @@ fn pick_physical(
     let index = choose_device(&candidates, wanted).map_err(EngineError::NoDevice)?;
     let (pd, family, props, name, kind) = details.swap_remove(index);
     let info = DeviceInfo {
+        loop_iteration_limit: loop_iteration_limit(&name, kind),
         name,
         kind,
         timestamp_period_ns: props.limits.timestamp_period as f64,
@@ -397,6 +411,12 @@ fn pick_physical(
         float_atomic_add: has_float_atomic_add(instance, pd),
     };
     Ok((pd, family.unwrap_or(0), info))
+}
+
+/// The loop limit of a device named `name` ([`DeviceInfo::loop_iteration_limit`]):
+/// llvmpipe's (Mesa names its CPU device "llvmpipe (LLVM …)").
+fn loop_iteration_limit(name: &str, kind: DeviceKind) -> Option<u64> {
+    (kind == DeviceKind::Cpu && name.starts_with("llvmpipe")).then_some(LLVMPIPE_LOOP_LIMIT)
 }
 
 /// Whether `pd` has VK_EXT_shader_atomic_float with
@@ -506,4 +526,20 @@ fn create_device(
     }
     let info = info.enabled_extension_names(&extensions);
     unsafe { instance.create_device(pd, &info, None) }.vk("vkCreateDevice")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_llvmpipe_has_a_loop_limit() {
+        let limit = |name, kind| loop_iteration_limit(name, kind);
+        assert_eq!(
+            limit("llvmpipe (LLVM 15.0.6, 256 bits)", DeviceKind::Cpu),
+            Some(LLVMPIPE_LOOP_LIMIT)
+        );
+        assert_eq!(limit("NVIDIA H200", DeviceKind::Discrete), None);
+        assert_eq!(limit("SwiftShader Device", DeviceKind::Cpu), None);
+    }
 }

@@ -27,7 +27,10 @@ mod validation;
 pub mod window;
 
 pub use ash::vk;
-pub use context::{Context, ContextOptions, DeviceInfo, MemoryUsage, WindowHandles, DEVICE_ENV};
+pub use context::{
+    Context, ContextOptions, DeviceInfo, MemoryUsage, WindowHandles, DEVICE_ENV,
+    LLVMPIPE_LOOP_LIMIT,
+};
 pub use error::{EngineError, Result};
 pub use image_io::{HdrImage, IMAGE_EXTENSIONS, MAX_EXR_PIXELS};
 pub use memory::{is_depth_format, Buffer, BufferLocation, Image, ImageDesc};

@@ -133,13 +133,11 @@ fn grid_empty_until(x: vec3<f32>, dir: vec3<f32>) -> f32 {
     let h = extent / cells;
     let lo = grid_info.bounds_min + c * b * h;
     let hi = grid_info.bounds_min + min((c + vec3<f32>(1.0)) * b, cells) * h;
-    var exit = 3.0e38;
-    for (var a = 0; a < 3; a++) {
-        if dir[a] > 0.0 {
-            exit = min(exit, (hi[a] - x[a]) / dir[a]);
-        } else if dir[a] < 0.0 {
-            exit = min(exit, (lo[a] - x[a]) / dir[a]);
-        }
-    }
-    return max(exit, 0.0);
+    // Per axis, the distance to the face the ray leaves by (none along an
+    // axis it does not move on); no loop, since llvmpipe counts each loop
+    // iteration of an invocation against 65535 in all (sh_trilinear.wgsl).
+    let moving = dir != vec3<f32>(0.0);
+    let face = select(lo, hi, dir > vec3<f32>(0.0));
+    let t = select(vec3<f32>(3.0e38), (face - x) / select(vec3<f32>(1.0), dir, moving), moving);
+    return max(min(t.x, min(t.y, t.z)), 0.0);
 }

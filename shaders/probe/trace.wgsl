@@ -12,6 +12,12 @@
 // A strided trace (`stride` > 1) writes one texel of each stride × stride
 // block and leaves the others as they were (passes/src/probe/knobs.rs
 // ProbeKnobs::stride).
+// A dispatch traces sub-samples [first_sample, first_sample +
+// sample_count) of each texel and adds their share of the mean to what
+// the dispatches before it wrote (the first writes it): llvmpipe stops an
+// invocation's loops after 65535 iterations in all, so the pass splits a
+// texel's rays over as many dispatches as that needs
+// (passes/src/probe/pass.rs).
 // Mirrors passes/src/probe/reference.rs.
 #include "common/ray_box.wgsl"
 #include "common/sg.wgsl"
@@ -34,11 +40,17 @@ struct ProbePush {
     // (phase mod stride, phase / stride) in it (1, 0: every texel).
     stride: u32,
     phase: u32,
+    // The sub-samples this dispatch traces (row-major in the texel's
+    // side × side cells).
+    first_sample: u32,
+    sample_count: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 var<immediate> pc: ProbePush;
 
-@group(0) @binding(3) var probe: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(3) var probe: texture_storage_2d<rgba32float, read_write>;
 // Environment lobes, two vec4 each: (p, λ), (μ, 0).
 @group(0) @binding(4) var<storage, read> env_lobes: array<vec4<f32>>;
 // The local lights, two vec4 each: (centre, radius), known emission.
@@ -83,7 +95,29 @@ fn probe_texel(id: vec2<u32>) -> vec2<u32> {
     return id * pc.stride + vec2<u32>(pc.phase % pc.stride, pc.phase / pc.stride);
 }
 
-// Each entry point writes the solid-angle mean over the texel's sub-samples.
+// The sum of texel t's sub-sample weights (every dispatch divides by it).
+fn texel_weight(t: vec2<u32>) -> f32 {
+    let size = vec2<u32>(pc.width, pc.height);
+    var weight = 0.0;
+    for (var k = 0u; k < pc.side * pc.side; k++) {
+        let ij = vec2<u32>(k % pc.side, k / pc.side);
+        weight += dm_direction_density(dm_subsample_uv(t, ij, pc.side, size)).w;
+    }
+    return weight;
+}
+
+// Adds this dispatch's share `sum` of texel t's weighted sum to what the
+// dispatches before wrote (the first one writes it).
+fn store_share(t: vec2<u32>, sum: vec4<f32>) {
+    var before = vec4<f32>(0.0);
+    if pc.first_sample > 0u {
+        before = textureLoad(probe, t);
+    }
+    textureStore(probe, t, before + sum / texel_weight(t));
+}
+
+// Each entry point writes (or adds) its sub-samples' share of the
+// solid-angle mean over the texel's sub-samples.
 @compute @workgroup_size(8, 8, 1)
 fn main_with_environment(@builtin(global_invocation_id) gid: vec3<u32>) {
     let id = probe_texel(gid.xy);
@@ -91,14 +125,12 @@ fn main_with_environment(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var sum = vec4<f32>(0.0);
-    var weight = 0.0;
-    for (var k = 0u; k < pc.side * pc.side; k++) {
+    for (var k = pc.first_sample; k < pc.first_sample + pc.sample_count; k++) {
         let s = probe_sample(id, k);
         let l = s.march.colour + (1.0 - s.march.opacity) * environment(s.dir);
         sum += s.weight * vec4<f32>(l, s.march.opacity);
-        weight += s.weight;
     }
-    textureStore(probe, id, sum / weight);
+    store_share(id, sum);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -108,11 +140,9 @@ fn main_field_only(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     var sum = vec4<f32>(0.0);
-    var weight = 0.0;
-    for (var k = 0u; k < pc.side * pc.side; k++) {
+    for (var k = pc.first_sample; k < pc.first_sample + pc.sample_count; k++) {
         let s = probe_sample(id, k);
         sum += s.weight * vec4<f32>(s.march.colour, s.march.opacity);
-        weight += s.weight;
     }
-    textureStore(probe, id, sum / weight);
+    store_share(id, sum);
 }

@@ -2,6 +2,9 @@
 
 use crate::scene::spec::MarchSpec;
 
+/// The most samples a ray may take across the field's diagonal.
+pub const MAX_SAMPLES_PER_RAY: u32 = 1 << 15;
+
 /// How finely the field is integrated along each ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarchKnobs {
@@ -30,12 +33,26 @@ impl MarchKnobs {
         diagonal / self.samples_per_ray as f64
     }
 
+    /// The most loop iterations one march along a ray takes: one per
+    /// segment of a ray across the whole diagonal, and one where the last
+    /// is cut (what a kernel counts against the device's loop limit,
+    /// [`super::loop_budget`]).
+    pub fn loop_iterations(&self) -> u64 {
+        self.samples_per_ray as u64 + 1
+    }
+
     /// Why the knobs cannot be used, naming the knob.
     pub fn check(&self) -> Result<(), (String, String)> {
-        if !(4..=1 << 16).contains(&self.samples_per_ray) {
+        // At most 32768: one march then stays under llvmpipe's 65535 loop
+        // iterations per invocation with room for the loops around it
+        // (32768 samples is already 64 per node of a 512³ grid).
+        if !(4..=MAX_SAMPLES_PER_RAY).contains(&self.samples_per_ray) {
             return Err((
                 "samples_per_ray".into(),
-                format!("{} must be in 4..=65536", self.samples_per_ray),
+                format!(
+                    "{} must be in 4..={MAX_SAMPLES_PER_RAY}",
+                    self.samples_per_ray
+                ),
             ));
         }
         if !(self.termination.is_finite() && (0.0..=0.5).contains(&self.termination)) {

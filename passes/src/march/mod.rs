@@ -3,11 +3,12 @@
 //! pass and its f64 CPU reference compute the same quadrature.
 
 mod knobs;
+pub mod loop_budget;
 pub(crate) mod pass;
 mod reference;
 mod reuse;
 
-pub use knobs::MarchKnobs;
+pub use knobs::{MarchKnobs, MAX_SAMPLES_PER_RAY};
 pub use pass::{
     MarchOutputs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT, NERF_MARCH, NERF_MARCH_INFO,
     OCCLUSION_SWITCH,

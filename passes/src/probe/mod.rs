@@ -17,8 +17,8 @@ pub use direction_map::{
 pub use irradiance::{lobes_irradiance, probe_irradiance, AXES};
 pub use knobs::ProbeKnobs;
 pub use pass::{
-    EnvironmentLobes, ProbePass, ProbeTexels, ENVIRONMENT_SWITCH, PROBE_FORMAT, PROBE_TRACE,
-    PROBE_TRACE_INFO,
+    samples_per_dispatch, EnvironmentLobes, ProbePass, ProbeTexels, ENVIRONMENT_SWITCH,
+    PROBE_FORMAT, PROBE_TRACE, PROBE_TRACE_INFO,
 };
 pub use reference::{trace_probe, trace_probe_without};
 pub use texel_filter::{environment_kernel, texel_environment, BLUR_PER_SUBSAMPLE};

@@ -40,6 +40,15 @@ inlay_engine::gpu_struct! {
         pub stride: u32,
         /// Which one: column + stride × row in the block.
         pub phase: u32,
+        /// The first sub-sample this dispatch traces (row-major in a
+        /// texel's `side` × `side`); 0 writes the texel, later ones add.
+        pub first_sample: u32,
+        /// How many it traces.
+        pub sample_count: u32,
+        /// Padding to the block's 16-byte size.
+        pub _pad0: u32,
+        /// Padding.
+        pub _pad1: u32,
     }
 }
 
@@ -102,6 +111,37 @@ pub struct ProbePass {
     march: MarchKnobs,
     spheres: Arc<Buffer>,
     local_count: u32,
+    /// Sub-samples of a texel one dispatch traces ([`samples_per_dispatch`]).
+    samples_per_dispatch: u32,
+}
+
+/// How many of a texel's `knobs.supersampling`² sub-samples one invocation
+/// of the trace may march under the device's loop limit `limit`
+/// ([`crate::march::loop_budget`]), with `local` local lights (each taken
+/// out of a ray by two marches) and `env_lobes` lobes of L_env; the pass
+/// splits a texel's sub-samples over as many dispatches as that takes.
+/// An error names the knobs when even one sub-sample is over the limit.
+pub fn samples_per_dispatch(
+    limit: Option<u64>,
+    knobs: &ProbeKnobs,
+    march: &MarchKnobs,
+    local: usize,
+    env_lobes: usize,
+) -> anyhow::Result<u32> {
+    let samples = knobs.supersampling * knobs.supersampling;
+    // Per sub-sample: its march, two per local light, the loops over the
+    // lights and the lobes; per invocation: the texel's weight, a loop
+    // over every sub-sample.
+    let per_sample =
+        march.loop_iterations() * (1 + 2 * local as u64) + (local + env_lobes + 1) as u64;
+    let fixed = samples as u64 + 1;
+    crate::march::loop_budget::items_per_invocation(limit, fixed, per_sample, samples).ok_or_else(|| {
+        anyhow::anyhow!(
+            "probe-trace: one ray may loop {per_sample} times (march knob `samples_per_ray` {},              {local} local lights taken out of it), over the device's limit of {} loop              iterations per invocation; lower `samples_per_ray`",
+            march.samples_per_ray,
+            limit.unwrap_or(u64::MAX)
+        )
+    })
 }
 
 impl ProbePass {
@@ -133,6 +173,13 @@ impl ProbePass {
         let field_only = build("main_field_only")?;
         let map = knobs.direction_map();
         let environment = texel_environment(environment, &map, knobs.supersampling);
+        let samples_per_dispatch = samples_per_dispatch(
+            ctx.info().loop_iteration_limit,
+            &knobs,
+            &march,
+            local.len(),
+            environment.len(),
+        )?;
         let environment = if environment.is_empty() {
             None
         } else {
@@ -184,7 +231,15 @@ impl ProbePass {
                 )?)
             },
             local_count: local.len() as u32,
+            samples_per_dispatch,
         })
+    }
+
+    /// Dispatches a trace takes: a texel's sub-samples split so that each
+    /// invocation stays under the device's loop limit (1 unless the knobs
+    /// are high).
+    pub fn dispatches(&self) -> u32 {
+        (self.knobs.supersampling * self.knobs.supersampling).div_ceil(self.samples_per_dispatch)
     }
 
     /// The probe's direction map.
@@ -252,27 +307,41 @@ impl ProbePass {
                 (self.knobs.stride, x + self.knobs.stride * y)
             }
         };
-        let push = ProbePush {
-            origin: origin.as_vec3().to_array(),
-            step: self.march.step(field.diagonal) as f32,
-            width: w,
-            height: h,
-            termination: self.march.termination as f32,
-            env_lobe_count: env.map_or(0, |(_, n)| n),
-            side: self.knobs.supersampling,
-            local_count: self.local_count,
-            stride,
-            phase,
-        };
+        let samples = self.knobs.supersampling * self.knobs.supersampling;
         let mut probe = probe;
         let pipeline = chosen.map_or(&self.field_only, |e| &e.pipeline);
         let spheres = graph.import_buffer(&self.spheres, None);
-        grid.bind(graph.compute(PROBE_TRACE, pipeline))
-            .write("probe", &mut probe)
-            .read("local_spheres", spheres)
-            .read_opt("env_lobes", env.map(|(b, _)| b))
-            .push(&push)
-            .threads([w.div_ceil(stride), h.div_ceil(stride), 1]);
+        let mut pass = graph.compute_pass(PROBE_TRACE);
+        for first in (0..samples).step_by(self.samples_per_dispatch as usize) {
+            let push = ProbePush {
+                origin: origin.as_vec3().to_array(),
+                step: self.march.step(field.diagonal) as f32,
+                width: w,
+                height: h,
+                termination: self.march.termination as f32,
+                env_lobe_count: env.map_or(0, |(_, n)| n),
+                side: self.knobs.supersampling,
+                local_count: self.local_count,
+                stride,
+                phase,
+                first_sample: first,
+                sample_count: self.samples_per_dispatch.min(samples - first),
+                _pad0: 0,
+                _pad1: 0,
+            };
+            let dispatch = grid.bind(pass.dispatch(pipeline));
+            let dispatch = if first == 0 {
+                dispatch.write("probe", &mut probe)
+            } else {
+                dispatch.read_write("probe", &mut probe)
+            };
+            dispatch
+                .read("local_spheres", spheres)
+                .read_opt("env_lobes", env.map(|(b, _)| b))
+                .push(&push)
+                .threads([w.div_ceil(stride), h.div_ceil(stride), 1]);
+        }
+        pass.finish();
         probe
     }
 }
