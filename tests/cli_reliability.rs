@@ -419,6 +419,75 @@ fn an_ssdf_is_used_only_for_the_object_it_was_baked_from() {
     assert!(!dir.join("wrong.png").exists());
 }
 
+/// On llvmpipe, which ends an invocation's loops after 65535 iterations
+/// in all, an object whose shading would march 8 × 8 rays of up to 1025
+/// samples to PLANTS' lamp at each pixel is refused before any frame,
+/// naming the knobs, rather than shaded with its rays cut short; a
+/// device without that limit renders it.
+#[test]
+fn shading_rays_past_the_devices_loop_limit_are_refused() {
+    let dir = scratch("pixel-loops");
+    let limited = common::gpu().info().loop_iteration_limit.is_some();
+    let text = std::fs::read_to_string(scene_path("plants.toml")).unwrap();
+    let toy = common::objects_dir().join("toy.glb");
+    assert!(text.contains("file = \"objects/toy.glb\"") && !text.contains("[march]"));
+    let scene = dir.join("plants-rays.toml");
+    let text = text.replace("objects/toy.glb", s(&toy))
+        + "\n[march]\nsamples_per_ray = 1024\n\n[lighting]\nlocal_light_rays = 8\n";
+    std::fs::write(&scene, text).unwrap();
+    let field = dir.join("plants.inlayfield");
+    let o = inlay(
+        &[
+            "bake-scene",
+            s(&scene),
+            "--out",
+            s(&field),
+            "--resolution",
+            "40",
+            "--samples",
+            "4",
+            "--bounces",
+            "1",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    let out = dir.join("rays.png");
+    let o = inlay(
+        &[
+            "render",
+            s(&scene),
+            "--field",
+            s(&field),
+            "--width",
+            "16",
+            "--height",
+            "9",
+            "--frames",
+            "1",
+            "--out",
+            s(&out),
+        ],
+        &dir,
+    );
+    let t = common::output_text(&o);
+    if !limited {
+        assert!(o.status.success(), "{t}");
+        return;
+    }
+    assert!(!o.status.success(), "{t}");
+    for needle in [
+        "toy",
+        "object-shade",
+        "local_light_rays` 8",
+        "samples_per_ray` 1024",
+        "65535",
+    ] {
+        assert!(t.contains(needle), "`{needle}` missing: {t}");
+    }
+    assert!(!out.exists());
+}
+
 /// The text of a scene of `count` small cubes on a floor, at test knobs.
 fn many_cubes(count: usize) -> String {
     let cube = common::objects_dir().join("checker-cube.gltf");

@@ -596,6 +596,70 @@ fn direct_light_matches_the_cpu_reference() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// A sharp lobe's 16 × 16 rays of up to 2049 samples, through PLANTS'
+/// open side, are more than llvmpipe's 65535 loop iterations for one
+/// invocation (which marched them all before, and so stopped early
+/// without an error); a workgroup now shares them, and the attenuation
+/// must be the reference's.
+#[test]
+fn a_sharp_lobes_many_long_rays_are_shared_by_a_workgroup() {
+    let ctx = common::gpu();
+    let s = common::bundled_scene("plants.toml");
+    let field = common::bake_small(&s, 24, 4, 0);
+    let gpu_field = GpuGridField::upload(&ctx, &field).unwrap();
+    let probe_knobs = ProbeKnobs {
+        map: MapKind::Octahedral,
+        resolution: 4,
+        supersampling: 16,
+        stride: 1,
+    };
+    let long = MarchKnobs {
+        samples_per_ray: 2048,
+        ..MarchKnobs::default()
+    };
+    let centre = DVec3::new(0.0, 0.4, 0.0);
+    let needle = |k: u32| Sg64 {
+        direction: inlay_passes::sgfit::fibonacci_axis(k, 24),
+        sharpness: 400.0,
+        amplitude: DVec3::new(300.0, 200.0, 100.0),
+    };
+    let sharp: Vec<Sg64> = (0..24).map(needle).collect();
+    let split = split_environment(&sharp, sharp_limit(&probe_knobs));
+    assert_eq!(split.sharp.len(), 24);
+    let fit_knobs = FitKnobs {
+        lobes: 4,
+        cold_iterations: 1,
+        ..FitKnobs::default()
+    };
+    let mut light = IncidentLight::new(
+        &ctx,
+        &embedded_library(),
+        probe_knobs,
+        fit_knobs,
+        long,
+        &sharp,
+        &[],
+        1,
+    )
+    .unwrap();
+    let work = light.plan(centre, 0);
+    common::run_frame(&ctx, |graph| {
+        light.add(graph, &gpu_field, centre, work).unwrap();
+        light.add_readback(graph);
+    });
+    let gpu = light.read_lights().unwrap();
+    let cpu = direct_lights(&field, centre, &[], &split.sharp, 16, &long);
+    let mut open = 0;
+    for (k, (g, c)) in gpu[4..].iter().zip(&cpu).enumerate() {
+        let full = split.sharp[k].amplitude.max_element();
+        let err = (g.to_f64().amplitude - c.amplitude).abs().max_element();
+        assert!(err <= 3e-4 * full, "lobe {k}: GPU {g:?} CPU {c:?}");
+        open += (c.amplitude.max_element() > 0.5 * full) as u32;
+    }
+    assert!(open > 0, "no lobe sees out of the field");
+    common::assert_no_validation_errors(&ctx);
+}
+
 /// PLANTS' lamp, found in a small bake of the field, is shaded as a local
 /// light from the toy's place: the probe leaves its light out and the
 /// direct-light pass adds it back as a lobe, both as their f64 references
@@ -759,7 +823,7 @@ fn too_many_local_lights_are_refused() {
         .expect("nine local lights")
         .to_string();
     assert!(
-        e.contains("[lighting.local] count") && e.contains(&format!("at most {most}")),
+        e.contains("[lighting] local_lights") && e.contains(&format!("at most {most}")),
         "{e}"
     );
     common::assert_no_validation_errors(&ctx);

@@ -419,3 +419,29 @@ fn a_fit_spread_over_frames_reaches_the_same_lobes() {
         spread.costs
     );
 }
+
+/// A 256 × 256 probe fitted with 64 lobes is more than llvmpipe's 65535
+/// loop iterations for one invocation (a lobe's cold start gives each of
+/// its 64 invocations 1024 texels against every lobe; measured: the
+/// first cost 1.5 % off the reference's), so on such a device the fit is
+/// refused, naming the knobs; 128 × 128 fits.
+#[test]
+fn a_fit_past_the_devices_loop_limit_is_refused() {
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let knobs = FitKnobs {
+        lobes: 64,
+        ..FitKnobs::default()
+    };
+    let map = |n| DirectionMap::new(MapKind::Octahedral, n);
+    assert!(SgFitPass::new(&ctx, &lib, knobs, map(128)).is_ok());
+    let big = SgFitPass::new(&ctx, &lib, knobs, map(256));
+    if ctx.info().loop_iteration_limit.is_none() {
+        assert!(big.is_ok());
+        return;
+    }
+    let e = big.err().expect("refused").to_string();
+    for needle in ["sg-fit", "probe_resolution` 256", "lobes` 64", "65535"] {
+        assert!(e.contains(needle), "`{needle}` missing: {e}");
+    }
+}

@@ -6,7 +6,11 @@
 // lobe_rays); then each local light (lighting/local_light.wgsl) as the
 // centre sees it, its intensity measured towards the centre and written
 // with its sphere to `local_lights` for the per-pixel shading. One
-// invocation per output lobe. Mirrors passes/src/lighting/direct_reference.rs.
+// workgroup per output lobe, its rays shared among the group's
+// invocations: llvmpipe stops an invocation's loops after 65535
+// iterations in all, which one invocation marching a lobe's 256 rays
+// could pass (passes/src/lighting/direct_pass.rs checks the rest).
+// Mirrors passes/src/lighting/direct_reference.rs.
 #include "common/ray_box.wgsl"
 #include "common/sg.wgsl"
 #include "field/grid.wgsl"
@@ -49,65 +53,107 @@ var<immediate> pc: DirectPush;
 @group(0) @binding(8) var<storage, read_write> local_lights: array<vec4<f32>>;
 
 const DIRECT_NO_OBJECT: f32 = 3.0e38;
+const DIRECT_GROUP: u32 = 64u;
 
-fn local_light(i: u32, k: u32) {
+var<workgroup> direct_sums: array<vec4<f32>, DIRECT_GROUP>;
+var<workgroup> direct_emission: vec4<f32>;
+
+// The sum of every invocation's `part` (all the group's invocations call
+// it); the result is valid in invocation 0.
+fn direct_group_sum(lid: u32, part: vec4<f32>) -> vec4<f32> {
+    direct_sums[lid] = part;
+    workgroupBarrier();
+    for (var stride = DIRECT_GROUP / 2u; stride > 0u; stride = stride / 2u) {
+        if lid < stride {
+            direct_sums[lid] += direct_sums[lid + stride];
+        }
+        workgroupBarrier();
+    }
+    let total = direct_sums[0];
+    workgroupBarrier();
+    return total;
+}
+
+fn local_light(i: u32, k: u32, lid: u32) {
     let sphere = local_spheres[2u * k];
-    local_lights[2u * k] = sphere;
     var emission = local_spheres[2u * k + 1u];
     // A light of known emission lies outside the field: it is environment
     // light, off with the environment.
     let known = emission.w > 0.0;
     if !local_active(sphere, pc.origin) || (known && pc.environment == 0u) {
-        local_lights[2u * k + 1u] = vec4<f32>(0.0);
-        lights[2u * i] = vec4<f32>(0.0, 1.0, 0.0, 1.0);
-        lights[2u * i + 1u] = vec4<f32>(0.0);
+        if lid == 0u {
+            local_lights[2u * k] = sphere;
+            local_lights[2u * k + 1u] = vec4<f32>(0.0);
+            lights[2u * i] = vec4<f32>(0.0, 1.0, 0.0, 1.0);
+            lights[2u * i + 1u] = vec4<f32>(0.0);
+        }
         return;
     }
     if !known {
-        emission = local_intensity(sphere, pc.origin, pc.step, pc.termination);
+        let part = local_intensity_part(sphere, pc.origin, pc.step, pc.termination, lid, DIRECT_GROUP);
+        let sum = direct_group_sum(lid, part.sum);
+        let moment = direct_group_sum(lid, vec4<f32>(part.moment, 0.0, 0.0, 0.0)).x;
+        if lid == 0u {
+            direct_emission = local_intensity_of(sphere, LocalIntensitySum(sum, moment));
+        }
+        workgroupBarrier();
+        emission = direct_emission;
     }
-    local_lights[2u * k + 1u] = emission;
     let n = pc.local_side * pc.local_side;
     var clear = 0.0;
-    for (var r = 0u; r < n; r++) {
+    for (var r = lid; r < n; r += DIRECT_GROUP) {
         clear += local_transmittance_to(sphere, pc.origin, r, pc.local_side, emission.w, pc.step, pc.termination);
     }
-    let to = sphere.xyz - pc.origin;
-    let g = local_sphere_lobe(normalize(to), length(to), emission.w, emission.xyz);
-    let t = clamp(clear / f32(max(n, 1u)), 0.0, 1.0);
-    lights[2u * i] = vec4<f32>(g.direction, g.sharpness);
-    lights[2u * i + 1u] = vec4<f32>(g.amplitude * t, 0.0);
+    clear = direct_group_sum(lid, vec4<f32>(clear, 0.0, 0.0, 0.0)).x;
+    if lid == 0u {
+        local_lights[2u * k] = sphere;
+        local_lights[2u * k + 1u] = emission;
+        let to = sphere.xyz - pc.origin;
+        let g = local_sphere_lobe(normalize(to), length(to), emission.w, emission.xyz);
+        let t = clamp(clear / f32(max(n, 1u)), 0.0, 1.0);
+        lights[2u * i] = vec4<f32>(g.direction, g.sharpness);
+        lights[2u * i + 1u] = vec4<f32>(g.amplitude * t, 0.0);
+    }
 }
 
+// Workgroup i writes output lobe i (every branch below is taken by the
+// whole group alike).
 @compute @workgroup_size(64, 1, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
+fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let i = group.x;
     if i < pc.fitted {
-        lights[2u * i] = fitted_lobes[2u * i];
-        lights[2u * i + 1u] = fitted_lobes[2u * i + 1u];
+        if lid == 0u {
+            lights[2u * i] = fitted_lobes[2u * i];
+            lights[2u * i + 1u] = fitted_lobes[2u * i + 1u];
+        }
         return;
     }
     if i >= pc.fitted + pc.sharp + pc.local || pc.fitted_only != 0u {
         return;
     }
     if i >= pc.fitted + pc.sharp {
-        local_light(i, i - pc.fitted - pc.sharp);
+        local_light(i, i - pc.fitted - pc.sharp, lid);
         return;
     }
     let k = i - pc.fitted;
     if pc.environment == 0u {
-        lights[2u * i] = sharp_lobes[2u * k];
-        lights[2u * i + 1u] = vec4<f32>(0.0);
+        if lid == 0u {
+            lights[2u * i] = sharp_lobes[2u * k];
+            lights[2u * i + 1u] = vec4<f32>(0.0);
+        }
         return;
     }
     var clear = 0.0;
-    for (var r = 0u; r < pc.rays; r++) {
+    for (var r = lid; r < pc.rays; r += DIRECT_GROUP) {
         let dir = sharp_rays[k * pc.rays + r].xyz;
         let m = march_ray(pc.origin, dir, DIRECT_NO_OBJECT, pc.step, pc.termination);
         clear += 1.0 - m.opacity;
     }
-    let t = clamp(clear / f32(max(pc.rays, 1u)), 0.0, 1.0);
-    let amplitude = sharp_lobes[2u * k + 1u];
-    lights[2u * i] = sharp_lobes[2u * k];
-    lights[2u * i + 1u] = vec4<f32>(amplitude.xyz * t, 0.0);
+    clear = direct_group_sum(lid, vec4<f32>(clear, 0.0, 0.0, 0.0)).x;
+    if lid == 0u {
+        let t = clamp(clear / f32(max(pc.rays, 1u)), 0.0, 1.0);
+        let amplitude = sharp_lobes[2u * k + 1u];
+        lights[2u * i] = sharp_lobes[2u * k];
+        lights[2u * i + 1u] = vec4<f32>(amplitude.xyz * t, 0.0);
+    }
 }

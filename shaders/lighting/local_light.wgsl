@@ -23,19 +23,25 @@ fn local_inside_colour(sphere: vec4<f32>, origin: vec3<f32>, dir: vec3<f32>, ste
         - march_ray(origin, dir, t.x, step, termination).colour;
 }
 
-// The light's emission towards `towards`: (intensity, radius of the disk
-// it shines from, √(2 E[ρ²]) weighted by its light), from parallel rays
-// through the cell centres of a square grid over its disk (those inside
-// it), each through the sphere alone.
-fn local_intensity(sphere: vec4<f32>, towards: vec3<f32>, step: f32, termination: f32) -> vec4<f32> {
+// The light's emission towards `towards` is measured with parallel rays
+// through the cell centres of a LOCAL_INTENSITY_SIDE² grid over its disk
+// (those inside it), each through the sphere alone; this sums rays
+// first, first + every, … of them: (Σ colour, Σ luminance y) and Σ y·ρ²
+// (ρ the ray's distance from the centre over the radius), which
+// local_intensity_of turns into the emission. Split so that the rays
+// can be shared among a workgroup (lighting/direct.wgsl).
+struct LocalIntensitySum {
+    sum: vec4<f32>,
+    moment: f32,
+}
+
+fn local_intensity_part(sphere: vec4<f32>, towards: vec3<f32>, step: f32, termination: f32, first: u32, every: u32) -> LocalIntensitySum {
     let w = normalize(towards - sphere.xyz);
     let f = local_basis(w);
     let n = f32(LOCAL_INTENSITY_SIDE);
     let r = sphere.w;
-    var sum = vec3<f32>(0.0);
-    var weight = 0.0;
-    var moment = 0.0;
-    for (var k = 0u; k < LOCAL_INTENSITY_SIDE * LOCAL_INTENSITY_SIDE; k++) {
+    var out = LocalIntensitySum(vec4<f32>(0.0), 0.0);
+    for (var k = first; k < LOCAL_INTENSITY_SIDE * LOCAL_INTENSITY_SIDE; k += every) {
         let a = 2.0 * (f32(k % LOCAL_INTENSITY_SIDE) + 0.5) / n - 1.0;
         let b = 2.0 * (f32(k / LOCAL_INTENSITY_SIDE) + 0.5) / n - 1.0;
         let d2 = a * a + b * b;
@@ -45,17 +51,23 @@ fn local_intensity(sphere: vec4<f32>, towards: vec3<f32>, step: f32, termination
         let half = r * sqrt(1.0 - d2);
         let origin = sphere.xyz + r * (a * f.u + b * f.v) + half * w;
         let c = march_ray(origin, -w, 2.0 * half, step, termination).colour;
-        sum += c;
         let y = c.x + c.y + c.z;
-        weight += y;
-        moment += y * d2;
+        out.sum += vec4<f32>(c, y);
+        out.moment += y * d2;
     }
-    let cell = 2.0 * r / n;
+    return out;
+}
+
+// The emission from the sums of all the rays: (intensity, radius of the
+// disk it shines from, √(2 E[ρ²]) weighted by its light).
+fn local_intensity_of(sphere: vec4<f32>, total: LocalIntensitySum) -> vec4<f32> {
+    let r = sphere.w;
+    let cell = 2.0 * r / f32(LOCAL_INTENSITY_SIDE);
     var radius = r;
-    if weight > 0.0 {
-        radius = r * clamp(sqrt(2.0 * moment / weight), 1e-3, 1.0);
+    if total.sum.w > 0.0 {
+        radius = r * clamp(sqrt(2.0 * total.moment / total.sum.w), 1e-3, 1.0);
     }
-    return vec4<f32>(sum * (cell * cell), radius);
+    return vec4<f32>(total.sum.xyz * (cell * cell), radius);
 }
 
 // The field's transmittance from x to point k of side² on the disk of

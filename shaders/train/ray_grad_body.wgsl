@@ -104,6 +104,14 @@ fn unclamped_colour(cell: TrilinearCell, base: vec3<f32>, basis: array<f32, 8>) 
     return base + sh_trilinear(cell, pc.sh_degree, basis);
 }
 
+// Adds the gradient `e` of coefficient j (one per colour channel) to the
+// words n, n + 1, n + 2 of its page.
+fn add_sh_grad(j: u32, n: u32, e: vec3<f32>) {
+    add_sh_float(j, n, e.x);
+    add_sh_float(j, n + 1u, e.y);
+    add_sh_float(j, n + 2u, e.z);
+}
+
 // The colour seen: clamped at zero where the grid has view-dependent
 // colour, the base itself where it has not (as grid_view_colour).
 fn seen_colour(u: vec3<f32>) -> vec3<f32> {
@@ -240,13 +248,20 @@ fn train_ray(index: u32) {
             add_float(n, d_c.x * wk);
             add_float(n + 1u, d_c.y * wk);
             add_float(n + 2u, d_c.z * wk);
+            // Written out, not looped over `count`: llvmpipe counts every
+            // iteration of a loop of unknown length against its 65535 per
+            // invocation (field/sh_trilinear.wgsl).
             if count > 0u {
-                for (var j = 0u; j < count; j++) {
-                    let e = d_c * (wk * y[j]);
-                    add_sh_float(j, n, e.x);
-                    add_sh_float(j, n + 1u, e.y);
-                    add_sh_float(j, n + 2u, e.z);
-                }
+                add_sh_grad(0u, n, d_c * (wk * y[0]));
+                add_sh_grad(1u, n, d_c * (wk * y[1]));
+                add_sh_grad(2u, n, d_c * (wk * y[2]));
+            }
+            if count > 3u {
+                add_sh_grad(3u, n, d_c * (wk * y[3]));
+                add_sh_grad(4u, n, d_c * (wk * y[4]));
+                add_sh_grad(5u, n, d_c * (wk * y[5]));
+                add_sh_grad(6u, n, d_c * (wk * y[6]));
+                add_sh_grad(7u, n, d_c * (wk * y[7]));
             }
         }
         t_i = t_next;

@@ -127,6 +127,10 @@ pub fn test_library() -> inlay_engine::shader::ShaderLibrary {
             "checks/tonemap_probe.wgsl",
             include_str!("../shaders/tonemap_probe.wgsl"),
         ),
+        (
+            "checks/loop_count.wgsl",
+            include_str!("../shaders/loop_count.wgsl"),
+        ),
     ] {
         lib.insert(name, source);
     }

@@ -12,6 +12,7 @@
 //! them between frames.
 
 pub mod meta;
+pub mod pixel_loops;
 
 use std::sync::Arc;
 
@@ -31,6 +32,7 @@ use crate::edge_aa::{EdgeAaKnobs, EdgeAaPass, OBJECT_EDGE_AA};
 use crate::field::GpuGridField;
 use crate::gbuffer::{GBufferPass, ObjectDraw, OBJECT_GBUFFER};
 use crate::lighting::IncidentLight;
+use crate::march::loop_budget::check_loop_budget;
 use crate::march::{MarchClip, MarchPass, MarchReuse};
 use crate::object::{GpuObject, ObjectRecords, PlacedObject};
 use crate::probe::PROBE_TRACE;
@@ -131,6 +133,53 @@ pub struct InsertionFrame {
     reuse: Option<MarchReuse>,
 }
 
+/// Refuses an object whose shading or cast shadow would loop, at some
+/// pixel, past the device's limit ([`pixel_loops`]), naming the knobs.
+fn check_pixel_loops(
+    ctx: &Context,
+    scene: &SceneFile,
+    light: &IncidentLight,
+    march: &crate::march::MarchKnobs,
+    shadows: bool,
+) -> anyhow::Result<()> {
+    let rays = light
+        .direct
+        .as_ref()
+        .map(|d| d.ray_counts())
+        .unwrap_or_default();
+    let knobs = || {
+        format!(
+            "{} sharp lobes of L_env at `[lighting] probe_supersampling` {}, {} local lights \
+             at `[lighting] local_light_rays` {}, `[shading] field_light` {}, `[march] \
+             samples_per_ray` {}",
+            rays.sharp,
+            rays.side,
+            rays.local,
+            rays.local_side,
+            scene.shading.field_light,
+            march.samples_per_ray
+        )
+    };
+    let field_side = if shadows {
+        scene.shading.field_light
+    } else {
+        0
+    };
+    let shade = pixel_loops::shade_loop_iterations(
+        &rays,
+        march,
+        field_side,
+        scene.lighting.fit.lobes,
+        light.probe.environment_lobe_count(),
+    );
+    check_loop_budget(ctx, OBJECT_SHADE, shade, knobs)?;
+    if shadows {
+        let cast = pixel_loops::cast_loop_iterations(&rays, march);
+        check_loop_budget(ctx, CAST_SHADOW, cast, knobs)?;
+    }
+    Ok(())
+}
+
 /// The format of a frame's image.
 pub const FRAME_FORMAT: vk::Format = COMPOSITE_FORMAT;
 
@@ -184,19 +233,23 @@ impl InsertionFrame {
             let (lobes, hidden) =
                 crate::lighting::object_lights(scene, centre, scene.lighting.local.count > 0);
             let lights: Vec<_> = local.iter().copied().chain(hidden).collect();
+            let named = || format!("{}: object `{}`", scene.path.display(), placed.name);
+            let light = IncidentLight::new(
+                ctx,
+                lib,
+                scene.lighting.probe,
+                scene.lighting.fit,
+                *march.knobs(),
+                &lobes,
+                &lights,
+                scene.lighting.local.rays,
+            )
+            .with_context(named)?;
+            check_pixel_loops(ctx, scene, &light, march.knobs(), ssdf.is_some())
+                .with_context(named)?;
             objects.push(FrameObject {
                 gpu: GpuObject::upload(ctx, &placed.mesh)?,
-                light: IncidentLight::new(
-                    ctx,
-                    lib,
-                    scene.lighting.probe,
-                    scene.lighting.fit,
-                    *march.knobs(),
-                    &lobes,
-                    &lights,
-                    scene.lighting.local.rays,
-                )
-                .with_context(|| format!("{}: object `{}`", scene.path.display(), placed.name))?,
+                light,
                 ssdf: match ssdf {
                     Some(f) => Some(GpuSsdf::upload(ctx, f, &placed.mesh)?),
                     None => None,

@@ -14,10 +14,11 @@ use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context};
 
-use super::local::LocalLight;
+use super::local::{LocalLight, INTENSITY_SIDE};
 use super::sharp::lobe_rays;
 use super::{DirectRays, LightLobes, LocalLightBindings};
 use crate::field::GpuGridField;
+use crate::march::loop_budget::check_loop_budget;
 use crate::march::MarchKnobs;
 use crate::sg::{Sg32, Sg64};
 
@@ -118,6 +119,42 @@ pub(crate) fn sphere_bytes(local: &[LocalLight]) -> Vec<u8> {
         .collect()
 }
 
+/// The rays a shaded pixel of the object and a pixel of its cast shadow
+/// take per frame for the direct lobes ([`DirectLightPass::ray_counts`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DirectRayCounts {
+    /// Sharp lobes of L_env, each seen along `side`² rays.
+    pub sharp: u32,
+    /// Their rays' side.
+    pub side: u32,
+    /// Local lights, each seen along `local_side`² rays.
+    pub local: u32,
+    /// Their rays' side.
+    pub local_side: u32,
+}
+
+/// Invocations of a workgroup, which share each lobe's rays
+/// (`shaders/lighting/direct.wgsl` DIRECT_GROUP).
+const DIRECT_GROUP: u64 = 64;
+
+/// The most loop iterations one invocation of `direct-light` runs
+/// ([`crate::march::loop_budget`]): its share of a sharp lobe's `side`²
+/// rays, or of a local light's intensity rays (each counted as a whole
+/// march, since the sphere's size against the step is not known here)
+/// and `local_side`² rays, and the group's sums.
+fn loop_iterations(side: u32, local_side: u32, local: bool, march: &MarchKnobs) -> u64 {
+    let share = |rays: u64| rays.div_ceil(DIRECT_GROUP);
+    let sums = 3 * (DIRECT_GROUP.ilog2() as u64 + 1);
+    let sharp = share((side * side) as u64);
+    let intensity = share((INTENSITY_SIDE * INTENSITY_SIDE) as u64);
+    let lights = if local {
+        intensity + share((local_side * local_side) as u64)
+    } else {
+        0
+    };
+    sharp.max(lights) * march.loop_iterations() + sums
+}
+
 impl DirectLightPass {
     /// Compiles the pass for `fitted` fitted lobes followed by `sharp`,
     /// each attenuated along `side`² rays, then the `local` lights, each
@@ -140,6 +177,18 @@ impl DirectLightPass {
         }
         let side = side.max(1);
         let local_side = local_side.max(1);
+        check_loop_budget(
+            ctx,
+            DIRECT_LIGHT,
+            loop_iterations(side, local_side, !local.is_empty(), &march),
+            || {
+                format!(
+                    "`[lighting] probe_supersampling` {side} (rays² per sharp lobe), \
+                     `[lighting] local_light_rays` {local_side}, `[march] samples_per_ray` {}",
+                    march.samples_per_ray
+                )
+            },
+        )?;
         let pipeline = lib.compute_pipeline(
             ctx,
             "lighting/direct.wgsl",
@@ -182,6 +231,17 @@ impl DirectLightPass {
             local_side,
             march,
         }))
+    }
+
+    /// What each shaded pixel casts rays for: sharp lobes and their rays'
+    /// side, local lights and theirs.
+    pub fn ray_counts(&self) -> DirectRayCounts {
+        DirectRayCounts {
+            sharp: self.sharp_count,
+            side: self.side,
+            local: self.local_count,
+            local_side: self.local_side,
+        }
     }
 
     /// Lobes in the assembled buffer (fitted, then sharp).
@@ -291,7 +351,7 @@ impl DirectLightPass {
             .read("local_spheres", spheres)
             .write("local_lights", &mut local)
             .push(&push)
-            .threads([if fitted_only { self.fitted } else { self.count }, 1, 1]);
+            .groups([if fitted_only { self.fitted } else { self.count }, 1, 1]);
         self.light_lobes(lights, rays, local)
     }
 

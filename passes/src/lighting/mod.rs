@@ -9,7 +9,7 @@ pub mod direct_reference;
 pub mod local;
 pub mod sharp;
 
-pub use direct_pass::{DirectLightPass, DIRECT_LIGHT, DIRECT_LIGHT_INFO};
+pub use direct_pass::{DirectLightPass, DirectRayCounts, DIRECT_LIGHT, DIRECT_LIGHT_INFO};
 pub use direct_reference::direct_lights;
 pub use local::{LocalLight, LocalLightKnobs};
 pub use sharp::{lobe_rays, split_environment, SplitEnvironment};
@@ -158,8 +158,8 @@ impl IncidentLight {
         // write past it, silently.
         anyhow::ensure!(
             local.len() <= local::MAX_LOCAL_LIGHTS as usize,
-            "{} local lights light the object (the field's `[lighting.local] count` and the \
-             recipe's hidden bulbs together); at most {} are shaded: lower `count`",
+            "{} local lights light the object (the field's, up to `[lighting] local_lights`, and the \
+             recipe's hidden bulbs together); at most {} are shaded: lower `local_lights`",
             local.len(),
             local::MAX_LOCAL_LIGHTS
         );

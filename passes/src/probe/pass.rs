@@ -273,6 +273,11 @@ impl ProbePass {
         })
     }
 
+    /// How many lobes of L_env the probe adds beyond the field (0: none).
+    pub fn environment_lobe_count(&self) -> u32 {
+        self.environment.as_ref().map_or(0, |e| e.count)
+    }
+
     /// The knobs it was built with.
     pub fn knobs(&self) -> ProbeKnobs {
         self.knobs

@@ -203,6 +203,15 @@ fn round_up(x: u32, m: u32) -> u32 {
     x.div_ceil(m) * m
 }
 
+/// The most loop iterations one invocation of the fit's kernels runs
+/// ([`crate::march::loop_budget`]): a block of the Gram matrix sums over
+/// every texel, and a lobe's cold start gives each of a workgroup's 64
+/// invocations its share of the texels, each against every lobe.
+fn loop_iterations(texels: u32, lobes: u32) -> u64 {
+    let (n, m) = (texels as u64, lobes as u64);
+    n.max(n.div_ceil(64) * (m + 2) + m + 32)
+}
+
 impl SgFitPass {
     /// Compiles the kernels and creates the persistent buffers; fails with
     /// a clear message when the feature matrix would not fit one storage
@@ -217,6 +226,19 @@ impl SgFitPass {
             .check()
             .map_err(|(k, m)| anyhow::anyhow!("fit knob `{k}`: {m}"))?;
         let texels = map.texels() as u32;
+        crate::march::loop_budget::check_loop_budget(
+            ctx,
+            SG_FIT,
+            loop_iterations(texels, knobs.lobes),
+            || {
+                format!(
+                    "{} probe texels (`[lighting] probe_resolution` {}), `[lighting] lobes` {}",
+                    texels,
+                    map.width.min(map.height),
+                    knobs.lobes
+                )
+            },
+        )?;
         let shape = Shape {
             cols: round_up(knobs.parameters() as u32 + 1, 16),
             rows: round_up(texels, 16),
