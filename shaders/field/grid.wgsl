@@ -38,27 +38,47 @@ struct GridInfo {
 
 #include "field/sh_trilinear.wgsl"
 
-// Further coefficient j of pool node n (sh_trilinear.wgsl's accessor).
+// Σ_j y_j·coefficient_j of pool node n with `count` (3 or 8) further
+// coefficients (sh_trilinear.wgsl's accessor), y = `basis`. A node's
+// coefficients are runs of halves, three a coefficient: the first
+// (count + 1) / 2 at half 3·first·n of `grid_sh`, the rest at half
+// 3·(count − first)·n of `grid_sh_rest`; they are read a word at a time
+// (degree 2: six words from each, always whole; degree 1: three whole
+// words, and the rest's one coefficient from the half it starts at).
 // Mirrors sh_half::unpack_split_sh.
-fn field_sh_coefficient(n: u32, j: u32) -> vec3<f32> {
-    let count = sh_count(grid_info.sh_degree);
-    let first = (count + 1u) / 2u;
-    var h: u32;
-    var words: vec2<u32>;
-    if j < first {
-        h = 3u * (first * n + j);
-        words = vec2<u32>(grid_sh[h >> 1u], grid_sh[(h >> 1u) + 1u]);
+fn field_sh_node(n: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
+    var s: vec3<f32>;
+    if count == 8u {
+        let a = 6u * n;
+        let f0 = unpack2x16float(grid_sh[a]);
+        let f1 = unpack2x16float(grid_sh[a + 1u]);
+        let f2 = unpack2x16float(grid_sh[a + 2u]);
+        let f3 = unpack2x16float(grid_sh[a + 3u]);
+        let f4 = unpack2x16float(grid_sh[a + 4u]);
+        let f5 = unpack2x16float(grid_sh[a + 5u]);
+        let r0 = unpack2x16float(grid_sh_rest[a]);
+        let r1 = unpack2x16float(grid_sh_rest[a + 1u]);
+        let r2 = unpack2x16float(grid_sh_rest[a + 2u]);
+        let r3 = unpack2x16float(grid_sh_rest[a + 3u]);
+        let r4 = unpack2x16float(grid_sh_rest[a + 4u]);
+        let r5 = unpack2x16float(grid_sh_rest[a + 5u]);
+        s = basis[0] * vec3<f32>(f0.x, f0.y, f1.x) + basis[1] * vec3<f32>(f1.y, f2.x, f2.y)
+            + basis[2] * vec3<f32>(f3.x, f3.y, f4.x) + basis[3] * vec3<f32>(f4.y, f5.x, f5.y)
+            + basis[4] * vec3<f32>(r0.x, r0.y, r1.x) + basis[5] * vec3<f32>(r1.y, r2.x, r2.y)
+            + basis[6] * vec3<f32>(r3.x, r3.y, r4.x) + basis[7] * vec3<f32>(r4.y, r5.x, r5.y);
     } else {
-        h = 3u * ((count - first) * n + j - first);
-        words = vec2<u32>(grid_sh_rest[h >> 1u], grid_sh_rest[(h >> 1u) + 1u]);
+        let a = 3u * n;
+        let f0 = unpack2x16float(grid_sh[a]);
+        let f1 = unpack2x16float(grid_sh[a + 1u]);
+        let f2 = unpack2x16float(grid_sh[a + 2u]);
+        let h = 3u * n;
+        let r0 = unpack2x16float(grid_sh_rest[h >> 1u]);
+        let r1 = unpack2x16float(grid_sh_rest[(h >> 1u) + 1u]);
+        let rest = select(vec3<f32>(r0.x, r0.y, r1.x), vec3<f32>(r0.y, r1.x, r1.y), (h & 1u) == 1u);
+        s = basis[0] * vec3<f32>(f0.x, f0.y, f1.x) + basis[1] * vec3<f32>(f1.y, f2.x, f2.y)
+            + basis[2] * rest;
     }
-    let a = unpack2x16float(words.x);
-    let b = unpack2x16float(words.y);
-    var c = vec3<f32>(a.y, b.x, b.y);
-    if (h & 1u) == 0u {
-        c = vec3<f32>(a.x, a.y, b.x);
-    }
-    return c * grid_info.sh_unscale;
+    return s * grid_info.sh_unscale;
 }
 
 // Where node i lies in grid_nodes, or EMPTY_BRICK where its brick was

@@ -13,33 +13,14 @@
 @group(0) @binding(13) var<storage, read> sh_page_6: array<vec4<f32>>;
 @group(0) @binding(14) var<storage, read> sh_page_7: array<vec4<f32>>;
 
-// Further coefficient j of the node at pool index n (the accessor
-// field/sh_trilinear.wgsl needs).
-fn field_sh_coefficient(n: u32, j: u32) -> vec3<f32> {
-    switch j {
-        case 0u: {
-            return sh_page_0[n].xyz;
-        }
-        case 1u: {
-            return sh_page_1[n].xyz;
-        }
-        case 2u: {
-            return sh_page_2[n].xyz;
-        }
-        case 3u: {
-            return sh_page_3[n].xyz;
-        }
-        case 4u: {
-            return sh_page_4[n].xyz;
-        }
-        case 5u: {
-            return sh_page_5[n].xyz;
-        }
-        case 6u: {
-            return sh_page_6[n].xyz;
-        }
-        default: {
-            return sh_page_7[n].xyz;
-        }
+// Σ_j y_j·coefficient_j of the node at pool index n with `count` (3 or
+// 8) further coefficients, y = `basis` (the accessor field/sh_trilinear.wgsl
+// needs).
+fn field_sh_node(n: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
+    var s = basis[0] * sh_page_0[n].xyz + basis[1] * sh_page_1[n].xyz + basis[2] * sh_page_2[n].xyz;
+    if count > 3u {
+        s += basis[3] * sh_page_3[n].xyz + basis[4] * sh_page_4[n].xyz + basis[5] * sh_page_5[n].xyz
+            + basis[6] * sh_page_6[n].xyz + basis[7] * sh_page_7[n].xyz;
     }
+    return s;
 }

@@ -65,7 +65,7 @@ pub fn pack_sh(coefficients: &[[f32; 3]], unscale: f32) -> Vec<u32> {
 }
 
 /// Coefficient `j` of the `count` of pool node `n` from words [`pack_sh`]
-/// wrote (the CPU mirror of `field_sh_coefficient` in grid.wgsl).
+/// wrote (the CPU mirror of how `field_sh_node` in grid.wgsl reads them).
 pub fn unpack_sh(words: &[u32], unscale: f32, count: usize, n: usize, j: usize) -> [f32; 3] {
     let h = 3 * (count * n + j);
     let half = |i: usize| {
@@ -97,7 +97,7 @@ pub fn split_sh(coefficients: &[[f32; 3]], count: usize) -> (Vec<[f32; 3]>, Vec<
 
 /// Coefficient `j` of the `count` of pool node `n` from the two bindings'
 /// words, [`pack_sh`] of each half of [`split_sh`] (the CPU mirror of
-/// `field_sh_coefficient` in grid.wgsl).
+/// how `field_sh_node` in grid.wgsl reads them).
 pub fn unpack_split_sh(
     first: &[u32],
     rest: &[u32],

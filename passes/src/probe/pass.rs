@@ -135,13 +135,17 @@ pub fn samples_per_dispatch(
     let per_sample =
         march.loop_iterations() * (1 + 2 * local as u64) + (local + env_lobes + 1) as u64;
     let fixed = samples as u64 + 1;
-    crate::march::loop_budget::items_per_invocation(limit, fixed, per_sample, samples).ok_or_else(|| {
-        anyhow::anyhow!(
-            "probe-trace: one ray may loop {per_sample} times (march knob `samples_per_ray` {},              {local} local lights taken out of it), over the device's limit of {} loop              iterations per invocation; lower `samples_per_ray`",
-            march.samples_per_ray,
-            limit.unwrap_or(u64::MAX)
-        )
-    })
+    crate::march::loop_budget::items_per_invocation(limit, fixed, per_sample, samples).ok_or_else(
+        || {
+            anyhow::anyhow!(
+                "probe-trace: one ray may loop {per_sample} times (`[march] samples_per_ray` {}, \
+             {local} local lights taken out of it), over the device's limit of {} loop \
+             iterations per invocation; lower `samples_per_ray`",
+                march.samples_per_ray,
+                limit.unwrap_or(u64::MAX)
+            )
+        },
+    )
 }
 
 impl ProbePass {
@@ -348,5 +352,55 @@ impl ProbePass {
         }
         pass.finish();
         probe
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn knobs(supersampling: u32) -> ProbeKnobs {
+        ProbeKnobs {
+            supersampling,
+            ..ProbeKnobs::default()
+        }
+    }
+
+    fn march(samples_per_ray: u32) -> MarchKnobs {
+        MarchKnobs {
+            samples_per_ray,
+            ..MarchKnobs::default()
+        }
+    }
+
+    #[test]
+    fn a_texels_rays_are_split_only_past_the_limit() {
+        let limit = Some(inlay_engine::LLVMPIPE_LOOP_LIMIT);
+        // The defaults: 36 rays of 513 samples, one dispatch; with two
+        // local lights a ray may take 5 marches: 25 rays a dispatch.
+        assert_eq!(
+            samples_per_dispatch(limit, &knobs(6), &march(512), 0, 4).unwrap(),
+            36
+        );
+        assert_eq!(
+            samples_per_dispatch(limit, &knobs(6), &march(512), 2, 4).unwrap(),
+            25
+        );
+        // 256 rays of 1025: (65535 − 257) / 1026 = 63 a dispatch.
+        assert_eq!(
+            samples_per_dispatch(limit, &knobs(16), &march(1024), 0, 0).unwrap(),
+            63
+        );
+        assert_eq!(
+            samples_per_dispatch(None, &knobs(16), &march(1024), 0, 0).unwrap(),
+            256
+        );
+        // One ray of 32769 samples and two more marches for a local light.
+        let e = samples_per_dispatch(limit, &knobs(6), &march(32768), 1, 0).unwrap_err();
+        assert!(
+            e.to_string().contains("`[march] samples_per_ray` 32768"),
+            "{e}"
+        );
+        assert!(samples_per_dispatch(None, &knobs(6), &march(32768), 1, 0).is_ok());
     }
 }
