@@ -402,6 +402,39 @@ fn a_view_dependent_field_marches_long_rays_whole() {
     common::assert_no_validation_errors(&ctx);
 }
 
+/// A view-dependent sample costs the march nine loop iterations on
+/// llvmpipe (the loop over its corners is not unrolled), so a march
+/// compiled for such fields refuses more than 7280 samples per ray there,
+/// naming the knob; compiled for plain fields it takes them.
+#[test]
+fn a_view_dependent_march_past_the_devices_loop_limit_is_refused() {
+    let ctx = common::gpu();
+    let knobs = |samples_per_ray| MarchKnobs {
+        samples_per_ray,
+        ..MarchKnobs::default()
+    };
+    let general = common::test_library();
+    let plain = GpuGridField::upload(&ctx, &small_field(&scene("plants.toml"), 8, 1))
+        .unwrap()
+        .library(&general);
+    assert!(MarchPass::new(&ctx, &general, knobs(7280)).is_ok());
+    assert!(MarchPass::new(&ctx, &plain, knobs(32768)).is_ok());
+    let long = MarchPass::new(&ctx, &general, knobs(7281));
+    if ctx.info().loop_iteration_limit.is_none() {
+        assert!(long.is_ok());
+        return;
+    }
+    let e = long.err().expect("refused").to_string();
+    for needle in [
+        "nerf-march",
+        "samples_per_ray` 7281",
+        "view-dependent",
+        "65535",
+    ] {
+        assert!(e.contains(needle), "`{needle}` missing: {e}");
+    }
+}
+
 /// A pass compiled for fields without view-dependent colour refuses one
 /// that has it (its colour would be read as the mean).
 #[test]

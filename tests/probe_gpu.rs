@@ -112,7 +112,10 @@ fn a_texel_of_many_long_rays_is_split_over_dispatches() {
         samples_per_ray: 1024,
         ..MarchKnobs::default()
     };
-    let pass = ProbePass::new(&ctx, &embedded_library(), knobs, long, &env, &[]).unwrap();
+    let lib = GpuGridField::upload(&ctx, &field)
+        .unwrap()
+        .library(&embedded_library());
+    let pass = ProbePass::new(&ctx, &lib, knobs, long, &env, &[]).unwrap();
     if ctx.info().loop_iteration_limit.is_some() {
         assert!(pass.dispatches() > 1, "{} dispatches", pass.dispatches());
     }
@@ -631,17 +634,11 @@ fn a_sharp_lobes_many_long_rays_are_shared_by_a_workgroup() {
         cold_iterations: 1,
         ..FitKnobs::default()
     };
-    let mut light = IncidentLight::new(
-        &ctx,
-        &embedded_library(),
-        probe_knobs,
-        fit_knobs,
-        long,
-        &sharp,
-        &[],
-        1,
-    )
-    .unwrap();
+    // The field's own library: compiled without view-dependent colour,
+    // whose samples would cost the loop limit nine times as much.
+    let lib = gpu_field.library(&embedded_library());
+    let mut light =
+        IncidentLight::new(&ctx, &lib, probe_knobs, fit_knobs, long, &sharp, &[], 1).unwrap();
     let work = light.plan(centre, 0);
     common::run_frame(&ctx, |graph| {
         light.add(graph, &gpu_field, centre, work).unwrap();

@@ -13,13 +13,24 @@ fn sh_count(degree: u32) -> u32 {
     return (degree + 1u) * (degree + 1u) - 1u;
 }
 
+// Corner k's weighted term of sh_trilinear (zero where its brick was
+// dropped).
+fn sh_corner(cell: TrilinearCell, k: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
+    let n = field_node_index(cell.base + trilinear_corner(k));
+    if n == EMPTY_BRICK {
+        return vec3<f32>(0.0);
+    }
+    return trilinear_weight(cell.f, k) * field_sh_node(n, count, basis);
+}
+
 // The view-dependent part at a cell (a dropped brick's coefficients are
-// zero); zero at degree 0. The loop over the corners has a constant count
-// and is unrolled by the compiler; the includer's node accessor reads a
-// node's coefficients without a loop: llvmpipe ends all of an
-// invocation's loops after 65535 iterations in all, and a loop over a
-// node's coefficients here ran 8 + 8·8 of them at every step of a march
-// (a degree-2 field's rays were cut short from 2048 samples per ray on).
+// zero); zero at degree 0. llvmpipe ends all of an invocation's loops
+// after 65535 iterations in all and does not unroll this loop (its body
+// is too large), so a sample of a view-dependent field costs the march
+// 1 + 8 of them (passes/src/march/knobs.rs MarchKnobs::loop_iterations):
+// the eight corners written out were 1.6 times slower there, and a loop
+// over a node's coefficients inside, 8 + 8·8 a sample, cut a degree-2
+// field's rays short from 2048 samples per ray on.
 fn sh_trilinear(cell: TrilinearCell, degree: u32, basis: array<f32, 8>) -> vec3<f32> {
     let count = sh_count(degree);
     if count == 0u {
@@ -27,11 +38,7 @@ fn sh_trilinear(cell: TrilinearCell, degree: u32, basis: array<f32, 8>) -> vec3<
     }
     var c = vec3<f32>(0.0);
     for (var k = 0u; k < 8u; k++) {
-        let n = field_node_index(cell.base + trilinear_corner(k));
-        if n == EMPTY_BRICK {
-            continue;
-        }
-        c += trilinear_weight(cell.f, k) * field_sh_node(n, count, basis);
+        c += sh_corner(cell, k, count, basis);
     }
     return c;
 }

@@ -65,6 +65,13 @@ pub enum FieldLayout {
 /// of every pipeline, so a field without it costs nothing for it.
 pub const VIEW_DEPENDENT_DEFINE: &str = "FIELD_VIEW_DEPENDENT";
 
+/// Whether passes compiled from `lib` may march view-dependent colour
+/// (its [`VIEW_DEPENDENT_DEFINE`] is not false): what a sample costs them
+/// in loop iterations ([`crate::march::MarchKnobs::loop_iterations`]).
+pub fn library_marches_view_dependent(lib: &ShaderLibrary) -> bool {
+    lib.define(VIEW_DEPENDENT_DEFINE) != Some(&Define::Bool(VIEW_DEPENDENT_DEFINE, false))
+}
+
 /// `lib` for passes over any field: the march evaluates view-dependent
 /// colour where the field has it (checked per sample). What
 /// [`crate::shaders::library`] gives.

@@ -23,8 +23,8 @@ pub use format::{
 };
 pub use gpu_grid::{
     check_field_fits, check_field_may_fit, check_sparse_field_fits, device_values,
-    general_field_library, FieldIdentity, FieldLayout, GpuGridField, GridBindings, NodeStorage,
-    SPARSE_DEFINE, VIEW_DEPENDENT_DEFINE,
+    general_field_library, library_marches_view_dependent, FieldIdentity, FieldLayout,
+    GpuGridField, GridBindings, NodeStorage, SPARSE_DEFINE, VIEW_DEPENDENT_DEFINE,
 };
 pub use grid::{density_at, GridField};
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};

@@ -2,6 +2,11 @@
 
 use crate::scene::spec::MarchSpec;
 
+/// Loop iterations a sample of a field with view-dependent colour adds:
+/// the loop over its cell's eight corners (`shaders/field/sh_trilinear.wgsl`),
+/// which llvmpipe does not unroll.
+pub const VIEW_DEPENDENT_SAMPLE_LOOPS: u64 = 8;
+
 /// The most samples a ray may take across the field's diagonal.
 pub const MAX_SAMPLES_PER_RAY: u32 = 1 << 15;
 
@@ -33,12 +38,18 @@ impl MarchKnobs {
         diagonal / self.samples_per_ray as f64
     }
 
-    /// The most loop iterations one march along a ray takes: one per
-    /// segment of a ray across the whole diagonal, and one where the last
-    /// is cut (what a kernel counts against the device's loop limit,
-    /// [`super::loop_budget`]).
-    pub fn loop_iterations(&self) -> u64 {
-        self.samples_per_ray as u64 + 1
+    /// The most loop iterations one march along a ray takes (what a
+    /// kernel counts against the device's loop limit,
+    /// [`super::loop_budget`]): one per segment of a ray across the whole
+    /// diagonal and one where the last is cut, and at each, on a field
+    /// with view-dependent colour, [`VIEW_DEPENDENT_SAMPLE_LOOPS`] more.
+    pub fn loop_iterations(&self, view_dependent: bool) -> u64 {
+        let per_sample = 1 + if view_dependent {
+            VIEW_DEPENDENT_SAMPLE_LOOPS
+        } else {
+            0
+        };
+        (self.samples_per_ray as u64 + 1) * per_sample
     }
 
     /// Why the knobs cannot be used, naming the knob.

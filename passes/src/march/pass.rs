@@ -71,6 +71,23 @@ impl MarchPass {
         knobs
             .check()
             .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
+        let view_dependent = crate::field::library_marches_view_dependent(lib);
+        super::loop_budget::check_loop_budget(
+            ctx,
+            NERF_MARCH,
+            knobs.loop_iterations(view_dependent),
+            || {
+                format!(
+                    "`[march] samples_per_ray` {} on a field {} view-dependent colour",
+                    knobs.samples_per_ray,
+                    if view_dependent {
+                        "that may have"
+                    } else {
+                        "without"
+                    }
+                )
+            },
+        )?;
         let defines = [Define::Bool("SKIP_EMPTY", knobs.skip_empty)];
         let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
             Ok(lib.compute_pipeline(ctx, "march/march.wgsl", entry, &defines)?)

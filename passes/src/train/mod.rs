@@ -21,7 +21,7 @@ pub mod visibility;
 
 pub use adam::{adam_step, AdamKnobs};
 pub use geometry::{geometry_score, GeometryScore};
-pub use gpu::{GpuTrainer, GradientScatter, TrainRay};
+pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};

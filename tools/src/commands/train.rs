@@ -166,6 +166,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     if let Err((k, m)) = knobs.check() {
         anyhow::bail!("--{}: {m}", k.replace('_', "-"));
     }
+    inlay_passes::train::check_train_rays(ctx, knobs.samples_per_ray, knobs.sh_degree)?;
     let budget = match args.time_budget {
         Some(s) if !(s.is_finite() && s > 0.0) => {
             anyhow::bail!("--time-budget {s}: must be positive seconds")
