@@ -35,6 +35,33 @@ fn refused_before_work(o: &Output, needles: &[&str]) {
     );
 }
 
+/// Renders one 16 × 9 frame of `scene` over the field file `field` into
+/// `out`, with its cache in `dir`.
+fn render_small(
+    scene: &std::path::Path,
+    field: &std::path::Path,
+    out: &std::path::Path,
+    dir: &std::path::Path,
+) -> Output {
+    inlay(
+        &[
+            "render",
+            s(scene),
+            "--field",
+            s(field),
+            "--width",
+            "16",
+            "--height",
+            "9",
+            "--frames",
+            "1",
+            "--out",
+            s(out),
+        ],
+        dir,
+    )
+}
+
 #[test]
 fn outputs_and_device_limits_are_checked_before_any_work() {
     let dir = scratch("before-work");
@@ -394,23 +421,7 @@ fn an_ssdf_is_used_only_for_the_object_it_was_baked_from() {
         &dir,
     );
     assert!(o.status.success(), "{}", common::output_text(&o));
-    let o = inlay(
-        &[
-            "render",
-            s(&wrong),
-            "--field",
-            s(&field),
-            "--width",
-            "16",
-            "--height",
-            "9",
-            "--frames",
-            "1",
-            "--out",
-            s(&dir.join("wrong.png")),
-        ],
-        &dir,
-    );
+    let o = render_small(&wrong, &field, &dir.join("wrong.png"), &dir);
     let t = common::output_text(&o);
     assert!(!o.status.success(), "{t}");
     for needle in ["sphere.inlayssdf", "object", "another mesh", "bake-ssdf"] {
@@ -453,23 +464,7 @@ fn shading_rays_past_the_devices_loop_limit_are_refused() {
     );
     assert!(o.status.success(), "{}", common::output_text(&o));
     let out = dir.join("rays.png");
-    let o = inlay(
-        &[
-            "render",
-            s(&scene),
-            "--field",
-            s(&field),
-            "--width",
-            "16",
-            "--height",
-            "9",
-            "--frames",
-            "1",
-            "--out",
-            s(&out),
-        ],
-        &dir,
-    );
+    let o = render_small(&scene, &field, &out, &dir);
     let t = common::output_text(&o);
     if !limited {
         assert!(o.status.success(), "{t}");

@@ -20,6 +20,7 @@
 #include "march/volume_march.wgsl"
 #include "common/tangent_basis.wgsl"
 #include "envest/hemisphere.wgsl"
+#include "common/group_sum.wgsl"
 
 struct NearFieldPush {
     step: f32,
@@ -54,8 +55,6 @@ fn nf_ray_start(position: vec3<f32>, normal: vec3<f32>, rise: f32, d: vec3<f32>)
     return position + d * (rise / max(dot(d, normal), NF_MIN_RISE_COSINE));
 }
 
-var<workgroup> nf_sums: array<vec4<f32>, NF_GROUP>;
-
 @compute @workgroup_size(64, 1, 1)
 fn irradiance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let chunk = group.x;
@@ -71,17 +70,10 @@ fn irradiance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation
         let m = march_ray(origin, d, NF_NO_OBJECT, pc.step, pc.termination);
         sum += vec4<f32>(m.colour, m.opacity);
     }
-    nf_sums[lid] = sum;
-    workgroupBarrier();
-    for (var stride = NF_GROUP / 2u; stride > 0u; stride = stride / 2u) {
-        if lid < stride {
-            nf_sums[lid] += nf_sums[lid + stride];
-        }
-        workgroupBarrier();
-    }
+    let total = group_sum(lid, sum);
     if lid == 0u {
         let chunks = (pc.rays + NF_RAYS_PER_GROUP - 1u) / NF_RAYS_PER_GROUP;
-        irradiance_out[local_point * chunks + chunk] = nf_sums[0];
+        irradiance_out[local_point * chunks + chunk] = total;
     }
 }
 

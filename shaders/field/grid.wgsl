@@ -50,35 +50,28 @@ fn field_sh_node(n: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
     var s: vec3<f32>;
     if count == 8u {
         let a = 6u * n;
-        let f0 = unpack2x16float(grid_sh[a]);
-        let f1 = unpack2x16float(grid_sh[a + 1u]);
-        let f2 = unpack2x16float(grid_sh[a + 2u]);
-        let f3 = unpack2x16float(grid_sh[a + 3u]);
-        let f4 = unpack2x16float(grid_sh[a + 4u]);
-        let f5 = unpack2x16float(grid_sh[a + 5u]);
-        let r0 = unpack2x16float(grid_sh_rest[a]);
-        let r1 = unpack2x16float(grid_sh_rest[a + 1u]);
-        let r2 = unpack2x16float(grid_sh_rest[a + 2u]);
-        let r3 = unpack2x16float(grid_sh_rest[a + 3u]);
-        let r4 = unpack2x16float(grid_sh_rest[a + 4u]);
-        let r5 = unpack2x16float(grid_sh_rest[a + 5u]);
-        s = basis[0] * vec3<f32>(f0.x, f0.y, f1.x) + basis[1] * vec3<f32>(f1.y, f2.x, f2.y)
-            + basis[2] * vec3<f32>(f3.x, f3.y, f4.x) + basis[3] * vec3<f32>(f4.y, f5.x, f5.y)
-            + basis[4] * vec3<f32>(r0.x, r0.y, r1.x) + basis[5] * vec3<f32>(r1.y, r2.x, r2.y)
-            + basis[6] * vec3<f32>(r3.x, r3.y, r4.x) + basis[7] * vec3<f32>(r4.y, r5.x, r5.y);
+        s = sh_pair(grid_sh[a], grid_sh[a + 1u], grid_sh[a + 2u], basis[0], basis[1])
+            + sh_pair(grid_sh[a + 3u], grid_sh[a + 4u], grid_sh[a + 5u], basis[2], basis[3])
+            + sh_pair(grid_sh_rest[a], grid_sh_rest[a + 1u], grid_sh_rest[a + 2u], basis[4], basis[5])
+            + sh_pair(grid_sh_rest[a + 3u], grid_sh_rest[a + 4u], grid_sh_rest[a + 5u], basis[6], basis[7]);
     } else {
         let a = 3u * n;
-        let f0 = unpack2x16float(grid_sh[a]);
-        let f1 = unpack2x16float(grid_sh[a + 1u]);
-        let f2 = unpack2x16float(grid_sh[a + 2u]);
         let h = 3u * n;
         let r0 = unpack2x16float(grid_sh_rest[h >> 1u]);
         let r1 = unpack2x16float(grid_sh_rest[(h >> 1u) + 1u]);
         let rest = select(vec3<f32>(r0.x, r0.y, r1.x), vec3<f32>(r0.y, r1.x, r1.y), (h & 1u) == 1u);
-        s = basis[0] * vec3<f32>(f0.x, f0.y, f1.x) + basis[1] * vec3<f32>(f1.y, f2.x, f2.y)
-            + basis[2] * rest;
+        s = sh_pair(grid_sh[a], grid_sh[a + 1u], grid_sh[a + 2u], basis[0], basis[1]) + basis[2] * rest;
     }
     return s * grid_info.sh_unscale;
+}
+
+// y0·c0 + y1·c1 for two coefficients c0, c1 held in three words (six
+// halves: c0's r, g, b, then c1's).
+fn sh_pair(w0: u32, w1: u32, w2: u32, y0: f32, y1: f32) -> vec3<f32> {
+    let a = unpack2x16float(w0);
+    let b = unpack2x16float(w1);
+    let c = unpack2x16float(w2);
+    return y0 * vec3<f32>(a.x, a.y, b.x) + y1 * vec3<f32>(b.y, c.x, c.y);
 }
 
 // Where node i lies in grid_nodes, or EMPTY_BRICK where its brick was

@@ -16,6 +16,7 @@
 #include "field/grid.wgsl"
 #include "march/volume_march.wgsl"
 #include "lighting/local_light.wgsl"
+#include "common/group_sum.wgsl"
 
 struct DirectPush {
     origin: vec3<f32>,
@@ -55,24 +56,7 @@ var<immediate> pc: DirectPush;
 const DIRECT_NO_OBJECT: f32 = 3.0e38;
 const DIRECT_GROUP: u32 = 64u;
 
-var<workgroup> direct_sums: array<vec4<f32>, DIRECT_GROUP>;
 var<workgroup> direct_emission: vec4<f32>;
-
-// The sum of every invocation's `part` (all the group's invocations call
-// it); the result is valid in invocation 0.
-fn direct_group_sum(lid: u32, part: vec4<f32>) -> vec4<f32> {
-    direct_sums[lid] = part;
-    workgroupBarrier();
-    for (var stride = DIRECT_GROUP / 2u; stride > 0u; stride = stride / 2u) {
-        if lid < stride {
-            direct_sums[lid] += direct_sums[lid + stride];
-        }
-        workgroupBarrier();
-    }
-    let total = direct_sums[0];
-    workgroupBarrier();
-    return total;
-}
 
 fn local_light(i: u32, k: u32, lid: u32) {
     let sphere = local_spheres[2u * k];
@@ -91,8 +75,8 @@ fn local_light(i: u32, k: u32, lid: u32) {
     }
     if !known {
         let part = local_intensity_part(sphere, pc.origin, pc.step, pc.termination, lid, DIRECT_GROUP);
-        let sum = direct_group_sum(lid, part.sum);
-        let moment = direct_group_sum(lid, vec4<f32>(part.moment, 0.0, 0.0, 0.0)).x;
+        let sum = group_sum(lid, part.sum);
+        let moment = group_sum(lid, vec4<f32>(part.moment, 0.0, 0.0, 0.0)).x;
         if lid == 0u {
             direct_emission = local_intensity_of(sphere, LocalIntensitySum(sum, moment));
         }
@@ -104,7 +88,7 @@ fn local_light(i: u32, k: u32, lid: u32) {
     for (var r = lid; r < n; r += DIRECT_GROUP) {
         clear += local_transmittance_to(sphere, pc.origin, r, pc.local_side, emission.w, pc.step, pc.termination);
     }
-    clear = direct_group_sum(lid, vec4<f32>(clear, 0.0, 0.0, 0.0)).x;
+    clear = group_sum(lid, vec4<f32>(clear, 0.0, 0.0, 0.0)).x;
     if lid == 0u {
         local_lights[2u * k] = sphere;
         local_lights[2u * k + 1u] = emission;
@@ -149,7 +133,7 @@ fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index
         let m = march_ray(pc.origin, dir, DIRECT_NO_OBJECT, pc.step, pc.termination);
         clear += 1.0 - m.opacity;
     }
-    clear = direct_group_sum(lid, vec4<f32>(clear, 0.0, 0.0, 0.0)).x;
+    clear = group_sum(lid, vec4<f32>(clear, 0.0, 0.0, 0.0)).x;
     if lid == 0u {
         let t = clamp(clear / f32(max(pc.rays, 1u)), 0.0, 1.0);
         let amplitude = sharp_lobes[2u * k + 1u];
