@@ -25,20 +25,27 @@ fn sh_corner(cell: TrilinearCell, k: u32, count: u32, basis: array<f32, 8>) -> v
 
 // The view-dependent part at a cell (a dropped brick's coefficients are
 // zero); zero at degree 0. llvmpipe ends all of an invocation's loops
-// after 65535 iterations in all and does not unroll this loop (its body
-// is too large), so a sample of a view-dependent field costs the march
-// 1 + 8 of them (passes/src/march/knobs.rs MarchKnobs::loop_iterations):
-// the eight corners written out were 1.6 times slower there, and a loop
-// over a node's coefficients inside, 8 + 8·8 a sample, cut a degree-2
-// field's rays short from 2048 samples per ray on.
+// after 65535 iterations in all, and does not unroll a loop over the
+// corners (its body is too large): with SH_CORNER_LOOP (a bool define,
+// passes/src/march/knobs.rs SH_CORNER_LOOP_DEFINE) the corners are taken
+// in a loop, 1.6 times faster there but eight iterations a sample, for
+// kernels of one ray an invocation; without it they are written out and
+// cost none. (A loop over a node's coefficients inside, 8 + 8·8 a sample,
+// cut a degree-2 field's rays short from 2048 samples per ray on.)
 fn sh_trilinear(cell: TrilinearCell, degree: u32, basis: array<f32, 8>) -> vec3<f32> {
     let count = sh_count(degree);
     if count == 0u {
         return vec3<f32>(0.0);
     }
-    var c = vec3<f32>(0.0);
-    for (var k = 0u; k < 8u; k++) {
-        c += sh_corner(cell, k, count, basis);
+    if SH_CORNER_LOOP {
+        var c = vec3<f32>(0.0);
+        for (var k = 0u; k < 8u; k++) {
+            c += sh_corner(cell, k, count, basis);
+        }
+        return c;
     }
-    return c;
+    return sh_corner(cell, 0u, count, basis) + sh_corner(cell, 1u, count, basis)
+        + sh_corner(cell, 2u, count, basis) + sh_corner(cell, 3u, count, basis)
+        + sh_corner(cell, 4u, count, basis) + sh_corner(cell, 5u, count, basis)
+        + sh_corner(cell, 6u, count, basis) + sh_corner(cell, 7u, count, basis);
 }

@@ -130,11 +130,10 @@ pub struct NearFieldTracer {
 impl NearFieldTracer {
     /// Compiles both kernels for `march`'s quadrature.
     pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, march: MarchKnobs) -> anyhow::Result<Self> {
-        let view_dependent = crate::field::library_marches_view_dependent(lib);
         crate::march::loop_budget::check_loop_budget(
             ctx,
             "near-field",
-            RAYS_PER_INVOCATION as u64 * march.loop_iterations(view_dependent),
+            RAYS_PER_INVOCATION as u64 * march.loop_iterations(),
             || {
                 format!(
                     "{RAYS_PER_INVOCATION} rays an invocation at `[march] samples_per_ray` {}",

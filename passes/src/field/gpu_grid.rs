@@ -79,6 +79,7 @@ pub fn general_field_library(lib: &ShaderLibrary) -> ShaderLibrary {
     lib.with_defines(&[
         Define::Bool(VIEW_DEPENDENT_DEFINE, true),
         Define::Bool(SPARSE_DEFINE, true),
+        Define::Bool(crate::march::SH_CORNER_LOOP_DEFINE, false),
     ])
 }
 

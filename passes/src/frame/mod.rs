@@ -140,7 +140,6 @@ fn check_pixel_loops(
     scene: &SceneFile,
     light: &IncidentLight,
     march: &crate::march::MarchKnobs,
-    view_dependent: bool,
     shadows: bool,
 ) -> anyhow::Result<()> {
     let rays = light
@@ -169,14 +168,13 @@ fn check_pixel_loops(
     let shade = pixel_loops::shade_loop_iterations(
         &rays,
         march,
-        view_dependent,
         field_side,
         scene.lighting.fit.lobes,
         light.probe.environment_lobe_count(),
     );
     check_loop_budget(ctx, OBJECT_SHADE, shade, knobs)?;
     if shadows {
-        let cast = pixel_loops::cast_loop_iterations(&rays, march, view_dependent);
+        let cast = pixel_loops::cast_loop_iterations(&rays, march);
         check_loop_budget(ctx, CAST_SHADOW, cast, knobs)?;
     }
     Ok(())
@@ -247,16 +245,8 @@ impl InsertionFrame {
                 scene.lighting.local.rays,
             )
             .with_context(named)?;
-            let view_dependent = field.sh_degree > 0;
-            check_pixel_loops(
-                ctx,
-                scene,
-                &light,
-                march.knobs(),
-                view_dependent,
-                ssdf.is_some(),
-            )
-            .with_context(named)?;
+            check_pixel_loops(ctx, scene, &light, march.knobs(), ssdf.is_some())
+                .with_context(named)?;
             objects.push(FrameObject {
                 gpu: GpuObject::upload(ctx, &placed.mesh)?,
                 light,

@@ -23,17 +23,15 @@ const FIELD_LIGHT_MAX_RAYS: u64 = 256;
 /// the mesh, each local light's rays through the mesh and along the field
 /// to it, and the pixel's share of the field light's `field_side`² rays
 /// (each a march, two more per local light inside whose sphere it
-/// starts, and the `fitted` and `env_lobes` lobes along it), on a field
-/// with view-dependent colour if `view_dependent`.
+/// starts, and the `fitted` and `env_lobes` lobes along it).
 pub fn shade_loop_iterations(
     rays: &DirectRayCounts,
     march: &MarchKnobs,
-    view_dependent: bool,
     field_side: u32,
     fitted: u32,
     env_lobes: u32,
 ) -> u64 {
-    let m = march.loop_iterations(view_dependent);
+    let m = march.loop_iterations();
     let sharp = rays.sharp as u64 * (rays.side as u64).pow(2) * 2;
     let local = rays.local as u64 * (rays.local_side as u64).pow(2) * (2 + m);
     let field_rays = ((field_side as u64).pow(2).min(FIELD_LIGHT_MAX_RAYS)).div_ceil(SHADE_GROUP);
@@ -44,14 +42,10 @@ pub fn shade_loop_iterations(
 /// Loops per pixel of the cast shadow for the direct lobes: each sharp
 /// lobe's rays through the mesh, and each local light's arrival (its rays'
 /// side over the disk, one march to it) and its rays through the mesh.
-pub fn cast_loop_iterations(
-    rays: &DirectRayCounts,
-    march: &MarchKnobs,
-    view_dependent: bool,
-) -> u64 {
+pub fn cast_loop_iterations(rays: &DirectRayCounts, march: &MarchKnobs) -> u64 {
     let sharp = rays.sharp as u64 * (rays.side as u64).pow(2) * 2;
     let local_rays = (rays.local_side as u64).pow(2);
-    let local = rays.local as u64 * (3 * local_rays + march.loop_iterations(view_dependent));
+    let local = rays.local as u64 * (3 * local_rays + march.loop_iterations());
     sharp + local
 }
 
@@ -75,9 +69,9 @@ mod tests {
         // samples per ray, 32 lobes.
         let march = MarchKnobs::default();
         let c = counts(1, 6, 2, 2);
-        let shade = shade_loop_iterations(&c, &march, false, 16, 32, 8);
+        let shade = shade_loop_iterations(&c, &march, 16, 32, 8);
         assert!(shade < 20_000, "{shade}");
-        assert!(cast_loop_iterations(&c, &march, false) < 5_000);
+        assert!(cast_loop_iterations(&c, &march) < 5_000);
     }
 
     #[test]
@@ -85,12 +79,7 @@ mod tests {
         let march = MarchKnobs::default();
         let c = counts(0, 6, 8, 8);
         // 8 lights × 64 rays × (513 + 2): a quarter of a million.
-        assert_eq!(
-            shade_loop_iterations(&c, &march, false, 0, 32, 0),
-            8 * 64 * 515
-        );
-        assert!(
-            shade_loop_iterations(&c, &march, false, 0, 32, 0) > inlay_engine::LLVMPIPE_LOOP_LIMIT
-        );
+        assert_eq!(shade_loop_iterations(&c, &march, 0, 32, 0), 8 * 64 * 515);
+        assert!(shade_loop_iterations(&c, &march, 0, 32, 0) > inlay_engine::LLVMPIPE_LOOP_LIMIT);
     }
 }

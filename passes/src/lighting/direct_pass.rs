@@ -142,13 +142,7 @@ const DIRECT_GROUP: u64 = 64;
 /// rays, or of a local light's intensity rays (each counted as a whole
 /// march, since the sphere's size against the step is not known here)
 /// and `local_side`² rays, and the group's sums.
-fn loop_iterations(
-    side: u32,
-    local_side: u32,
-    local: bool,
-    march: &MarchKnobs,
-    view_dependent: bool,
-) -> u64 {
+fn loop_iterations(side: u32, local_side: u32, local: bool, march: &MarchKnobs) -> u64 {
     let share = |rays: u64| rays.div_ceil(DIRECT_GROUP);
     let sums = 3 * (DIRECT_GROUP.ilog2() as u64 + 1);
     let sharp = share((side * side) as u64);
@@ -158,7 +152,7 @@ fn loop_iterations(
     } else {
         0
     };
-    sharp.max(lights) * march.loop_iterations(view_dependent) + sums
+    sharp.max(lights) * march.loop_iterations() + sums
 }
 
 impl DirectLightPass {
@@ -186,13 +180,7 @@ impl DirectLightPass {
         check_loop_budget(
             ctx,
             DIRECT_LIGHT,
-            loop_iterations(
-                side,
-                local_side,
-                !local.is_empty(),
-                &march,
-                crate::field::library_marches_view_dependent(lib),
-            ),
+            loop_iterations(side, local_side, !local.is_empty(), &march),
             || {
                 format!(
                     "`[lighting] probe_supersampling` {side} (rays² per sharp lobe), \

@@ -8,7 +8,9 @@ pub(crate) mod pass;
 mod reference;
 mod reuse;
 
-pub use knobs::{MarchKnobs, MAX_SAMPLES_PER_RAY, VIEW_DEPENDENT_SAMPLE_LOOPS};
+pub use knobs::{
+    MarchKnobs, MAX_SAMPLES_PER_RAY, SH_CORNER_LOOP_DEFINE, VIEW_DEPENDENT_SAMPLE_LOOPS,
+};
 pub use pass::{
     MarchOutputs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT, NERF_MARCH, NERF_MARCH_INFO,
     OCCLUSION_SWITCH,

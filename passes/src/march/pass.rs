@@ -71,11 +71,18 @@ impl MarchPass {
         knobs
             .check()
             .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
+        // One ray an invocation: its view-dependent samples take their
+        // corners in a loop (faster on llvmpipe), eight iterations more.
         let view_dependent = crate::field::library_marches_view_dependent(lib);
+        let per_sample = 1 + if view_dependent {
+            super::VIEW_DEPENDENT_SAMPLE_LOOPS
+        } else {
+            0
+        };
         super::loop_budget::check_loop_budget(
             ctx,
             NERF_MARCH,
-            knobs.loop_iterations(view_dependent),
+            knobs.loop_iterations() * per_sample,
             || {
                 format!(
                     "`[march] samples_per_ray` {} on a field {} view-dependent colour",
@@ -88,7 +95,10 @@ impl MarchPass {
                 )
             },
         )?;
-        let defines = [Define::Bool("SKIP_EMPTY", knobs.skip_empty)];
+        let defines = [
+            Define::Bool("SKIP_EMPTY", knobs.skip_empty),
+            Define::Bool(super::SH_CORNER_LOOP_DEFINE, true),
+        ];
         let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
             Ok(lib.compute_pipeline(ctx, "march/march.wgsl", entry, &defines)?)
         };

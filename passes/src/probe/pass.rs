@@ -118,8 +118,7 @@ pub struct ProbePass {
 /// How many of a texel's `knobs.supersampling`² sub-samples one invocation
 /// of the trace may march under the device's loop limit `limit`
 /// ([`crate::march::loop_budget`]), with `local` local lights (each taken
-/// out of a ray by two marches) and `env_lobes` lobes of L_env, on a field
-/// with view-dependent colour if `view_dependent`; the pass
+/// out of a ray by two marches) and `env_lobes` lobes of L_env; the pass
 /// splits a texel's sub-samples over as many dispatches as that takes.
 /// An error names the knobs when even one sub-sample is over the limit.
 pub fn samples_per_dispatch(
@@ -128,14 +127,13 @@ pub fn samples_per_dispatch(
     march: &MarchKnobs,
     local: usize,
     env_lobes: usize,
-    view_dependent: bool,
 ) -> anyhow::Result<u32> {
     let samples = knobs.supersampling * knobs.supersampling;
     // Per sub-sample: its march, two per local light, the loops over the
     // lights and the lobes; per invocation: the texel's weight, a loop
     // over every sub-sample.
-    let per_sample = march.loop_iterations(view_dependent) * (1 + 2 * local as u64)
-        + (local + env_lobes + 1) as u64;
+    let per_sample =
+        march.loop_iterations() * (1 + 2 * local as u64) + (local + env_lobes + 1) as u64;
     let fixed = samples as u64 + 1;
     crate::march::loop_budget::items_per_invocation(limit, fixed, per_sample, samples).ok_or_else(
         || {
@@ -185,7 +183,6 @@ impl ProbePass {
             &march,
             local.len(),
             environment.len(),
-            crate::field::library_marches_view_dependent(lib),
         )?;
         let environment = if environment.is_empty() {
             None
@@ -382,28 +379,28 @@ mod tests {
         // The defaults: 36 rays of 513 samples, one dispatch; with two
         // local lights a ray may take 5 marches: 25 rays a dispatch.
         assert_eq!(
-            samples_per_dispatch(limit, &knobs(6), &march(512), 0, 4, false).unwrap(),
+            samples_per_dispatch(limit, &knobs(6), &march(512), 0, 4).unwrap(),
             36
         );
         assert_eq!(
-            samples_per_dispatch(limit, &knobs(6), &march(512), 2, 4, false).unwrap(),
+            samples_per_dispatch(limit, &knobs(6), &march(512), 2, 4).unwrap(),
             25
         );
         // 256 rays of 1025: (65535 − 257) / 1026 = 63 a dispatch.
         assert_eq!(
-            samples_per_dispatch(limit, &knobs(16), &march(1024), 0, 0, false).unwrap(),
+            samples_per_dispatch(limit, &knobs(16), &march(1024), 0, 0).unwrap(),
             63
         );
         assert_eq!(
-            samples_per_dispatch(None, &knobs(16), &march(1024), 0, 0, false).unwrap(),
+            samples_per_dispatch(None, &knobs(16), &march(1024), 0, 0).unwrap(),
             256
         );
         // One ray of 32769 samples and two more marches for a local light.
-        let e = samples_per_dispatch(limit, &knobs(6), &march(32768), 1, 0, false).unwrap_err();
+        let e = samples_per_dispatch(limit, &knobs(6), &march(32768), 1, 0).unwrap_err();
         assert!(
             e.to_string().contains("`[march] samples_per_ray` 32768"),
             "{e}"
         );
-        assert!(samples_per_dispatch(None, &knobs(6), &march(32768), 1, 0, false).is_ok());
+        assert!(samples_per_dispatch(None, &knobs(6), &march(32768), 1, 0).is_ok());
     }
 }

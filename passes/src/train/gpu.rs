@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use glam::{DVec3, UVec3};
 use inlay_engine::graph::{BufferAccess, BufferHandle, FrameGraph};
-use inlay_engine::shader::ShaderLibrary;
+use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Renderer, SubmitSync};
 
 use super::adam::AdamKnobs;
@@ -211,6 +211,10 @@ pub enum GradientScatter {
     /// `train/ray_grad_float.wgsl`.
     FloatAdd,
 }
+
+/// The ray kernel's defines: one ray an invocation, it takes a
+/// view-dependent sample's corners in a loop (faster, counted below).
+const RAY_GRAD_DEFINES: [Define; 1] = [Define::Bool(crate::march::SH_CORNER_LOOP_DEFINE, true)];
 
 /// The most loop iterations one invocation of the trainer's ray kernel
 /// runs ([`crate::march::loop_budget`]), per sample of a ray across the
@@ -463,7 +467,7 @@ impl GpuTrainer {
                 ctx,
                 GradientScatter::best(ctx.info()).file(),
                 "main",
-                &[],
+                &RAY_GRAD_DEFINES,
             )?,
             adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &[])?,
             tv: lib.compute_pipeline(ctx, "train/tv.wgsl", "main", &[])?,
@@ -507,7 +511,7 @@ impl GpuTrainer {
             ctx.info().name
         );
         check_ray_loops(ctx, &self.march, self.sh_degree, scatter)?;
-        self.ray_grad = lib.compute_pipeline(ctx, scatter.file(), "main", &[])?;
+        self.ray_grad = lib.compute_pipeline(ctx, scatter.file(), "main", &RAY_GRAD_DEFINES)?;
         Ok(self)
     }
 
