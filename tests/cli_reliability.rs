@@ -483,6 +483,43 @@ fn shading_rays_past_the_devices_loop_limit_are_refused() {
     assert!(!out.exists());
 }
 
+/// DOG over a field with view-dependent colour renders at the scene's own
+/// knobs: its shading's rays, counted against llvmpipe's loop limit, stay
+/// under it (counted at nine iterations a sample, as the march's own loop
+/// over the corners costs, they had passed it and the frame was refused).
+#[test]
+fn a_view_dependent_field_renders_at_the_scenes_knobs() {
+    use inlay_passes::field::{save_field, sh_extra_coefficients};
+    let dir = scratch("sh-dog");
+    let scene = common::bundled_scene("dog.toml");
+    let plain = common::bake_small(&scene, 48, 1, 0);
+    // The lamp is shaded as a local light: its rays are what the check
+    // counts most.
+    let emitters = inlay_passes::field::find_emitters(&plain);
+    assert_eq!(
+        scene.lighting.local.choose(&emitters, &plain.bounds).len(),
+        1
+    );
+    let k = sh_extra_coefficients(1);
+    let sh: Vec<[f32; 3]> = (0..plain.nodes.len() * k)
+        .map(|i| {
+            let c = plain.nodes[i / k];
+            std::array::from_fn(|ch| 0.2 * c[ch] * if (i + ch) % 2 == 0 { 1.0 } else { -1.0 })
+        })
+        .collect();
+    let field = dir.join("dog-sh1.inlayfield");
+    save_field(&field, &plain.with_sh(1, sh)).unwrap();
+    let out = dir.join("dog.png");
+    let o = render_small(
+        std::path::Path::new(&scene_path("dog.toml")),
+        &field,
+        &out,
+        &dir,
+    );
+    assert!(o.status.success(), "{}", common::output_text(&o));
+    assert!(out.exists());
+}
+
 /// The text of a scene of `count` small cubes on a floor, at test knobs.
 fn many_cubes(count: usize) -> String {
     let cube = common::objects_dir().join("checker-cube.gltf");
