@@ -118,22 +118,31 @@ pub struct ProbePass {
 /// How many of a texel's `knobs.supersampling`² sub-samples one invocation
 /// of the trace may march under the device's loop limit `limit`
 /// ([`crate::march::loop_budget`]), with `local` local lights (each taken
-/// out of a ray by two marches) and `env_lobes` lobes of L_env; the pass
-/// splits a texel's sub-samples over as many dispatches as that takes.
-/// An error names the knobs when even one sub-sample is over the limit.
+/// out of a ray by two marches) and `env_lobes` lobes of L_env, on a field
+/// with view-dependent colour if `view_dependent` (the trace takes a
+/// sample's corners in a loop, [`crate::march::SH_CORNER_LOOP_DEFINE`]:
+/// faster, and it splits its rays at no loss); the pass splits a texel's
+/// sub-samples over as many dispatches as that takes. An error names the
+/// knobs when even one sub-sample is over the limit.
 pub fn samples_per_dispatch(
     limit: Option<u64>,
     knobs: &ProbeKnobs,
     march: &MarchKnobs,
     local: usize,
     env_lobes: usize,
+    view_dependent: bool,
 ) -> anyhow::Result<u32> {
     let samples = knobs.supersampling * knobs.supersampling;
     // Per sub-sample: its march, two per local light, the loops over the
     // lights and the lobes; per invocation: the texel's weight, a loop
     // over every sub-sample.
-    let per_sample =
-        march.loop_iterations() * (1 + 2 * local as u64) + (local + env_lobes + 1) as u64;
+    let corners = if view_dependent {
+        crate::march::VIEW_DEPENDENT_SAMPLE_LOOPS
+    } else {
+        0
+    };
+    let march_loops = march.loop_iterations() * (1 + corners);
+    let per_sample = march_loops * (1 + 2 * local as u64) + (local + env_lobes + 1) as u64;
     let fixed = samples as u64 + 1;
     crate::march::loop_budget::items_per_invocation(limit, fixed, per_sample, samples).ok_or_else(
         || {
@@ -170,6 +179,7 @@ impl ProbePass {
         let defines = [
             Define::Bool("SKIP_EMPTY", march.skip_empty),
             Define::Bool("OCTAHEDRAL", knobs.map == MapKind::Octahedral),
+            Define::Bool(crate::march::SH_CORNER_LOOP_DEFINE, true),
         ];
         let build = |entry: &str| -> anyhow::Result<Arc<ComputePipeline>> {
             Ok(lib.compute_pipeline(ctx, "probe/trace.wgsl", entry, &defines)?)
@@ -183,6 +193,7 @@ impl ProbePass {
             &march,
             local.len(),
             environment.len(),
+            crate::field::library_marches_view_dependent(lib),
         )?;
         let environment = if environment.is_empty() {
             None
@@ -379,28 +390,34 @@ mod tests {
         // The defaults: 36 rays of 513 samples, one dispatch; with two
         // local lights a ray may take 5 marches: 25 rays a dispatch.
         assert_eq!(
-            samples_per_dispatch(limit, &knobs(6), &march(512), 0, 4).unwrap(),
+            samples_per_dispatch(limit, &knobs(6), &march(512), 0, 4, false).unwrap(),
             36
         );
         assert_eq!(
-            samples_per_dispatch(limit, &knobs(6), &march(512), 2, 4).unwrap(),
+            samples_per_dispatch(limit, &knobs(6), &march(512), 2, 4, false).unwrap(),
             25
         );
         // 256 rays of 1025: (65535 − 257) / 1026 = 63 a dispatch.
         assert_eq!(
-            samples_per_dispatch(limit, &knobs(16), &march(1024), 0, 0).unwrap(),
+            samples_per_dispatch(limit, &knobs(16), &march(1024), 0, 0, false).unwrap(),
             63
         );
         assert_eq!(
-            samples_per_dispatch(None, &knobs(16), &march(1024), 0, 0).unwrap(),
+            samples_per_dispatch(None, &knobs(16), &march(1024), 0, 0, false).unwrap(),
             256
         );
         // One ray of 32769 samples and two more marches for a local light.
-        let e = samples_per_dispatch(limit, &knobs(6), &march(32768), 1, 0).unwrap_err();
+        // On a view-dependent field a sample costs nine: with a local
+        // light, (65535 − 37) / (513 · 9 · 3 + 6) = 4 rays a dispatch.
+        assert_eq!(
+            samples_per_dispatch(limit, &knobs(6), &march(512), 1, 4, true).unwrap(),
+            4
+        );
+        let e = samples_per_dispatch(limit, &knobs(6), &march(32768), 1, 0, false).unwrap_err();
         assert!(
             e.to_string().contains("`[march] samples_per_ray` 32768"),
             "{e}"
         );
-        assert!(samples_per_dispatch(None, &knobs(6), &march(32768), 1, 0).is_ok());
+        assert!(samples_per_dispatch(None, &knobs(6), &march(32768), 1, 0, false).is_ok());
     }
 }
