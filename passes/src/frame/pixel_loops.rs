@@ -16,9 +16,6 @@ use crate::march::MarchKnobs;
 /// rays (`shaders/shade/field_light.wgsl`).
 const SHADE_GROUP: u64 = 64;
 
-/// Most field-light rays a workgroup traces (`FIELD_LIGHT_MAX_RAYS`).
-const FIELD_LIGHT_MAX_RAYS: u64 = 256;
-
 /// Loops per pixel of the object's shading: each sharp lobe's rays through
 /// the mesh, each local light's rays through the mesh and along the field
 /// to it, and the pixel's share of the field light's `field_side`² rays
@@ -34,7 +31,8 @@ pub fn shade_loop_iterations(
     let m = march.loop_iterations();
     let sharp = rays.sharp as u64 * (rays.side as u64).pow(2) * 2;
     let local = rays.local as u64 * (rays.local_side as u64).pow(2) * (2 + m);
-    let field_rays = ((field_side as u64).pow(2).min(FIELD_LIGHT_MAX_RAYS)).div_ceil(SHADE_GROUP);
+    let side = field_side.min(crate::shade::field_light::MAX_SIDE) as u64;
+    let field_rays = (side * side).div_ceil(SHADE_GROUP);
     let per_field_ray = m * (1 + 2 * rays.local as u64) + (rays.local + fitted + env_lobes) as u64;
     sharp + local + field_rays * per_field_ray
 }
