@@ -342,6 +342,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         3,
         40.0,
         16.0 / 12.0,
+        &dog.capture,
     );
     assert_eq!(trained_scene.cameras.len(), 3);
     for (a, b) in trained_scene.cameras.iter().zip(&placed) {

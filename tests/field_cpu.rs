@@ -280,6 +280,18 @@ fn bad_scene_files_name_the_key() {
             "shadows.cast_refine",
         ),
         (
+            format!("{base}\n[capture]\nazimuth = [90.0, 0.0]\n"),
+            "capture.azimuth",
+        ),
+        (
+            format!("{base}\n[capture]\nazimuth = [0.0, 5.0]\n"),
+            "capture.azimuth",
+        ),
+        (
+            format!("{base}\n[capture]\nazimut = [0.0, 90.0]\n"),
+            "azimut",
+        ),
+        (
             base.replace("max = [0.9, 0.9, 0.9]", "max = [-2.0, 0.9, 0.9]"),
             "recipe.bounds",
         ),

@@ -335,7 +335,7 @@ fn recipe_dataset(name: &str) -> inlay_passes::dataset::Dataset {
     let recipe = scene.recipe().unwrap();
     let (w, h) = (32u32, 32u32);
     let fov = 40.0f64;
-    let frames: Vec<Frame> = cap_cameras(&recipe.bounds, 24, fov, 1.0)
+    let frames: Vec<Frame> = cap_cameras(&recipe.bounds, 24, fov, 1.0, &scene.capture)
         .iter()
         .enumerate()
         .map(|(i, cam)| {

@@ -736,15 +736,24 @@ def measure_irradiance(centre, samples, seed, log):
 
 def training_views(scene_spec, count):
     """Cameras on the upper hemisphere around the field, looking at its
-    centre: a Fibonacci spiral from 10° to 70° of elevation."""
+    centre: a Fibonacci spiral from 10° to 70° of elevation; over the
+    scene's `[capture] azimuth = [from, to]` (degrees from +x towards +z,
+    where a photographer can stand) when it names one, a Fibonacci lattice
+    of the same golden angle over that arc, as `inlay render-views` does."""
     b = scene_spec["recipe"]["bounds"]
     lo, hi = np.array(b["min"], float), np.array(b["max"], float)
     centre = 0.5 * (lo + hi)
     radius = 1.6 * np.linalg.norm(hi - lo)
+    arc = scene_spec.get("capture", {}).get("azimuth")
+    golden = math.pi * (3 - math.sqrt(5))
     views = []
     for k in range(count):
         el = math.radians(10 + 60 * (k + 0.5) / count)
-        az = k * math.pi * (3 - math.sqrt(5))
+        if arc is None or arc[1] - arc[0] >= 360:
+            az = k * golden
+        else:
+            turn = math.fmod(k * golden / (2 * math.pi), 1.0)
+            az = math.radians(arc[0] + turn * (arc[1] - arc[0]))
         d = np.array([math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)])
         views.append((centre + radius * d, centre))
     return views

@@ -15,12 +15,73 @@ pub const CAP_LOWEST: f64 = 10.0;
 /// Highest camera elevation, degrees.
 pub const CAP_HIGHEST: f64 = 60.0;
 
+/// Where a photographer can stand around a recipe: the azimuths of the
+/// cap, in degrees from +x towards +z (a scene's `[capture] azimuth`).
+/// A room's walls are photographed from inside; a capture from behind
+/// them sees each wall's dark back and lit front at once, which a field
+/// with one colour per node can only fake with haze (ROOM trained at the
+/// trainer's defaults from the whole cap: an optical depth of 1.6 per
+/// metre of its free space; from its open side, 0.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capture {
+    /// The first azimuth, degrees.
+    pub azimuth_from: f64,
+    /// The last azimuth, degrees (more than `azimuth_from`, at most 360
+    /// beyond it).
+    pub azimuth_to: f64,
+}
+
+impl Capture {
+    /// The whole cap around the field.
+    pub const FULL: Capture = Capture {
+        azimuth_from: 0.0,
+        azimuth_to: 360.0,
+    };
+
+    /// Whether the arc goes all the way round.
+    pub fn is_full(&self) -> bool {
+        self.azimuth_to - self.azimuth_from >= 360.0
+    }
+
+    /// What is wrong with the arc, if anything.
+    pub fn problem(&self) -> Option<String> {
+        let (a, b) = (self.azimuth_from, self.azimuth_to);
+        if !(a.is_finite() && b.is_finite()) {
+            return Some(format!("[{a}, {b}] must be two finite angles in degrees"));
+        }
+        if b - a < MIN_CAPTURE_ARC || b - a > 360.0 {
+            return Some(format!(
+                "[{a}, {b}]: the second angle must exceed the first by {MIN_CAPTURE_ARC}° to 360°"
+            ));
+        }
+        None
+    }
+}
+
+impl Default for Capture {
+    fn default() -> Self {
+        Capture::FULL
+    }
+}
+
+/// The narrowest arc of azimuths a capture may span, degrees: narrower,
+/// the cameras barely triangulate across it.
+pub const MIN_CAPTURE_ARC: f64 = 20.0;
+
 /// `views` cameras looking at the field's centre from a cap between
-/// [`CAP_LOWEST`] and [`CAP_HIGHEST`] degrees of elevation, spread evenly
-/// over its area (a Fibonacci spiral), far enough that the field's bounding
-/// sphere fills 1/1.1 of the narrower field of view (`fov_y` degrees, for
-/// an image `aspect` = width / height).
-pub fn cap_cameras(bounds: &Aabb, views: u32, fov_y: f64, aspect: f64) -> Vec<CameraSpec> {
+/// [`CAP_LOWEST`] and [`CAP_HIGHEST`] degrees of elevation and over the
+/// `capture`'s azimuths, spread evenly over its area (a Fibonacci spiral;
+/// over part of the circle, a Fibonacci lattice of the same golden
+/// ratio), far enough that the field's bounding sphere fills 1/1.1 of the
+/// narrower field of view (`fov_y` degrees, for an image `aspect` = width
+/// / height).
+pub fn cap_cameras(
+    bounds: &Aabb,
+    views: u32,
+    fov_y: f64,
+    aspect: f64,
+    capture: &Capture,
+) -> Vec<CameraSpec> {
     let centre = bounds.center();
     let radius = 0.5 * bounds.diagonal();
     let half_y = 0.5 * fov_y.to_radians();
@@ -35,7 +96,13 @@ pub fn cap_cameras(bounds: &Aabb, views: u32, fov_y: f64, aspect: f64) -> Vec<Ca
         .map(|i| {
             let t = (i as f64 + 0.5) / views as f64;
             let elevation = (s0 + t * (s1 - s0)).asin();
-            let azimuth = i as f64 * golden;
+            let azimuth = if capture.is_full() {
+                i as f64 * golden
+            } else {
+                let span = capture.azimuth_to - capture.azimuth_from;
+                let turn = (i as f64 * golden / std::f64::consts::TAU).fract();
+                (capture.azimuth_from + turn * span).to_radians()
+            };
             let dir = DVec3::new(
                 elevation.cos() * azimuth.cos(),
                 elevation.sin(),
@@ -144,7 +211,7 @@ mod tests {
     fn a_written_capture_reads_back_with_the_cameras_rays() {
         let bounds = Aabb::new(DVec3::new(-1.0, -0.1, -0.8), DVec3::new(1.0, 1.2, 0.6));
         let (w, h) = (12u32, 8u32);
-        let cams = cap_cameras(&bounds, 5, 40.0, w as f64 / h as f64);
+        let cams = cap_cameras(&bounds, 5, 40.0, w as f64 / h as f64, &Capture::FULL);
         let dir = std::env::temp_dir().join(format!("inlay-capture-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let frames: Vec<WrittenFrame> = cams
@@ -200,6 +267,55 @@ mod tests {
                 (CAP_LOWEST - 1e-9..=CAP_HIGHEST + 1e-9).contains(&el),
                 "{el}"
             );
+        }
+    }
+
+    /// A capture over part of the circle keeps its cameras on that arc
+    /// and spreads them over it: each quarter of the arc holds a share of
+    /// them, at low and at high elevations.
+    #[test]
+    fn a_capture_arc_keeps_its_cameras_on_the_arc() {
+        let bounds = Aabb::new(DVec3::new(-1.0, -0.1, -1.0), DVec3::new(1.0, 1.4, 1.0));
+        let arc = Capture {
+            azimuth_from: 0.0,
+            azimuth_to: 90.0,
+        };
+        let cams = cap_cameras(&bounds, 64, 40.0, 1.0, &arc);
+        let mut quarters = [0; 4];
+        let mut high = [0; 4];
+        for c in &cams {
+            let d = (c.position - bounds.center()).normalize();
+            let az = d.z.atan2(d.x).to_degrees();
+            assert!((-1e-9..=90.0 + 1e-9).contains(&az), "{az}");
+            let q = ((az / 22.5) as usize).min(3);
+            quarters[q] += 1;
+            if d.y.asin().to_degrees() > 35.0 {
+                high[q] += 1;
+            }
+        }
+        for q in 0..4 {
+            assert!((12..=20).contains(&quarters[q]), "{quarters:?}");
+            assert!(high[q] >= 4, "{high:?}");
+        }
+        // The whole circle is the spiral it always was: camera i at i
+        // golden angles.
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        for (i, c) in cap_cameras(&bounds, 8, 40.0, 1.0, &Capture::FULL)
+            .iter()
+            .enumerate()
+        {
+            let d = c.position - bounds.center();
+            let want = DVec3::new((i as f64 * golden).cos(), 0.0, (i as f64 * golden).sin());
+            let got = DVec3::new(d.x, 0.0, d.z).normalize();
+            assert!((got - want).length() < 1e-9, "{i}: {got} vs {want}");
+        }
+        assert!(arc.problem().is_none() && Capture::FULL.problem().is_none());
+        for (a, b) in [(0.0, 10.0), (90.0, 0.0), (0.0, 400.0), (f64::NAN, 90.0)] {
+            let bad = Capture {
+                azimuth_from: a,
+                azimuth_to: b,
+            };
+            assert!(bad.problem().is_some(), "{a} {b}");
         }
     }
 }

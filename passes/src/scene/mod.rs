@@ -163,6 +163,9 @@ pub struct Scene {
     /// The distant light objects are lit with instead of [`Self::environment`]
     /// (`[lighting] environment`, an estimated environment file), if any.
     pub object_environment: Option<ObjectEnvironment>,
+    /// Where a training set of the recipe is photographed from
+    /// (`[capture]`; the whole cap by default).
+    pub capture: crate::dataset::capture::Capture,
 }
 
 /// Distant light for the objects from an environment file.
@@ -573,6 +576,19 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             cast_refine,
         }
     };
+    let capture = match spec.capture.and_then(|c| c.azimuth) {
+        None => crate::dataset::capture::Capture::FULL,
+        Some([azimuth_from, azimuth_to]) => {
+            let c = crate::dataset::capture::Capture {
+                azimuth_from,
+                azimuth_to,
+            };
+            if let Some(m) = c.problem() {
+                return Err(e("capture.azimuth", m));
+            }
+            c
+        }
+    };
     if spec.objects.len() > MAX_OBJECTS {
         return Err(e(
             "objects",
@@ -659,6 +675,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         object_sources,
         shadows,
         object_environment,
+        capture,
     })
 }
 

@@ -37,6 +37,16 @@ pub(crate) struct SceneSpec {
     pub shadows: Option<ShadowsSpec>,
     #[serde(default)]
     pub objects: Vec<ObjectSpec>,
+    #[serde(default)]
+    pub capture: Option<CaptureSpec>,
+}
+
+/// `[capture]`: where `inlay render-views` may put its cameras.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CaptureSpec {
+    /// [from, to] in degrees from +x towards +z.
+    pub azimuth: Option<[f64; 2]>,
 }
 
 /// `[shadows]`: which shadows are drawn, how the SSDF is read outside its

@@ -13,7 +13,9 @@ use clap::Args;
 use inlay_engine::HdrImage;
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
-use inlay_passes::dataset::capture::{bracket_png, cap_cameras, transforms_json, WrittenFrame};
+use inlay_passes::dataset::capture::{
+    bracket_png, cap_cameras, transforms_json, Capture, WrittenFrame,
+};
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::progress_bar;
@@ -46,6 +48,11 @@ pub struct RenderViewsArgs {
     /// (stops; exposure_time = 2^EV), e.g. `-4,-2,0,2`.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub brackets: Vec<f64>,
+    /// The cap's azimuths, degrees from +x towards +z, e.g. `0,90`: where a
+    /// photographer can stand (default: the scene's `[capture] azimuth`,
+    /// else all the way round).
+    #[arg(long, value_delimiter = ',', num_args = 2, allow_hyphen_values = true)]
+    pub azimuth: Option<Vec<f64>>,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -90,7 +97,24 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
     }
     let transforms = args.out.join("transforms.json");
     check_output("--out", &transforms, &["json"])?;
-    let cameras = cap_cameras(&recipe.bounds, args.views, args.fov, w as f64 / h as f64);
+    let capture = match args.azimuth.as_deref() {
+        Some(&[azimuth_from, azimuth_to]) => Capture {
+            azimuth_from,
+            azimuth_to,
+        },
+        Some(_) => anyhow::bail!("--azimuth takes two angles, FROM,TO"),
+        None => scene.capture,
+    };
+    if let Some(m) = capture.problem() {
+        anyhow::bail!("--azimuth {m}");
+    }
+    let cameras = cap_cameras(
+        &recipe.bounds,
+        args.views,
+        args.fov,
+        w as f64 / h as f64,
+        &capture,
+    );
     let options = ReferenceOptions {
         samples: args.samples,
         bounces: args.bounces.unwrap_or(scene.bake.bounces),
@@ -154,8 +178,16 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
         )?;
     }
     let written = outputs.commit(None)?;
+    let arc = if capture.is_full() {
+        "all the way round".to_string()
+    } else {
+        format!(
+            "from azimuths {}° to {}°",
+            capture.azimuth_from, capture.azimuth_to
+        )
+    };
     eprintln!(
-        "{} views of {w}x{h} at {} samples per pixel in {:.1} s ({} files)",
+        "{} views of {w}x{h} {arc} at {} samples per pixel in {:.1} s ({} files)",
         args.views,
         args.samples,
         started.elapsed().as_secs_f64(),
