@@ -13,9 +13,11 @@ use super::fit::{fit_environment, FitData, FitResult};
 use super::knobs::EnvEstimateKnobs;
 use super::near_field::{NearField, NearFieldTracer};
 use super::quality::{view_quality, QualityScore, ViewImage};
-use super::surface::{draw_points, emitter_limit, keep_seen, view_candidates, SurfacePoint};
+use super::surface::{
+    covered_median, draw_points, emitter_limit, keep_seen, view_candidates, SurfacePoint,
+};
 use super::views::ViewSource;
-use super::witnesses::Witnesses;
+use super::witnesses::{Witnesses, PHOTO_SPREAD_FLOOR};
 use crate::camera::CameraFrame;
 use crate::field::{GpuGridField, GridField};
 use crate::march::{MarchKnobs, MarchPass, MARCH_COLOUR_FORMAT, MARCH_DEPTH_FORMAT};
@@ -65,6 +67,10 @@ pub struct SurfaceSample {
     /// radiance from the photographs: or read by none, its pixels
     /// saturated or masked), over all views rendered.
     pub unseen: usize,
+    /// Candidates tried and left out because the photographs that saw
+    /// them disagree there, or only one or two did
+    /// ([`EnvEstimateKnobs::max_photo_spread`]), over all views rendered.
+    pub inconsistent: usize,
 }
 
 /// A finished estimate.
@@ -141,11 +147,15 @@ pub fn sample_surface(
         mixed: 0,
         creased: 0,
         unseen: 0,
+        inconsistent: 0,
         photo_ratio: None,
     };
     let mut photo_ratios = Vec::new();
-    // Whether points take their radiance from the photographs.
-    let photos = seen_from.is_some_and(Witnesses::have_photos);
+    // Whether points take their radiance from the photographs, and
+    // whether the photographs judge them.
+    let have_photos = seen_from.is_some_and(Witnesses::have_photos);
+    let photos = have_photos && knobs.radiance_from_photos;
+    let photo_check = have_photos && knobs.max_photo_spread > 0.0;
     let mut rejected = Vec::new();
     // Views that passed the quality score but had no surface point.
     let mut surfaceless = 0u32;
@@ -181,7 +191,19 @@ pub fn sample_surface(
                 // Twice the points drawn, for those left out as lights.
                 let mut rng = Pcg32::new(knobs.seed, 0x5EE4_0000_0000 | out.views_tried as u64);
                 let count = 2 * knobs.pixels_per_view as usize;
+                let mut inconsistent = 0;
+                let floor = PHOTO_SPREAD_FLOOR * covered_median([&candidates]);
                 candidates = keep_seen(candidates, count, &mut rng, |p| {
+                    if photo_check {
+                        match w.photo_spread(field, &march, p.position, p.normal) {
+                            Some(s) if s.relative(floor) <= knobs.max_photo_spread => {}
+                            None if !w.saw(field, &march, p.position, p.normal) => return false,
+                            _ => {
+                                inconsistent += 1;
+                                return false;
+                            }
+                        }
+                    }
                     if !photos {
                         return w.saw(field, &march, p.position, p.normal);
                     }
@@ -194,6 +216,8 @@ pub fn sample_surface(
                         None => false,
                     }
                 });
+                candidates.unseen -= inconsistent;
+                out.inconsistent += inconsistent;
                 out.unseen += candidates.unseen;
             }
             // A view with no surface to draw from is as poor as an empty one.
@@ -240,6 +264,16 @@ pub fn sample_surface(
         "{surfaceless} of {} views passed the quality check but no photograph gave a reading within 2× of the field's colour at any of their surface points: \
          were the photographs' exposures learnt in training (`inlay train --learn-exposure`), or are they scaled unlike the field?",
         out.views_tried
+    );
+    anyhow::ensure!(
+        !out.points.is_empty() || surfaceless == 0 || out.inconsistent == 0,
+        "{surfaceless} of {} views passed the quality check but at none of their {} surface points did the photographs that saw it agree \
+         (within a spread of {} of their median; {} points seen by none): the field's surfaces are not where its photographs put them, \
+         as where a trainer left haze",
+        out.views_tried,
+        out.inconsistent,
+        knobs.max_photo_spread,
+        out.unseen
     );
     anyhow::ensure!(
         !out.points.is_empty() || surfaceless == 0,

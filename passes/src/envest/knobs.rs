@@ -97,6 +97,22 @@ pub struct EnvEstimateKnobs {
     /// zero a node off its round surfaces, which then read as creases
     /// (DOG's bake 4.2 → 11.6 % on seed 1 with it).
     pub max_crease: f64,
+    /// Where the photographs that saw a surface point are at hand
+    /// (`--seen-from DATASET`), the most their readings there may
+    /// disagree for it to be kept: the interquartile range of their
+    /// luminance over their median plus a floor
+    /// ([`super::witnesses::PhotoSpread::relative`],
+    /// [`super::witnesses::PHOTO_SPREAD_FLOOR`]); 0 turns the test off.
+    /// A point in a trainer's haze reads different parts of the surface
+    /// behind it in each photograph. On ROOM trained from 64 views, it
+    /// keeps all but one of 264 points within 8 cm of the recipe's
+    /// surfaces and 11 % of 1592 further off; on the bakes, 95 % (DOG)
+    /// and over 99 % (ROOM) of the points (docs/fidelity.md,
+    /// "Thirty-first pass").
+    pub max_photo_spread: f64,
+    /// Read each surface point's radiance from the photographs that saw
+    /// it (the median reading) rather than from the field.
+    pub radiance_from_photos: bool,
     /// Seed of every random choice (views, pixels, rays, batches, samples).
     pub seed: u64,
 }
@@ -125,6 +141,8 @@ impl Default for EnvEstimateKnobs {
             max_sharpness: 2000.0,
             emitter_ratio: 8.0,
             max_crease: 15.0,
+            max_photo_spread: 0.2,
+            radiance_from_photos: false,
             seed: 1,
         }
     }
@@ -169,6 +187,16 @@ impl EnvEstimateKnobs {
                     .or_else(|| pos("max_sharpness", self.max_sharpness, 1e4))
                     .or_else(|| pos("emitter_ratio", self.emitter_ratio, 1e9))
                     .or_else(|| pos("max_crease", self.max_crease, 180.0))
+                    .or_else(|| {
+                        (!(self.max_photo_spread.is_finite() && self.max_photo_spread >= 0.0)).then(
+                            || {
+                                (
+                                    "max_photo_spread",
+                                    format!("{} must be a number ≥ 0", self.max_photo_spread),
+                                )
+                            },
+                        )
+                    })
             })
     }
 

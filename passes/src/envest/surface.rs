@@ -338,6 +338,12 @@ pub fn emitter_limit<'a>(
     views: impl IntoIterator<Item = &'a ViewPoints>,
     emitter_ratio: f64,
 ) -> f64 {
+    emitter_ratio * covered_median(views)
+}
+
+/// The median luminance of every pixel the `views` saw the field in (0
+/// when there are none).
+pub fn covered_median<'a>(views: impl IntoIterator<Item = &'a ViewPoints>) -> f64 {
     let mut lum: Vec<f32> = views
         .into_iter()
         .flat_map(|v| v.covered_luminance.iter().copied())
@@ -346,8 +352,7 @@ pub fn emitter_limit<'a>(
         return 0.0;
     }
     let mid = lum.len() / 2;
-    let (_, median, _) = lum.select_nth_unstable_by(mid, f32::total_cmp);
-    emitter_ratio * *median as f64
+    *lum.select_nth_unstable_by(mid, f32::total_cmp).1 as f64
 }
 
 /// Keeps up to `count` of `view`'s candidates for which `seen` holds,
