@@ -417,4 +417,38 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("WxH"), "{}", text(&o));
+    // An arc of azimuths: backwards or of one angle is refused by name;
+    // a negative start is an angle, not a flag.
+    for bad in ["90,0", "10"] {
+        let o = inlay(&[
+            "render-views",
+            scene,
+            &format!("--azimuth={bad}"),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!o.status.success(), "{bad}: {}", text(&o));
+        assert!(text(&o).contains("--azimuth"), "{bad}: {}", text(&o));
+    }
+    let arc = out.join("arc");
+    let o = inlay(&[
+        "render-views",
+        scene,
+        "--azimuth",
+        "-30,60",
+        "--views",
+        "2",
+        "--size",
+        "8x8",
+        "--samples",
+        "1",
+        "--out",
+        arc.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("from azimuths -30° to 60°"),
+        "{}",
+        text(&o)
+    );
 }

@@ -196,7 +196,12 @@ pub fn sample_surface(
                 candidates = keep_seen(candidates, count, &mut rng, |p| {
                     if photo_check {
                         match w.photo_spread(field, &march, p.position, p.normal) {
-                            Some(s) if s.relative(floor) <= knobs.max_photo_spread => {}
+                            // Three photographs saw it: no need to ask again.
+                            Some(s) if s.relative(floor) <= knobs.max_photo_spread => {
+                                if !photos {
+                                    return true;
+                                }
+                            }
                             None if !w.saw(field, &march, p.position, p.normal) => return false,
                             _ => {
                                 inconsistent += 1;
@@ -267,8 +272,8 @@ pub fn sample_surface(
     );
     anyhow::ensure!(
         !out.points.is_empty() || surfaceless == 0 || out.inconsistent == 0,
-        "{surfaceless} of {} views passed the quality check but at none of their {} surface points did the photographs that saw it agree \
-         (within a spread of {} of their median; {} points seen by none): the field's surfaces are not where its photographs put them, \
+        "{surfaceless} of {} views passed the quality check but at none of their {} surface points did three or more photographs see it and agree \
+         (within --max-photo-spread {} of their median and its floor; {} points seen by none): the field's surfaces are not where its photographs put them, \
          as where a trainer left haze",
         out.views_tried,
         out.inconsistent,

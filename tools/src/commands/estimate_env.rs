@@ -249,8 +249,13 @@ fn witnesses(
             .collect(),
         path if photos => {
             let options = inlay_passes::dataset::LoadOptions::default();
+            let hint = if radiance_from_photos {
+                ""
+            } else {
+                " (its photographs judge the surface points; --max-photo-spread 0 takes its cameras alone)"
+            };
             inlay_passes::dataset::load_dataset(Path::new(path), &options)
-                .map_err(|e| anyhow::anyhow!("--seen-from: {e}"))?
+                .map_err(|e| anyhow::anyhow!("--seen-from: {e}{hint}"))?
                 .frames
                 .into_iter()
                 .map(Witness::photographed)

@@ -51,7 +51,12 @@ pub struct RenderViewsArgs {
     /// The cap's azimuths, degrees from +x towards +z, e.g. `0,90`: where a
     /// photographer can stand (default: the scene's `[capture] azimuth`,
     /// else all the way round).
-    #[arg(long, value_delimiter = ',', num_args = 2, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "FROM,TO"
+    )]
     pub azimuth: Option<Vec<f64>>,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
