@@ -229,7 +229,9 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     );
     // Its geometry scored against the recipe the views show.
     assert!(
-        t.contains("held-out frame 1: geometry against") && t.contains("node spacings"),
+        t.contains("held-out frame 1: geometry against")
+            && t.contains("node spacings")
+            && t.contains("of the surfaces' light"),
         "{t}"
     );
     let trained = inlay_passes::field::load_field(&field).unwrap();

@@ -16,6 +16,17 @@ use super::pixels::pixel_ray;
 /// (its expected depth then lies on what hides the rest).
 pub const SURFACE_OPACITY: f64 = 0.5;
 
+/// Node spacings in front of a known surface from which the field's
+/// opacity counts as haze ([`GeometryScore::haze`]): a trained surface's
+/// own blur and offset are not haze. ROOM trained from its open side put
+/// its surfaces a median 2–4 spacings in front of the recipe's, its
+/// surface pixels' weight spread over 7 or more, and with a margin of 3
+/// nearly half their light counted as haze where the free space was all
+/// but clear. With 8, that field (0.3 per metre of free space) hides
+/// 16–24 %, those whose free space reads 1.25–3.1 per metre 33–52 %
+/// (docs/fidelity.md, "Thirty-second pass").
+pub const HAZE_MARGIN: f64 = 8.0;
+
 /// One view's geometry against the known surfaces.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GeometryScore {
@@ -36,6 +47,12 @@ pub struct GeometryScore {
     /// Share of the pixels with no known surface inside the bounds where
     /// the field is opaque: floaters (NaN: no such pixel).
     pub floating: f64,
+    /// Mean opacity the field gathers before [`HAZE_MARGIN`] node spacings
+    /// in front of the known surface, over the pixels with one: the share
+    /// of the surface's light that haze in the room hides from the camera
+    /// (and from any point the estimate reads light at). 0 on a clean
+    /// field; NaN where no pixel has a known surface.
+    pub haze: f64,
 }
 
 /// Scores `field`'s geometry in `frame`'s usable pixels: `surface(ray,
@@ -50,8 +67,9 @@ pub fn geometry_score(
     use rayon::prelude::*;
     let spacing = field.spacing().min_element();
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
-    // Per pixel: (a known surface, the field opaque, signed depth error).
-    let pixels: Vec<(bool, bool, f64)> = (0..w * h)
+    // Per pixel: (a known surface, the field opaque, signed depth error,
+    // the opacity in front of the known surface).
+    let pixels: Vec<(bool, bool, f64, f64)> = (0..w * h)
         .into_par_iter()
         .filter(|&p| frame.image.state[p as usize] != PixelState::Masked)
         .filter_map(|p| {
@@ -64,15 +82,23 @@ pub fn geometry_score(
                 Some(t) if opaque => (m.depth / m.opacity - t) / spacing,
                 _ => f64::NAN,
             };
-            Some((known.is_some(), opaque, error))
+            let haze = known.map_or(f64::NAN, |t| {
+                let front = t - HAZE_MARGIN * spacing;
+                if front <= t0 {
+                    0.0
+                } else {
+                    march_ray(field, &ray, front, march).opacity
+                }
+            });
+            Some((known.is_some(), opaque, error, haze))
         })
         .collect();
     let mut signed: Vec<f64> = pixels.iter().map(|p| p.2).filter(|e| !e.is_nan()).collect();
     let mut errors: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
     errors.sort_by(f64::total_cmp);
     signed.sort_by(f64::total_cmp);
-    let share = |of: &dyn Fn(&(bool, bool, f64)) -> bool,
-                 among: &dyn Fn(&(bool, bool, f64)) -> bool| {
+    type Pixel = (bool, bool, f64, f64);
+    let share = |of: &dyn Fn(&Pixel) -> bool, among: &dyn Fn(&Pixel) -> bool| {
         let n = pixels.iter().filter(|p| among(p)).count();
         let k = pixels.iter().filter(|p| among(p) && of(p)).count();
         if n == 0 {
@@ -87,6 +113,17 @@ pub fn geometry_score(
         median_signed_error: median(&signed),
         see_through: share(&|p| !p.1, &|p| p.0),
         floating: share(&|p| p.1, &|p| !p.0),
+        haze: mean(pixels.iter().map(|p| p.3).filter(|o| !o.is_nan())),
+    }
+}
+
+/// The mean of `v` (NaN when empty).
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 {
+        f64::NAN
+    } else {
+        sum / n as f64
     }
 }
 
@@ -112,6 +149,11 @@ mod tests {
     /// A 24³ field over [−1, 1]³ opaque below `floor` (density 400 a unit),
     /// empty above.
     fn slab(floor: f64) -> GridField {
+        foggy_slab(floor, 0.0)
+    }
+
+    /// [`slab`] with density `fog` a unit above `floor`.
+    fn foggy_slab(floor: f64, fog: f32) -> GridField {
         let n = 24u32;
         let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
         let h = 2.0 / (n - 1) as f64;
@@ -122,7 +164,7 @@ mod tests {
                     let sigma = if -1.0 + y as f64 * h <= floor {
                         400.0
                     } else {
-                        0.0
+                        fog
                     };
                     nodes.push([0.5, 0.5, 0.5, sigma]);
                 }
@@ -183,12 +225,39 @@ mod tests {
         assert!(on.compared > 900, "{on:?}");
         assert!(on.median_error < 0.5, "{on:?}");
         assert!(on.see_through == 0.0 && on.floating.is_nan(), "{on:?}");
+        assert!(on.haze == 0.0, "{on:?}");
         let off = geometry_score(&f, &field, &march(), &plane(top - 1.5 * h));
         assert!(
             (off.median_error - on.median_error - 2.0).abs() < 0.5,
             "{on:?} {off:?}"
         );
         assert_eq!(off.median_signed_error, -off.median_error, "{off:?}");
+    }
+
+    /// Fog of density 2 above the slab hides 1 − e^(−2L) of it, L the
+    /// ray's length from the box's top (1 − top above the surface) to
+    /// [`HAZE_MARGIN`] spacings short of the surface along the ray: from
+    /// (1 − top) − 8h straight down to (1 − top)/cos 25° − 8h at the
+    /// frame's corners; and its weight draws the field's expected depth in
+    /// front of the surface.
+    #[test]
+    fn fog_in_front_of_a_surface_is_haze() {
+        let h = 2.0 / 23.0;
+        let top = -1.0 + 11.0 * h + 0.5 * h;
+        let fog = 2.0f32;
+        let g = geometry_score(&frame(), &foggy_slab(top, fog), &march(), &plane(top));
+        let fog_length = |cos: f64| (1.0 - top) / cos - HAZE_MARGIN * h;
+        let least = 1.0 - (-(fog as f64) * fog_length(1.0)).exp();
+        let most = 1.0 - (-(fog as f64) * fog_length(25f64.to_radians().cos())).exp();
+        assert!(
+            g.haze > least - 1e-3 && g.haze < most,
+            "{g:?}: {least}..{most}"
+        );
+        // The fog's weight pulls the expected depth in front of the slab.
+        assert!(
+            g.see_through == 0.0 && g.median_signed_error < -1.0,
+            "{g:?}"
+        );
     }
 
     /// An empty field is seen through wherever a surface is known, and an
@@ -198,8 +267,10 @@ mod tests {
         let f = frame();
         let empty = geometry_score(&f, &slab(-2.0), &march(), &plane(0.0));
         assert!(empty.compared == 0 && empty.see_through == 1.0 && empty.median_error.is_nan());
+        assert_eq!(empty.haze, 0.0, "{empty:?}");
         let nothing = |_: &Ray, _: f64, _: f64| None;
         let full = geometry_score(&f, &slab(0.0), &march(), &nothing);
         assert!(full.compared == 0 && full.floating == 1.0 && full.see_through.is_nan());
+        assert!(full.haze.is_nan(), "{full:?}");
     }
 }

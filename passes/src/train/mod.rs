@@ -20,7 +20,7 @@ pub mod tv;
 pub mod visibility;
 
 pub use adam::{adam_step, AdamKnobs};
-pub use geometry::{geometry_score, GeometryScore};
+pub use geometry::{geometry_score, GeometryScore, HAZE_MARGIN};
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};

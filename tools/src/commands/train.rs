@@ -345,11 +345,14 @@ fn print_geometry(
         };
         println!(
             "held-out frame {}: geometry against {}: {depth}; seen through at {} of the surfaces' pixels, \
-             floating at {} of the others",
+             floating at {} of the others; haze hides {} of the surfaces' light (the field's mean opacity \
+             up to {} node spacings in front of them)",
             v.frame,
             scene.path.display(),
             percent_of(g.see_through),
-            percent_of(g.floating)
+            percent_of(g.floating),
+            percent_of(g.haze),
+            inlay_passes::train::HAZE_MARGIN
         );
     }
 }
