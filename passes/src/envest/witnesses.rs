@@ -405,7 +405,7 @@ mod tests {
     /// green and blue, taken with exposure 0.5 (its values read doubled).
     fn photo_above(offset: f64, saturated: Option<usize>) -> Witness {
         let (w, h) = (8u32, 8u32);
-        let mut witness = Witness::new(
+        let witness = Witness::new(
             &CameraSpec {
                 name: None,
                 position: DVec3::new(0.0, 3.0, 0.0),
@@ -426,15 +426,26 @@ mod tests {
         if let Some(i) = saturated {
             state[i] = PixelState::LowerBound;
         }
+        with_photo(witness, radiance, state, 2.0)
+    }
+
+    /// `witness` holding the photograph `radiance` (its own size, row-major
+    /// from the top), each pixel's `state`, its values read × `scale`.
+    fn with_photo(
+        mut witness: Witness,
+        radiance: Vec<[f32; 3]>,
+        state: Vec<PixelState>,
+        scale: f64,
+    ) -> Witness {
         witness.photo = Some(Photo {
             image: FrameImage {
-                width: w,
-                height: h,
+                width: witness.intrinsics.width,
+                height: witness.intrinsics.height,
                 radiance,
                 state,
                 counts: Default::default(),
             },
-            scale: 2.0,
+            scale,
         });
         witness
     }
@@ -523,18 +534,9 @@ mod tests {
                 [c as f32; 3]
             })
             .collect();
-        let mut witness = Witness::new(&spec, w, h);
-        witness.photo = Some(Photo {
-            image: FrameImage {
-                width: w,
-                height: h,
-                radiance,
-                state: vec![PixelState::Value; (w * h) as usize],
-                counts: Default::default(),
-            },
-            scale: 1.0,
-        });
-        witness
+        let witness = Witness::new(&spec, w, h);
+        let state = vec![PixelState::Value; (w * h) as usize];
+        with_photo(witness, radiance, state, 1.0)
     }
 
     /// Points on the checkered floor read the same in every photograph;
