@@ -586,6 +586,14 @@ fn a_lamp_in_view_is_learnt_with_its_light() {
     assert!((0.5..1.3).contains(&mean), "mean brightness {mean}");
 }
 
+/// The total variation the GPU's step is checked with: an edge inside the
+/// test field's density differences (up to 4), so both sides are read.
+const TV: inlay_passes::train::tv::TvWeights = inlay_passes::train::tv::TvWeights {
+    colour: 0.03,
+    density: 0.07,
+    density_edge: 0.5,
+};
+
 /// `train-tv` and `train-descend` take the CPU reference's total-variation
 /// step after Adam's (here of size zero, with rays of zero weight: nothing
 /// else moves the values).
@@ -596,7 +604,7 @@ fn the_tv_step_matches_the_cpu_step() {
     let field = field();
     let knobs = MarchKnobs::default();
     let mut trainer = trainer_of(&ctx, &lib, &field, knobs);
-    trainer.tv_weights = (0.03, 0.07);
+    trainer.tv_weights = TV;
     let mut renderer = Renderer::new(&ctx, 1).unwrap();
     let (ray, target, _) = rays(&field, 1)[0];
     let records = [TrainRay::new(ray.origin, ray.dir, target, 0.0)];
@@ -619,7 +627,7 @@ fn the_tv_step_matches_the_cpu_step() {
         .unwrap();
     let gpu = trainer.field(&mut renderer).unwrap().nodes;
     let mut cpu = field.nodes.clone();
-    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, 0.03, 0.07);
+    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, TV);
     for (i, (g, c)) in gpu.iter().flatten().zip(cpu.iter().flatten()).enumerate() {
         assert!(
             (g - c).abs() < 1e-5 * (1.0 + c.abs()),
@@ -861,7 +869,7 @@ fn a_sparse_grid_trains_as_the_dense_one_where_it_has_bricks() {
         beta1: 0.9,
         beta2: 0.99,
     };
-    trainer.tv_weights = (0.03, 0.07);
+    trainer.tv_weights = TV;
     let quiet = [TrainRay::new(
         batch[0].0.origin,
         batch[0].0.dir,
@@ -873,7 +881,7 @@ fn a_sparse_grid_trains_as_the_dense_one_where_it_has_bricks() {
         .unwrap();
     let gpu = trainer.field(&mut renderer).unwrap().nodes;
     let mut cpu = field.nodes.clone();
-    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, 0.03, 0.07);
+    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, TV);
     for z in 0..r.z {
         for y in 0..r.y {
             for x in 0..r.x {

@@ -1,6 +1,8 @@
 // Total variation: each node's gradient of the squared differences to its
 // six neighbours, Σ_nb (v − v_nb) per channel, weighted per channel group
-// (colour, density), into the gradient buffer Adam's step left empty;
+// (colour, density), a density difference d pulled by d / √(1 + (d·inv)²)
+// (a Charbonnier penalty: squared below 1/inv, its size beyond; inv 0:
+// squared everywhere), into the gradient buffer Adam's step left empty;
 // train/descend.wgsl then takes one plain step along it. A sparse grid's
 // nodes are its pool's, a dropped brick's neighbours zero (held so).
 // Mirrors passes/src/train/tv.rs tv_gradient.
@@ -10,7 +12,7 @@ struct TvPush {
     count: u32,
     colour_weight: f32,
     density_weight: f32,
-    pad0: u32,
+    density_edge_inverse: f32,
     pad: u32,
     // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
     brick_dims: vec3<u32>,
@@ -40,6 +42,13 @@ fn neighbour(m: vec3<u32>) -> vec4<f32> {
     return params[brick_pool_index(slot, m)];
 }
 
+// Half the penalty's derivative for a difference d: d for colour, the
+// density's d / √(1 + (d·inv)²) (passes/src/train/tv.rs edge_pull).
+fn pull(d: vec4<f32>) -> vec4<f32> {
+    let s = d.w * pc.density_edge_inverse;
+    return vec4<f32>(d.xyz, d.w / sqrt(1.0 + s * s));
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = id.x + 65535u * 64u * id.y;
@@ -60,10 +69,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         var e = vec3<u32>(0u);
         e[a] = 1u;
         if i[a] + 1u < r[a] {
-            acc += v - neighbour(i + e);
+            acc += pull(v - neighbour(i + e));
         }
         if i[a] > 0u {
-            acc += v - neighbour(i - e);
+            acc += pull(v - neighbour(i - e));
         }
     }
     let w = vec4<f32>(pc.colour_weight, pc.colour_weight, pc.colour_weight, pc.density_weight);

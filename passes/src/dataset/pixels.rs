@@ -29,6 +29,9 @@ pub struct PixelCounts {
     pub masked: usize,
     /// Saturated LDR pixels (lower bounds).
     pub saturated: usize,
+    /// LDR pixels whose alpha is below 1, composited over the background
+    /// when read.
+    pub transparent: usize,
 }
 
 impl std::ops::AddAssign for PixelCounts {
@@ -37,6 +40,7 @@ impl std::ops::AddAssign for PixelCounts {
         self.negative += o.negative;
         self.masked += o.masked;
         self.saturated += o.saturated;
+        self.transparent += o.transparent;
     }
 }
 
@@ -109,6 +113,7 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 /// radiance is the coverage-weighted mix of the two. EXR alpha is ignored
 /// (EXR frames are radiance).
 pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, String> {
+    let mut counts = PixelCounts::default();
     let (width, height, rgb, saturated) = match image_kind(path) {
         Some(ImageKind::Exr) => {
             let img = inlay_engine::HdrImage::load_exr(path).map_err(|e| e.to_string())?;
@@ -123,6 +128,7 @@ pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, Strin
             let mut sat = Vec::with_capacity((w * h) as usize);
             for p in img.pixels() {
                 let a = p[3] as f32 / 65535.0;
+                counts.transparent += usize::from(p[3] < u16::MAX);
                 let mut c = [0f32; 3];
                 for k in 0..3 {
                     let v = srgb_to_linear(p[k] as f32 / 65535.0);
@@ -135,7 +141,6 @@ pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, Strin
         }
         None => return Err("not an .exr, .png, .jpg or .jpeg file".into()),
     };
-    let mut counts = PixelCounts::default();
     let mut radiance = rgb;
     let state = radiance
         .iter_mut()

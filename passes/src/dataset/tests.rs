@@ -119,6 +119,7 @@ fn blender_synthetic_frames_are_composited_and_saturation_is_a_lower_bound() {
         assert!((got - (a * c + (1.0 - a) * b)).abs() < 1e-5);
     }
     assert_eq!(d.counts.saturated, 4 * 6);
+    assert_eq!(d.counts.transparent, 4 * 6 * 2);
     // The cameras look at the origin from 3 m: the common view is there.
     assert!(d.bounds.center().length() < 1e-6, "{:?}", d.bounds);
 }

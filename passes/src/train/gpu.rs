@@ -12,6 +12,7 @@ use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Rendere
 
 use super::adam::AdamKnobs;
 use super::sh_pages::{interleave, ShPages};
+use super::tv::TvWeights;
 use crate::field::bricks::BrickLayout;
 use crate::field::{GridField, NodeStorage, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
@@ -122,8 +123,9 @@ inlay_engine::gpu_struct! {
         pub colour_weight: f32,
         /// Weight of the density's differences.
         pub density_weight: f32,
-        /// Padding.
-        pub pad0: u32,
+        /// 1 / the density difference beyond which its penalty grows as
+        /// its size (0: squared everywhere; [`TvWeights::density_edge`]).
+        pub density_edge_inverse: f32,
         /// Padding.
         pub pad: u32,
         /// Bricks per axis of a sparse grid (0: dense).
@@ -344,9 +346,9 @@ pub struct GpuTrainer {
     pub march: MarchKnobs,
     /// Adam steps taken.
     pub steps: u32,
-    /// Total variation's weights (colour, density): a step of it after
-    /// each Adam step ([`super::tv::tv_step`]); zero leaves it out.
-    pub tv_weights: (f32, f32),
+    /// Total variation's weights: a step of it after each Adam step
+    /// ([`super::tv::tv_step`]); [`TvWeights::NONE`] leaves it out.
+    pub tv_weights: TvWeights,
     /// The step size of the frames' exposure gains when they are learnt
     /// (Adam, after each of the grid's steps); None keeps them fixed.
     pub gain_rate: Option<f32>,
@@ -491,7 +493,7 @@ impl GpuTrainer {
             sh_degree: field.sh_degree,
             march,
             steps: 0,
-            tv_weights: (0.0, 0.0),
+            tv_weights: TvWeights::NONE,
             gain_rate: None,
             distortion: 0.0,
         })
@@ -671,7 +673,7 @@ impl GpuTrainer {
                 pass.dispatch(&self.adam).push(&page_step).groups(groups);
                 pass.finish();
             }
-            if self.tv_weights != (0.0, 0.0) {
+            if !self.tv_weights.is_none() {
                 self.add_tv_step(&mut graph, params, grad, (graph_table, graph_slots));
             }
             if let Some(rate) = self.gain_rate {
@@ -717,9 +719,9 @@ impl GpuTrainer {
         let t = TvPush {
             resolution: self.resolution.to_array(),
             count: nodes,
-            colour_weight: self.tv_weights.0,
-            density_weight: self.tv_weights.1,
-            pad0: 0,
+            colour_weight: self.tv_weights.colour as f32,
+            density_weight: self.tv_weights.density as f32,
+            density_edge_inverse: self.tv_weights.density_edge_inverse() as f32,
             pad: 0,
             brick_dims: self.brick_dims(),
             pad1: 0,

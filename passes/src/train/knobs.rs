@@ -40,6 +40,16 @@ pub struct TrainKnobs {
     /// 24–30 dB), 2–4 with it (29–33 dB); 1e-2 and 3e-2 a little worse
     /// (`docs/benchmarks.md`, issue 25's eighth pass).
     pub tv_density: f64,
+    /// The density difference between neighbouring nodes, as an optical
+    /// depth per node spacing (σ·h), beyond which the total variation
+    /// pulls it by a bounded amount rather than in proportion
+    /// ([`super::tv::TvWeights::density_edge`]): a haze below it is
+    /// smoothed as before, a surface's rise above it is left sharp. 0:
+    /// squared differences everywhere, which at the default weight
+    /// diffuse a density step over 12 nodes in 2000 steps. With the
+    /// distortion loss it is what lets a surface's rise be sharp
+    /// (`docs/fidelity.md`, "Thirty-third pass").
+    pub tv_edge: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
     /// shells; 0 leaves it out. On DOG at 128 nodes from 64 views of 256²,
@@ -47,6 +57,19 @@ pub struct TrainKnobs {
     /// (`docs/benchmarks.md`, "Distortion loss"); off by default until
     /// measured on a real capture.
     pub distortion: f64,
+    /// Each step's rays end on a random colour behind the field (each
+    /// channel uniform over 0 to twice the photographs' mean radiance)
+    /// rather than on the fixed background: a field a ray partly sees
+    /// through where its photograph shows a surface then pays for it, so
+    /// surfaces train opaque rather than translucent with their colour
+    /// raised against the black behind them (NeRF's random background).
+    /// What the photographs see past the bounds is painted into the field
+    /// the same way, so it suits captures whose rays all end inside the
+    /// bounds: ROOM from its open side (the pixels seen through 3.9 % →
+    /// 0.6 %), not DOG from its cap (45 % of the pixels with nothing in the
+    /// bounds came out opaque; `docs/fidelity.md`, "Thirty-third pass").
+    /// Needs opaque photographs (no pixel with alpha below 1).
+    pub random_background: bool,
     /// Degree of the view-dependent colour trained (spherical harmonics,
     /// 0..=2; 0: one colour per node, as a bake's).
     pub sh_degree: u32,
@@ -83,12 +106,29 @@ impl Default for TrainKnobs {
             epsilon: 4.0,
             tv_colour: 0.0,
             tv_density: 3e-3,
+            tv_edge: 0.0,
             distortion: 0.0,
+            random_background: false,
             sh_degree: 0,
             learn_exposure: false,
             prune: 0.01,
             sparse: false,
             seed: 1,
+        }
+    }
+}
+
+impl TrainKnobs {
+    /// The total variation's weights on a grid of node spacing `h`.
+    pub fn tv_weights(&self, h: f64) -> super::tv::TvWeights {
+        super::tv::TvWeights {
+            colour: self.tv_colour,
+            density: self.tv_density,
+            density_edge: if self.tv_edge > 0.0 {
+                self.tv_edge / h
+            } else {
+                f64::INFINITY
+            },
         }
     }
 }
@@ -150,6 +190,7 @@ impl TrainKnobs {
         for (k, v) in [
             ("tv_colour", self.tv_colour),
             ("tv_density", self.tv_density),
+            ("tv_edge", self.tv_edge),
             ("distortion", self.distortion),
             ("prune", self.prune),
         ] {

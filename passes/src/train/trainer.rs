@@ -22,6 +22,7 @@ use crate::dataset::{Dataset, PixelState};
 use crate::field::FieldLayout::Auto;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::march::{march_ray, MarchKnobs};
+use crate::rng::Pcg32;
 use crate::sgfit::model::luminance;
 
 /// Where a run is, for progress reports.
@@ -161,6 +162,36 @@ fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
     (sum / n.max(1) as f64).max(1e-6)
 }
 
+/// The radiance behind the field for step `step`'s rays: `background`, or
+/// under [`TrainKnobs::random_background`] a colour drawn for the step,
+/// each channel uniform over [0, 2·`scale`) (`scale` the photographs' mean
+/// radiance).
+pub fn step_background(knobs: &TrainKnobs, background: DVec3, scale: f64, step: u32) -> DVec3 {
+    if !knobs.random_background {
+        return background;
+    }
+    let mut rng = Pcg32::new(knobs.seed, RANDOM_BACKGROUND_STREAM ^ step as u64);
+    DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * (2.0 * scale)
+}
+
+/// The random stream [`step_background`] draws from (apart from the
+/// batches' pixels').
+const RANDOM_BACKGROUND_STREAM: u64 = 0xB6_0000_0000;
+
+/// Why `dataset` cannot be trained with `knobs`, before any work: a random
+/// background behind photographs with transparent pixels, already
+/// composited over a fixed one when read.
+pub fn check_dataset(knobs: &TrainKnobs, dataset: &Dataset) -> anyhow::Result<()> {
+    let transparent = dataset.counts.transparent;
+    anyhow::ensure!(
+        !knobs.random_background || transparent == 0,
+        "random background: {} has {transparent} pixels with alpha below 1, composited over the \
+         fixed background when read; train them over it (no random background)",
+        dataset.file.display()
+    );
+    Ok(())
+}
+
 /// How a run begins and when it stops early.
 pub struct TrainControl<'a> {
     /// A field to continue from (its nodes, resolution and bounds; one
@@ -200,6 +231,7 @@ pub fn train(
     if let Err((k, m)) = knobs.check() {
         anyhow::bail!("train knob {k}: {m}");
     }
+    check_dataset(knobs, dataset)?;
     let started = Instant::now();
     let pool = PixelPool::new(dataset, hold_out);
     anyhow::ensure!(!pool.pixels.is_empty(), "no usable pixel to train on");
@@ -283,7 +315,7 @@ pub fn train(
             );
         }
         let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, march, layout)?;
-        gpu.tv_weights = (knobs.tv_colour as f32, knobs.tv_density as f32);
+        gpu.tv_weights = knobs.tv_weights(field.spacing().min_element());
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
@@ -311,7 +343,7 @@ pub fn train(
             let out = gpu.run_batch(
                 &mut renderer,
                 &records,
-                background,
+                step_background(knobs, background, scale, step),
                 knobs.epsilon * scale,
                 Some((&adam, 1.0 / records.len() as f32)),
             )?;
@@ -548,6 +580,68 @@ pub fn score_view(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A dataset of no frames whose pixels counted `transparent` with
+    /// alpha below 1.
+    fn dataset_with(transparent: usize) -> Dataset {
+        Dataset {
+            file: "shots/transforms.json".into(),
+            dialect: crate::dataset::Dialect::InstantNgp,
+            frames: Vec::new(),
+            bounds: crate::geometry::Aabb::new(DVec3::ZERO, DVec3::ONE),
+            bounds_source: crate::dataset::BoundsSource::AabbKey,
+            counts: crate::dataset::pixels::PixelCounts {
+                transparent,
+                ..Default::default()
+            },
+            skipped: Vec::new(),
+        }
+    }
+
+    /// A random background is refused, naming the file, for photographs
+    /// with transparent pixels, and taken for opaque ones; a fixed one
+    /// either way.
+    #[test]
+    fn a_random_background_needs_opaque_photographs() {
+        let random = TrainKnobs {
+            random_background: true,
+            ..TrainKnobs::default()
+        };
+        let e = check_dataset(&random, &dataset_with(3))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("shots/transforms.json") && e.contains("3 pixels"),
+            "{e}"
+        );
+        assert!(check_dataset(&random, &dataset_with(0)).is_ok());
+        assert!(check_dataset(&TrainKnobs::default(), &dataset_with(3)).is_ok());
+    }
+
+    /// The fixed background is every step's; a random one differs from
+    /// step to step, stays in [0, 2·scale) per channel, and averages the
+    /// scale.
+    #[test]
+    fn each_step_draws_its_own_background() {
+        let bg = DVec3::new(0.1, 0.2, 0.3);
+        assert_eq!(step_background(&TrainKnobs::default(), bg, 0.5, 7), bg);
+        let random = TrainKnobs {
+            random_background: true,
+            ..TrainKnobs::default()
+        };
+        let draws: Vec<DVec3> = (0..2000)
+            .map(|s| step_background(&random, bg, 0.5, s))
+            .collect();
+        assert_ne!(draws[0], draws[1]);
+        assert!(draws
+            .iter()
+            .all(|d| d.min_element() >= 0.0 && d.max_element() < 1.0));
+        let mean = draws.iter().sum::<DVec3>() / draws.len() as f64;
+        assert!(
+            (mean - DVec3::splat(0.5)).abs().max_element() < 0.03,
+            "{mean}"
+        );
+    }
 
     /// A view 10 % too bright everywhere scores brightness 1.1 and
     /// relative error 0.1; a darker one the other way; masked pixels and

@@ -63,11 +63,23 @@ pub struct TrainArgs {
     /// Total variation's weight on neighbouring nodes' density differences.
     #[arg(long, default_value_t = TrainKnobs::default().tv_density)]
     pub tv_density: f64,
+    /// Optical depth per node spacing (σ·h) from which a density step
+    /// between neighbouring nodes is smoothed by a bounded pull rather than
+    /// in proportion: a surface's rise stays sharp, a haze below it is
+    /// smoothed (0: squared differences everywhere).
+    #[arg(long, default_value_t = TrainKnobs::default().tv_edge)]
+    pub tv_edge: f64,
     /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
     /// weight into one short stretch, so surfaces train as thin shells
     /// rather than haze (0: none).
     #[arg(long, default_value_t = TrainKnobs::default().distortion)]
     pub distortion: f64,
+    /// Each step's rays end on a random colour behind the field instead of
+    /// `--background`, so that surfaces train opaque rather than
+    /// translucent (for opaque photographs: refused when a pixel's alpha
+    /// is below 1).
+    #[arg(long)]
+    pub random_background: bool,
     /// Degree of view-dependent colour (spherical harmonics, 0..=2; 0 is
     /// one colour per node). Degree 1 adds 3 RGB coefficients a node,
     /// degree 2 8, to the file and to the device's memory. Default: the
@@ -151,7 +163,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         epsilon: args.epsilon,
         tv_colour: args.tv_colour,
         tv_density: args.tv_density,
+        tv_edge: args.tv_edge,
         distortion: args.distortion,
+        random_background: args.random_background,
         sh_degree: args.sh_degree.unwrap_or(
             resume
                 .as_ref()
@@ -181,6 +195,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         ..LoadOptions::default()
     };
     let dataset = load_dataset(&args.dataset, &options)?;
+    inlay_passes::train::check_dataset(&knobs, &dataset)?;
     let scene = match &args.scene {
         Some(p) => {
             let scene = inlay_passes::scene::load_scene(p)?;
