@@ -22,7 +22,7 @@ pub struct TvWeights {
     pub density: f64,
     /// The density difference (in σ's units) from which its penalty grows
     /// as its size rather than its square: ε in 2ε²(√(1 + (d/ε)²) − 1),
-    /// which is d² for |d| ≪ ε. Infinite: squared everywhere.
+    /// which is d² for |d| ≪ ε; positive. Infinite: squared everywhere.
     pub density_edge: f64,
 }
 
