@@ -118,21 +118,6 @@ impl Default for TrainKnobs {
     }
 }
 
-impl TrainKnobs {
-    /// The total variation's weights on a grid of node spacing `h`.
-    pub fn tv_weights(&self, h: f64) -> super::tv::TvWeights {
-        super::tv::TvWeights {
-            colour: self.tv_colour,
-            density: self.tv_density,
-            density_edge: if self.tv_edge > 0.0 {
-                self.tv_edge / h
-            } else {
-                f64::INFINITY
-            },
-        }
-    }
-}
-
 /// The steps `inlay train` takes when not told: 2000 for a grid of up to
 /// 128 nodes along its longest axis, and four times as many for each
 /// doubling above (256 nodes: 8000), as many as the finest grid's nodes
@@ -153,6 +138,21 @@ pub fn default_iterations(resolution: u32) -> u32 {
 pub const FEW_STEPS_RESOLUTION: u32 = 128;
 
 impl TrainKnobs {
+    /// The total variation's weights on a grid of node spacing `h`: the
+    /// edge [`Self::tv_edge`] (an optical depth per spacing) as a density
+    /// difference, τ/h.
+    pub fn tv_weights(&self, h: f64) -> super::tv::TvWeights {
+        super::tv::TvWeights {
+            colour: self.tv_colour,
+            density: self.tv_density,
+            density_edge: if self.tv_edge > 0.0 {
+                self.tv_edge / h
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+
     /// Why the knobs cannot be used: (knob, message).
     pub fn check(&self) -> Result<(), (String, String)> {
         let bad = |k: &str, m: String| Err((k.to_string(), m));
@@ -215,6 +215,28 @@ impl TrainKnobs {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The edge is an optical depth per node spacing: on a grid twice as
+    /// fine it is twice the density difference; 0 leaves the differences
+    /// squared everywhere, and a negative edge is refused.
+    #[test]
+    fn the_tv_edge_is_an_optical_depth_per_spacing() {
+        let knobs = TrainKnobs {
+            tv_edge: 0.02,
+            ..TrainKnobs::default()
+        };
+        let tv = knobs.tv_weights(0.01);
+        assert!((tv.density_edge - 2.0).abs() < 1e-12);
+        assert_eq!(tv.density, knobs.tv_density);
+        assert!((knobs.tv_weights(0.005).density_edge - 4.0).abs() < 1e-12);
+        let off = TrainKnobs::default().tv_weights(0.01);
+        assert_eq!(off.density_edge_inverse(), 0.0);
+        let bad = TrainKnobs {
+            tv_edge: -1.0,
+            ..TrainKnobs::default()
+        };
+        assert_eq!(bad.check().unwrap_err().0, "tv_edge");
+    }
 
     /// The default steps: 2000 up to 128 nodes, ×4 per doubling above.
     #[test]
