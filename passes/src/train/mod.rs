@@ -26,6 +26,5 @@ pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
 pub use trainer::{
-    check_dataset, resample, step_background, train, view_march, with_sh_degree, HeldOutView,
-    TrainControl, TrainProgress, Trained,
+    resample, train, view_march, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
 };

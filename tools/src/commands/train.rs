@@ -195,7 +195,6 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         ..LoadOptions::default()
     };
     let dataset = load_dataset(&args.dataset, &options)?;
-    inlay_passes::train::check_dataset(&knobs, &dataset)?;
     let scene = match &args.scene {
         Some(p) => {
             let scene = inlay_passes::scene::load_scene(p)?;
