@@ -178,15 +178,8 @@ pub fn sample_surface(
         };
         let mut keep = judged <= knobs.quality_threshold;
         if keep {
-            let mut candidates = view_candidates(
-                field,
-                &frame,
-                &image,
-                out.views_tried - 1,
-                &march,
-                knobs.surface_test,
-                knobs.max_crease,
-            );
+            let mut candidates =
+                view_candidates(field, &frame, &image, out.views_tried - 1, &march, knobs);
             if let Some(w) = seen_from {
                 // Twice the points drawn, for those left out as lights.
                 let mut rng = Pcg32::new(knobs.seed, 0x5EE4_0000_0000 | out.views_tried as u64);

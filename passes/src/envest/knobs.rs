@@ -97,6 +97,18 @@ pub struct EnvEstimateKnobs {
     /// zero a node off its round surfaces, which then read as creases
     /// (DOG's bake 4.2 → 11.6 % on seed 1 with it).
     pub max_crease: f64,
+    /// Under the `weight` surface test, where a point's normal is read: at
+    /// the point (the default) or along the pixel's ray through the
+    /// surface ([`super::surface::SurfaceNormals`]). Along the ray, ROOM's
+    /// trained floor read its normals a median 20° off the recipe's
+    /// against 31° at the point, and the estimate (with `max_crease` 30
+    /// and a near light) found the bulb within 4.5° and 11.1° on two
+    /// seeds against 20.1° and 21.4°; DOG's error at the test points
+    /// 13.3 % over four seeds against 13.5 %; but PLANTS' all-visible
+    /// estimate rose from 7–11 % of its lights to 63–90 %
+    /// (docs/fidelity.md, "Thirty-fourth pass"), so it is not the
+    /// default.
+    pub normals: super::surface::SurfaceNormals,
     /// Where the photographs that saw a surface point are at hand
     /// (`--seen-from DATASET`), the most their readings there may
     /// disagree for it to be kept: the interquartile range of their
@@ -141,6 +153,7 @@ impl Default for EnvEstimateKnobs {
             max_sharpness: 2000.0,
             emitter_ratio: 8.0,
             max_crease: 15.0,
+            normals: super::surface::SurfaceNormals::AtPoint,
             max_photo_spread: 0.2,
             radiance_from_photos: false,
             seed: 1,

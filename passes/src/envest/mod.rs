@@ -48,8 +48,8 @@ pub use near_lights::PointLight;
 pub use quality::{view_quality, QualityScore, ViewImage};
 pub use recovery::{emitter_recovery, EmitterRecovery};
 pub use surface::{
-    covered_median, draw_points, emitter_limit, keep_seen, view_candidates, SurfacePoint,
-    SurfaceTest, ViewPoints,
+    covered_median, draw_points, emitter_limit, keep_seen, view_candidates, SurfaceNormals,
+    SurfacePoint, SurfaceTest, ViewPoints,
 };
 pub use truth::{
     field_light_irradiance, hidden_light_lobes, hidden_light_lobes_except, light_irradiance,

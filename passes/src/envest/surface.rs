@@ -24,6 +24,7 @@
 
 use glam::DVec3;
 
+use super::knobs::EnvEstimateKnobs;
 use super::quality::ViewImage;
 use crate::camera::CameraFrame;
 use crate::field::{GridField, RadianceField};
@@ -152,6 +153,23 @@ pub enum SurfaceTest {
     Weight,
 }
 
+/// Where a trained surface point's normal is read
+/// ([`super::knobs::EnvEstimateKnobs::normals`]; a bake's is read at the
+/// point under either).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SurfaceNormals {
+    /// −∇σ at the point, over [`NORMAL_REACH`] scales, and the crease test
+    /// on the normals a scale away ([`crease_angle`]).
+    #[default]
+    AtPoint,
+    /// −Σ w_i ∇σ(x_i) along the pixel's ray through the surface
+    /// (`surface_walk`), and the crease test on the rays beside it: for
+    /// the thin shells a trainer's bounded total variation and distortion
+    /// loss leave, whose expected depth sits on the density's peak
+    /// (docs/fidelity.md, "Thirty-fourth pass").
+    AlongRay,
+}
+
 /// Largest relative difference between a pixel's luminance and the field's
 /// colour at its surface point before the pixel counts as mixed. On PLANTS
 /// a floor pixel whose ray grazed the lamp differs by 0.76 (and alone made
@@ -188,6 +206,40 @@ pub fn crease_angle(field: &GridField, x: DVec3, normal: DVec3) -> f64 {
             let n = -field
                 .density_gradient_over(x + *t * CREASE_REACH * scale, scale)
                 .normalize_or_zero();
+            normal.dot(n).clamp(-1.0, 1.0).acos().to_degrees()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// As [`crease_angle`], with each normal read as the pixel's is
+/// ([`surface_walk`]): the largest angle, in degrees, between `normal` and
+/// the normals of the rays parallel to `ray` that cross the point's
+/// tangent plane [`CREASE_REACH`] [`trained_surface_scale`]s from it, four
+/// ways, each summed over the stretch of its ray within `half_width` of
+/// that plane. An edge's neighbours cross another face, or no surface in
+/// that stretch (no normal: 90°).
+fn crease_angle_along(
+    field: &GridField,
+    ray: &Ray,
+    depth: f64,
+    normal: DVec3,
+    half_width: f64,
+    knobs: &MarchKnobs,
+) -> f64 {
+    let scale = trained_surface_scale(field);
+    let t1 = normal.any_orthonormal_vector();
+    let t2 = normal.cross(t1);
+    [t1, -t1, t2, -t2]
+        .iter()
+        .map(|t| {
+            let beside = Ray {
+                origin: ray.origin + *t * CREASE_REACH * scale,
+                dir: ray.dir,
+            };
+            let (_, n) = surface_walk(field, &beside, depth, half_width, knobs, true);
+            if n == DVec3::ZERO {
+                return 90.0;
+            }
             normal.dot(n).clamp(-1.0, 1.0).acos().to_degrees()
         })
         .fold(0.0, f64::max)
@@ -238,42 +290,68 @@ pub(crate) fn is_mixed(field: &GridField, x: DVec3, dir: DVec3, radiance: DVec3)
     (seen - own).abs() > MAX_MIXED_DIFFERENCE * seen.max(own)
 }
 
-/// The share of `ray`'s opacity through `field` (marched with `knobs`)
-/// within `half_width` of distance `depth` along it.
-fn surface_share(
+/// The reach, in node spacings, of the central differences that give each
+/// sample's ∇σ in `surface_walk`'s normal. A trained surface is a shell
+/// a few spacings thick whose expected depth lies near its density's peak,
+/// where the gradient read at that one point over [`NORMAL_REACH`] scales
+/// has lost the rise and holds the node-to-node noise along the surface:
+/// ROOM's trained floor (thirty-third pass's field) read its normals a
+/// median 31° off the recipe's, its walls 16° and 19°. Summed along the
+/// ray with the rendering weights, ∇σ over 2 spacings read 34°, over 1
+/// 20°, over ½ 16°, over ¼ 15° (walls 10° and 14°): each sample's
+/// gradient should see the shell's rise where the ray crosses it, not
+/// reach past it. Over ¼ or ½ spacing it reads more of the node-to-node
+/// noise than the point's normal does on thicker shells (synthetic
+/// floors: 11–15° against 6–11°); over 1 it is no worse there and 11°
+/// against 71° on a shell three spacings thick (docs/fidelity.md,
+/// "Thirty-fourth pass").
+pub const WEIGHTED_NORMAL_REACH: f64 = 1.0;
+
+/// One walk along `ray` through `field` (marched with `knobs`): the share
+/// of its opacity within `half_width` of distance `depth`, and, when
+/// `with_normal`, the unit normal those samples show, −Σ w_i ∇σ(x_i) / |…|
+/// over them (w_i the rendering weights, ∇σ over
+/// [`WEIGHTED_NORMAL_REACH`] node spacings): the side of the shell the
+/// ray enters weighs most, as it does in the pixel's colour. Zero where
+/// the samples' gradients cancel, or not asked for.
+fn surface_walk(
     field: &GridField,
     ray: &Ray,
     depth: f64,
     half_width: f64,
     knobs: &MarchKnobs,
-) -> f64 {
-    let (mut near, mut all) = (0.0, 0.0);
+    with_normal: bool,
+) -> (f64, DVec3) {
+    let reach = WEIGHTED_NORMAL_REACH * field.spacing().min_element();
+    let (mut near, mut all, mut gradient) = (0.0, 0.0, DVec3::ZERO);
     march_samples(field, ray, f64::INFINITY, knobs, |s| {
         all += s.weight;
         if (s.t - depth).abs() <= half_width {
             near += s.weight;
+            if with_normal {
+                gradient += s.weight * field.density_gradient_over(ray.at(s.t), reach);
+            }
         }
     });
-    if all > 0.0 {
-        near / all
-    } else {
-        0.0
-    }
+    let share = if all > 0.0 { near / all } else { 0.0 };
+    (share, -gradient.normalize_or_zero())
 }
 
 /// Every candidate surface point of `view` (rendered from `frame` with
-/// `knobs`), `view_index` naming it, surfaces told by `test` (under
-/// [`SurfaceTest::Weight`], those whose [`crease_angle`] exceeds
-/// `max_crease` degrees left out), before light sources are left out.
+/// `knobs`), `view_index` naming it, surfaces told and their normals read
+/// as `rules` say (`surface_test`, `normals`; under
+/// [`SurfaceTest::Weight`], those that bend more than `max_crease` degrees
+/// left out), before light sources are left out.
 pub fn view_candidates(
     field: &GridField,
     frame: &CameraFrame,
     view: &ViewImage,
     view_index: u32,
     knobs: &MarchKnobs,
-    test: SurfaceTest,
-    max_crease: f64,
+    rules: &EnvEstimateKnobs,
 ) -> ViewPoints {
+    let (test, max_crease) = (rules.surface_test, rules.max_crease);
+    let along_ray = test == SurfaceTest::Weight && rules.normals == SurfaceNormals::AlongRay;
     let h = field.spacing().min_element();
     let unit = trained_surface_scale(field);
     let half_width = SURFACE_HALF_WIDTH * unit;
@@ -290,16 +368,21 @@ pub fn view_candidates(
         let radiance = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) / opacity;
         out.covered_luminance.push(luminance(radiance) as f32);
         let g = surface_gradient(field, x, test);
-        let normal = -g.normalize_or_zero();
-        let surface = normal.dot(ray.dir) < 0.0
-            && radiance.is_finite()
-            && match test {
-                SurfaceTest::Gradient => g.length() * h * h >= MIN_SURFACE_GRADIENT,
-                SurfaceTest::Weight => {
-                    g.length() * unit * unit >= MIN_TRAINED_GRADIENT
-                        && surface_share(field, &ray, depth, half_width, knobs) >= MIN_SURFACE_SHARE
-                }
-            };
+        let at_point = -g.normalize_or_zero();
+        // A bake's normal is read at the point; a trained surface's there
+        // too, or along the ray through its shell (`surface_walk`).
+        let (surface, normal) = match test {
+            SurfaceTest::Gradient => (g.length() * h * h >= MIN_SURFACE_GRADIENT, at_point),
+            SurfaceTest::Weight => {
+                let (share, walked) =
+                    surface_walk(field, &ray, depth, half_width, knobs, along_ray);
+                (
+                    g.length() * unit * unit >= MIN_TRAINED_GRADIENT && share >= MIN_SURFACE_SHARE,
+                    if along_ray { walked } else { at_point },
+                )
+            }
+        };
+        let surface = surface && normal.dot(ray.dir) < 0.0 && radiance.is_finite();
         if !surface {
             out.not_surface += 1;
             continue;
@@ -310,7 +393,11 @@ pub fn view_candidates(
         }
         if test == SurfaceTest::Weight
             && max_crease < 180.0
-            && crease_angle(field, x, normal) > max_crease
+            && if along_ray {
+                crease_angle_along(field, &ray, depth, normal, half_width, knobs)
+            } else {
+                crease_angle(field, x, normal)
+            } > max_crease
         {
             out.creased += 1;
             continue;
@@ -446,12 +533,13 @@ mod tests {
             let f = field(thin);
             let m = crate::march::march_ray(&f, &ray, f64::INFINITY, &knobs);
             assert!(m.opacity > 0.85, "{}", m.opacity);
-            let share = surface_share(
+            let (share, _) = surface_walk(
                 &f,
                 &ray,
                 m.depth / m.opacity,
                 SURFACE_HALF_WIDTH * trained_surface_scale(&f),
                 &knobs,
+                false,
             );
             assert_eq!(
                 share >= MIN_SURFACE_SHARE,
@@ -490,6 +578,122 @@ mod tests {
             nodes,
             4,
         )
+    }
+
+    /// A trained floor's shell: on `n`³ nodes over the unit box, the density
+    /// rises to 40 over `rise` node spacings down to the surface, stays
+    /// there for `plateau` and falls to zero over `fall`, the surface's
+    /// height in each column of nodes
+    /// y = ½ + `bump` spacings × a random number in [−1, 1], each node's
+    /// density scaled by a random factor in 1 ± `noise`.
+    fn shell(n: u32, bump: f64, noise: f64, rise: f64, plateau: f64, fall: f64) -> GridField {
+        use crate::geometry::Aabb;
+        use glam::UVec3;
+        let h = 1.0 / (n - 1) as f64;
+        let mut rng = Pcg32::new(11, 5);
+        let heights: Vec<f64> = (0..n * n)
+            .map(|_| 0.5 + bump * h * (2.0 * rng.next_f64() - 1.0))
+            .collect();
+        let nodes = (0..n * n * n)
+            .map(|i| {
+                let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
+                let jitter = 1.0 + noise * (2.0 * rng.next_f64() - 1.0);
+                let above = (y as f64 * h - heights[(x + n * z) as usize]) / h;
+                let profile = if above >= 0.0 {
+                    (1.0 - above / rise).max(0.0)
+                } else if above >= -plateau {
+                    1.0
+                } else {
+                    (1.0 + (above + plateau) / fall).max(0.0)
+                };
+                [0.5, 0.5, 0.5, (40.0 * jitter * profile) as f32]
+            })
+            .collect();
+        GridField::new(
+            UVec3::splat(n),
+            Aabb::new(DVec3::ZERO, DVec3::ONE),
+            nodes,
+            4,
+        )
+    }
+
+    /// The median angle, in degrees, between the floor's normal (+y) and
+    /// the normals read on `f` along 400 parallel rays onto it: summed
+    /// along each ray ([`surface_walk`]) and at its expected depth
+    /// ([`surface_normal`]).
+    fn floor_normal_errors(f: &GridField) -> (f64, f64) {
+        let knobs = MarchKnobs::default();
+        let unit = trained_surface_scale(f);
+        let angle = |n: DVec3| n.dot(DVec3::Y).clamp(-1.0, 1.0).acos().to_degrees();
+        let dir = DVec3::new(1.0, -1.0, 0.4).normalize();
+        let (mut walked, mut at_point) = (Vec::new(), Vec::new());
+        for i in 0..20 {
+            for j in 0..20 {
+                let target = DVec3::new(0.2 + 0.03 * i as f64, 0.5, 0.2 + 0.03 * j as f64);
+                let ray = Ray {
+                    origin: target - dir * 0.4,
+                    dir,
+                };
+                let m = crate::march::march_ray(f, &ray, f64::INFINITY, &knobs);
+                let depth = m.depth / m.opacity;
+                let (_, n) = surface_walk(f, &ray, depth, SURFACE_HALF_WIDTH * unit, &knobs, true);
+                walked.push(angle(n));
+                at_point.push(angle(surface_normal(f, ray.at(depth), SurfaceTest::Weight)));
+            }
+        }
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        (median(walked), median(at_point))
+    }
+
+    /// On a shell three spacings thick (as the trainer's bounded total
+    /// variation and distortion loss leave ROOM's floor), ∇σ read at the
+    /// expected depth over [`NORMAL_REACH`] scales reaches past the shell
+    /// on both sides and reads the noise along it; summed along the ray it
+    /// reads the rise where the ray enters.
+    #[test]
+    fn a_thin_shells_normal_is_read_along_the_ray() {
+        let (walked, at_point) = floor_normal_errors(&shell(65, 0.3, 0.2, 1.0, 1.0, 1.0));
+        assert!(
+            walked < 15.0 && at_point > 3.0 * walked,
+            "along the ray {walked}°, at the point {at_point}°"
+        );
+    }
+
+    /// On thicker noisy shells the normal along the ray is no worse than
+    /// the one at the point (by a degree).
+    #[test]
+    fn a_thick_shells_normal_along_the_ray_is_no_worse() {
+        for (rise, plateau, fall) in [(2.0, 0.0, 4.0), (2.0, 2.0, 1.0), (3.0, 3.0, 3.0)] {
+            let (walked, at_point) = floor_normal_errors(&shell(65, 0.3, 0.2, rise, plateau, fall));
+            assert!(
+                walked < at_point + 1.0,
+                "rise {rise}, plateau {plateau}, fall {fall}: along the ray {walked}°, at the point {at_point}°"
+            );
+        }
+    }
+
+    /// Without noise, a tilted shell's normal is read along the ray to
+    /// within a degree.
+    #[test]
+    fn a_clean_tilted_shells_normal_is_exact() {
+        let tilt = DVec3::new(0.3, 1.0, -0.2).normalize();
+        let f = soft_solid(65, 2.0, 0.0, |p| (p - DVec3::splat(0.5)).dot(tilt));
+        let knobs = MarchKnobs::default();
+        let dir = DVec3::new(-0.5, -1.0, 0.3).normalize();
+        let ray = Ray {
+            origin: DVec3::splat(0.5) - dir * 0.45,
+            dir,
+        };
+        let m = crate::march::march_ray(&f, &ray, f64::INFINITY, &knobs);
+        let depth = m.depth / m.opacity;
+        let unit = trained_surface_scale(&f);
+        let (share, n) = surface_walk(&f, &ray, depth, SURFACE_HALF_WIDTH * unit, &knobs, true);
+        assert!(share > 0.9, "{share}");
+        let off = n.dot(tilt).clamp(-1.0, 1.0).acos().to_degrees();
+        assert!(off < 1.0, "{off}°");
     }
 
     /// The weight test reads a surface over a length of the scene: a node
@@ -608,8 +812,17 @@ mod tests {
         let frame = CameraFrame::new(&spec, 40, 40);
         let knobs = MarchKnobs::default();
         let view = march_view(&cube, &frame, &knobs);
+        let run_with = |surface_test, max_crease, normals| {
+            let rules = EnvEstimateKnobs {
+                surface_test,
+                max_crease,
+                normals,
+                ..EnvEstimateKnobs::default()
+            };
+            view_candidates(&cube, &frame, &view, 0, &knobs, &rules)
+        };
         let run =
-            |test, max_crease| view_candidates(&cube, &frame, &view, 0, &knobs, test, max_crease);
+            |surface_test, max_crease| run_with(surface_test, max_crease, SurfaceNormals::AtPoint);
         let all = run(SurfaceTest::Weight, 180.0);
         let kept = run(SurfaceTest::Weight, 15.0);
         assert_eq!(all.creased, 0);
@@ -641,6 +854,14 @@ mod tests {
         assert_eq!(on_face(&kept), on_face(&all));
         assert!(on_face(&all) > 100);
         assert!(4 * near_edge(&kept) < near_edge(&all));
+        // Read along the rays, a point within a spacing of an edge has the
+        // normal of the face its ray enters, whose colour the pixel shows,
+        // so the test has fewer to refuse: it still keeps every face's
+        // point and leaves out most of the edges' (measured 66 of 192
+        // kept).
+        let along = run_with(SurfaceTest::Weight, 15.0, SurfaceNormals::AlongRay);
+        assert_eq!(on_face(&along), on_face(&all));
+        assert!(2 * near_edge(&along) < near_edge(&all));
         let gradient = run(SurfaceTest::Gradient, 15.0);
         assert_eq!(gradient.creased, 0);
     }
@@ -691,6 +912,11 @@ mod tests {
             4,
         );
         let floor = solid(|p| p.y - 0.5);
+        let weight_test = EnvEstimateKnobs {
+            surface_test: SurfaceTest::Weight,
+            max_crease: 180.0,
+            ..EnvEstimateKnobs::default()
+        };
         let spec = crate::camera::CameraSpec {
             name: None,
             position: DVec3::new(0.5, 1.4, 0.75),
@@ -704,8 +930,7 @@ mod tests {
         let candidates = |field: &GridField| {
             let view = march_view(field, &frame, &knobs);
             let covered = view.colour_opacity.iter().filter(|p| p[3] >= 0.5).count();
-            let points =
-                view_candidates(field, &frame, &view, 0, &knobs, SurfaceTest::Weight, 180.0);
+            let points = view_candidates(field, &frame, &view, 0, &knobs, &weight_test);
             (view, covered, points)
         };
         let (view, covered, points) = candidates(&sheet);
@@ -717,7 +942,14 @@ mod tests {
         let ray = frame.pixel_ray(8, 8);
         let depth = view.depth[centre] as f64 / view.colour_opacity[centre][3] as f64;
         let x = ray.at(depth);
-        let share = surface_share(&sheet, &ray, depth, SURFACE_HALF_WIDTH * unit, &knobs);
+        let (share, _) = surface_walk(
+            &sheet,
+            &ray,
+            depth,
+            SURFACE_HALF_WIDTH * unit,
+            &knobs,
+            false,
+        );
         assert!(share >= MIN_SURFACE_SHARE, "{share}");
         let slope = surface_gradient(&sheet, x, SurfaceTest::Weight).length() * unit * unit;
         assert!(slope < 0.5 * MIN_TRAINED_GRADIENT, "{slope}");

@@ -18,7 +18,7 @@ use inlay_passes::envest::{
     emitter_recovery, environment_file_text, estimate_environment, field_light_irradiance,
     hidden_light_lobes, EnvEstimateKnobs, Stage, Validation, ViewSource,
 };
-use inlay_passes::envest::{SurfaceTest, Witness, Witnesses};
+use inlay_passes::envest::{SurfaceNormals, SurfaceTest, Witness, Witnesses};
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
 use inlay_passes::march::MarchPass;
 use inlay_passes::scene::{load_scene, ObjectEnvironment, Scene};
@@ -124,6 +124,14 @@ pub struct EstimateEnvArgs {
     /// every point).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().max_crease)]
     pub max_crease: f64,
+    /// With `--surface-test weight`, where a point's normal is read:
+    /// `at-point` (the density's gradient at its depth) or `along-ray`
+    /// (summed along the pixel's ray through the surface, and the crease
+    /// test on the rays beside it): for fields trained into thin shells
+    /// (`inlay train --tv-edge`), not for foliage (docs/fidelity.md,
+    /// "Thirty-fourth pass").
+    #[arg(long, value_enum, default_value = "at-point")]
+    pub normals: NormalsArg,
     /// Point lights near the field fitted beside the lobes (0: the paper's
     /// distant model alone).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().near_lights)]
@@ -189,6 +197,10 @@ impl EstimateEnvArgs {
             env_samples: self.env_samples,
             share_prior: self.share_prior,
             max_crease: self.max_crease,
+            normals: match self.normals {
+                NormalsArg::AtPoint => SurfaceNormals::AtPoint,
+                NormalsArg::AlongRay => SurfaceNormals::AlongRay,
+            },
             max_photo_spread: self.max_photo_spread,
             radiance_from_photos: self.radiance_from_photos,
             seed: self.seed,
@@ -204,6 +216,15 @@ pub enum SurfaceTestArg {
     Gradient,
     /// Where the ray's weight lies (trained fields).
     Weight,
+}
+
+/// `--normals`' values ([`SurfaceNormals`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NormalsArg {
+    /// The density's gradient at the point.
+    AtPoint,
+    /// Summed along the pixel's ray through the surface.
+    AlongRay,
 }
 
 /// The views `--views-from` asks for, and words saying what they are.
