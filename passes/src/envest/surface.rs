@@ -198,16 +198,22 @@ pub const CREASE_REACH: f64 = 1.0;
 /// surfaces read as creases.
 pub fn crease_angle(field: &GridField, x: DVec3, normal: DVec3) -> f64 {
     let scale = trained_surface_scale(field);
+    largest_turn(normal, |t| {
+        -field
+            .density_gradient_over(x + t * CREASE_REACH * scale, scale)
+            .normalize_or_zero()
+    })
+}
+
+/// The largest angle, in degrees, between unit `normal` and the normals
+/// `beside(t)` gives a step along each of four tangent directions t (two
+/// orthogonal ones and their opposites); a zero normal reads 90°.
+fn largest_turn(normal: DVec3, beside: impl Fn(DVec3) -> DVec3) -> f64 {
     let t1 = normal.any_orthonormal_vector();
     let t2 = normal.cross(t1);
     [t1, -t1, t2, -t2]
-        .iter()
-        .map(|t| {
-            let n = -field
-                .density_gradient_over(x + *t * CREASE_REACH * scale, scale)
-                .normalize_or_zero();
-            normal.dot(n).clamp(-1.0, 1.0).acos().to_degrees()
-        })
+        .into_iter()
+        .map(|t| normal.dot(beside(t)).clamp(-1.0, 1.0).acos().to_degrees())
         .fold(0.0, f64::max)
 }
 
@@ -227,22 +233,13 @@ fn crease_angle_along(
     knobs: &MarchKnobs,
 ) -> f64 {
     let scale = trained_surface_scale(field);
-    let t1 = normal.any_orthonormal_vector();
-    let t2 = normal.cross(t1);
-    [t1, -t1, t2, -t2]
-        .iter()
-        .map(|t| {
-            let beside = Ray {
-                origin: ray.origin + *t * CREASE_REACH * scale,
-                dir: ray.dir,
-            };
-            let (_, n) = surface_walk(field, &beside, depth, half_width, knobs, true);
-            if n == DVec3::ZERO {
-                return 90.0;
-            }
-            normal.dot(n).clamp(-1.0, 1.0).acos().to_degrees()
-        })
-        .fold(0.0, f64::max)
+    largest_turn(normal, |t| {
+        let beside = Ray {
+            origin: ray.origin + t * CREASE_REACH * scale,
+            dir: ray.dir,
+        };
+        surface_walk(field, &beside, depth, half_width, knobs, true).1
+    })
 }
 
 /// One surface point of the field.
