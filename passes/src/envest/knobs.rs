@@ -102,9 +102,10 @@ pub struct EnvEstimateKnobs {
     /// surface ([`super::surface::SurfaceNormals`]). Along the ray, ROOM's
     /// trained floor read its normals a median 20° off the recipe's
     /// against 31° at the point, and the estimate (with `max_crease` 30
-    /// and a near light) found the bulb within 4.5° and 11.1° on two
-    /// seeds against 20.1° and 21.4°; DOG's error at the test points
-    /// 13.3 % over four seeds against 13.5 %; but PLANTS' all-visible
+    /// and a near light) placed the bulb 4.5–11.1° off over four seeds
+    /// against 13.4–21.4°, though its error at the test points rose from
+    /// 65 % to 77 % on average; DOG's 13.3 % over four seeds against
+    /// 13.5 %; but PLANTS' all-visible
     /// estimate rose from 7–11 % of its lights to 63–90 %
     /// (docs/fidelity.md, "Thirty-fourth pass"), so it is not the
     /// default.
