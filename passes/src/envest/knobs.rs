@@ -106,7 +106,7 @@ pub struct EnvEstimateKnobs {
     /// against 13.4–21.4°, though its error at the test points rose from
     /// 65 % to 77 % on average; DOG's 13.3 % over four seeds against
     /// 13.5 %; but PLANTS' all-visible
-    /// estimate rose from 7–11 % of its lights to 63–90 %
+    /// estimate rose from 6–11 % of its lights to 63–162 %
     /// (docs/fidelity.md, "Thirty-fourth pass"), so it is not the
     /// default.
     pub normals: super::surface::SurfaceNormals,
