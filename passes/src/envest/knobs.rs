@@ -202,6 +202,18 @@ impl EnvEstimateKnobs {
                     .or_else(|| pos("emitter_ratio", self.emitter_ratio, 1e9))
                     .or_else(|| pos("max_crease", self.max_crease, 180.0))
                     .or_else(|| {
+                        (self.normals == super::surface::SurfaceNormals::AlongRay
+                            && self.surface_test != super::surface::SurfaceTest::Weight)
+                            .then(|| {
+                                (
+                                    "normals",
+                                    "along-ray reads a trained field's shells: it needs the \
+                                     weight surface test"
+                                        .to_string(),
+                                )
+                            })
+                    })
+                    .or_else(|| {
                         (!(self.max_photo_spread.is_finite() && self.max_photo_spread >= 0.0)).then(
                             || {
                                 (
@@ -217,5 +229,28 @@ impl EnvEstimateKnobs {
     /// Surface points asked for: views × pixels per view.
     pub fn points(&self) -> usize {
         self.views as usize * self.pixels_per_view as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::envest::surface::{SurfaceNormals, SurfaceTest};
+
+    /// Normals read along the ray need the weight test, whose shells they
+    /// read; a bake's gradient test refuses them by name.
+    #[test]
+    fn along_ray_normals_need_the_weight_test() {
+        assert!(EnvEstimateKnobs::default().problem().is_none());
+        let along = EnvEstimateKnobs {
+            normals: SurfaceNormals::AlongRay,
+            ..EnvEstimateKnobs::default()
+        };
+        assert_eq!(along.problem().map(|p| p.0), Some("normals"));
+        let weighed = EnvEstimateKnobs {
+            surface_test: SurfaceTest::Weight,
+            ..along
+        };
+        assert!(weighed.problem().is_none());
     }
 }

@@ -124,7 +124,8 @@ pub struct EstimateEnvArgs {
     /// every point).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().max_crease)]
     pub max_crease: f64,
-    /// With `--surface-test weight`, where a point's normal is read:
+    /// With `--surface-test weight` (refused without it), where a point's
+    /// normal is read:
     /// `at-point` (the density's gradient at its depth) or `along-ray`
     /// (summed along the pixel's ray through the surface, and the crease
     /// test on the rays beside it): for fields trained into thin shells
