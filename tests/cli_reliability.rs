@@ -123,6 +123,17 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
                 dog.clone(),
                 "--out".into(),
                 s(&dir.join("env.toml")).into(),
+                "--min-loss-gain".into(),
+                "nan".into(),
+            ],
+            vec!["--min-loss-gain", "must be in [0, 1e6]"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.toml")).into(),
                 "--views-from".into(),
                 s(&missing.with_file_name("transforms.json")).into(),
             ],

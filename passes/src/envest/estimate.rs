@@ -12,6 +12,7 @@ use inlay_engine::{Context, ImageDesc, Readback, Renderer, SubmitSync};
 use super::fit::{fit_environment, FitData, FitResult};
 use super::knobs::EnvEstimateKnobs;
 use super::near_field::{NearField, NearFieldTracer};
+use super::outside_light::{keep_if_needed, OutsideLightTest};
 use super::quality::{view_quality, QualityScore, ViewImage};
 use super::surface::{
     covered_median, draw_points, emitter_limit, keep_seen, view_candidates, SurfacePoint,
@@ -80,8 +81,11 @@ pub struct EnvEstimate {
     pub surface: SurfaceSample,
     /// Their near-field light.
     pub near: NearField,
-    /// The fit and its lobes.
+    /// The fit and its lobes (black when the points need no light from
+    /// outside the field: `outside`).
     pub fit: FitResult,
+    /// Whether the points needed the light the fit found.
+    pub outside: OutsideLightTest,
     /// Seconds spent on views, near-field light and the fit.
     pub seconds: [f64; 3],
 }
@@ -335,11 +339,13 @@ pub fn estimate_environment(
     let fit = fit_environment(&data, knobs, &|step, steps, loss| {
         progress(Stage::Fit, step as usize, steps as usize, Some(loss))
     });
+    let (outside, fit) = keep_if_needed(&data, knobs, fit);
     let t3 = Instant::now();
     Ok(EnvEstimate {
         surface,
         near,
         fit,
+        outside,
         seconds: [
             (t1 - t0).as_secs_f64(),
             (t2 - t1).as_secs_f64(),

@@ -4,7 +4,8 @@
 //! near-field irradiance and cached opacity on the GPU ([`near_field`],
 //! its CPU mirror [`near_field_reference`], the ray set [`hemisphere`]),
 //! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
-//! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]);
+//! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]), kept only
+//! when the points need light from outside the field ([`outside_light`]);
 //! [`witnesses`] keeps a trained field's points to what its photographs
 //! saw; `estimate` runs them in order, `file` stores the lobes, and
 //! [`truth`] checks them against a recipe's lights ([`recovery`]: did it
@@ -22,6 +23,7 @@ pub mod mlp;
 pub mod near_field;
 pub mod near_field_reference;
 pub mod near_lights;
+pub mod outside_light;
 pub mod prune;
 pub mod quality;
 pub mod recovery;

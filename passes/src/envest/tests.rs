@@ -568,3 +568,66 @@ fn a_trained_surface_s_rays_rise_over_a_length_of_the_scene() {
         );
     }
 }
+
+/// Points on one wall lit by a lamp in the field alone, with ±10 % noise
+/// on their recorded E_nerf (as PLANTS' trained back wall, which held
+/// every point of its estimate): the fit leaves some light in the
+/// environment, which the test of whether the points need it removes;
+/// the same points lit by a sun as well keep it.
+#[test]
+fn light_the_points_do_not_need_is_dropped_and_light_they_need_is_kept() {
+    use super::fit::fit_environment;
+    use super::knobs::EnvEstimateKnobs;
+    use super::near_lights::PointLight;
+    use super::outside_light::keep_if_needed;
+    let lamp = PointLight {
+        position: DVec3::new(0.1, 0.25, 0.4),
+        intensity: DVec3::splat(0.05),
+    };
+    let sun = synthetic_sun();
+    let wall = |with_sun: bool| {
+        let (mut points, mut near) = synthetic_data_lit(&|_, _| DVec3::ZERO);
+        let mut rng = Pcg32::new(5, 5);
+        for (p, e) in points.iter_mut().zip(&mut near.irradiance) {
+            p.normal = DVec3::Z;
+            p.position.z = -0.4;
+            let lit = lamp.irradiance(p.position, p.normal).0;
+            let outside = if with_sun {
+                sun.amplitude * (2.0 * std::f64::consts::PI / sun.sharpness) * sun.direction.z
+            } else {
+                DVec3::ZERO
+            };
+            p.radiance = 0.7 / std::f64::consts::PI * (lit + outside);
+            *e = lit * (1.0 + 0.2 * (rng.next_f64() - 0.5));
+        }
+        (points, near)
+    };
+    let knobs = small_fit_knobs(8, 400);
+    for (with_sun, keep) in [(false, false), (true, true)] {
+        let (points, near) = wall(with_sun);
+        let data = synthetic_fit_data(&points, &near);
+        let fit = fit_environment(&data, &knobs, &|_, _, _| {});
+        let share = environment_share(&points, &near, &fit.lobes);
+        let (test, kept) = keep_if_needed(&data, &knobs, fit);
+        let gain = test.gain().unwrap();
+        eprintln!("sun {with_sun}: share {share:.3}, loss gain {gain:.2}");
+        assert_eq!(test.kept, keep, "sun {with_sun}: gain {gain}");
+        assert_eq!(kept.lobes.is_empty(), !keep);
+        if !keep {
+            // What the fit had left there, for the test to remove.
+            assert!(share > 0.02, "the fit left only {share} in the environment");
+        } else {
+            assert!(gain > 10.0, "the sun lowered the loss only {gain}×");
+        }
+    }
+    // Off: the light is kept without asking.
+    let (points, near) = wall(false);
+    let data = synthetic_fit_data(&points, &near);
+    let off = EnvEstimateKnobs {
+        min_loss_gain: 0.0,
+        ..knobs
+    };
+    let fit = fit_environment(&data, &off, &|_, _, _| {});
+    let (test, kept) = keep_if_needed(&data, &off, fit);
+    assert!(test.kept && test.gain().is_none() && !kept.lobes.is_empty());
+}

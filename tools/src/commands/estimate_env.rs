@@ -158,6 +158,12 @@ pub struct EstimateEnvArgs {
     /// (0 turns it off).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().share_prior)]
     pub share_prior: f64,
+    /// Keep the estimated light only when the points' loss without it
+    /// (the albedo fitted alone under the field's light) is at least this
+    /// many times the loss with it; otherwise the environment is black (0
+    /// keeps it always).
+    #[arg(long, default_value_t = EnvEstimateKnobs::default().min_loss_gain)]
+    pub min_loss_gain: f64,
     /// Seed of every random choice.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().seed)]
     pub seed: u64,
@@ -197,6 +203,7 @@ impl EstimateEnvArgs {
             batch: self.batch,
             env_samples: self.env_samples,
             share_prior: self.share_prior,
+            min_loss_gain: self.min_loss_gain,
             max_crease: self.max_crease,
             normals: match self.normals {
                 NormalsArg::AtPoint => SurfaceNormals::AtPoint,
@@ -425,13 +432,27 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         estimate.fit.final_loss,
         estimate.fit.exact_loss
     );
+    let outside = &estimate.outside;
+    match (outside.gain(), outside.kept) {
+        (Some(g), true) => println!(
+            "light from outside the field: needed (the points' loss without it, the albedo fitted alone, is {g:.3}× the estimate's; kept from {}×)",
+            knobs.min_loss_gain
+        ),
+        (Some(g), false) => println!(
+            "light from outside the field: not needed (the points' loss without it, the albedo fitted alone, is {g:.3}× the estimate's, under {}×): the environment is black",
+            knobs.min_loss_gain
+        ),
+        (None, _) => println!("light from outside the field: kept without asking (--min-loss-gain 0)"),
+    }
     let lobes = &estimate.fit.lobes;
-    println!(
-        "kept {} of {} lobes (the others send the points under {:.0} % of their light)",
-        lobes.len(),
-        knobs.lobes,
-        100.0 * inlay_passes::envest::prune::MIN_LOBE_REACH
-    );
+    if outside.kept {
+        println!(
+            "kept {} of {} lobes (the others send the points under {:.0} % of their light)",
+            lobes.len(),
+            knobs.lobes,
+            100.0 * inlay_passes::envest::prune::MIN_LOBE_REACH
+        );
+    }
     let record = vec![
         ("views".to_string(), s.views_kept.to_string()),
         ("points".to_string(), s.points.len().to_string()),
@@ -450,6 +471,12 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             },
         ),
         ("lobes_kept".to_string(), lobes.len().to_string()),
+        (
+            "loss_gain_of_outside_light".to_string(),
+            outside
+                .gain()
+                .map_or("\"not asked\"".to_string(), |g| format!("{g:e}")),
+        ),
         (
             "final_loss".to_string(),
             format!("{:e}", estimate.fit.final_loss),
