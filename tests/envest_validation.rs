@@ -29,6 +29,7 @@
 mod common;
 
 use inlay_passes::envest::{estimate_environment, EnvEstimateKnobs, Validation};
+use inlay_passes::field::{perturb, Perturbation};
 
 /// Estimates `name`'s environment and checks it against the recipe.
 fn validate(name: &str, rays_per_point: u32) -> Validation {
@@ -37,10 +38,25 @@ fn validate(name: &str, rays_per_point: u32) -> Validation {
 
 /// As [`validate`], with `near_lights` near lights beside the lobes.
 fn validate_with(name: &str, rays_per_point: u32, near_lights: u32) -> Validation {
+    validate_field(name, rays_per_point, near_lights, &Perturbation::default())
+}
+
+/// As [`validate_with`], on the bundled field perturbed by `perturbation`.
+fn validate_field(
+    name: &str,
+    rays_per_point: u32,
+    near_lights: u32,
+    perturbation: &Perturbation,
+) -> Validation {
     let scene = common::bundled_scene(name);
     let ctx = common::gpu();
     let lib = inlay_passes::shaders::embedded_library();
     let field = inlay::field_source::scene_field(&scene, None, false, None).unwrap();
+    let field = if perturbation.is_none() {
+        field
+    } else {
+        perturb(&field, perturbation)
+    };
     let knobs = EnvEstimateKnobs {
         views: 30,
         rays_per_point,
@@ -90,6 +106,30 @@ fn plants_whose_lights_are_all_in_the_field_yields_a_nearly_black_environment() 
     let share = v.fraction_of_lights();
     assert!(
         share < 0.02,
+        "the environment carries {:.2} % of the lamp's irradiance",
+        100.0 * share
+    );
+}
+
+/// Item 6: PLANTS' field perturbed as a trainer leaves a field (log-normal
+/// noise of 0.2 on every node, 60 floaters, 30 % of the density removed
+/// everywhere) still yields a black environment: its points do not need
+/// light from outside the field (measured: their loss without it 1.24×
+/// the loss with it; each perturbation alone 0.88–1.49×). Before the
+/// estimate asked, its lobes carried 44 % of the lamp's irradiance over
+/// the test points on this field (the floaters alone 48 %, 2.3 × the
+/// field's light at the toy; docs/fidelity.md, "Thirty-fifth pass").
+#[test]
+fn plants_perturbed_as_a_trainer_leaves_it_stays_black() {
+    let trained_like = Perturbation {
+        noise: 0.2,
+        floaters: 60,
+        see_through: 0.3,
+        ..Perturbation::default()
+    };
+    let share = validate_field("plants.toml", 8192, 0, &trained_like).fraction_of_lights();
+    assert!(
+        share < 0.005,
         "the environment carries {:.2} % of the lamp's irradiance",
         100.0 * share
     );
