@@ -72,11 +72,14 @@ pub fn keep_if_needed(
         return (test, fit);
     }
     let alone = fit_without_outside_light(data, knobs);
-    let mut test = OutsideLightTest {
+    let asked = OutsideLightTest {
         loss_without: Some(alone.exact_loss),
         loss_with: fit.exact_loss,
         kept: false,
     };
-    test.kept = test.gain().is_some_and(|g| g >= knobs.min_loss_gain);
+    let test = OutsideLightTest {
+        kept: asked.gain().is_some_and(|g| g >= knobs.min_loss_gain),
+        ..asked
+    };
     (test, if test.kept { fit } else { alone })
 }
