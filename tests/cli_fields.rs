@@ -698,6 +698,7 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
         "hidden-light irradiance error",
         "mean relative difference",
         "kept without asking",
+        "the points' loss under the recipe's hidden light",
     ] {
         assert!(text.contains(want), "no `{want}` in:\n{text}");
     }

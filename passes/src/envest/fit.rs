@@ -155,8 +155,18 @@ pub fn fit_environment(
     } else {
         1.0
     };
-    let env = initial_params(knobs.lobes as usize, share * mean_luminance(data.points));
-    fit_from(data, knobs, env, true, progress)
+    let level = mean_luminance(data.points);
+    let env = initial_params(knobs.lobes as usize, share * level);
+    // Near lights start with [`NEAR_START_SHARE`] of the points' mean
+    // irradiance scale at the field's centre, shared among them, and the
+    // lobes with the rest.
+    let k = knobs.near_lights.max(1) as f64;
+    let near = near_lights::initial_params(
+        knobs.near_lights as usize,
+        &data.bounds,
+        NEAR_START_SHARE * std::f64::consts::PI * level / k,
+    );
+    fit_from(data, knobs, env, near, true, progress)
 }
 
 /// The environment parameters of `lobes` (for [`fit_from`]).
@@ -180,13 +190,15 @@ pub fn params_of(lobes: &[Sg64]) -> Vec<f64> {
         .collect()
 }
 
-/// Runs the fit from environment parameters `env`; with `fit_env` false
-/// the environment stays as given and only the albedo is fitted (to ask
-/// how well a known environment explains the points).
+/// Runs the fit from environment parameters `env` and near-light
+/// parameters `near` ([`near_lights::params`]); with `fit_env` false the
+/// light stays as given and only the albedo is fitted (to ask how well a
+/// known light explains the points).
 pub fn fit_from(
     data: &FitData,
     knobs: &EnvEstimateKnobs,
     mut env: Vec<f64>,
+    mut near: Vec<f64>,
     fit_env: bool,
     progress: &dyn Fn(u32, u32, f64),
 ) -> FitResult {
@@ -196,16 +208,6 @@ pub fn fit_from(
         knobs.albedo_octaves,
         knobs.seed,
     );
-    // Near lights start with [`NEAR_START_SHARE`] of the points' mean
-    // irradiance scale at the field's centre, shared among them, and the
-    // lobes with the rest; with a known environment, none.
-    let mut near = if fit_env {
-        let k = knobs.near_lights.max(1) as f64;
-        let start = NEAR_START_SHARE * std::f64::consts::PI * mean_luminance(data.points) / k;
-        near_lights::initial_params(knobs.near_lights as usize, &data.bounds, start)
-    } else {
-        Vec::new()
-    };
     let mut adam_env = Adam::new(env.len());
     let mut adam_near = Adam::new(near.len());
     let mut adam_mlp = Adam::new(mlp.params.len());

@@ -54,8 +54,8 @@ pub use surface::{
     SurfacePoint, SurfaceTest, ViewPoints,
 };
 pub use truth::{
-    field_light_irradiance, hidden_light_lobes, hidden_light_lobes_except, light_irradiance,
-    lobes_irradiance, point_lights_irradiance, test_points, Lights, Validation,
+    field_light_irradiance, hidden_light_lobes, hidden_light_lobes_except, hidden_light_model,
+    light_irradiance, lobes_irradiance, point_lights_irradiance, test_points, Lights, Validation,
 };
 pub use views::ViewSource;
 pub use witnesses::{Witness, Witnesses};

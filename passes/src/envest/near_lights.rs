@@ -112,6 +112,21 @@ pub fn lights(params: &[f64], bounds: &Aabb) -> Vec<PointLight> {
         .collect()
 }
 
+/// The parameters of `lights` for a field of `bounds` (the inverse of
+/// [`lights`]).
+pub fn params(lights: &[PointLight], bounds: &Aabb) -> Vec<f64> {
+    let (diag, centre) = (bounds.diagonal(), bounds.center());
+    lights
+        .iter()
+        .flat_map(|l| {
+            let q = l.position / diag;
+            let e = l.intensity / (l.position - centre).length_squared().max(1e-300);
+            let e = e.max(DVec3::splat(1e-300)).to_array().map(f64::ln);
+            [q.x, q.y, q.z, e[0], e[1], e[2]]
+        })
+        .collect()
+}
+
 /// Keeps `params` in range: each light outside `bounds` by
 /// [`MIN_OUTSIDE`] (pushed out through the nearest face), within
 /// [`MAX_DISTANCE`] diagonals of the centre, log irradiances in [−40, 40].

@@ -52,7 +52,7 @@ pub fn fit_without_outside_light(data: &FitData, knobs: &EnvEstimateKnobs) -> Fi
         near_lights: 0,
         ..*knobs
     };
-    fit_from(data, &alone, Vec::new(), false, &|_, _, _| {})
+    fit_from(data, &alone, Vec::new(), Vec::new(), false, &|_, _, _| {})
 }
 
 /// Tests `fit` against the points lit by the field alone; returns the
@@ -82,4 +82,22 @@ pub fn keep_if_needed(
         ..asked
     };
     (test, if test.kept { fit } else { alone })
+}
+
+/// The points' loss (without E_env's sampling noise) under `lobes` and
+/// point `lights` held fixed, the albedo fitted alone with `knobs`' steps
+/// and seed: how well that light explains them. Given the true light
+/// and the estimate's, it tells a fit that fell short of a light the
+/// points prefer (the true light's loss the lower) from points that ask
+/// for another light than the true one (docs/fidelity.md, "Thirty-sixth
+/// pass").
+pub fn loss_under(
+    data: &FitData,
+    knobs: &EnvEstimateKnobs,
+    lobes: &[crate::sg::Sg64],
+    lights: &[super::near_lights::PointLight],
+) -> f64 {
+    let env = super::fit::params_of(lobes);
+    let near = super::near_lights::params(lights, &data.bounds);
+    fit_from(data, knobs, env, near, false, &|_, _, _| {}).exact_loss
 }

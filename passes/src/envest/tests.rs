@@ -631,3 +631,64 @@ fn light_the_points_do_not_need_is_dropped_and_light_they_need_is_kept() {
     let (test, kept) = keep_if_needed(&data, &off, fit);
     assert!(test.kept && test.gain().is_none() && !kept.lobes.is_empty());
 }
+
+/// The light that lit synthetic points explains them (the albedo fitted
+/// alone under it) far better than a wrong one, and a point light at a
+/// lamp's place as well as the lamp: what `estimate-env` reads to tell a
+/// fit that fell short from points that ask for another light.
+#[test]
+fn the_light_that_lit_the_points_explains_them() {
+    use super::near_lights::PointLight;
+    use super::outside_light::loss_under;
+    let sun = synthetic_sun();
+    let (points, near) = synthetic_data(&sun);
+    let data = synthetic_fit_data(&points, &near);
+    let knobs = small_fit_knobs(8, 400);
+    let right = loss_under(&data, &knobs, &[sun], &[]);
+    let wrong = crate::sg::Sg64 {
+        direction: DVec3::new(-0.4, 0.8, -0.3).normalize(),
+        ..sun
+    };
+    let wrong = loss_under(&data, &knobs, &[wrong], &[]);
+    let none = loss_under(&data, &knobs, &[], &[]);
+    eprintln!("sun: right {right:.3e}, wrong {wrong:.3e}, none {none:.3e}");
+    assert!(right < 0.1 * wrong && right < 0.1 * none);
+    let lamp = PointLight {
+        position: DVec3::new(0.2, 0.6, -0.1),
+        intensity: DVec3::splat(0.3),
+    };
+    let (points, near) = synthetic_data_lit(&|x, n| lamp.irradiance(x, n).0);
+    let data = synthetic_fit_data(&points, &near);
+    let right = loss_under(&data, &knobs, &[], &[lamp]);
+    let moved = PointLight {
+        position: DVec3::new(-0.6, 0.4, 0.5),
+        ..lamp
+    };
+    let wrong = loss_under(&data, &knobs, &[], &[moved]);
+    eprintln!("lamp: right {right:.3e}, moved {wrong:.3e}");
+    assert!(right < 0.1 * wrong);
+}
+
+/// ROOM's hidden bulb in the fit's terms is one point light at its centre
+/// with its radiance × πr² (it lights the floor below it as the ball
+/// does, within a ball's size against the distance), and its sky one lobe.
+#[test]
+fn room_s_hidden_light_is_its_bulb_as_a_point_and_its_sky() {
+    use super::truth::{hidden_light_model, light_irradiance, Lights};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/room.toml");
+    let scene = crate::scene::load_scene(&path).unwrap();
+    let recipe = scene.recipe().unwrap();
+    let at = DVec3::new(0.0, 0.4, 0.0);
+    let (lobes, lights) = hidden_light_model(recipe, &scene.environment, at, 2000.0);
+    assert_eq!(lights.len(), 1);
+    assert_eq!(lobes.len(), 1, "the sky alone");
+    assert!((lights[0].position - DVec3::new(0.2, 2.9, 0.3)).length() < 1e-12);
+    // The bulb's direct light at a point below it, against the path
+    // tracer's (the environment left black).
+    let bulb = lights[0].irradiance(at, DVec3::Y).0;
+    let black = crate::scene::Environment::Black;
+    let traced = light_irradiance(recipe, &black, Lights::Hidden, at, DVec3::Y, 4096, 1, true);
+    let ratio = bulb.y / traced.y;
+    eprintln!("point light / traced bulb: {ratio:.4}");
+    assert!((ratio - 1.0).abs() < 0.05, "{ratio}");
+}

@@ -256,6 +256,34 @@ pub fn hidden_light_lobes_except(
     lobes
 }
 
+/// The recipe's hidden light in the fit's own terms: each hidden ball
+/// emitter as a point light at its centre (intensity its radiance × πr²,
+/// what a uniformly bright ball sends every way), and the environment's
+/// lobes with every other hidden emitter as a lobe seen from `at`
+/// ([`hidden_light_lobes_except`]).
+pub fn hidden_light_model(
+    recipe: &Recipe,
+    env: &Environment,
+    at: DVec3,
+    max_sharpness: f64,
+) -> (Vec<Sg64>, Vec<PointLight>) {
+    let ball = |p: &Primitive| match p.shape {
+        crate::scene::Shape::Sphere { centre, radius } => Some((centre, radius)),
+        _ => None,
+    };
+    let lights = emitters(recipe, Lights::Hidden)
+        .into_iter()
+        .filter_map(|p| {
+            ball(p).map(|(centre, radius)| PointLight {
+                position: centre,
+                intensity: p.emission * std::f64::consts::PI * radius * radius,
+            })
+        })
+        .collect();
+    let lobes = hidden_light_lobes_except(recipe, env, at, max_sharpness, |p| ball(p).is_some());
+    (lobes, lights)
+}
+
 /// An estimated environment checked against a recipe's lights at
 /// [`test_points`]: the irradiance each delivers there, occluded by the
 /// recipe's geometry (what an object placed there receives). The recipe's

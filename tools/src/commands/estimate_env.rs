@@ -513,6 +513,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             .map_or(0.5 * (recipe.bounds.min + recipe.bounds.max), |o| {
                 o.sphere().0
             });
+        print_true_light_loss(&estimate, &field, &knobs, recipe, &scene, at);
         // The near lights count as lobes seen from the object.
         let seen: Vec<Sg64> = lobes
             .iter()
@@ -749,4 +750,43 @@ fn compare(
         (sq / n).sqrt()
     );
     Ok(image)
+}
+
+/// Says how well the recipe's hidden light explains the estimate's points
+/// against the estimate's own light, each with the albedo fitted alone
+/// (`envest::outside_light::loss_under`): which of the data and the fit
+/// an error comes from.
+fn print_true_light_loss(
+    estimate: &inlay_passes::envest::EnvEstimate,
+    field: &inlay_passes::field::GridField,
+    knobs: &EnvEstimateKnobs,
+    recipe: &inlay_passes::scene::Recipe,
+    scene: &inlay_passes::scene::Scene,
+    at: DVec3,
+) {
+    use inlay_passes::envest::outside_light::loss_under;
+    use inlay_passes::envest::{hidden_light_model, FitData};
+    let data = FitData {
+        points: &estimate.surface.points,
+        near: &estimate.near,
+        bounds: field.bounds,
+    };
+    let (lobes, lights) = hidden_light_model(recipe, &scene.environment, at, knobs.max_sharpness);
+    let truth = loss_under(&data, knobs, &lobes, &lights);
+    let own = loss_under(&data, knobs, &estimate.fit.lobes, &estimate.fit.lights);
+    // The exact losses are unbiased estimates and can dip below zero on a
+    // near-exact fit; the two within 5 % are read as alike.
+    let ratio = truth / own;
+    let verdict = if !(truth > 0.0 && own > 0.0) {
+        "one fits the points exactly"
+    } else if (ratio - 1.0).abs() <= 0.05 {
+        "the two explain the points alike"
+    } else if ratio < 1.0 {
+        "the fit fell short of a light the points prefer"
+    } else {
+        "the points ask for another light than the recipe's"
+    };
+    println!(
+        "the points' loss under the recipe's hidden light {truth:.4e}, under the estimate's {own:.4e} ({ratio:.2}×; the albedo fitted alone under each): {verdict}"
+    );
 }
