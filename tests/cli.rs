@@ -305,6 +305,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     for (flag, value, says) in [
         ("--time-budget", "0", "--time-budget"),
         ("--stages", "9", "--stages"),
+        (
+            "--first-stage-share",
+            "1.5",
+            "--first-stage-share: 1.5 must lie between 0 and 1",
+        ),
         ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
         ("--prune", "nan", "--prune: NaN must be non-negative"),
         ("--out", "x.exr", ".inlayfield"),

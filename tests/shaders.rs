@@ -25,6 +25,10 @@ fn knob_defines() -> Vec<Define> {
         Define::U32("ARC_CAPACITY", 16384),
         Define::U32("DIRECTIONS_PER_INVOCATION", 8),
         Define::U32(
+            "VALUES_PER_INVOCATION",
+            inlay_passes::train::gpu::VALUES_PER_INVOCATION,
+        ),
+        Define::U32(
             "NF_RAYS_PER_INVOCATION",
             inlay_passes::envest::near_field::RAYS_PER_INVOCATION,
         ),

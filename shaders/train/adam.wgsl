@@ -1,5 +1,6 @@
 // One Adam step over every trained value (4 per node: r, g, b, σ, then the
-// view-dependent colour's coefficients), the gradient read and cleared; a
+// view-dependent colour's coefficients), several an invocation
+// (train/every_value.wgsl), the gradient read and cleared; a
 // node's colour kept non-negative, its density and the coefficients free
 // (a density is clamped after interpolation: density_at); a node's colour
 // steps by the larger of `rate` and `relative_rate` × its value once above
@@ -21,6 +22,8 @@ struct AdamPush {
     pad2: u32,
 }
 
+#include "train/every_value.wgsl"
+
 var<immediate> pc: AdamPush;
 @group(0) @binding(0) var<storage, read_write> params: array<f32>;
 @group(0) @binding(1) var<storage, read_write> grad: array<f32>;
@@ -31,9 +34,8 @@ var<immediate> pc: AdamPush;
 
 const ADAM_EPSILON: f32 = 1e-8;
 
-@compute @workgroup_size(64, 1, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x + 65535u * 64u * id.y;
+// Adam's step of value `i`.
+fn step_value(i: u32) {
     if i >= pc.count {
         return;
     }
@@ -53,4 +55,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // density_at); its colour is kept non-negative.
     let colour = base && (i & 3u) != 3u;
     params[i] = select(params[i] - step, max(params[i] - step, 0.0), colour);
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    for (var k = 0u; k < VALUES_PER_INVOCATION; k++) {
+        step_value(value_index(id, k));
+    }
 }

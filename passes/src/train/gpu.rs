@@ -214,6 +214,23 @@ pub enum GradientScatter {
     FloatAdd,
 }
 
+/// Values one invocation of `train/adam.wgsl` and `train/descend.wgsl`
+/// steps (consecutive ones). llvmpipe charges every invocation: at one a
+/// value, the steps over every node (Adam's, total variation's) took two
+/// thirds of a training step at 128 nodes (docs/benchmarks.md, issue 25's
+/// fourteenth pass).
+pub const VALUES_PER_INVOCATION: u32 = 4;
+
+/// The defines of the kernels that step every value.
+const VALUES_DEFINES: [Define; 1] = [Define::U32("VALUES_PER_INVOCATION", VALUES_PER_INVOCATION)];
+
+/// Workgroups (of 64) to step `count` values, [`VALUES_PER_INVOCATION`]
+/// an invocation, split over y past the dispatch limit.
+fn value_groups(count: u32) -> [u32; 3] {
+    let groups = count.div_ceil(64 * VALUES_PER_INVOCATION);
+    [groups.min(65535), groups.div_ceil(65535), 1]
+}
+
 /// The ray kernel's defines: one ray an invocation, it takes a
 /// view-dependent sample's corners in a loop (faster, counted below).
 const RAY_GRAD_DEFINES: [Define; 1] = [Define::Bool(crate::march::SH_CORNER_LOOP_DEFINE, true)];
@@ -471,9 +488,9 @@ impl GpuTrainer {
                 "main",
                 &RAY_GRAD_DEFINES,
             )?,
-            adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &[])?,
+            adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &VALUES_DEFINES)?,
             tv: lib.compute_pipeline(ctx, "train/tv.wgsl", "main", &[])?,
-            descend: lib.compute_pipeline(ctx, "train/descend.wgsl", "main", &[])?,
+            descend: lib.compute_pipeline(ctx, "train/descend.wgsl", "main", &VALUES_DEFINES)?,
             params: Arc::new(Buffer::with_data(
                 ctx,
                 "train-params",
@@ -649,8 +666,7 @@ impl GpuTrainer {
                 relative_floor: knobs.relative_floor as f32,
                 pad2: 0,
             };
-            let groups = (4 * self.node_count()).div_ceil(64);
-            let groups = [groups.min(65535), groups.div_ceil(65535), 1];
+            let groups = value_groups(4 * self.node_count());
             let mut pass = graph.compute_pass(TRAIN_ADAM);
             let params = pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
             let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
@@ -693,7 +709,7 @@ impl GpuTrainer {
                 pass.buffer_at("second", gain_moments[1], BufferAccess::StorageReadWrite);
                 pass.dispatch(&self.adam)
                     .push(&g)
-                    .groups([count.div_ceil(64), 1, 1]);
+                    .groups(value_groups(count));
                 pass.finish();
             }
         }
@@ -742,15 +758,12 @@ impl GpuTrainer {
             pad1: 0,
             pad2: 0,
         };
-        let groups = (4 * nodes).div_ceil(64);
         let mut pass = graph.compute_pass(TRAIN_DESCEND);
         pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
         pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
-        pass.dispatch(&self.descend).push(&d).groups([
-            groups.min(65535),
-            groups.div_ceil(65535),
-            1,
-        ]);
+        pass.dispatch(&self.descend)
+            .push(&d)
+            .groups(value_groups(4 * nodes));
         pass.finish();
     }
 

@@ -318,7 +318,7 @@ pub fn train(
         gpu.tv_weights = knobs.tv_weights(field.spacing().min_element());
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
-        let end = (knobs.iterations as u64 * (s as u64 + 1) / stages as u64) as u32;
+        let end = knobs.stage_end(stages, s);
         while step < end {
             if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {
                 field = gpu.field(&mut renderer)?;

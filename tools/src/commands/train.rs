@@ -36,6 +36,10 @@ pub struct TrainArgs {
     /// Coarse-to-fine stages (the grid doubles between them).
     #[arg(long, default_value_t = TrainKnobs::default().stages)]
     pub stages: u32,
+    /// Share of the steps the first, coarsest stage takes (the later
+    /// stages split the rest evenly).
+    #[arg(long, default_value_t = TrainKnobs::default().first_stage_share)]
+    pub first_stage_share: f64,
     /// Optimiser steps. Default: 2000 up to 128 nodes along the longest
     /// axis, four times as many per doubling above (256: 8000), for the
     /// `--resume` field's resolution when resuming.
@@ -149,6 +153,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     let knobs = TrainKnobs {
         resolution: args.resolution,
         stages: args.stages,
+        first_stage_share: args.first_stage_share,
         iterations: args.iterations.unwrap_or_else(|| {
             default_iterations(
                 resume
