@@ -60,7 +60,12 @@ pub struct TrainKnobs {
     /// squared differences everywhere, which at the default weight
     /// diffuse a density step over 12 nodes in 2000 steps. With the
     /// distortion loss it is what lets a surface's rise be sharp
-    /// (`docs/fidelity.md`, "Thirty-third pass").
+    /// (`docs/fidelity.md`, "Thirty-third pass"). 0.1 by default: with
+    /// squared differences PLANTS' lamp, a sphere a few nodes across,
+    /// faded over longer runs (at 3000 steps its views kept 0.73–0.80 of
+    /// their light, 0.93–0.97 with the edge), and at 3000 steps the edge
+    /// took ROOM's median depth error from 2.1–3.8 node spacings to
+    /// 1.4–2.4 (`docs/benchmarks.md`, issue 25's fourteenth pass).
     pub tv_edge: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
@@ -110,7 +115,7 @@ impl Default for TrainKnobs {
             resolution: 64,
             stages: 3,
             first_stage_share: 0.5,
-            iterations: 2000,
+            iterations: 3000,
             batch: 4096,
             samples_per_ray: 256,
             rate: 0.1,
@@ -119,7 +124,7 @@ impl Default for TrainKnobs {
             epsilon: 4.0,
             tv_colour: 0.0,
             tv_density: 3e-3,
-            tv_edge: 0.0,
+            tv_edge: 0.1,
             distortion: 0.0,
             random_background: false,
             sh_degree: 0,
@@ -131,20 +136,27 @@ impl Default for TrainKnobs {
     }
 }
 
-/// The steps `inlay train` takes when not told: 2000 for a grid of up to
-/// 128 nodes along its longest axis, and four times as many for each
-/// doubling above (256 nodes: 8000), as many as the finest grid's nodes
-/// grow per view. On DOG's 64 views of 256², 2000 steps left a 256-node
-/// degree-1 field hazy where the training views never looked through
-/// (held-out 27.75 and 31.47 dB); 8000 cleared it (31.60, 30.74 dB) and
-/// 16 000 fitted the views' noise (31.03, 30.04 dB), while a 128-node field
-/// gained nothing from 8000 (29.26, 31.84 against 29.24, 32.21 dB;
-/// `docs/benchmarks.md`, issue 25's seventh pass).
+/// The steps `inlay train` takes when not told: [`TrainKnobs::default`]'s
+/// 3000 for a grid of up to 128 nodes along its longest axis (2000 before
+/// the fourteenth pass of issue 25 in `docs/benchmarks.md`: with
+/// [`TrainKnobs::tv_edge`] every bundled scene gained 0.6–1.6 dB and
+/// depth, within 5 minutes), and
+/// [`FINE_GRID_STEPS`] × (nodes / 128)² above, as the finest grid's nodes
+/// grow per view (256 nodes: 8000). On DOG's 64 views of 256², 2000 steps
+/// left a 256-node degree-1 field hazy where the training views never
+/// looked through (held-out 27.75 and 31.47 dB); 8000 cleared it (31.60,
+/// 30.74 dB) and 16 000 fitted the views' noise (31.03, 30.04 dB; issue
+/// 25's seventh pass).
 pub fn default_iterations(resolution: u32) -> u32 {
     let r = resolution.clamp(FEW_STEPS_RESOLUTION, 512) as u64;
-    (TrainKnobs::default().iterations as u64 * r * r
-        / (FEW_STEPS_RESOLUTION as u64 * FEW_STEPS_RESOLUTION as u64)) as u32
+    let grown = FINE_GRID_STEPS as u64 * r * r
+        / (FEW_STEPS_RESOLUTION as u64 * FEW_STEPS_RESOLUTION as u64);
+    (grown as u32).max(TrainKnobs::default().iterations)
 }
+
+/// The steps of [`default_iterations`]' growth at 128 nodes, from which
+/// grids above 128 nodes take four times as many per doubling.
+pub const FINE_GRID_STEPS: u32 = 2000;
 
 /// Up to this many nodes along the longest axis the default steps stay at
 /// [`TrainKnobs::default`]'s.
@@ -260,7 +272,11 @@ mod tests {
         assert!((tv.density_edge - 2.0).abs() < 1e-12);
         assert_eq!(tv.density, knobs.tv_density);
         assert!((knobs.tv_weights(0.005).density_edge - 4.0).abs() < 1e-12);
-        let off = TrainKnobs::default().tv_weights(0.01);
+        let off = TrainKnobs {
+            tv_edge: 0.0,
+            ..TrainKnobs::default()
+        }
+        .tv_weights(0.01);
         assert_eq!(off.density_edge_inverse(), 0.0);
         let bad = TrainKnobs {
             tv_edge: -1.0,
@@ -298,11 +314,13 @@ mod tests {
         }
     }
 
-    /// The default steps: 2000 up to 128 nodes, ×4 per doubling above.
+    /// The default steps: 3000 up to 128 nodes, 2000 × (nodes/128)² above
+    /// where that is more.
     #[test]
     fn default_steps_grow_with_the_grid() {
-        assert_eq!(default_iterations(32), 2000);
-        assert_eq!(default_iterations(128), 2000);
+        assert_eq!(default_iterations(32), 3000);
+        assert_eq!(default_iterations(128), 3000);
+        assert_eq!(default_iterations(150), 3000);
         assert_eq!(default_iterations(192), 4500);
         assert_eq!(default_iterations(256), 8000);
         assert_eq!(default_iterations(512), 32000);

@@ -40,9 +40,9 @@ pub struct TrainArgs {
     /// stages split the rest evenly).
     #[arg(long, default_value_t = TrainKnobs::default().first_stage_share)]
     pub first_stage_share: f64,
-    /// Optimiser steps. Default: 2000 up to 128 nodes along the longest
-    /// axis, four times as many per doubling above (256: 8000), for the
-    /// `--resume` field's resolution when resuming.
+    /// Optimiser steps. Default: 3000 up to 128 nodes along the longest
+    /// axis, 2000 × (nodes / 128)² above where that is more (256: 8000),
+    /// for the `--resume` field's resolution when resuming.
     #[arg(long)]
     pub iterations: Option<u32>,
     /// Rays per step.
