@@ -145,8 +145,9 @@ impl Default for TrainKnobs {
 /// grow per view (256 nodes: 8000). On DOG's 64 views of 256², 2000 steps
 /// left a 256-node degree-1 field hazy where the training views never
 /// looked through (held-out 27.75 and 31.47 dB); 8000 cleared it (31.60,
-/// 30.74 dB) and 16 000 fitted the views' noise (31.03, 30.04 dB; issue
-/// 25's seventh pass).
+/// 30.74 dB) and 16 000 fitted the views' noise (31.03, 30.04 dB), while
+/// a 128-node field with squared total variation gained nothing from 8000
+/// (29.26, 31.84 against 29.24, 32.21 dB; issue 25's seventh pass).
 pub fn default_iterations(resolution: u32) -> u32 {
     let r = resolution.clamp(FEW_STEPS_RESOLUTION, 512) as u64;
     let grown = FINE_GRID_STEPS as u64 * r * r
