@@ -587,11 +587,14 @@ fn a_lamp_in_view_is_learnt_with_its_light() {
 }
 
 /// The total variation the GPU's step is checked with: an edge inside the
-/// test field's density differences (up to 4), so both sides are read.
+/// test field's density differences (up to 4), so both sides are read,
+/// and the sparsity prior, whose pull on the densities (0–4) peaks at the
+/// edge.
 const TV: inlay_passes::train::tv::TvWeights = inlay_passes::train::tv::TvWeights {
     colour: 0.03,
     density: 0.07,
     density_edge: 0.5,
+    sparsity: 0.05,
 };
 
 /// `train-tv` and `train-descend` take the CPU reference's total-variation

@@ -2,7 +2,8 @@
 // six neighbours, Σ_nb (v − v_nb) per channel, weighted per channel group
 // (colour, density), a density difference d pulled by d / √(1 + (d·inv)²)
 // (a Charbonnier penalty: squared below 1/inv, its size beyond; inv 0:
-// squared everywhere), into the gradient buffer Adam's step left empty;
+// squared everywhere), and the density's sparsity prior (σ₊ / (1 +
+// (σ₊·inv)²), weighted), into the gradient buffer Adam's step left empty;
 // train/descend.wgsl then takes one plain step along it. A sparse grid's
 // nodes are its pool's, a dropped brick's neighbours zero (held so).
 // Mirrors passes/src/train/tv.rs tv_gradient.
@@ -13,7 +14,8 @@ struct TvPush {
     colour_weight: f32,
     density_weight: f32,
     density_edge_inverse: f32,
-    pad: u32,
+    // The sparsity prior's weight λ (passes/src/train/tv.rs TvWeights).
+    sparsity: f32,
     // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
     brick_dims: vec3<u32>,
     pad1: u32,
@@ -49,6 +51,14 @@ fn pull(d: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(d.xyz, d.w / sqrt(1.0 + s * s));
 }
 
+// Half the sparsity prior's derivative over its weight for a density σ:
+// σ₊ / (1 + (σ₊·inv)²) (passes/src/train/tv.rs sparsity_pull).
+fn sparsity_pull(sigma: f32) -> f32 {
+    let s = max(sigma, 0.0);
+    let q = s * pc.density_edge_inverse;
+    return s / (1.0 + q * q);
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let n = id.x + 65535u * 64u * id.y;
@@ -76,5 +86,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let w = vec4<f32>(pc.colour_weight, pc.colour_weight, pc.colour_weight, pc.density_weight);
-    grad[n] += 2.0 * w * acc;
+    acc *= w;
+    acc.w += pc.sparsity * sparsity_pull(v.w);
+    grad[n] += 2.0 * acc;
 }

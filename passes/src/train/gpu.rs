@@ -126,8 +126,9 @@ inlay_engine::gpu_struct! {
         /// 1 / the density difference beyond which its penalty grows as
         /// its size (0: squared everywhere; [`TvWeights::density_edge`]).
         pub density_edge_inverse: f32,
-        /// Padding.
-        pub pad: u32,
+        /// The density's sparsity prior's weight
+        /// ([`TvWeights::sparsity`]).
+        pub sparsity: f32,
         /// Bricks per axis of a sparse grid (0: dense).
         pub brick_dims: [u32; 3],
         /// Padding.
@@ -738,7 +739,7 @@ impl GpuTrainer {
             colour_weight: self.tv_weights.colour as f32,
             density_weight: self.tv_weights.density as f32,
             density_edge_inverse: self.tv_weights.density_edge_inverse() as f32,
-            pad: 0,
+            sparsity: self.tv_weights.sparsity as f32,
             brick_dims: self.brick_dims(),
             pad1: 0,
         };

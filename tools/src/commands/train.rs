@@ -73,6 +73,11 @@ pub struct TrainArgs {
     /// smoothed (0: squared differences everywhere).
     #[arg(long, default_value_t = TrainKnobs::default().tv_edge)]
     pub tv_edge: f64,
+    /// Weight of the density's sparsity prior, taken with total variation:
+    /// pulls a density below the edge (a haze) toward zero and leaves an
+    /// opaque surface be (0: none).
+    #[arg(long, default_value_t = TrainKnobs::default().sparsity)]
+    pub sparsity: f64,
     /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
     /// weight into one short stretch, so surfaces train as thin shells
     /// rather than haze (0: none).
@@ -169,6 +174,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         tv_colour: args.tv_colour,
         tv_density: args.tv_density,
         tv_edge: args.tv_edge,
+        sparsity: args.sparsity,
         distortion: args.distortion,
         random_background: args.random_background,
         sh_degree: args.sh_degree.unwrap_or(
