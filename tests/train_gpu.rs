@@ -535,6 +535,15 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
     }
 }
 
+/// The largest colour channel of any node of `field`.
+fn brightest_node(field: &GridField) -> f32 {
+    field
+        .nodes
+        .iter()
+        .map(|n| n[0].max(n[1]).max(n[2]))
+        .fold(0.0f32, f32::max)
+}
+
 /// A lamp in view is learnt with its light: PLANTS' lamp is a thousand
 /// times the mean radiance of its views, and at steps sized by the mean
 /// alone the trained field's held-out views kept a fifth to a third of
@@ -564,12 +573,7 @@ fn a_lamp_in_view_is_learnt_with_its_light() {
     };
     let trained = train_with(&ctx, &lib, &dataset, &knobs);
     common::assert_no_validation_errors(&ctx);
-    let brightest = trained
-        .field
-        .nodes
-        .iter()
-        .map(|n| n[0].max(n[1]).max(n[2]))
-        .fold(0.0f32, f32::max);
+    let brightest = brightest_node(&trained.field);
     eprintln!(
         "mean radiance {:.3}, brightest node {brightest:.1}",
         trained.mean_radiance
@@ -584,6 +588,120 @@ fn a_lamp_in_view_is_learnt_with_its_light() {
     let n = trained.held_out.len() as f64;
     let mean = trained.held_out.iter().map(|v| v.brightness).sum::<f64>() / n;
     assert!((0.5..1.3).contains(&mean), "mean brightness {mean}");
+}
+
+/// `dataset`'s frames but those in `held`, each as 8-bit sRGB brackets at
+/// `exposures` (PNG paths, `exposure_time` set; a saturated pixel a lower
+/// bound, as the loader marks it).
+fn bracketed(
+    dataset: &inlay_passes::dataset::Dataset,
+    held: &[usize],
+    exposures: &[f32],
+) -> inlay_passes::dataset::Dataset {
+    use inlay_passes::dataset::capture::linear_to_srgb8;
+    use inlay_passes::dataset::pixels::srgb_to_linear;
+    use inlay_passes::dataset::PixelState;
+    let mut frames = Vec::new();
+    for (i, f) in dataset.frames.iter().enumerate() {
+        if held.contains(&i) {
+            continue;
+        }
+        for &e in exposures {
+            let mut b = f.clone();
+            b.index = frames.len();
+            b.image_path = format!("view-{i}-{e}.png").into();
+            b.exposure_time = Some(e as f64);
+            let mut state = Vec::new();
+            for p in &mut b.image.radiance {
+                let bytes = p.map(|v| linear_to_srgb8(v * e));
+                state.push(if bytes.contains(&255) {
+                    PixelState::LowerBound
+                } else {
+                    PixelState::Value
+                });
+                *p = bytes.map(|c| srgb_to_linear(c as f32 / 255.0));
+            }
+            b.image.state = state;
+            frames.push(b);
+        }
+    }
+    inlay_passes::dataset::Dataset {
+        frames,
+        ..dataset.clone()
+    }
+}
+
+/// Brackets → HDR: PLANTS' views as 8-bit sRGB brackets at exposures 1,
+/// 1/16 and 1/256. Its lamp (emission 160) saturates the longest
+/// exposure, which holds radiance up to 1; only the shortest holds it.
+/// Trained from the brackets (without the two views the linear run holds
+/// out), the loss's scale is the linear views' (the brackets merged at
+/// each pixel), the field learns the lamp's light far beyond what the
+/// longest exposure holds (brightest node over 50; measured 497–818),
+/// and its held-out views, in linear radiance against the linear
+/// photographs, are as bright as them within 30 % and no darker than
+/// the field trained from the linear views (measured 0.84 and 0.68; the
+/// issue's 5 % is for the benchmark's 128-node fields,
+/// `docs/benchmarks.md`). 1200 steps, twice the linear runs': the lamp
+/// climbs from the shortest bracket alone, and at 600 steps this grid's
+/// brightest node was 4.7.
+#[test]
+fn brackets_train_the_hdr_field_their_linear_views_do() {
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let linear_set = recipe_dataset("plants.toml");
+    let held = [6usize, 18];
+    let brackets = bracketed(&linear_set, &held, &[1.0, 1.0 / 16.0, 1.0 / 256.0]);
+    let knobs = inlay_passes::train::TrainKnobs {
+        rate: 3.0 * inlay_passes::train::TrainKnobs::default().rate,
+        iterations: 1200,
+        ..small_knobs()
+    };
+    let linear = train_with(&ctx, &lib, &linear_set, &knobs);
+    assert_eq!(
+        linear.held_out.iter().map(|v| v.frame).collect::<Vec<_>>(),
+        held.map(|f| f as u32)
+    );
+    let control = inlay_passes::train::TrainControl::default();
+    let hdr = inlay_passes::train::train(
+        &ctx,
+        &lib,
+        &brackets,
+        &knobs,
+        0,
+        DVec3::ZERO,
+        &control,
+        &|_| {},
+    )
+    .unwrap();
+    common::assert_no_validation_errors(&ctx);
+    let scale = hdr.mean_radiance / linear.mean_radiance;
+    let brightest = brightest_node(&hdr.field);
+    let brightness = |field: &GridField| {
+        let views = held.map(|f| {
+            inlay_passes::train::trainer::score_view(
+                &linear_set,
+                f as u32,
+                field,
+                &MarchKnobs::default(),
+                DVec3::ZERO,
+                false,
+            )
+            .brightness
+        });
+        views.iter().sum::<f64>() / views.len() as f64
+    };
+    let (from_brackets, from_linear) = (brightness(&hdr.field), brightness(&linear.field));
+    eprintln!(
+        "scale brackets / linear {scale:.3}; brightest node {brightest:.1}; held-out brightness \
+         from brackets {from_brackets:.3}, from linear views {from_linear:.3}"
+    );
+    assert!((scale - 1.0).abs() < 0.05, "scale ratio {scale}");
+    assert!(brightest > 50.0, "brightest node {brightest}");
+    assert!(
+        (0.7..1.3).contains(&from_brackets) && from_brackets > 0.9 * from_linear,
+        "brightness {from_brackets} against {from_linear}"
+    );
 }
 
 /// The total variation the GPU's step is checked with: an edge inside the

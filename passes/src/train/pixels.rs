@@ -9,6 +9,7 @@ use crate::dataset::pixels::{image_kind, ImageKind};
 use crate::dataset::{Dataset, Frame, PixelState};
 use crate::geometry::Ray;
 use crate::rng::Pcg32;
+use crate::sgfit::model::luminance;
 
 /// One usable pixel: its frame (index into the dataset's frames) and pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,6 +56,71 @@ pub fn pixel_target(frame: &Frame, pixel: u32) -> Option<PixelTarget> {
         PixelState::LowerBound => Some(PixelTarget::AtLeast(value)),
         PixelState::Value => Some(PixelTarget::Value(value)),
     }
+}
+
+/// The frames each frame's pixels merge with to read the scene's
+/// radiance: for a bracket, every bracket of the same pose (to the bit)
+/// and image size among `frames` (itself included), the longest exposure
+/// first; for any other frame, itself alone. Frames outside `frames`
+/// (held out) stand alone and merge with none.
+pub fn bracket_sets(dataset: &Dataset, frames: &[u32]) -> Vec<Vec<u32>> {
+    type Key = ([u64; 16], u32, u32);
+    let key = |f: &Frame| -> Key {
+        (
+            f.pose.matrix.to_cols_array().map(f64::to_bits),
+            f.image.width,
+            f.image.height,
+        )
+    };
+    let exposure = |i: &u32| dataset.frames[*i as usize].exposure_time.unwrap_or(1.0);
+    let mut groups: std::collections::HashMap<Key, Vec<u32>> = Default::default();
+    for &i in frames {
+        let f = &dataset.frames[i as usize];
+        if is_bracket(f) {
+            groups.entry(key(f)).or_default().push(i);
+        }
+    }
+    for g in groups.values_mut() {
+        g.sort_by(|a, b| exposure(b).total_cmp(&exposure(a)));
+    }
+    (0..dataset.frames.len() as u32)
+        .map(|i| {
+            let f = &dataset.frames[i as usize];
+            match groups.get(&key(f)) {
+                Some(g) if is_bracket(f) && g.contains(&i) => g.clone(),
+                _ => vec![i],
+            }
+        })
+        .collect()
+}
+
+/// The scene's luminance at `pixel` as the frames `set` ([`bracket_sets`])
+/// record it: a frame that is not a bracket, its value; brackets, the
+/// longest exposure that did not saturate there over its exposure (the
+/// least noisy reading), or where all saturated the shortest's, a lower
+/// bound. None where every frame masks the pixel.
+pub fn merged_luminance(dataset: &Dataset, set: &[u32], pixel: u32) -> Option<f64> {
+    let i = pixel as usize;
+    let reading = |f: &Frame| {
+        let c = f.image.radiance[i];
+        let e = if is_bracket(f) {
+            f.exposure_time.unwrap_or(1.0)
+        } else {
+            1.0
+        };
+        luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)) / e
+    };
+    let seen: Vec<&Frame> = set
+        .iter()
+        .map(|&f| &dataset.frames[f as usize])
+        .filter(|f| f.image.state[i] != PixelState::Masked)
+        .collect();
+    let last = seen.last()?;
+    if !is_bracket(last) {
+        return Some(reading(last));
+    }
+    let unsaturated = seen.iter().find(|f| f.image.state[i] == PixelState::Value);
+    Some(reading(unsaturated.unwrap_or(last)))
 }
 
 /// The training pixels: every usable pixel of the frames not held out.

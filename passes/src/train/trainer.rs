@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use super::adam::AdamKnobs;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
-use super::pixels::{is_bracket, pixel_ray, PixelPool};
+use super::pixels::{bracket_sets, is_bracket, merged_luminance, pixel_ray, PixelPool};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
@@ -150,14 +150,25 @@ pub fn with_sh_degree(field: GridField, degree: u32) -> GridField {
 }
 
 /// The training pixels' mean luminance (the loss's and the colours' scale;
-/// a median would be zero where most pixels see empty space).
-fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
+/// a median would be zero where most pixels see empty space), in the
+/// scene's radiance: the brackets of a pose are merged at each pixel
+/// ([`merged_luminance`]), so that bracketed photographs give the scale
+/// their linear counterparts would. Read as recorded, PLANTS' brackets at
+/// 1/64, 1/8 and 1 gave a fraction of it, and the field they trained
+/// had its surfaces 10–13 node spacings in front of the recipe's
+/// (`docs/benchmarks.md`, issue 25's fifteenth pass).
+pub fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
+    let training: Vec<u32> = (0..dataset.frames.len() as u32)
+        .filter(|f| !pool.held_out.contains(f))
+        .collect();
+    let sets = bracket_sets(dataset, &training);
     let step = (pool.pixels.len() / 20000).max(1);
     let (mut sum, mut n) = (0.0, 0usize);
     for r in pool.pixels.iter().step_by(step) {
-        let c = dataset.frames[r.frame as usize].image.radiance[r.pixel as usize];
-        sum += luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
-        n += 1;
+        if let Some(l) = merged_luminance(dataset, &sets[r.frame as usize], r.pixel) {
+            sum += l;
+            n += 1;
+        }
     }
     (sum / n.max(1) as f64).max(1e-6)
 }
@@ -596,6 +607,81 @@ mod tests {
             },
             skipped: Vec::new(),
         }
+    }
+
+    /// One view of radiance `radiance` (linear), as an EXR frame or, with
+    /// `exposure`, as an 8-bit sRGB bracket taken at that exposure (its
+    /// saturated pixels lower bounds, as the loader marks them).
+    fn frame_of(radiance: &[f32], exposure: Option<f32>) -> crate::dataset::Frame {
+        use crate::dataset::capture::linear_to_srgb8;
+        use crate::dataset::pixels::srgb_to_linear;
+        let recorded: Vec<(f32, PixelState)> = radiance
+            .iter()
+            .map(|&v| match exposure {
+                None => (v, PixelState::Value),
+                Some(e) => {
+                    let byte = linear_to_srgb8(v * e);
+                    let state = if byte == 255 {
+                        PixelState::LowerBound
+                    } else {
+                        PixelState::Value
+                    };
+                    (srgb_to_linear(byte as f32 / 255.0), state)
+                }
+            })
+            .collect();
+        let n = radiance.len() as u32;
+        crate::dataset::Frame {
+            index: 0,
+            image_path: if exposure.is_some() { "v.png" } else { "v.exr" }.into(),
+            pose: crate::dataset::Pose::looking_at(DVec3::Z, DVec3::ZERO, DVec3::Y),
+            intrinsics: crate::dataset::Intrinsics::centred(n, 1, 40.0),
+            exposure_time: exposure.map(f64::from),
+            exif_exposure: None,
+            image: crate::dataset::FrameImage {
+                width: n,
+                height: 1,
+                radiance: recorded.iter().map(|(v, _)| [*v; 3]).collect(),
+                state: recorded.iter().map(|(_, s)| *s).collect(),
+                counts: Default::default(),
+            },
+        }
+    }
+
+    /// The loss's and the colours' scale is the scene's mean radiance
+    /// whether the photographs are linear or brackets of one pose, merged
+    /// at each pixel. Read as they were recorded, brackets at 1/64, 1/8
+    /// and 1 of a view whose mean is 0.44 (a lamp of 40 that only the
+    /// darkest holds is 45 % of it) read 0.097; with each bracket's value
+    /// over its exposure and its saturated pixels left out, 0.31.
+    #[test]
+    fn brackets_give_the_scale_of_the_radiance_they_record() {
+        let radiance: Vec<f32> = (0..200)
+            .map(|i| {
+                if i == 7 {
+                    40.0
+                } else {
+                    0.02 + 0.5 * (i % 10) as f32 / 10.0
+                }
+            })
+            .collect();
+        let dataset = |frames: Vec<crate::dataset::Frame>| Dataset {
+            frames,
+            ..dataset_with(0)
+        };
+        let linear = dataset(vec![frame_of(&radiance, None)]);
+        let brackets = dataset(
+            [1.0 / 64.0, 1.0 / 8.0, 1.0]
+                .map(|e| frame_of(&radiance, Some(e)))
+                .to_vec(),
+        );
+        let of = |d: &Dataset| mean_luminance(d, &PixelPool::new(d, 0));
+        let truth = of(&linear);
+        let read = of(&brackets);
+        assert!(
+            (read / truth - 1.0).abs() < 0.05,
+            "brackets {read}, linear {truth}"
+        );
     }
 
     /// A random background is refused, naming the file, for photographs
