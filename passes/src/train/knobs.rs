@@ -75,8 +75,8 @@ pub struct TrainKnobs {
     /// 1.4–2.4 node spacings to 1.0–1.2 and CUPS' worst view's from 4.3 to
     /// 3.4 at the same held-out PSNR, and cost PLANTS, whose lamp and
     /// foliage train as faint glowing density, 0.5 dB; 2e-3 and 3e-3 put
-    /// the surfaces behind the recipe's (`docs/benchmarks.md`, issue 25's
-    /// fifteenth pass).
+    /// ROOM's surfaces about a spacing behind the recipe's
+    /// (`docs/benchmarks.md`, issue 25's fifteenth pass).
     pub sparsity: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
