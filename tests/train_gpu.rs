@@ -598,8 +598,7 @@ fn bracketed(
     held: &[usize],
     exposures: &[f32],
 ) -> inlay_passes::dataset::Dataset {
-    use inlay_passes::dataset::capture::linear_to_srgb8;
-    use inlay_passes::dataset::pixels::srgb_to_linear;
+    use inlay_passes::dataset::capture::bracket_reading;
     use inlay_passes::dataset::PixelState;
     let mut frames = Vec::new();
     for (i, f) in dataset.frames.iter().enumerate() {
@@ -613,13 +612,13 @@ fn bracketed(
             b.exposure_time = Some(e as f64);
             let mut state = Vec::new();
             for p in &mut b.image.radiance {
-                let bytes = p.map(|v| linear_to_srgb8(v * e));
-                state.push(if bytes.contains(&255) {
+                let read = p.map(|v| bracket_reading(v, e));
+                state.push(if read.iter().any(|r| r.1) {
                     PixelState::LowerBound
                 } else {
                     PixelState::Value
                 });
-                *p = bytes.map(|c| srgb_to_linear(c as f32 / 255.0));
+                *p = read.map(|r| r.0);
             }
             b.image.state = state;
             frames.push(b);

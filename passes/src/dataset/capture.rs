@@ -179,6 +179,17 @@ pub fn linear_to_srgb8(v: f32) -> u8 {
     (super::pixels::srgb_encode(v as f64) * 255.0 + 0.5) as u8
 }
 
+/// What an 8-bit sRGB bracket taken at `exposure` records of linear
+/// radiance `v`, read back linear as the loader reads it, and whether it
+/// saturated (a lower bound to the loader).
+pub fn bracket_reading(v: f32, exposure: f32) -> (f32, bool) {
+    let byte = linear_to_srgb8(v * exposure);
+    (
+        super::pixels::srgb_to_linear(byte as f32 / 255.0),
+        byte == 255,
+    )
+}
+
 /// A bracketed LDR frame as PNG bytes: clip(`exposure` × radiance) through
 /// the sRGB curve, 8 bits, as a camera with an sRGB response records it.
 pub fn bracket_png(rgb: &[[f32; 3]], width: u32, height: u32, exposure: f32) -> Vec<u8> {

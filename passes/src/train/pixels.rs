@@ -30,6 +30,16 @@ pub fn is_bracket(frame: &Frame) -> bool {
     frame.exposure_time.is_some() && image_kind(&frame.image_path) == Some(ImageKind::Srgb)
 }
 
+/// The exposure `frame`'s values were recorded at: a bracket's exposure
+/// time, 1 for any other frame (its values are radiance).
+pub fn recorded_exposure(frame: &Frame) -> f64 {
+    if is_bracket(frame) {
+        frame.exposure_time.unwrap_or(1.0)
+    } else {
+        1.0
+    }
+}
+
 /// The ray through pixel `pixel` of `frame` (through its centre), or None
 /// where the lens model cannot be inverted.
 pub fn pixel_ray(frame: &Frame, pixel: u32) -> Option<Ray> {
@@ -51,7 +61,7 @@ pub fn pixel_target(frame: &Frame, pixel: u32) -> Option<PixelTarget> {
         PixelState::Masked => None,
         _ if is_bracket(frame) => Some(PixelTarget::Bracket {
             encoded: DVec3::new(encode(c[0]), encode(c[1]), encode(c[2])),
-            exposure: frame.exposure_time.unwrap_or(1.0),
+            exposure: recorded_exposure(frame),
         }),
         PixelState::LowerBound => Some(PixelTarget::AtLeast(value)),
         PixelState::Value => Some(PixelTarget::Value(value)),
@@ -72,7 +82,7 @@ pub fn bracket_sets(dataset: &Dataset, frames: &[u32]) -> Vec<Vec<u32>> {
             f.image.height,
         )
     };
-    let exposure = |i: &u32| dataset.frames[*i as usize].exposure_time.unwrap_or(1.0);
+    let exposure = |i: &u32| recorded_exposure(&dataset.frames[*i as usize]);
     let mut groups: std::collections::HashMap<Key, Vec<u32>> = Default::default();
     for &i in frames {
         let f = &dataset.frames[i as usize];
@@ -103,12 +113,7 @@ pub fn merged_luminance(dataset: &Dataset, set: &[u32], pixel: u32) -> Option<f6
     let i = pixel as usize;
     let reading = |f: &Frame| {
         let c = f.image.radiance[i];
-        let e = if is_bracket(f) {
-            f.exposure_time.unwrap_or(1.0)
-        } else {
-            1.0
-        };
-        luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)) / e
+        luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)) / recorded_exposure(f)
     };
     let seen: Vec<&Frame> = set
         .iter()

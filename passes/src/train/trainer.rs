@@ -613,21 +613,14 @@ mod tests {
     /// `exposure`, as an 8-bit sRGB bracket taken at that exposure (its
     /// saturated pixels lower bounds, as the loader marks them).
     fn frame_of(radiance: &[f32], exposure: Option<f32>) -> crate::dataset::Frame {
-        use crate::dataset::capture::linear_to_srgb8;
-        use crate::dataset::pixels::srgb_to_linear;
         let recorded: Vec<(f32, PixelState)> = radiance
             .iter()
             .map(|&v| match exposure {
                 None => (v, PixelState::Value),
-                Some(e) => {
-                    let byte = linear_to_srgb8(v * e);
-                    let state = if byte == 255 {
-                        PixelState::LowerBound
-                    } else {
-                        PixelState::Value
-                    };
-                    (srgb_to_linear(byte as f32 / 255.0), state)
-                }
+                Some(e) => match crate::dataset::capture::bracket_reading(v, e) {
+                    (r, true) => (r, PixelState::LowerBound),
+                    (r, false) => (r, PixelState::Value),
+                },
             })
             .collect();
         let n = radiance.len() as u32;
