@@ -638,8 +638,9 @@ fn bracketed(
 /// each pixel), the field learns the lamp's light far beyond what the
 /// longest exposure holds (brightest node over 50; measured 497–818),
 /// and its held-out views, in linear radiance against the linear
-/// photographs, are as bright as them within 30 % and no darker than
-/// the field trained from the linear views (measured 0.84 and 0.68; the
+/// photographs, are at least half as bright as them, as the lamp test
+/// asks of the linear views' field, and no darker than that field
+/// (measured 0.77–0.84 against 0.67–0.68 over three runs; the
 /// issue's 5 % is for the benchmark's 128-node fields,
 /// `docs/benchmarks.md`). 1200 steps, twice the linear runs': the lamp
 /// climbs from the shortest bracket alone, and at 600 steps this grid's
@@ -698,7 +699,7 @@ fn brackets_train_the_hdr_field_their_linear_views_do() {
     assert!((scale - 1.0).abs() < 0.05, "scale ratio {scale}");
     assert!(brightest > 50.0, "brightest node {brightest}");
     assert!(
-        (0.7..1.3).contains(&from_brackets) && from_brackets > 0.9 * from_linear,
+        (0.5..1.3).contains(&from_brackets) && from_brackets > 0.9 * from_linear,
         "brightness {from_brackets} against {from_linear}"
     );
 }
