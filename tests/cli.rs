@@ -220,6 +220,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "1",
         "--scene",
         scene,
+        "--sky",
+        "4",
     ]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
@@ -227,6 +229,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         t.contains("held-out frame 1: PSNR") && field.is_file(),
         "{t}"
     );
+    // The sky learnt behind it, beside it.
+    let sky = dir.join("views.sky.exr");
+    assert!(t.contains("learnt a sky of 8x4 texels"), "{t}");
+    let image = inlay_engine::HdrImage::load_exr(&sky).unwrap();
+    inlay_passes::train::Sky::from_image(&image).unwrap();
     // Its geometry scored against the recipe the views show.
     assert!(
         t.contains("held-out frame 1: geometry against")
@@ -272,8 +279,12 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "--sh-degree",
         "1",
         "--learn-exposure",
+        "--sky",
+        "4",
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    // Its sky went on from the resumed field's (beside it).
+    assert!(dir.join("stopped.sky.exr").is_file());
     assert!(text(&o).contains("learnt exposure gains"), "{}", text(&o));
     // Resumed with view-dependent colour: the file carries it, trained.
     let resumed = inlay_passes::field::load_field(&stopped).unwrap();
@@ -311,6 +322,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
             "--first-stage-share: 1.5 must lie between 0 and 1",
         ),
         ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
+        ("--sky", "2000", "--sky: 2000 must be in 0..=1024"),
         ("--prune", "nan", "--prune: NaN must be non-negative"),
         ("--out", "x.exr", ".inlayfield"),
         (

@@ -101,6 +101,7 @@ fn the_reference_path_tracer_matches_cycles() {
                         bounces: scene.bake.bounces,
                         seed,
                         antialias: true,
+                        sky_behind: false,
                     },
                     &|_, _| {},
                 );

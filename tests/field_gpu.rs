@@ -606,6 +606,7 @@ fn marched_field_matches_the_path_traced_reference() {
             bounces: 0,
             seed: 7,
             antialias: false,
+            sky_behind: false,
         },
         &|_, _| {},
     );

@@ -37,6 +37,23 @@ fn add_gain_float(i: u32, value: f32) {
     }
 }
 
+@group(0) @binding(24) var<storage, read_write> sky_grad: array<atomic<u32>>;
+
+// add_float into sky_grad.
+fn add_sky_float(i: u32, value: f32) {
+    if value == 0.0 {
+        return;
+    }
+    var old = atomicLoad(&sky_grad[i]);
+    loop {
+        let r = atomicCompareExchangeWeak(&sky_grad[i], old, bitcast<u32>(bitcast<f32>(old) + value));
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+}
+
 // The gradient's pages (train/sh_pages.wgsl).
 @group(0) @binding(15) var<storage, read_write> sh_grad_0: array<atomic<u32>>;
 @group(0) @binding(16) var<storage, read_write> sh_grad_1: array<atomic<u32>>;

@@ -9,10 +9,13 @@
 // gradient with respect to the gain of every frame but the first is
 // scattered too. With pc.distortion > 0, the distortion loss of the ray's
 // weights is added, and its gradient with respect to the densities.
+// Behind the field is pc.background, or where pc.sky_width is not 0 a learnt sky
+// (train/sky.wgsl) whose gradient is scattered too.
 // Mirrors passes/src/train/render.rs render_ray_with_gradient.
-// Needs from the includer: the bindings `grad` (2), `gain_grad` (5) and
-// the gradient's pages `sh_grad_j` (15..22), and `add_float(i, v)`,
-// `add_gain_float(i, v)`, `add_sh_float(j, i, v)` that add v to their
+// Needs from the includer: the bindings `grad` (2), `gain_grad` (5),
+// `sky_grad` (24) and the gradient's pages `sh_grad_j` (15..22), and
+// `add_float(i, v)`, `add_gain_float(i, v)`, `add_sky_float(i, v)`,
+// `add_sh_float(j, i, v)` that add v to their
 // element i atomically (train/ray_grad.wgsl: a compare-and-swap loop, core WGSL;
 // train/ray_grad_float.wgsl: atomicAdd on f32, VK_EXT_shader_atomic_float).
 
@@ -20,6 +23,7 @@
 #include "field/trilinear.wgsl"
 #include "field/sh.wgsl"
 #include "train/loss.wgsl"
+#include "train/sky.wgsl"
 
 struct TrainPush {
     bounds_min: vec3<f32>,
@@ -34,10 +38,12 @@ struct TrainPush {
     learn_gains: u32,
     // The distortion loss's weight over the field's diagonal, λ/D (0: none).
     distortion: f32,
-    pad2: u32,
+    // A learnt sky's texels across (0: pc.background behind the field).
+    sky_width: u32,
     // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
     brick_dims: vec3<u32>,
-    pad3: u32,
+    // A learnt sky's texels down.
+    sky_height: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -61,6 +67,8 @@ var<immediate> pc: TrainPush;
 @group(0) @binding(4) var<storage, read> gains: array<vec4<f32>>;
 // A sparse grid's brick table (one unused entry for a dense grid).
 @group(0) @binding(6) var<storage, read> bricks: array<u32>;
+// A learnt sky's texels (r, g, b, 0; one unused entry without a sky).
+@group(0) @binding(23) var<storage, read> sky: array<vec4<f32>>;
 
 #include "field/bricks.wgsl"
 #include "train/sh_pages.wgsl"
@@ -118,6 +126,33 @@ fn seen_colour(u: vec3<f32>) -> vec3<f32> {
     return select(u, max(u, vec3<f32>(0.0)), pc.sh_degree > 0u);
 }
 
+// The radiance behind the field along unit direction d.
+fn background_along(d: vec3<f32>) -> vec3<f32> {
+    if pc.sky_width == 0u {
+        return pc.background;
+    }
+    let c = sky_corners(vec2<u32>(pc.sky_width, pc.sky_height), d);
+    return c.weight.x * sky[c.index.x].xyz + c.weight.y * sky[c.index.y].xyz
+        + c.weight.z * sky[c.index.z].xyz + c.weight.w * sky[c.index.w].xyz;
+}
+
+// Adds `e` to sky texel t's gradient (r, g, b).
+fn add_sky_texel(t: u32, e: vec3<f32>) {
+    add_sky_float(4u * t, e.x);
+    add_sky_float(4u * t + 1u, e.y);
+    add_sky_float(4u * t + 2u, e.z);
+}
+
+// Adds the gradient g·T_N of the radiance behind the field along d to
+// the sky texels it read (written out: no loop for llvmpipe to count).
+fn add_sky_grad(d: vec3<f32>, e: vec3<f32>) {
+    let c = sky_corners(vec2<u32>(pc.sky_width, pc.sky_height), d);
+    add_sky_texel(c.index.x, e * c.weight.x);
+    add_sky_texel(c.index.y, e * c.weight.y);
+    add_sky_texel(c.index.z, e * c.weight.z);
+    add_sky_texel(c.index.w, e * c.weight.w);
+}
+
 // Renders ray `index` of the batch, its loss and gradient.
 fn train_ray(index: u32) {
     if index >= pc.ray_count {
@@ -165,7 +200,8 @@ fn train_ray(index: u32) {
             }
         }
     }
-    let total = colour + transmittance * pc.background;
+    let background = background_along(ray.dir);
+    let total = colour + transmittance * background;
     let gain = gains[ray.frame].xyz;
     let l = pixel_loss(gain * total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
     // The distortion loss, weighted as the pixel's (λ/D folded in).
@@ -181,6 +217,9 @@ fn train_ray(index: u32) {
     let g = ray.weight * l.grad * gain;
     if all(g == vec3<f32>(0.0)) && distortion == 0.0 {
         return;
+    }
+    if pc.sky_width != 0u && transmittance > 0.0 {
+        add_sky_grad(ray.dir, g * transmittance);
     }
     // Backward, with the running sum.
     let count = select(0u, sh_count(pc.sh_degree), pc.sh_degree > 0u);
@@ -210,7 +249,7 @@ fn train_ray(index: u32) {
         // The clamp at zero after interpolation passes no gradient where
         // it holds (density_at).
         let open_sigma = select(0.0, 1.0, v.w > 0.0);
-        var d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * pc.background);
+        var d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * background);
         if distort {
             // e = ∂L_d/∂w of this sample, from the sums before and after it.
             let t = 0.5 * (a + b);

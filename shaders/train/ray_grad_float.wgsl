@@ -20,6 +20,14 @@ fn add_gain_float(i: u32, value: f32) {
     }
 }
 
+@group(0) @binding(24) var<storage, read_write> sky_grad: array<atomic<f32>>;
+
+fn add_sky_float(i: u32, value: f32) {
+    if value != 0.0 {
+        atomicAdd(&sky_grad[i], value);
+    }
+}
+
 // The gradient's pages (train/sh_pages.wgsl).
 @group(0) @binding(15) var<storage, read_write> sh_grad_0: array<atomic<f32>>;
 @group(0) @binding(16) var<storage, read_write> sh_grad_1: array<atomic<f32>>;

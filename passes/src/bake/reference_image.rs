@@ -31,6 +31,10 @@ pub struct ReferenceOptions {
     /// Jitter samples over the pixel (anti-aliasing); off: pixel centres,
     /// as the march samples them.
     pub antialias: bool,
+    /// A camera ray that leaves the bounds sees the environment, as a
+    /// photograph sees past any box (off: black there, the pixel's
+    /// coverage below 1).
+    pub sky_behind: bool,
 }
 
 /// Renders the camera image; pixels are (r, g, b, coverage), row-major from
@@ -95,6 +99,10 @@ pub fn render_reference(
                             }
                             Event::Medium { t, prim } => {
                                 sum += tracer.medium_radiance(prim, ray.at(t), &mut rng);
+                                cover += 1.0;
+                            }
+                            Event::Escape if options.sky_behind => {
+                                sum += env.eval(ray.dir);
                                 cover += 1.0;
                             }
                             Event::Escape => {}

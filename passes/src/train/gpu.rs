@@ -12,6 +12,7 @@ use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Rendere
 
 use super::adam::AdamKnobs;
 use super::sh_pages::{interleave, ShPages};
+use super::sky::Sky;
 use super::tv::TvWeights;
 use crate::field::bricks::BrickLayout;
 use crate::field::{GridField, NodeStorage, DEFAULT_OCCUPANCY_BLOCK};
@@ -44,12 +45,12 @@ inlay_engine::gpu_struct! {
         /// The distortion loss's weight λ over the field's diagonal (0:
         /// none).
         pub distortion: f32,
-        /// Padding.
-        pub pad2: u32,
+        /// A learnt sky's texels across (0: `background` behind the field).
+        pub sky_width: u32,
         /// Bricks per axis of a sparse grid (0: dense).
         pub brick_dims: [u32; 3],
-        /// Padding.
-        pub pad3: u32,
+        /// A learnt sky's texels down.
+        pub sky_height: u32,
     }
 }
 
@@ -150,27 +151,38 @@ inlay_engine::gpu_struct! {
     }
 }
 
-/// The exposure gains' buffers: the gains as the shader reads them
-/// ((r, g, b, 0) per frame), their gradient and Adam's first and second
+/// The buffers of a small set of learnt colours (the frames' exposure
+/// gains, a sky's texels), named `name`: the colours as the shader reads
+/// them ((r, g, b, 0) each), their gradient and Adam's first and second
 /// moments (zero).
-fn gain_buffers(ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<[Arc<Buffer>; 4]> {
-    anyhow::ensure!(!gains.is_empty(), "no frame");
+fn colour_buffers(
+    ctx: &Arc<Context>,
+    name: &str,
+    colours: &[DVec3],
+) -> anyhow::Result<[Arc<Buffer>; 4]> {
+    anyhow::ensure!(!colours.is_empty(), "{name}: none");
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER
         | vk::BufferUsageFlags::TRANSFER_SRC
         | vk::BufferUsageFlags::TRANSFER_DST;
-    let bytes: Vec<u8> = gains
+    let bytes: Vec<u8> = colours
         .iter()
         .flat_map(|g| [g.x as f32, g.y as f32, g.z as f32, 0.0])
         .flat_map(f32::to_le_bytes)
         .collect();
-    let buffer = |name: &str, data: &[u8]| -> anyhow::Result<Arc<Buffer>> {
-        Ok(Arc::new(Buffer::with_data(ctx, name, data, usage)?))
+    let zeros = vec![0u8; bytes.len()];
+    let buffer = |part: &str, data: &[u8]| -> anyhow::Result<Arc<Buffer>> {
+        Ok(Arc::new(Buffer::with_data(
+            ctx,
+            &format!("{name}{part}"),
+            data,
+            usage,
+        )?))
     };
     Ok([
-        buffer("train-gains", &bytes)?,
-        buffer("train-gain-grad", &vec![0u8; 16 * gains.len()])?,
-        buffer("train-gain-first", &vec![0u8; 16 * gains.len()])?,
-        buffer("train-gain-second", &vec![0u8; 16 * gains.len()])?,
+        buffer("", &bytes)?,
+        buffer("-grad", &zeros)?,
+        buffer("-first", &zeros)?,
+        buffer("-second", &zeros)?,
     ])
 }
 
@@ -242,7 +254,8 @@ const RAY_GRAD_DEFINES: [Define; 1] = [Define::Bool(crate::march::SH_CORNER_LOOP
 /// scatter's eight corners (llvmpipe does not unroll their loop); on a grid
 /// with view-dependent colour, the eight corners of its colour forward and
 /// back; with compare-and-swap, at least one turn for each word a corner
-/// adds to (4, and 3 per further coefficient). Measured on lavapipe
+/// adds to (4, and 3 per further coefficient), and once a ray for the
+/// exposure gain's 3 words and a learnt sky's 12. Measured on lavapipe
 /// against the f64 gradient: at degree 0, 4096 samples per ray match and
 /// 8192 do not; at degree 2, 2048 and 4096; compare-and-swap at degree 0
 /// fails from 2048.
@@ -252,10 +265,13 @@ fn ray_loop_iterations(march: &MarchKnobs, sh_degree: u32, scatter: GradientScat
     if count > 0 {
         per_sample += 2 * crate::march::VIEW_DEPENDENT_SAMPLE_LOOPS;
     }
+    // Once a ray: the gains' 3 words and a sky's 12, one turn each at least.
+    let mut per_ray = 0;
     if scatter == GradientScatter::CompareAndSwap {
         per_sample += 8 * (4 + 3 * count);
+        per_ray += 15;
     }
-    (march.samples_per_ray as u64 + 1) * per_sample
+    (march.samples_per_ray as u64 + 1) * per_sample + per_ray
 }
 
 /// Refuses training at `samples_per_ray` and `sh_degree` on `ctx`'s device
@@ -330,6 +346,8 @@ pub const TRAIN_RAYS: &str = "train-rays";
 pub const TRAIN_ADAM: &str = "train-adam";
 /// Name of the exposure gains' optimiser pass.
 pub const TRAIN_GAINS: &str = "train-gains";
+/// Name of the learnt sky's optimiser pass.
+pub const TRAIN_SKY: &str = "train-sky";
 /// Name of the total-variation pass.
 pub const TRAIN_TV: &str = "train-tv";
 /// Name of the pass stepping along total variation's gradient.
@@ -354,6 +372,10 @@ pub struct GpuTrainer {
     gains: Arc<Buffer>,
     gain_grad: Arc<Buffer>,
     gain_moments: [Arc<Buffer>; 2],
+    /// A learnt sky's texels, gradient and moments (one unused texel
+    /// without one), and its size (None: the fixed background).
+    sky: [Arc<Buffer>; 4],
+    sky_size: Option<(u32, u32)>,
     /// Nodes per axis.
     pub resolution: UVec3,
     /// The region the nodes span.
@@ -450,7 +472,8 @@ impl GpuTrainer {
             ctx.info().name,
             limit >> 20
         );
-        let [gains, gain_grad, gain_first, gain_second] = gain_buffers(ctx, &[DVec3::ONE])?;
+        let [gains, gain_grad, gain_first, gain_second] =
+            colour_buffers(ctx, "train-gains", &[DVec3::ONE])?;
         let u32_buffer = |name: &str, v: &[u32]| -> anyhow::Result<Arc<Buffer>> {
             let v = if v.is_empty() { &[0u32][..] } else { v };
             Ok(Arc::new(Buffer::with_data(
@@ -506,6 +529,8 @@ impl GpuTrainer {
             gains,
             gain_grad,
             gain_moments: [gain_first, gain_second],
+            sky: colour_buffers(ctx, "train-sky", &[DVec3::ZERO])?,
+            sky_size: None,
             resolution,
             bounds: field.bounds,
             sh_degree: field.sh_degree,
@@ -539,9 +564,54 @@ impl GpuTrainer {
     /// times its pixel; frame 0's stays as given when gains are learnt),
     /// their gradient and moments cleared.
     pub fn set_gains(&mut self, ctx: &Arc<Context>, gains: &[DVec3]) -> anyhow::Result<()> {
-        let [g, grad, first, second] = gain_buffers(ctx, gains)?;
+        let [g, grad, first, second] = colour_buffers(ctx, "train-gains", gains)?;
         (self.gains, self.gain_grad, self.gain_moments) = (g, grad, [first, second]);
         Ok(())
+    }
+
+    /// Puts `sky` behind the field, learnt at the colours' step size with
+    /// each grid step (its gradient and moments cleared); None puts the
+    /// fixed background of each batch there instead.
+    pub fn set_sky(&mut self, ctx: &Arc<Context>, sky: Option<&Sky>) -> anyhow::Result<()> {
+        self.sky = match sky {
+            Some(s) => colour_buffers(ctx, "train-sky", &s.texels)?,
+            None => colour_buffers(ctx, "train-sky", &[DVec3::ZERO])?,
+        };
+        self.sky_size = sky.map(|s| (s.width, s.height));
+        Ok(())
+    }
+
+    /// The learnt sky now (None without one).
+    pub fn sky(&self, renderer: &mut Renderer) -> anyhow::Result<Option<Sky>> {
+        let Some((width, height)) = self.sky_size else {
+            return Ok(None);
+        };
+        let v = self.read(renderer, &self.sky[0])?;
+        let texels = v
+            .chunks_exact(4)
+            .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
+            .collect();
+        Sky::new(width, height, texels)
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("the learnt sky: {e}"))
+    }
+
+    /// Which of the sky's texels some ray's loss has moved since
+    /// [`Self::set_sky`] (Adam's second moment is not zero; empty without a
+    /// sky).
+    pub fn sky_seen(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<bool>> {
+        if self.sky_size.is_none() {
+            return Ok(Vec::new());
+        }
+        let v = self.read(renderer, &self.sky[3])?;
+        Ok(v.chunks_exact(4)
+            .map(|c| c[..3].iter().any(|m| *m > 0.0))
+            .collect())
+    }
+
+    /// The accumulated gradient of the sky's texels (4 per texel).
+    pub fn sky_gradient(&self, renderer: &mut Renderer) -> anyhow::Result<Vec<f32>> {
+        self.read(renderer, &self.sky[1])
     }
 
     /// The frames' exposure gains now.
@@ -570,9 +640,9 @@ impl GpuTrainer {
             sh_degree: self.sh_degree,
             learn_gains: self.gain_rate.is_some() as u32,
             distortion: (self.distortion / self.bounds.diagonal()) as f32,
-            pad2: 0,
+            sky_width: self.sky_size.map_or(0, |s| s.0),
             brick_dims: self.brick_dims(),
-            pad3: 0,
+            sky_height: self.sky_size.map_or(0, |s| s.1),
         }
     }
 
@@ -600,10 +670,12 @@ impl GpuTrainer {
         self.layout.as_ref()
     }
 
-    /// Runs one batch: renders `rays` over `background`, adds their loss's
-    /// gradient to the accumulated gradient and, with `adam` given, takes
-    /// an Adam step with the gradient scaled by `grad_scale` (clearing it),
-    /// then a total-variation step ([`Self::tv_weights`] not zero).
+    /// Runs one batch: renders `rays` over `background` (or the sky of
+    /// [`Self::set_sky`]), adds their loss's gradient to the accumulated
+    /// gradient and, with `adam` given, takes an Adam step with the
+    /// gradient scaled by `grad_scale` (clearing it), then a
+    /// total-variation step ([`Self::tv_weights`] not zero), then the
+    /// sky's and the gains' steps where they are learnt.
     /// Returns each ray's pixel and weighted loss.
     pub fn run_batch(
         &mut self,
@@ -629,6 +701,8 @@ impl GpuTrainer {
             .clone()
             .map(|m| graph.import_buffer(&m, None));
         let graph_table = graph.import_buffer(&self.table, None);
+        let [sky, sky_grad, sky_first, sky_second] =
+            self.sky.clone().map(|b| graph.import_buffer(&b, None));
         let mut pages = self.sh_pages.import(&mut graph);
         let graph_slots = graph.import_buffer(&self.slot_bricks, None);
         let batch = host_storage(&ctx, "train-batch", bytemuck::cast_slice(rays))?;
@@ -645,6 +719,8 @@ impl GpuTrainer {
         let gain_grad = pass.buffer_at("gain_grad", gain_grad, BufferAccess::StorageReadWrite);
         let table = graph_table;
         pass.buffer_at("bricks", table, BufferAccess::StorageRead);
+        pass.buffer_at("sky", sky, BufferAccess::StorageRead);
+        let sky_grad = pass.buffer_at("sky_grad", sky_grad, BufferAccess::StorageReadWrite);
         pages.bind_to_batch(&mut pass);
         pass.dispatch(&self.ray_grad)
             .push(&push)
@@ -692,6 +768,25 @@ impl GpuTrainer {
             }
             if !self.tv_weights.is_none() {
                 self.add_tv_step(&mut graph, params, grad, (graph_table, graph_slots));
+            }
+            // The sky's texels: colours, non-negative, at the nodes' steps.
+            if let Some((w, h)) = self.sky_size {
+                let count = 4 * w * h;
+                let s = AdamPush {
+                    count,
+                    density_rate: 0.0,
+                    base_values: count,
+                    ..a
+                };
+                let mut pass = graph.compute_pass(TRAIN_SKY);
+                pass.buffer_at("params", sky, BufferAccess::StorageReadWrite);
+                pass.buffer_at("grad", sky_grad, BufferAccess::StorageReadWrite);
+                pass.buffer_at("first", sky_first, BufferAccess::StorageReadWrite);
+                pass.buffer_at("second", sky_second, BufferAccess::StorageReadWrite);
+                pass.dispatch(&self.adam)
+                    .push(&s)
+                    .groups(value_groups(count));
+                pass.finish();
             }
             if let Some(rate) = self.gain_rate {
                 let count = (self.gains.size() / 4) as u32;

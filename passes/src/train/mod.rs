@@ -14,6 +14,7 @@ pub mod pixels;
 pub mod prune;
 pub mod render;
 pub mod sh_pages;
+pub mod sky;
 pub mod sparse_stage;
 pub mod trainer;
 pub mod tv;
@@ -25,6 +26,7 @@ pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
+pub use sky::{Behind, Sky};
 pub use trainer::{
     resample, train, view_march, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
 };

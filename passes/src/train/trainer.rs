@@ -16,6 +16,7 @@ use super::adam::AdamKnobs;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::pixels::{bracket_sets, is_bracket, merged_luminance, pixel_ray, PixelPool};
+use super::sky::{Behind, Sky};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
@@ -87,6 +88,13 @@ pub struct Trained {
     /// Bricks trained and bricks in the grid, where the last stage was
     /// trained sparsely ([`TrainKnobs::sparse`]).
     pub bricks: Option<(u32, u32)>,
+    /// The sky learnt behind the field ([`TrainKnobs::sky`]; None behind
+    /// the fixed background).
+    pub sky: Option<Sky>,
+    /// The sky's texels the last stage's rays reached (the others, where
+    /// no photograph looks past the field, are filled from the nearest
+    /// of these: [`Sky::fill_unseen`]).
+    pub sky_seen: usize,
 }
 
 /// Nodes per axis for `nodes` along the bounds' longest axis.
@@ -209,6 +217,9 @@ pub struct TrainControl<'a> {
     /// stage at its resolution; its view-dependent colour brought to the
     /// knobs' degree) instead of a grey grid.
     pub resume: Option<&'a GridField>,
+    /// A learnt sky to continue from ([`TrainKnobs::sky`]; one of another
+    /// size starts afresh).
+    pub resume_sky: Option<&'a Sky>,
     /// Stop once this much time has passed.
     pub budget: Option<Duration>,
     /// Stop when this says so (Ctrl-C).
@@ -219,6 +230,7 @@ impl Default for TrainControl<'_> {
     fn default() -> Self {
         Self {
             resume: None,
+            resume_sky: None,
             budget: None,
             stop: &|| false,
         }
@@ -288,6 +300,11 @@ pub fn train(
     };
     let mut field = with_sh_degree(start, knobs.sh_degree);
     let mut gains = vec![DVec3::ONE; dataset.frames.len().max(1)];
+    let mut sky = (knobs.sky > 0).then(|| match control.resume_sky {
+        Some(s) if s.height == knobs.sky => s.clone(),
+        _ => Sky::uniform(knobs.sky, background),
+    });
+    let mut sky_seen = Vec::new();
     let mut renderer = Renderer::new(ctx, 1)?;
     let mut history = Vec::new();
     let mut rays_done = 0u64;
@@ -329,11 +346,14 @@ pub fn train(
         gpu.tv_weights = knobs.tv_weights(field.spacing().min_element());
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
+        gpu.set_sky(ctx, sky.as_ref())?;
         let end = knobs.stage_end(stages, s);
         while step < end {
             if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {
                 field = gpu.field(&mut renderer)?;
                 gains = gpu.gains(&mut renderer)?;
+                sky = gpu.sky(&mut renderer)?;
+                sky_seen = gpu.sky_seen(&mut renderer)?;
                 break 'stages;
             }
             let batch = pool.batch(dataset, knobs.batch as usize, knobs.seed, step as u64);
@@ -375,6 +395,11 @@ pub fn train(
         }
         field = gpu.field(&mut renderer)?;
         gains = gpu.gains(&mut renderer)?;
+        sky = gpu.sky(&mut renderer)?;
+        sky_seen = gpu.sky_seen(&mut renderer)?;
+    }
+    if let Some(s) = &mut sky {
+        s.fill_unseen(&sky_seen);
     }
     // Pruned unless Ctrl-C ended the run (the field so far, at once).
     let mut pruned = 0;
@@ -386,6 +411,7 @@ pub fn train(
     // Empty space below zero costs a sparse file its bricks; zeroing it
     // changes no density.
     (field, _) = super::prune::clear_inert_negatives(&field);
+    let behind = sky.as_ref().map_or(Behind::Colour(background), Behind::Sky);
     let held_out = pool
         .held_out
         .iter()
@@ -395,7 +421,7 @@ pub fn train(
                 f,
                 &field,
                 &view_march,
-                background,
+                behind,
                 knobs.learn_exposure,
             )
         })
@@ -409,6 +435,8 @@ pub fn train(
         pruned,
         gains,
         bricks,
+        sky,
+        sky_seen: sky_seen.iter().filter(|s| **s).count(),
     })
 }
 
@@ -528,17 +556,19 @@ pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
     }
 }
 
-/// Renders frame `f` of `dataset` from `field` and scores it; with
+/// Renders frame `f` of `dataset` from `field` over `background` (a
+/// colour or a learnt sky) and scores it; with
 /// `fit_exposure`, at the RGB gain that fits the photograph best (least
 /// squares over its usable pixels: a frame of unknown exposure).
-pub fn score_view(
+pub fn score_view<'a>(
     dataset: &Dataset,
     f: u32,
     field: &GridField,
     march: &MarchKnobs,
-    background: DVec3,
+    background: impl Into<Behind<'a>>,
     fit_exposure: bool,
 ) -> HeldOutView {
+    let behind = background.into();
     let frame = &dataset.frames[f as usize];
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     let exposure = if is_bracket(frame) {
@@ -553,7 +583,7 @@ pub fn score_view(
         .map(|p| match pixel_ray(frame, p) {
             Some(ray) => {
                 let r = march_ray(field, &ray, f64::INFINITY, march);
-                recorded(r.colour + (1.0 - r.opacity) * background)
+                recorded(r.colour + (1.0 - r.opacity) * behind.eval(ray.dir))
             }
             None => DVec3::ZERO,
         })

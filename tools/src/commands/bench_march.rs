@@ -133,6 +133,7 @@ pub fn run(ctx: &Arc<Context>, args: &BenchMarchArgs) -> anyhow::Result<()> {
                 bounces: scene.bake.bounces,
                 seed: 1,
                 antialias: false,
+                sky_behind: false,
             },
             &|_, _| {},
         )

@@ -261,6 +261,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                         bounces: scene.bake.bounces,
                         seed,
                         antialias: true,
+                        sky_behind: false,
                     },
                     &|_, _| {},
                 )

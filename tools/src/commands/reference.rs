@@ -76,6 +76,7 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
         bounces: args.bounces.unwrap_or(scene.bake.bounces),
         seed: args.seed,
         antialias: args.antialias,
+        sky_behind: false,
     };
     let started = Instant::now();
     let bar = progress_bar("tracing", args.height as u64);

@@ -3,7 +3,9 @@
 //! spread over a cap around the field, as a capture would be: linear EXR
 //! frames and a `transforms.json` in instant-ngp's convention (with the
 //! field's bounds as `aabb`), and optionally bracketed sRGB PNGs of the
-//! same views with their `exposure_time` in `DIR/brackets/`.
+//! same views with their `exposure_time` in `DIR/brackets/`. With
+//! `--sky-behind` what the cameras see past the bounds is the scene's
+//! environment, not black.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -58,6 +60,11 @@ pub struct RenderViewsArgs {
         value_name = "FROM,TO"
     )]
     pub azimuth: Option<Vec<f64>>,
+    /// Pixels that see past the field's bounds show the scene's
+    /// environment, as a photograph sees past any box (default: black
+    /// there). Train such a set with `inlay train --sky`.
+    #[arg(long)]
+    pub sky_behind: bool,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -125,6 +132,7 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
         bounces: args.bounces.unwrap_or(scene.bake.bounces),
         seed: args.seed,
         antialias: true,
+        sky_behind: args.sky_behind,
     };
     let started = Instant::now();
     let bar = progress_bar("views", args.views as u64);
@@ -145,7 +153,7 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
             &|_, _| {},
         );
         // Radiance over black where the field does not cover the pixel
-        // (premultiplied), as a camera sees empty space.
+        // (premultiplied), or with --sky-behind over the environment.
         let image = HdrImage {
             width: w,
             height: h,

@@ -210,6 +210,7 @@ pub fn run(ctx: &Arc<Context>, args: &SweepArgs) -> anyhow::Result<()> {
                 bounces: scene.bake.bounces,
                 seed: 1,
                 antialias: false,
+                sky_behind: false,
             };
             render_reference(
                 recipe,

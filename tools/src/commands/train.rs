@@ -89,6 +89,12 @@ pub struct TrainArgs {
     /// is below 1).
     #[arg(long)]
     pub random_background: bool,
+    /// Learn a sky behind the field instead of `--background`: what the
+    /// photographs see past the bounds, as an equirect map of 2N x N
+    /// texels (N this; 0: none), written beside the field as
+    /// FIELD.sky.exr (and read from beside the `--resume` field).
+    #[arg(long, default_value_t = TrainKnobs::default().sky)]
+    pub sky: u32,
     /// Degree of view-dependent colour (spherical harmonics, 0..=2; 0 is
     /// one colour per node). Degree 1 adds 3 RGB coefficients a node,
     /// degree 2 8, to the file and to the device's memory. Default: the
@@ -148,12 +154,36 @@ pub struct TrainArgs {
 /// Runs `inlay train`.
 pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     check_output("--out", &args.out, &["inlayfield"])?;
+    let sky_out = sky_path(&args.out);
+    if args.sky > 0 {
+        check_image_output("--out's sky", &sky_out)?;
+    }
     if let Some(p) = &args.picture {
         check_image_output("--picture", p)?;
     }
     let resume = match &args.resume {
         Some(p) => Some(inlay_passes::field::load_field(p)?),
         None => None,
+    };
+    // The sky learnt with the `--resume` field, where there is one.
+    let resume_sky = match &args.resume {
+        Some(p) if args.sky > 0 && sky_path(p).exists() => {
+            let file = sky_path(p);
+            let image = HdrImage::load_exr(&file)?;
+            let sky = inlay_passes::train::Sky::from_image(&image)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+            if sky.height != args.sky {
+                eprintln!(
+                    "{}: a sky of {}x{} texels, not --sky {}'s: a new sky starts",
+                    file.display(),
+                    sky.width,
+                    sky.height,
+                    args.sky
+                );
+            }
+            Some(sky)
+        }
+        _ => None,
     };
     let knobs = TrainKnobs {
         resolution: args.resolution,
@@ -177,6 +207,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         sparsity: args.sparsity,
         distortion: args.distortion,
         random_background: args.random_background,
+        sky: args.sky,
         sh_degree: args.sh_degree.unwrap_or(
             resume
                 .as_ref()
@@ -257,6 +288,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     inlay_engine::interrupt::catch_interrupts()?;
     let control = TrainControl {
         resume: resume.as_ref(),
+        resume_sky: resume_sky.as_ref(),
         budget,
         stop: &inlay_engine::interrupt::interrupted,
     };
@@ -300,16 +332,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         trained.history.last().map_or(f64::NAN, |h| h.1)
     );
     if knobs.learn_exposure {
-        let luma: Vec<f64> = trained
-            .gains
-            .iter()
-            .map(|g| inlay_passes::sgfit::model::luminance(*g))
-            .collect();
-        eprintln!(
-            "learnt exposure gains (luminance, frame 0 = 1): {:.3} to {:.3}",
-            luma.iter().copied().fold(f64::INFINITY, f64::min),
-            luma.iter().copied().fold(0.0, f64::max)
-        );
+        let (low, high) = luminance_range(&trained.gains);
+        eprintln!("learnt exposure gains (luminance, frame 0 = 1): {low:.3} to {high:.3}");
     }
     if let Some((kept, all)) = trained.bricks {
         eprintln!("the last stage trained {kept} of {all} bricks of 8³ nodes (sparse)");
@@ -333,11 +357,38 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     }
     let mut outputs = Outputs::new();
     outputs.bytes(&args.out, &field_bytes(f))?;
+    if let Some(sky) = &trained.sky {
+        let (low, high) = luminance_range(&sky.texels);
+        eprintln!(
+            "learnt a sky of {}x{} texels ({} seen past the field, the others filled from \
+             the nearest of those), luminance {low:.3e} to {high:.3e}: {}",
+            sky.width,
+            sky.height,
+            trained.sky_seen,
+            sky_out.display()
+        );
+        outputs.image(&sky_out, &sky.to_image(), 1.0)?;
+    }
     if let (Some(path), false) = (&args.picture, trained.held_out.is_empty()) {
         outputs.image(path, &held_out_picture(&trained.held_out), 1.0)?;
     }
     outputs.commit(Some(ctx))?;
     Ok(())
+}
+
+/// The smallest and largest luminance of `colours`.
+fn luminance_range(colours: &[DVec3]) -> (f64, f64) {
+    colours
+        .iter()
+        .map(|c| inlay_passes::sgfit::model::luminance(*c))
+        .fold((f64::INFINITY, 0.0), |(lo, hi), l| (lo.min(l), hi.max(l)))
+}
+
+/// Where the sky learnt with the field `field` is written: FIELD.sky.exr
+/// beside it (an equirect map in the scene environment's convention,
+/// which a scene's `[environment] equirect` can name).
+pub fn sky_path(field: &std::path::Path) -> PathBuf {
+    field.with_extension("sky.exr")
 }
 
 /// Prints each held-out view's geometry against `scene`'s recipe
