@@ -3,7 +3,9 @@
 // kind 0, a value (relative squared error, the denominator held, and never
 // below RENDER_FLOOR_SHARE of the photograph's value); kind 1, a lower bound
 // (the same, only below it); kind 2, a bracket (squared error of
-// srgb(clip(exposure × C)) against the recorded encoded value).
+// srgb(exposure × C) against the recorded encoded value, clipped at white
+// only where the photograph recorded white; below white the sRGB curve
+// continued past 1).
 
 #include "common/tonemap.wgsl"
 
@@ -16,12 +18,13 @@ struct PixelLoss {
     grad: vec3<f32>,
 }
 
-// srgb_encode (common/tonemap.wgsl) and its derivative.
+// srgb_encode (common/tonemap.wgsl) of v ≥ 0, its curve continued past
+// 1, and its derivative.
 fn train_srgb_encode(v: f32) -> vec2<f32> {
     if v <= 0.0031308 {
         return vec2<f32>(srgb_encode(v), 12.92);
     }
-    return vec2<f32>(srgb_encode(v), 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
+    return vec2<f32>(1.055 * pow(v, 1.0 / 2.4) - 0.055, 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
 }
 
 fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, epsilon: f32) -> PixelLoss {
@@ -29,10 +32,12 @@ fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, e
     for (var k = 0u; k < 3u; k++) {
         if kind == 2u {
             let v = exposure * c[k];
-            let e = train_srgb_encode(clamp(v, 0.0, 1.0));
+            // Recorded white: the render is clipped as the sensor was.
+            let white = target_value[k] >= 1.0;
+            let e = train_srgb_encode(select(max(v, 0.0), clamp(v, 0.0, 1.0), white));
             let r = e.x - target_value[k];
             out.loss += r * r;
-            if v > 0.0 && v < 1.0 {
+            if v > 0.0 && (v < 1.0 || !white) {
                 out.grad[k] = 2.0 * r * e.y * exposure;
             }
         } else {

@@ -19,9 +19,14 @@
 //! - A lower bound (a saturated LDR pixel): the same error, only where C
 //!   is below it.
 //! - A bracket (an LDR pixel y taken with exposure e): the squared error
-//!   between srgb(clip(e·C)) and y's encoded value, so that the field
-//!   learns HDR radiance from exposures directly; a clipped channel whose
-//!   rendered value is clipped too gives no gradient.
+//!   between srgb(e·C) and y's encoded value, so that the field learns HDR
+//!   radiance from exposures directly. Clipped only where the photograph
+//!   clipped: a channel recorded white says e·C ≥ 1 (a rendered value
+//!   clipped too costs nothing); one recorded below white is compared with
+//!   the sRGB curve continued past 1, so a render too bright for it is
+//!   pulled down however bright (clipped, it gave no gradient past white:
+//!   a field too bright in a pixel was held there by every exposure that
+//!   saw it so).
 
 use glam::DVec3;
 
@@ -48,14 +53,16 @@ pub enum PixelTarget {
 /// black one by exactly that).
 pub const RENDER_FLOOR_SHARE: f64 = 1.0 / 16.0;
 
-/// sRGB encoding of linear [0, 1] ([`crate::dataset::pixels::srgb_encode`])
-/// and its derivative.
+/// sRGB encoding of linear v ≥ 0 ([`crate::dataset::pixels::srgb_encode`]
+/// up to 1, its curve continued past 1) and its derivative.
 fn srgb_encode(v: f64) -> (f64, f64) {
-    let e = crate::dataset::pixels::srgb_encode(v);
     if v <= 0.003_130_8 {
-        (e, 12.92)
+        (crate::dataset::pixels::srgb_encode(v), 12.92)
     } else {
-        (e, 1.055 / 2.4 * v.powf(1.0 / 2.4 - 1.0))
+        (
+            1.055 * v.powf(1.0 / 2.4) - 0.055,
+            1.055 / 2.4 * v.powf(1.0 / 2.4 - 1.0),
+        )
     }
 }
 
@@ -84,11 +91,12 @@ pub fn pixel_loss(c: DVec3, target: PixelTarget, epsilon: f64) -> (f64, DVec3) {
             let mut grad = DVec3::ZERO;
             for k in 0..3 {
                 let v = exposure * c[k];
-                let clipped = v.clamp(0.0, 1.0);
-                let (e, slope) = srgb_encode(clipped);
+                // Recorded white: the render is clipped as the sensor was.
+                let white = encoded[k] >= 1.0;
+                let (e, slope) = srgb_encode(if white { v.clamp(0.0, 1.0) } else { v.max(0.0) });
                 let r = e - encoded[k];
                 loss += r * r;
-                if v > 0.0 && v < 1.0 {
+                if v > 0.0 && (v < 1.0 || !white) {
                     grad[k] = 2.0 * r * slope * exposure;
                 }
             }
@@ -111,6 +119,11 @@ mod tests {
             PixelTarget::AtLeast(DVec3::new(0.5, 2.0, 0.1)),
             PixelTarget::Bracket {
                 encoded: DVec3::new(0.6, 1.0, 0.2),
+                exposure: 0.5,
+            },
+            // Rendered past white (1.25) where the photograph is not.
+            PixelTarget::Bracket {
+                encoded: DVec3::new(0.6, 0.9, 0.2),
                 exposure: 0.5,
             },
         ];
@@ -174,5 +187,25 @@ mod tests {
             1e-2,
         );
         assert_eq!(g, DVec3::ZERO);
+    }
+
+    /// A render past white where the photograph recorded a value below it
+    /// is pulled down, the further past the harder; below white the loss
+    /// is the clipped one's; the curve is continuous at white.
+    #[test]
+    fn a_bracket_not_saturated_pulls_a_render_past_white_down() {
+        let grey = PixelTarget::Bracket {
+            encoded: DVec3::splat(0.5),
+            exposure: 0.5,
+        };
+        let (l2, g2) = pixel_loss(DVec3::splat(4.0), grey, 1e-2);
+        let (l8, g8) = pixel_loss(DVec3::splat(16.0), grey, 1e-2);
+        assert!(g2.min_element() > 0.0 && g8.min_element() > 0.0);
+        assert!(l8 > l2 && l2 > 3.0 * 0.25, "{l2} {l8}");
+        let below = pixel_loss(DVec3::splat(1.2), grey, 1e-2).0;
+        let expected = 3.0 * (crate::dataset::pixels::srgb_encode(0.6) - 0.5f64).powi(2);
+        assert!((below - expected).abs() < 1e-12);
+        let (under, over) = (srgb_encode(1.0 - 1e-9).0, srgb_encode(1.0 + 1e-9).0);
+        assert!((under - 1.0).abs() < 1e-8 && (over - 1.0).abs() < 1e-8);
     }
 }
