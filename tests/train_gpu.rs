@@ -349,6 +349,11 @@ fn the_gpu_sky_gradient_and_step_match_the_cpu_reference() {
     for (ray, _, _) in batch.iter_mut().step_by(3) {
         ray.dir = (ray.origin - field.bounds.center()).normalize();
     }
+    // Two look straight up and straight down (φ is 0 there).
+    for (i, dir) in [DVec3::Y, -DVec3::Y].into_iter().enumerate() {
+        let origin = field.bounds.center() + dir * (3.0 - 6.0 * i as f64);
+        batch.push((Ray { origin, dir }, PixelTarget::Value(DVec3::ONE), 1.0));
+    }
     let eps = 0.05;
     let mut scatters = vec![GradientScatter::CompareAndSwap];
     if ctx.info().float_atomic_add {
@@ -378,7 +383,8 @@ fn the_gpu_sky_gradient_and_step_match_the_cpu_reference() {
             // near the poles in f32): 1e-4, as the nodes' test.
             assert!(
                 (pixel - r.colour).abs().max_element() < 1e-4 * (1.0 + r.colour.length()),
-                "{pixel} vs {}",
+                "{:?}: {pixel} vs {}",
+                ray.dir,
                 r.colour
             );
             if r.values.is_empty() {

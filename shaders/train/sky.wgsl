@@ -14,11 +14,17 @@ struct SkyCorners {
 fn sky_corners(size: vec2<u32>, d: vec3<f32>) -> SkyCorners {
     // atan2, not acos: acos(d.y) loses θ near the poles in f32.
     let theta = atan2(length(d.xz), d.y);
-    var phi = atan2(d.z, d.x);
-    if phi < 0.0 {
-        phi += 2.0 * SKY_PI;
+    // Straight up or down φ is 0 (atan2(0, 0) is not defined in WGSL).
+    var phi = 0.0;
+    if d.x != 0.0 || d.z != 0.0 {
+        phi = atan2(d.z, d.x);
+        if phi < 0.0 {
+            phi += 2.0 * SKY_PI;
+        }
     }
-    let u = phi / (2.0 * SKY_PI) * f32(size.x) - 0.5;
+    // Held to [-0.5, width - 0.5] so that the index below is in range
+    // whatever rounding gives.
+    let u = clamp(phi / (2.0 * SKY_PI) * f32(size.x) - 0.5, -0.5, f32(size.x) - 0.5);
     let xf = floor(u);
     let fx = u - xf;
     let x0 = u32((i32(xf) + i32(size.x)) % i32(size.x));

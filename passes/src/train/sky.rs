@@ -186,8 +186,13 @@ impl<'a> From<&'a Sky> for Behind<'a> {
 /// φ = 2π(x + ½)/width, θ = π(y + ½)/height.
 pub fn sky_corners(width: u32, height: u32, d: DVec3) -> [(usize, f64); 4] {
     let theta = (d.x.hypot(d.z)).atan2(d.y);
-    let phi = d.z.atan2(d.x).rem_euclid(2.0 * PI);
-    let u = phi / (2.0 * PI) * width as f64 - 0.5;
+    // Straight up or down φ is 0, whatever the zeros' signs.
+    let phi = if d.x == 0.0 && d.z == 0.0 {
+        0.0
+    } else {
+        d.z.atan2(d.x).rem_euclid(2.0 * PI)
+    };
+    let u = (phi / (2.0 * PI) * width as f64 - 0.5).clamp(-0.5, width as f64 - 0.5);
     let x0 = u.floor();
     let fx = u - x0;
     let w = width as i64;
@@ -267,8 +272,12 @@ mod tests {
             let b = sky.eval(direction(theta, 2.0 * PI - 1e-9));
             assert!((a - b).abs().max_element() < 1e-6, "θ {theta}: {a} {b}");
         }
-        // Straight up reads the top row's mean along φ's two nearest texels.
+        // Straight up or down reads φ = 0 whatever the zeros' signs (as
+        // the shader, where atan2(0, 0) is not defined).
         assert!(sky.eval(DVec3::Y).is_finite() && sky.eval(-DVec3::Y).is_finite());
+        let down = DVec3::new(-0.0, -1.0, -0.0);
+        assert_eq!(sky.corners(down), sky.corners(DVec3::new(0.0, -1.0, 0.0)));
+        assert_eq!(sky.corners(down), sky.corners(DVec3::new(1e-300, -1.0, 0.0)));
     }
 
     /// The unseen texels take the nearest seen ones' colour, ring by ring
