@@ -277,7 +277,10 @@ mod tests {
         assert!(sky.eval(DVec3::Y).is_finite() && sky.eval(-DVec3::Y).is_finite());
         let down = DVec3::new(-0.0, -1.0, -0.0);
         assert_eq!(sky.corners(down), sky.corners(DVec3::new(0.0, -1.0, 0.0)));
-        assert_eq!(sky.corners(down), sky.corners(DVec3::new(1e-300, -1.0, 0.0)));
+        assert_eq!(
+            sky.corners(down),
+            sky.corners(DVec3::new(1e-300, -1.0, 0.0))
+        );
     }
 
     /// The unseen texels take the nearest seen ones' colour, ring by ring
