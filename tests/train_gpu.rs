@@ -26,6 +26,29 @@ fn frame_rgb(values: &[f32], f: usize) -> DVec3 {
     )
 }
 
+/// The trainer's records of `batch` (all of frame 0).
+fn records_of(batch: &[(Ray, PixelTarget, f64)]) -> Vec<TrainRay> {
+    batch
+        .iter()
+        .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
+        .collect()
+}
+
+/// The ways of scattering gradients `ctx`'s device has: compare-and-swap
+/// always, atomic float adds where it has them (lavapipe does).
+fn scatters_of(ctx: &inlay_engine::Context) -> Vec<GradientScatter> {
+    let mut scatters = vec![GradientScatter::CompareAndSwap];
+    if ctx.info().float_atomic_add {
+        scatters.push(GradientScatter::FloatAdd);
+    } else {
+        eprintln!(
+            "{} has no atomic float add: compare-and-swap only",
+            ctx.info().name
+        );
+    }
+    scatters
+}
+
 fn trainer_of(
     ctx: &std::sync::Arc<inlay_engine::Context>,
     lib: &inlay_engine::shader::ShaderLibrary,
@@ -114,16 +137,7 @@ fn rays(field: &GridField, n: usize) -> Vec<(Ray, PixelTarget, f64)> {
 #[test]
 fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
     let ctx = common::gpu();
-    let mut scatters = vec![GradientScatter::CompareAndSwap];
-    if ctx.info().float_atomic_add {
-        scatters.push(GradientScatter::FloatAdd);
-    } else {
-        eprintln!(
-            "{} has no atomic float add: compare-and-swap only",
-            ctx.info().name
-        );
-    }
-    for scatter in scatters {
+    for scatter in scatters_of(&ctx) {
         // With the distortion loss at degree 0, without it at degree 2.
         for (degree, distortion) in [(0, 0.4), (2, 0.0)] {
             gradient_and_adam_match(degree, distortion, scatter);
@@ -355,20 +369,13 @@ fn the_gpu_sky_gradient_and_step_match_the_cpu_reference() {
         batch.push((Ray { origin, dir }, PixelTarget::Value(DVec3::ONE), 1.0));
     }
     let eps = 0.05;
-    let mut scatters = vec![GradientScatter::CompareAndSwap];
-    if ctx.info().float_atomic_add {
-        scatters.push(GradientScatter::FloatAdd);
-    }
-    for scatter in scatters {
+    let records = records_of(&batch);
+    for scatter in scatters_of(&ctx) {
         let mut trainer = trainer_of(&ctx, &lib, &field, knobs)
             .with_scatter(&ctx, &lib, scatter)
             .unwrap();
         trainer.set_sky(&ctx, Some(&sky)).unwrap();
         let mut renderer = Renderer::new(&ctx, 1).unwrap();
-        let records: Vec<TrainRay> = batch
-            .iter()
-            .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
-            .collect();
         let out = trainer
             .run_batch(&mut renderer, &records, DVec3::ONE, eps, None)
             .unwrap();
@@ -1142,10 +1149,7 @@ fn a_sparse_grid_trains_as_the_dense_one_where_it_has_bricks() {
     let mut trainer =
         GpuTrainer::with_layout(&ctx, &lib, &field, knobs, Some(layout.clone())).unwrap();
     let mut renderer = Renderer::new(&ctx, 1).unwrap();
-    let records: Vec<TrainRay> = batch
-        .iter()
-        .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
-        .collect();
+    let records = records_of(&batch);
     let out = trainer
         .run_batch(&mut renderer, &records, bg, eps, None)
         .unwrap();
@@ -1361,10 +1365,7 @@ fn a_grid_with_no_brick_kept_still_trains() {
     };
     let mut trainer = GpuTrainer::with_layout(&ctx, &lib, &field, knobs, Some(none)).unwrap();
     let mut renderer = Renderer::new(&ctx, 1).unwrap();
-    let records: Vec<TrainRay> = rays(&field, 8)
-        .iter()
-        .map(|(r, t, w)| TrainRay::new(r.origin, r.dir, *t, *w))
-        .collect();
+    let records = records_of(&rays(&field, 8));
     let bg = DVec3::new(0.2, 0.1, 0.3);
     let adam = AdamKnobs {
         rate: 0.01,
