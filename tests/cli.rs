@@ -390,20 +390,68 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         err.contains("cameras_from") && err.contains("nowhere"),
         "{err}"
     );
+    let render_to = |out: &std::path::Path| {
+        inlay(&[
+            "render",
+            scene_file.to_str().unwrap(),
+            "--camera",
+            "view-001",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
     let picture = dir.join("trained.png");
-    let o = inlay(&[
-        "render",
-        scene_file.to_str().unwrap(),
-        "--camera",
-        "view-001",
-        "--width",
-        "16",
-        "--height",
-        "12",
-        "--out",
-        picture.to_str().unwrap(),
-    ]);
+    let o = render_to(&picture);
     assert!(o.status.success() && picture.is_file(), "{}", text(&o));
+    // The sky learnt with the field (FIELD.sky.exr beside it) is drawn
+    // behind it, and said so; without the file the same render says
+    // nothing of a sky; a sky file that is not an EXR is an error naming
+    // it.
+    let (with_sky, over_black) = (dir.join("with-sky.exr"), dir.join("over-black.exr"));
+    let o = render_to(&with_sky);
+    assert!(
+        o.status.success() && text(&o).contains("is drawn behind it"),
+        "{}",
+        text(&o)
+    );
+    let aside = dir.join("aside.exr");
+    std::fs::rename(&sky, &aside).unwrap();
+    let o = render_to(&over_black);
+    assert!(
+        o.status.success() && !text(&o).contains("drawn behind"),
+        "{}",
+        text(&o)
+    );
+    // A sky of 2 everywhere: each pixel gains (1 − coverage)·2.
+    inlay_passes::field::Sky::uniform(4, glam::DVec3::splat(2.0))
+        .to_image()
+        .save(&sky, 1.0)
+        .unwrap();
+    let o = render_to(&with_sky);
+    assert!(o.status.success(), "{}", text(&o));
+    let (a, b) = (
+        inlay_engine::HdrImage::load_exr(&with_sky).unwrap(),
+        inlay_engine::HdrImage::load_exr(&over_black).unwrap(),
+    );
+    let mut uncovered = 0;
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        let left = (1.0 - q[3]).max(0.0);
+        for k in 0..3 {
+            assert!((p[k] - q[k] - 2.0 * left).abs() < 1e-4, "{p:?} over {q:?}");
+        }
+        assert_eq!(p[3], 1.0);
+        uncovered += (left > 0.01) as usize;
+    }
+    assert!(uncovered > 0, "no pixel shows the sky");
+    std::fs::write(&sky, b"not an exr").unwrap();
+    let o = render_to(&with_sky);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("views.sky.exr"), "{}", text(&o));
+    std::fs::rename(&aside, &sky).unwrap();
 
     // Two frames lose their images: both are named, and nothing panics.
     std::fs::remove_file(out.join("view-000.exr")).unwrap();

@@ -646,3 +646,86 @@ fn marched_field_matches_the_path_traced_reference() {
         "a finer field must match better: {errors:?}"
     );
 }
+
+/// `sky-behind` on lavapipe against its f64 CPU mirror
+/// ([`sky_behind_reference`]): a camera looking almost straight up with a
+/// wide view, so the image holds the pole and the seam at φ = 0, over a
+/// frame whose coverage runs from none to a hair past whole, a sky of
+/// random texels with one a hundred times the rest.
+#[test]
+fn the_sky_behind_the_frame_matches_the_cpu_reference() {
+    use inlay_passes::field::Sky;
+    use inlay_passes::sky_behind::{sky_behind_reference, SkyBehindPass, SKY_BEHIND_FORMAT};
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let (w, h) = (40u32, 30u32);
+    let spec = inlay_passes::camera::CameraSpec {
+        name: None,
+        position: DVec3::ZERO,
+        look_at: DVec3::new(0.05, 1.0, 0.02),
+        up: DVec3::Z,
+        fov_y: 120.0,
+    };
+    let camera = CameraFrame::new(&spec, w, h);
+    let mut rng = inlay_passes::rng::Pcg32::new(11, 4);
+    let mut texels: Vec<DVec3> = (0..16 * 8)
+        .map(|_| DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()))
+        .collect();
+    texels[3] *= 100.0;
+    let sky = Sky::new(16, 8, texels).unwrap();
+    let frame: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let a = [0.0, 0.25, 0.5, 1.0, 1.0000002][((x + 3 * y) % 5) as usize];
+            [0.3 * a, 0.2 * a + 0.01 * x as f32, 0.1, a]
+        })
+        .collect();
+    let desc = ImageDesc {
+        width: w,
+        height: h,
+        format: SKY_BEHIND_FORMAT,
+    };
+    let usage = inlay_engine::vk::ImageUsageFlags::SAMPLED
+        | inlay_engine::vk::ImageUsageFlags::TRANSFER_DST;
+    let input = Arc::new(inlay_engine::Image::new(&ctx, "frame", desc, usage).unwrap());
+    input.write_rgba32f(&frame).unwrap();
+    let pass = SkyBehindPass::new(&ctx, &lib, &sky).unwrap();
+    let readback = Readback::new(&ctx, desc).unwrap();
+    common::run_frame(&ctx, |graph| {
+        let c = graph.import_image(&input, "frame", None);
+        let out = pass.add(graph, c, &camera);
+        readback.add_to_graph(graph, out);
+    });
+    let gpu = readback.read().unwrap().pixels;
+    let seen: Vec<[f64; 4]> = frame.iter().map(|c| c.map(|v| v as f64)).collect();
+    let cpu = sky_behind_reference(&seen, &camera, &sky);
+    let mut behind = 0;
+    for (i, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
+        let d = camera.pixel_ray(i as u32 % w, i as u32 / w).dir;
+        // The f32 direction and atan2 move the bilinear weights by ~1e-5
+        // of a texel: the error is that share of the four texels read,
+        // beside f32 rounding of the frame's own colour.
+        let corners: f64 = sky
+            .corners(d)
+            .iter()
+            .map(|&(k, _)| sky.texels[k].max_element())
+            .sum();
+        for k in 0..4 {
+            let scale = seen[i][k].abs() + corners;
+            assert!(
+                (g[k] as f64 - c[k]).abs() <= 1e-4 * scale,
+                "pixel {i} channel {k}: gpu {} cpu {}",
+                g[k],
+                c[k]
+            );
+        }
+        assert_eq!(g[3], 1.0, "pixel {i}: coverage after the sky");
+        if seen[i][3] < 1.0 {
+            behind += 1;
+        }
+    }
+    assert!(
+        behind > (w * h / 2) as usize,
+        "{behind} pixels show the sky"
+    );
+}

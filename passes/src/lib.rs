@@ -36,5 +36,6 @@ pub mod sgfit;
 pub mod shade;
 pub mod shaders;
 pub mod shadow;
+pub mod sky_behind;
 pub mod ssdf;
 pub mod train;

@@ -10,7 +10,7 @@
 // scattered too. With pc.distortion > 0, the distortion loss of the ray's
 // weights is added, and its gradient with respect to the densities.
 // Behind the field is pc.background, or where pc.sky_width is not 0 a learnt sky
-// (train/sky.wgsl) whose gradient is scattered too.
+// (field/sky.wgsl) whose gradient is scattered too.
 // Mirrors passes/src/train/render.rs render_ray_with_gradient.
 // Needs from the includer: the bindings `grad` (2), `gain_grad` (5),
 // `sky_grad` (24) and the gradient's pages `sh_grad_j` (15..22), and
@@ -23,7 +23,7 @@
 #include "field/trilinear.wgsl"
 #include "field/sh.wgsl"
 #include "train/loss.wgsl"
-#include "train/sky.wgsl"
+#include "field/sky.wgsl"
 
 struct TrainPush {
     bounds_min: vec3<f32>,

@@ -1,5 +1,6 @@
 //! Getting a scene's field: a field file, or its recipe baked (with a
-//! progress bar) and kept in a cache so the next run loads it.
+//! progress bar) and kept in a cache so the next run loads it; and the sky
+//! learnt with a field file, drawn behind it.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -10,7 +11,7 @@ use inlay_engine::DeviceInfo;
 use inlay_passes::bake::{bake_grid, BakeKnobs};
 use inlay_passes::field::{
     check_field_may_fit, check_sparse_field_fits, field_bytes, load_field, read_field_header,
-    GridField, NodeStorage, FIELD_VERSION,
+    sky_path, GridField, NodeStorage, Sky, FIELD_VERSION,
 };
 use inlay_passes::scene::{FieldSource, Scene};
 
@@ -139,6 +140,30 @@ pub fn scene_field(
             )
         }
     }
+}
+
+/// The sky learnt with the scene's field (`override_file` when given, else
+/// its field file): the EXR beside it ([`sky_path`]), None where there is
+/// none or the field is baked from a recipe. A sky file that cannot be
+/// read, or is not a sky, is an error naming it.
+pub fn scene_sky(scene: &Scene, override_file: Option<&Path>) -> anyhow::Result<Option<Sky>> {
+    let field = match (override_file, &scene.field) {
+        (Some(f), _) => f,
+        (None, FieldSource::File(f)) => f.as_path(),
+        (None, FieldSource::Recipe(_)) => return Ok(None),
+    };
+    let file = sky_path(field);
+    if !file.exists() {
+        return Ok(None);
+    }
+    let sky = Sky::load(&file)?;
+    eprintln!(
+        "the sky learnt with the field ({}x{} texels) is drawn behind it: {}",
+        sky.width,
+        sky.height,
+        file.display()
+    );
+    Ok(Some(sky))
 }
 
 #[cfg(test)]

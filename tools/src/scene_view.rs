@@ -12,12 +12,13 @@ use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::march::{MarchKnobs, MarchPass};
 use inlay_passes::scene::Scene;
 
-use crate::field_source::scene_field;
+use crate::field_source::{scene_field, scene_sky};
 use crate::insertion_view::InsertionView;
 
 /// `scene` seen from its camera `camera` (index or name), the field from
-/// `field_file` when given, the march with `knobs` (checked), bakes cached
-/// when `use_cache`.
+/// `field_file` when given (with the sky learnt with it behind, where
+/// there is one), the march with `knobs` (checked), bakes cached when
+/// `use_cache`.
 pub fn open_view(
     ctx: &Arc<Context>,
     lib: &ShaderLibrary,
@@ -32,7 +33,9 @@ pub fn open_view(
         .check()
         .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
     let field = scene_field(scene, field_file, use_cache, Some(ctx.info()))?;
-    view_over_field(ctx, lib, scene, knobs, &field, camera, use_cache)
+    let sky = scene_sky(scene, field_file)?.map(Arc::new);
+    let gpu = GpuGridField::upload(ctx, &field)?.with_sky(sky);
+    view_over_gpu_field(ctx, lib, scene, knobs, gpu, camera, use_cache)
 }
 
 /// `scene`'s objects inserted into `field` (already loaded), seen from

@@ -108,6 +108,9 @@ pub struct GpuGridField {
     pub sparse: bool,
     /// Bytes its nodes and further coefficients take on the device.
     pub node_bytes: u64,
+    /// The sky learnt with it, drawn behind every frame
+    /// ([`crate::sky_behind`]; None: black behind the field).
+    pub sky: Option<Arc<super::Sky>>,
 }
 
 /// A field on the device, as [`GpuGridField::identity`] gives it: equal
@@ -451,7 +454,14 @@ impl GpuGridField {
             sh_degree: field.sh_degree,
             sparse: bricks.is_some(),
             node_bytes: (nodes.len() + 4 * (sh_words.len() + rest_words.len())) as u64,
+            sky: None,
         })
+    }
+
+    /// The same field with `sky` behind it (None: black).
+    pub fn with_sky(mut self, sky: Option<Arc<super::Sky>>) -> Self {
+        self.sky = sky;
+        self
     }
 
     /// `lib` for the passes that read this field: with

@@ -15,6 +15,7 @@ mod occupancy;
 mod perturb;
 mod sh;
 pub mod sh_half;
+pub mod sky;
 
 pub use emitters::{find_emitters, FieldEmitter, MAX_FIELD_EMITTERS, MIN_EMITTER_RATIO};
 pub use format::{
@@ -30,6 +31,7 @@ pub use grid::{density_at, GridField};
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
 pub use perturb::{perturb, Perturbation};
 pub use sh::{sh_basis, sh_colour_unclamped, sh_extra_coefficients, MAX_SH_DEGREE};
+pub use sky::{sky_path, Sky};
 
 use glam::DVec3;
 

@@ -4,7 +4,9 @@
 //! to it). Table 1, the HUD, the viewer's keys and help, and the profiler
 //! iterate over [`FRAME_PASSES`].
 
-use crate::{composite, edge_aa, gbuffer, lighting, march, probe, sgfit, shade, shadow};
+use crate::{
+    composite, edge_aa, gbuffer, lighting, march, probe, sgfit, shade, shadow, sky_behind,
+};
 
 /// The modules of the paper's Table 1, in its order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -95,7 +97,7 @@ pub struct PassInfo {
 }
 
 /// The frame's passes, in the order a frame runs them.
-pub const FRAME_PASSES: [PassInfo; 12] = [
+pub const FRAME_PASSES: [PassInfo; 13] = [
     probe::PROBE_TRACE_INFO,
     sgfit::SG_FIT_INFO,
     lighting::DIRECT_LIGHT_INFO,
@@ -108,6 +110,7 @@ pub const FRAME_PASSES: [PassInfo; 12] = [
     shadow::SHADOW_REFINE_INFO,
     composite::COMPOSITE_INFO,
     edge_aa::OBJECT_EDGE_AA_INFO,
+    sky_behind::SKY_BEHIND_INFO,
 ];
 
 /// Table 1's modules in order, each with the names of its passes.
@@ -163,7 +166,13 @@ mod tests {
     fn table1_groups_every_pass_once_in_order() {
         let t = table1();
         assert_eq!(t.len(), 6);
-        assert_eq!(t[0], ("NeRF rendering", vec![march::NERF_MARCH]));
+        assert_eq!(
+            t[0],
+            (
+                "NeRF rendering",
+                vec![march::NERF_MARCH, sky_behind::SKY_BEHIND]
+            )
+        );
         assert_eq!(
             t[5],
             (

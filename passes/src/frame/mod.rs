@@ -41,6 +41,7 @@ use crate::sgfit::SG_FIT;
 use crate::shade::{SelfShadow, ShadePass, OBJECT_SHADE};
 use crate::shadow::cast::CastInputs;
 use crate::shadow::{CastShadowPass, GpuFhTable, GpuSsdf, CAST_SHADOW};
+use crate::sky_behind::{SkyBehindPass, SKY_BEHIND};
 use crate::ssdf::SsdfField;
 
 /// How far, in bounding-sphere radii from the object's centre, its cast
@@ -131,6 +132,7 @@ pub struct InsertionFrame {
     cast: Option<CastShadowPass>,
     fh: Option<GpuFhTable>,
     reuse: Option<MarchReuse>,
+    sky: Option<SkyBehindPass>,
 }
 
 /// Refuses an object whose shading or cast shadow would loop, at some
@@ -256,6 +258,10 @@ impl InsertionFrame {
                 },
             });
         }
+        let sky = match field.sky.as_deref() {
+            Some(s) => Some(SkyBehindPass::new(ctx, lib, s)?),
+            None => None,
+        };
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, lib)?,
             shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes, *march.knobs())?
@@ -283,6 +289,7 @@ impl InsertionFrame {
             field,
             objects,
             reuse: None,
+            sky,
         })
     }
 
@@ -337,14 +344,38 @@ impl InsertionFrame {
         }
     }
 
+    /// Whether a sky is drawn behind the frame.
+    pub fn has_sky(&self) -> bool {
+        self.sky.is_some()
+    }
+
     /// Whether any object has an SSDF field (shadows can be drawn).
     pub fn has_shadows(&self) -> bool {
         self.fh.is_some()
     }
 
     /// Adds the frame seen through `frame` to `graph`, object i placed as
-    /// `placed[i]`, drawing `effects`; returns its image ([`FRAME_FORMAT`]).
+    /// `placed[i]`, drawing `effects`, the field's sky behind it where it
+    /// has one; returns its image ([`FRAME_FORMAT`]).
     pub fn add(
+        &mut self,
+        graph: &mut FrameGraph,
+        frame: &CameraFrame,
+        placed: &[PlacedObject],
+        effects: Effects,
+    ) -> anyhow::Result<ImageHandle> {
+        let image = self.add_layers(graph, frame, placed, effects)?;
+        Ok(match &self.sky {
+            Some(sky) => sky.add(graph, image, frame),
+            None => {
+                graph.note_skipped(SKY_BEHIND, "the field has no sky");
+                image
+            }
+        })
+    }
+
+    /// The frame's field and objects, without the sky.
+    fn add_layers(
         &mut self,
         graph: &mut FrameGraph,
         frame: &CameraFrame,

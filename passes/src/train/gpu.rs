@@ -12,9 +12,9 @@ use inlay_engine::{vk, Buffer, BufferReadback, ComputePipeline, Context, Rendere
 
 use super::adam::AdamKnobs;
 use super::sh_pages::{interleave, ShPages};
-use super::sky::Sky;
 use super::tv::TvWeights;
 use crate::field::bricks::BrickLayout;
+use crate::field::Sky;
 use crate::field::{GridField, NodeStorage, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
 use crate::march::MarchKnobs;

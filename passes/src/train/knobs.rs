@@ -99,7 +99,7 @@ pub struct TrainKnobs {
     /// Needs opaque photographs (no pixel with alpha below 1).
     pub random_background: bool,
     /// A sky learnt with the field behind it instead of the fixed
-    /// background ([`super::sky`]): an equirect map of 2n × n texels, n
+    /// background ([`crate::field::sky`]): an equirect map of 2n × n texels, n
     /// this knob (0: the fixed background). What the photographs see past
     /// the bounds (a sky, a far wall) is then learnt as a function of
     /// direction rather than painted into the box or missed. Starts as the
@@ -247,13 +247,13 @@ impl TrainKnobs {
                 format!("{} must lie between 0 and 1", self.first_stage_share),
             );
         }
-        if self.sky > super::sky::MAX_SKY_HEIGHT {
+        if self.sky > crate::field::sky::MAX_SKY_HEIGHT {
             return bad(
                 "sky",
                 format!(
                     "{} must be in 0..={} (texels down)",
                     self.sky,
-                    super::sky::MAX_SKY_HEIGHT
+                    crate::field::sky::MAX_SKY_HEIGHT
                 ),
             );
         }
@@ -317,7 +317,7 @@ mod tests {
         assert!(sky(32, false).check().is_ok());
         assert!(sky(0, true).check().is_ok());
         assert_eq!(sky(32, true).check().unwrap_err().0, "sky");
-        let big = super::super::sky::MAX_SKY_HEIGHT + 1;
+        let big = crate::field::sky::MAX_SKY_HEIGHT + 1;
         assert_eq!(sky(big, false).check().unwrap_err().0, "sky");
     }
 

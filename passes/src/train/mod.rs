@@ -6,6 +6,7 @@
 //! the gradient itself is checked by finite differences.
 
 pub mod adam;
+pub mod behind;
 pub mod geometry;
 pub mod gpu;
 pub mod knobs;
@@ -14,19 +15,19 @@ pub mod pixels;
 pub mod prune;
 pub mod render;
 pub mod sh_pages;
-pub mod sky;
 pub mod sparse_stage;
 pub mod trainer;
 pub mod tv;
 pub mod visibility;
 
+pub use crate::field::Sky;
 pub use adam::{adam_step, AdamKnobs};
+pub use behind::Behind;
 pub use geometry::{geometry_score, GeometryScore, HAZE_MARGIN};
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
-pub use sky::{Behind, Sky};
 pub use trainer::{
     resample, train, view_march, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
 };

@@ -7,7 +7,7 @@
 //! not empty); each reads (c_i, σ_i) trilinearly. With α_i = 1 − e^{−σ_iΔ_i}
 //! and T_{i+1} = T_i(1 − α_i), the pixel is
 //! C = Σ_i T_i α_i c_i + T_N·b (b the background behind the field, a
-//! fixed colour or a learnt sky read along the ray: [`super::sky`]), and
+//! fixed colour or a learnt sky read along the ray: [`crate::field::sky`]), and
 //! ∂C/∂c_i = T_i α_i, ∂C/∂b = T_N (a sky texel's share by its bilinear
 //! weight),
 //! ∂C/∂σ_i = Δ_i·(T_{i+1} c_i − Σ_{j>i} T_j α_j c_j − T_N b).
@@ -39,7 +39,7 @@ use crate::field::{sh_basis, sh_colour_unclamped, GridField, RadianceField};
 use crate::geometry::{ray_box, Ray};
 use crate::march::MarchKnobs;
 
-use super::sky::Behind;
+use super::behind::Behind;
 
 /// One ray's pixel and the gradient of a loss with respect to the nodes it
 /// read.
@@ -315,7 +315,7 @@ mod tests {
     /// misses the box reads the sky alone.
     #[test]
     fn the_sky_gradient_matches_finite_differences() {
-        use super::super::sky::Sky;
+        use crate::field::Sky;
         let knobs = MarchKnobs {
             samples_per_ray: 24,
             termination: 1e-4,

@@ -13,14 +13,15 @@ use inlay_engine::{Context, Renderer};
 use rayon::prelude::*;
 
 use super::adam::AdamKnobs;
+use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::pixels::{bracket_sets, is_bracket, merged_luminance, pixel_ray, PixelPool};
-use super::sky::{Behind, Sky};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
 use crate::field::FieldLayout::Auto;
+use crate::field::Sky;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::march::{march_ray, MarchKnobs};
 use crate::rng::Pcg32;

@@ -14,7 +14,7 @@ use clap::Args;
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::dataset::{load_dataset, LoadOptions};
-use inlay_passes::field::field_bytes;
+use inlay_passes::field::{field_bytes, sky_path};
 use inlay_passes::geometry::Aabb;
 use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
 
@@ -169,9 +169,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     let resume_sky = match &args.resume {
         Some(p) if args.sky > 0 && sky_path(p).exists() => {
             let file = sky_path(p);
-            let image = HdrImage::load_exr(&file)?;
-            let sky = inlay_passes::train::Sky::from_image(&image)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+            let sky = inlay_passes::field::Sky::load(&file)?;
             if sky.height != args.sky {
                 eprintln!(
                     "{}: a sky of {}x{} texels, not --sky {}'s: a new sky starts",
@@ -382,13 +380,6 @@ fn luminance_range(colours: &[DVec3]) -> (f64, f64) {
         .iter()
         .map(|c| inlay_passes::sgfit::model::luminance(*c))
         .fold((f64::INFINITY, 0.0), |(lo, hi), l| (lo.min(l), hi.max(l)))
-}
-
-/// Where the sky learnt with the field `field` is written: FIELD.sky.exr
-/// beside it (an equirect map in the scene environment's convention,
-/// which a scene's `[environment] equirect` can name).
-pub fn sky_path(field: &std::path::Path) -> PathBuf {
-    field.with_extension("sky.exr")
 }
 
 /// Prints each held-out view's geometry against `scene`'s recipe

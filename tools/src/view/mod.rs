@@ -134,7 +134,8 @@ impl Viewer {
         authored.shadows.self_shadow = true;
         authored.shadows.cast = true;
         let field = scene_field(&authored, None, use_cache, Some(ctx.info()))?;
-        let gpu_field = GpuGridField::upload(ctx, &field)?;
+        let sky = crate::field_source::scene_sky(&authored, None)?.map(Arc::new);
+        let gpu_field = GpuGridField::upload(ctx, &field)?.with_sky(sky);
         let scene = preset.apply(&authored);
         let mut view = view_over_gpu_field(
             ctx,

@@ -1,14 +1,16 @@
-//! The background a field is trained with: what a ray sees once it leaves
-//! the field's bounds. Either one fixed colour, or a sky learnt with the
-//! field: radiance as a function of direction only (beyond the box, where
-//! the photographs' cameras see the rest of the world: the sky, a far
-//! wall), an equirectangular map of 2n × n texels in the scene
+//! A field's sky: what a ray sees once it leaves the field's bounds,
+//! learnt with a trained field (`inlay train --sky`) and drawn behind it
+//! ([`crate::sky_behind`]). Radiance as a function of direction only (beyond
+//! the box, where the photographs' cameras see the rest of the world: the
+//! sky, a far wall), an equirectangular map of 2n × n texels in the scene
 //! environment's convention (+Y up, u = φ/2π with φ = atan2(z, x), v = θ/π
 //! from +Y; [`crate::scene::EquirectMap`]), read bilinearly between texel
 //! centres, wrapping round in φ and held at the first and last rows in θ.
-//! `shaders/train/sky.wgsl` mirrors [`Sky::corners`].
+//! `shaders/field/sky.wgsl` mirrors [`Sky::corners`]. A field file's sky
+//! is the EXR beside it ([`sky_path`]).
 
 use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
@@ -138,6 +140,13 @@ impl Sky {
         }
     }
 
+    /// The sky in the EXR file `path`, refused with the file's name and
+    /// the reason where it cannot be read or is not a sky.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        let image = inlay_engine::HdrImage::load_exr(path)?;
+        Self::from_image(&image).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    }
+
     /// The sky an image holds ([`Self::to_image`]'s), refused with a
     /// reason where [`Self::new`] would refuse it.
     pub fn from_image(image: &inlay_engine::HdrImage) -> Result<Self, String> {
@@ -150,35 +159,11 @@ impl Sky {
     }
 }
 
-/// What is behind the field for a ray: one colour, or a [`Sky`].
-#[derive(Debug, Clone, Copy)]
-pub enum Behind<'a> {
-    /// The same radiance in every direction.
-    Colour(DVec3),
-    /// A learnt sky.
-    Sky(&'a Sky),
-}
-
-impl Behind<'_> {
-    /// Radiance from unit direction `d`.
-    pub fn eval(&self, d: DVec3) -> DVec3 {
-        match self {
-            Behind::Colour(c) => *c,
-            Behind::Sky(s) => s.eval(d),
-        }
-    }
-}
-
-impl From<DVec3> for Behind<'_> {
-    fn from(c: DVec3) -> Self {
-        Behind::Colour(c)
-    }
-}
-
-impl<'a> From<&'a Sky> for Behind<'a> {
-    fn from(s: &'a Sky) -> Self {
-        Behind::Sky(s)
-    }
+/// Where the sky learnt with the field file `field` is kept: FIELD.sky.exr
+/// beside it (an equirect map in the scene environment's convention, which
+/// a scene's `[environment] equirect` can name too).
+pub fn sky_path(field: &Path) -> PathBuf {
+    field.with_extension("sky.exr")
 }
 
 /// The four texels of a `width × height` sky that unit direction `d` reads

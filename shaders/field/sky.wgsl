@@ -2,7 +2,7 @@
 // from texel 0's left edge, θ from +Y) that unit direction d reads
 // bilinearly between texel centres, wrapping round in φ and held at the
 // first and last rows in θ, and their weights.
-// Mirrors passes/src/train/sky.rs sky_corners.
+// Mirrors passes/src/field/sky.rs sky_corners.
 
 const SKY_PI: f32 = 3.14159265358979;
 
