@@ -218,7 +218,8 @@ fn the_far_field_darkens_as_little_as_in_cycles() {
             let field_only = |i: usize| bare_cover.field[i] >= 1.0 && object_cover[i] == 0.0;
             let far = far_pixels(&bare_cover, &spheres);
             let render = |objects| {
-                render_over_field(&ctx, &library, &scene, &field, camera, (w, h), objects).unwrap()
+                render_over_field(&ctx, &library, &scene, &gpu_field, camera, (w, h), objects)
+                    .unwrap()
             };
             let ours = box_shadow_ratio(&render(true), &render(false), field_only);
             let theirs = box_shadow_ratio(&with, &bare, field_only);
@@ -283,7 +284,8 @@ fn the_toy_among_leaves_is_lit_by_what_reaches_it() {
         let figures = |side: u32| {
             let mut s = scene.clone();
             s.shading.field_light = side;
-            let ours = render_over_field(&ctx, &library, &s, &field, camera, (w, h), true).unwrap();
+            let ours =
+                render_over_field(&ctx, &library, &s, &gpu_field, camera, (w, h), true).unwrap();
             (
                 median_relative_error(&ours, &truth, mask),
                 mean_ratio(&ours, &truth, mask),

@@ -8,6 +8,9 @@
 //! with and without the object); and for each object, the irradiance at
 //! its centre from the probe and from the fitted lobes against Cycles'
 //! irradiance sensors. Writes a markdown report and side-by-side images.
+//! With `--field`, a field trained from photographs stands in for the
+//! recipe's baked one: the whole method from photographs alone, against
+//! Cycles ([`trained_scene`]).
 
 use std::cell::RefCell;
 use std::fmt::Write as _;
@@ -20,7 +23,7 @@ use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::{CameraFrame, CameraSpec};
-use inlay_passes::field::{GpuGridField, GridField};
+use inlay_passes::field::{sky_path, GpuGridField};
 use inlay_passes::probe::{lobes_irradiance, probe_irradiance, AXES};
 use inlay_passes::scene::{load_scene, Scene};
 
@@ -29,10 +32,10 @@ use crate::fidelity::{
     median_relative_error, median_seed_noise, psnr, relative_l1, shadow_figures, side_by_side, Rgb,
     AREA_THRESHOLDS, FAR_RADII, SHADOW_EDGE, UMBRA,
 };
-use crate::field_source::scene_field;
+use crate::field_source::{scene_field, scene_sky};
 use crate::headless::run_headless;
 use crate::outputs::{check_output, Outputs};
-use crate::scene_view::view_over_field;
+use crate::scene_view::view_over_gpu_field;
 
 /// Options of `fidelity`.
 #[derive(Args, Debug)]
@@ -61,6 +64,42 @@ pub struct FidelityArgs {
     /// (overrides `[shading] field_light`; 0: off).
     #[arg(long)]
     pub field_light: Option<u32>,
+    /// A field trained from photographs of the scene (`inlay train`) to
+    /// measure in place of the recipe's baked field. Its objects are lit
+    /// by what the photographs show: the field, and as the distant light
+    /// the sky learnt with it (FIELD.sky.exr beside it, also drawn behind
+    /// the frame), not the recipe's known lights.
+    #[arg(long)]
+    pub field: Option<PathBuf>,
+    /// An environment file (`inlay estimate-env`'s) to light the objects
+    /// with as their distant light, in place of the scene's (with
+    /// `--field`: of the sky's).
+    #[arg(long)]
+    pub environment: Option<PathBuf>,
+}
+
+/// `scene` with the trained field `file` in place of its recipe's, lit as
+/// a user of that field alone would light it: the recipe's hidden lights
+/// and known environment give way to `sky` (the one learnt with the field)
+/// as the distant light, or none without one; an estimated `[lighting]
+/// environment` the scene names stays.
+pub fn trained_scene(
+    scene: &Scene,
+    file: &Path,
+    sky: Option<&inlay_passes::field::Sky>,
+) -> anyhow::Result<Scene> {
+    use inlay_passes::scene::{Environment, EquirectMap, FieldSource};
+    let mut lit = scene.clone();
+    lit.field = FieldSource::File(file.to_path_buf());
+    lit.environment = match sky {
+        Some(s) => Environment::Map(
+            EquirectMap::new(s.width as usize, s.height as usize, s.texels.clone(), 1.0)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", sky_path(file).display()))?,
+        ),
+        None => Environment::Black,
+    };
+    lit.environment_file = sky.map(|_| sky_path(file));
+    Ok(lit)
 }
 
 fn load(path: &Path) -> anyhow::Result<Rgb> {
@@ -110,7 +149,7 @@ pub fn render_over_field(
     ctx: &Arc<Context>,
     library: &ShaderLibrary,
     scene: &Scene,
-    field: &GridField,
+    field: &GpuGridField,
     camera: &CameraSpec,
     (w, h): (u32, u32),
     objects: bool,
@@ -119,12 +158,12 @@ pub fn render_over_field(
     if !objects {
         view_scene.objects.clear();
     }
-    let mut view = view_over_field(
+    let mut view = view_over_gpu_field(
         ctx,
         library,
         &view_scene,
         scene.march,
-        field,
+        field.clone(),
         camera.clone(),
         true,
     )?;
@@ -158,10 +197,46 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     let outputs = RefCell::new(Outputs::new());
     let mut md = String::new();
     writeln!(md, "## {}\n", scene.name)?;
-    let field = scene_field(&scene, None, true, Some(ctx.info()))?;
+    let trained = args.field.as_deref();
+    let field = scene_field(&scene, trained, true, Some(ctx.info()))?;
+    let sky = scene_sky(&scene, trained)?;
+    // The scene the field is rendered and lit with.
+    let lit = match trained {
+        Some(f) => {
+            writeln!(
+                md,
+                "The field trained from photographs, `{}`; its objects lit by the field and, as the distant light, {} (not the recipe's known lights).\n",
+                f.display(),
+                if sky.is_some() {
+                    "the sky learnt with it (also drawn behind it)"
+                } else {
+                    "nothing: no sky was learnt with it"
+                }
+            )?;
+            trained_scene(&scene, f, sky.as_ref())?
+        }
+        None => scene.clone(),
+    };
+    let mut lit = lit;
+    if let Some(file) = &args.environment {
+        let light = inlay_passes::envest::load_environment_file(file)
+            .map_err(|e| anyhow::anyhow!("--environment: {e}"))?;
+        writeln!(
+            md,
+            "The objects' distant light: `{}` ({} lobes, {} point lights).\n",
+            file.display(),
+            light.lobes.len(),
+            light.lights.len()
+        )?;
+        lit.object_environment = Some(inlay_passes::scene::ObjectEnvironment {
+            file: file.clone(),
+            lobes: light.lobes,
+            lights: light.lights,
+        });
+    }
     let library = inlay_passes::shaders::library()?;
     // Probe irradiance per object.
-    let gpu_field = GpuGridField::upload(ctx, &field)?;
+    let gpu_field = GpuGridField::upload(ctx, &field)?.with_sky(sky.map(Arc::new));
     let library = gpu_field.library(&library);
     writeln!(md, "Irradiance at each object's centre (luminance; Cycles: a 1 mm white sensor per axis, two seeds):\n")?;
     writeln!(
@@ -177,7 +252,7 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         let (centre, _) = object.sphere();
-        let env = inlay_passes::lighting::object_light_lobes(&scene, centre);
+        let env = inlay_passes::lighting::object_light_lobes(&lit, centre);
         let traced = crate::commands::probe::trace_and_fit(
             ctx,
             &gpu_field,
@@ -326,12 +401,22 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
                 traced_objects = Some(traced);
             }
         }
-        let field_image = render_over_field(ctx, &library, &scene, &field, camera, (w, h), false)?;
+        let field_image =
+            render_over_field(ctx, &library, &lit, &gpu_field, camera, (w, h), false)?;
         row(&mut md, "field, bare", &field_image, &bare, &field_px)?;
+        if gpu_field.sky.is_some() {
+            row(
+                &mut md,
+                "field, bare, every pixel",
+                &field_image,
+                &bare,
+                &|_| true,
+            )?;
+        }
         let Some(with) = with else {
             continue;
         };
-        let inserted = render_over_field(ctx, &library, &scene, &field, camera, (w, h), true)?;
+        let inserted = render_over_field(ctx, &library, &lit, &gpu_field, camera, (w, h), true)?;
         row(&mut md, "insertion", &inserted, &with, &|i| {
             field_px(i) || object_px(i)
         })?;
@@ -420,4 +505,37 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     outputs.bytes(&args.out, md.as_bytes())?;
     outputs.commit(Some(ctx))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inlay_passes::field::Sky;
+    use inlay_passes::scene::{Environment, FieldSource};
+
+    /// A trained field's scene is lit by its sky (or nothing), never by the
+    /// recipe's known lights; an estimate the scene names stays.
+    #[test]
+    fn a_trained_field_is_lit_by_its_sky_not_the_recipes_lights() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cups.toml");
+        let scene = load_scene(&path).unwrap();
+        assert!(scene.recipe().is_some() && !scene.environment.is_black());
+        let file = Path::new("/nowhere/cups.inlayfield");
+        let sky = Sky::uniform(4, DVec3::new(0.5, 1.0, 2.0));
+        let lit = trained_scene(&scene, file, Some(&sky)).unwrap();
+        assert!(matches!(&lit.field, FieldSource::File(f) if f == file));
+        assert!(lit.recipe().is_none());
+        assert_eq!(lit.environment.eval(DVec3::Y), sky.eval(DVec3::Y));
+        assert_eq!(
+            lit.environment_file.as_deref(),
+            Some(Path::new("/nowhere/cups.sky.exr"))
+        );
+        // The lobes the objects are lit with come from the sky alone.
+        let lobes = inlay_passes::lighting::object_light_lobes(&lit, DVec3::ZERO);
+        let up: DVec3 = lobes.iter().map(|l| l.eval(DVec3::Y)).sum();
+        assert!((up - sky.eval(DVec3::Y)).abs().max_element() < 0.2, "{up}");
+        let dark = trained_scene(&scene, file, None).unwrap();
+        assert!(matches!(dark.environment, Environment::Black));
+        assert!(inlay_passes::lighting::object_light_lobes(&dark, DVec3::ZERO).is_empty());
+    }
 }
