@@ -166,6 +166,32 @@ pub fn scene_sky(scene: &Scene, override_file: Option<&Path>) -> anyhow::Result<
     Ok(Some(sky))
 }
 
+/// Lights `scene`'s objects with `sky` (the one learnt with its field) as
+/// their distant light where the scene gives them none: a field file (no
+/// recipe, whose known lights stand), a black `[environment]` and no
+/// `[lighting] environment` estimate. What the photographs saw past the
+/// field is the light that reaches it from there. Returns whether it did.
+pub fn light_with_sky(scene: &mut Scene, sky: Option<&Sky>) -> anyhow::Result<bool> {
+    let Some(sky) = sky else {
+        return Ok(false);
+    };
+    if scene.recipe().is_some()
+        || scene.object_environment.is_some()
+        || !scene.environment.is_black()
+        || scene.objects.is_empty()
+    {
+        return Ok(false);
+    }
+    scene.environment = sky
+        .to_environment()
+        .map_err(|e| anyhow::anyhow!("{}: the field's sky: {e}", scene.path.display()))?;
+    eprintln!(
+        "the objects are lit by the sky as their distant light (a scene's [environment] or \
+         [lighting] environment takes its place)"
+    );
+    Ok(true)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -209,5 +235,41 @@ look_at = [0.0, 0.0, 0.0]
         assert_eq!(before, cache_entry(&load(), &scene.bake).unwrap());
         sky(2.0).save(&dir.join("sky.exr"), 1.0).unwrap();
         assert_ne!(before, cache_entry(&load(), &scene.bake).unwrap());
+    }
+
+    /// A trained field's sky lights the objects where the scene gives them
+    /// no distant light, and only there.
+    #[test]
+    fn the_sky_lights_the_objects_only_where_nothing_else_does() {
+        let dir = std::env::temp_dir().join(format!("inlay-sky-light-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let cube = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects/checker-cube.gltf");
+        let text = format!(
+            "name = \"lit\"\nfield = \"f.inlayfield\"\n[[objects]]\nname = \"cube\"\nfile = {:?}\n\
+             position = [0.0, 0.0, 0.0]\n[[cameras]]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n",
+            cube.display().to_string()
+        );
+        std::fs::write(dir.join("lit.toml"), &text).unwrap();
+        let mut scene = inlay_passes::scene::load_scene(&dir.join("lit.toml")).unwrap();
+        let sky = Sky::uniform(4, glam::DVec3::new(0.5, 1.0, 2.0));
+        assert!(!light_with_sky(&mut scene, None).unwrap());
+        assert!(scene.environment.is_black());
+        assert!(light_with_sky(&mut scene, Some(&sky)).unwrap());
+        assert_eq!(
+            scene.environment.eval(glam::DVec3::Y),
+            sky.eval(glam::DVec3::Y)
+        );
+        // A declared environment stands.
+        let declared = format!("{text}[environment]\nlobes = [{{ direction = [0.0, 1.0, 0.0], sharpness = 1.0, amplitude = [1.0, 1.0, 1.0] }}]\n");
+        std::fs::write(dir.join("lit.toml"), declared).unwrap();
+        let mut scene = inlay_passes::scene::load_scene(&dir.join("lit.toml")).unwrap();
+        let before = scene.environment.eval(glam::DVec3::Y);
+        assert!(!light_with_sky(&mut scene, Some(&sky)).unwrap());
+        assert_eq!(scene.environment.eval(glam::DVec3::Y), before);
+        // A recipe's known lights stand.
+        let cups = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cups.toml");
+        let mut recipe = inlay_passes::scene::load_scene(&cups).unwrap();
+        assert!(!light_with_sky(&mut recipe, Some(&sky)).unwrap());
     }
 }

@@ -12,13 +12,14 @@ use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::march::{MarchKnobs, MarchPass};
 use inlay_passes::scene::Scene;
 
-use crate::field_source::{scene_field, scene_sky};
+use crate::field_source::{light_with_sky, scene_field, scene_sky};
 use crate::insertion_view::InsertionView;
 
 /// `scene` seen from its camera `camera` (index or name), the field from
 /// `field_file` when given (with the sky learnt with it behind, where
-/// there is one), the march with `knobs` (checked), bakes cached when
-/// `use_cache`.
+/// there is one, lighting the objects where the scene gives them no
+/// distant light: [`light_with_sky`]), the march with `knobs` (checked),
+/// bakes cached when `use_cache`.
 pub fn open_view(
     ctx: &Arc<Context>,
     lib: &ShaderLibrary,
@@ -33,9 +34,11 @@ pub fn open_view(
         .check()
         .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
     let field = scene_field(scene, field_file, use_cache, Some(ctx.info()))?;
-    let sky = scene_sky(scene, field_file)?.map(Arc::new);
-    let gpu = GpuGridField::upload(ctx, &field)?.with_sky(sky);
-    view_over_gpu_field(ctx, lib, scene, knobs, gpu, camera, use_cache)
+    let sky = scene_sky(scene, field_file)?;
+    let mut lit = scene.clone();
+    light_with_sky(&mut lit, sky.as_ref())?;
+    let gpu = GpuGridField::upload(ctx, &field)?.with_sky(sky.map(Arc::new));
+    view_over_gpu_field(ctx, lib, &lit, knobs, gpu, camera, use_cache)
 }
 
 /// `scene`'s objects inserted into `field` (already loaded), seen from

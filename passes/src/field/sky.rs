@@ -147,6 +147,19 @@ impl Sky {
         Self::from_image(&image).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
     }
 
+    /// The sky as a scene's distant light: an equirect map of the same
+    /// texels (read per texel where the sky reads bilinearly; lit through
+    /// an SG fit, the two do not differ).
+    pub fn to_environment(&self) -> Result<crate::scene::Environment, String> {
+        let map = crate::scene::EquirectMap::new(
+            self.width as usize,
+            self.height as usize,
+            self.texels.clone(),
+            1.0,
+        )?;
+        Ok(crate::scene::Environment::Map(map))
+    }
+
     /// The sky an image holds ([`Self::to_image`]'s), refused with a
     /// reason where [`Self::new`] would refuse it.
     pub fn from_image(image: &inlay_engine::HdrImage) -> Result<Self, String> {

@@ -88,14 +88,13 @@ pub fn trained_scene(
     file: &Path,
     sky: Option<&inlay_passes::field::Sky>,
 ) -> anyhow::Result<Scene> {
-    use inlay_passes::scene::{Environment, EquirectMap, FieldSource};
+    use inlay_passes::scene::{Environment, FieldSource};
     let mut lit = scene.clone();
     lit.field = FieldSource::File(file.to_path_buf());
     lit.environment = match sky {
-        Some(s) => Environment::Map(
-            EquirectMap::new(s.width as usize, s.height as usize, s.texels.clone(), 1.0)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", sky_path(file).display()))?,
-        ),
+        Some(s) => s
+            .to_environment()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", sky_path(file).display()))?,
         None => Environment::Black,
     };
     lit.environment_file = sky.map(|_| sky_path(file));

@@ -134,8 +134,9 @@ impl Viewer {
         authored.shadows.self_shadow = true;
         authored.shadows.cast = true;
         let field = scene_field(&authored, None, use_cache, Some(ctx.info()))?;
-        let sky = crate::field_source::scene_sky(&authored, None)?.map(Arc::new);
-        let gpu_field = GpuGridField::upload(ctx, &field)?.with_sky(sky);
+        let sky = crate::field_source::scene_sky(&authored, None)?;
+        crate::field_source::light_with_sky(&mut authored, sky.as_ref())?;
+        let gpu_field = GpuGridField::upload(ctx, &field)?.with_sky(sky.map(Arc::new));
         let scene = preset.apply(&authored);
         let mut view = view_over_gpu_field(
             ctx,
