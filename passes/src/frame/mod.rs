@@ -344,11 +344,6 @@ impl InsertionFrame {
         }
     }
 
-    /// Whether a sky is drawn behind the frame.
-    pub fn has_sky(&self) -> bool {
-        self.sky.is_some()
-    }
-
     /// Whether any object has an SSDF field (shadows can be drawn).
     pub fn has_shadows(&self) -> bool {
         self.fh.is_some()

@@ -193,7 +193,14 @@ impl EquirectMap {
 
     fn texel_of(&self, d: DVec3) -> usize {
         let theta = d.y.clamp(-1.0, 1.0).acos();
-        let phi = d.z.atan2(d.x).rem_euclid(2.0 * PI);
+        // Straight up or down φ is 0 whatever the zeros' signs (atan2 of
+        // ±0 reads 0 or ±π), as the learnt sky reads it
+        // (crate::field::sky::sky_corners).
+        let phi = if d.x == 0.0 && d.z == 0.0 {
+            0.0
+        } else {
+            d.z.atan2(d.x).rem_euclid(2.0 * PI)
+        };
         let x = ((phi / (2.0 * PI)) * self.width as f64) as usize;
         let y = ((theta / PI) * self.height as f64) as usize;
         y.min(self.height - 1) * self.width + x.min(self.width - 1)
@@ -296,5 +303,22 @@ mod tests {
         t[5] = DVec3::new(f64::NAN, 0.0, 0.0);
         let e = EquirectMap::new(4, 2, t, 1.0).unwrap_err();
         assert!(e.contains("pixel (1, 1)"), "{e}");
+    }
+
+    /// Straight up or down reads the same texel whatever the signs of the
+    /// zeros, the one the learnt sky's φ = 0 reads.
+    #[test]
+    fn a_vertical_ray_reads_one_texel() {
+        let texels: Vec<DVec3> = (0..32).map(|i| DVec3::splat(i as f64)).collect();
+        let map = EquirectMap::new(8, 4, texels, 1.0).unwrap();
+        for y in [1.0, -1.0] {
+            let reads: Vec<DVec3> = [(0.0, 0.0), (-0.0, 0.0), (0.0, -0.0), (-0.0, -0.0)]
+                .iter()
+                .map(|&(x, z)| map.eval(DVec3::new(x, y, z)))
+                .collect();
+            assert!(reads.iter().all(|r| *r == reads[0]), "{y}: {reads:?}");
+            let row = if y > 0.0 { 0.0 } else { 24.0 };
+            assert_eq!(reads[0], DVec3::splat(row));
+        }
     }
 }
