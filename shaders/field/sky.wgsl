@@ -2,7 +2,9 @@
 // from texel 0's left edge, θ from +Y) that unit direction d reads
 // bilinearly between texel centres, wrapping round in φ and held at the
 // first and last rows in θ, and their weights.
-// Mirrors passes/src/field/sky.rs sky_corners.
+// Mirrors passes/src/field/sky.rs sky_corners (and Sky::eval).
+// Needs, for sky_radiance: the including shader's binding
+// `sky: array<vec4<f32>>` (texel (r, g, b, _), row-major).
 
 const SKY_PI: f32 = 3.14159265358979;
 
@@ -38,4 +40,11 @@ fn sky_corners(size: vec2<u32>, d: vec3<f32>) -> SkyCorners {
     c.index = vec4<u32>(y0 * size.x + x0, y0 * size.x + x1, y1 * size.x + x0, y1 * size.x + x1);
     c.weight = vec4<f32>((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy);
     return c;
+}
+
+// Radiance from unit direction d of the size.x × size.y sky in `sky`.
+fn sky_radiance(size: vec2<u32>, d: vec3<f32>) -> vec3<f32> {
+    let c = sky_corners(size, d);
+    return c.weight.x * sky[c.index.x].rgb + c.weight.y * sky[c.index.y].rgb
+        + c.weight.z * sky[c.index.z].rgb + c.weight.w * sky[c.index.w].rgb;
 }

@@ -32,9 +32,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var back = vec3<f32>(0.0);
     if left > 0.0 {
         let d = camera_ray_dir(pc.camera, vec2<f32>(id.xy) + vec2<f32>(0.5));
-        let k = sky_corners(vec2<u32>(pc.sky_width, pc.sky_height), d);
-        back = k.weight.x * sky[k.index.x].rgb + k.weight.y * sky[k.index.y].rgb
-            + k.weight.z * sky[k.index.z].rgb + k.weight.w * sky[k.index.w].rgb;
+        back = sky_radiance(vec2<u32>(pc.sky_width, pc.sky_height), d);
     }
     textureStore(out_colour, id.xy, vec4<f32>(c.rgb + left * back, 1.0));
 }

@@ -131,9 +131,7 @@ fn background_along(d: vec3<f32>) -> vec3<f32> {
     if pc.sky_width == 0u {
         return pc.background;
     }
-    let c = sky_corners(vec2<u32>(pc.sky_width, pc.sky_height), d);
-    return c.weight.x * sky[c.index.x].xyz + c.weight.y * sky[c.index.y].xyz
-        + c.weight.z * sky[c.index.z].xyz + c.weight.w * sky[c.index.w].xyz;
+    return sky_radiance(vec2<u32>(pc.sky_width, pc.sky_height), d);
 }
 
 // Adds `e` to sky texel t's gradient (r, g, b).
