@@ -76,7 +76,8 @@ pub struct TrainKnobs {
     /// 3.4 at the same held-out PSNR, and cost PLANTS, whose lamp and
     /// foliage train as faint glowing density, 0.5 dB; 2e-3 and 3e-3 put
     /// ROOM's surfaces about a spacing behind the recipe's
-    /// (`docs/benchmarks.md`, issue 25's fifteenth pass).
+    /// (`docs/benchmarks.md`, issue 25's fifteenth pass). Stated for 128
+    /// nodes; finer grids apply less ([`Self::applied_sparsity`]).
     pub sparsity: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
@@ -201,8 +202,23 @@ impl TrainKnobs {
             } else {
                 f64::INFINITY
             },
-            sparsity: self.sparsity,
+            sparsity: self.applied_sparsity(),
         }
+    }
+
+    /// The sparsity prior's weight as each step applies it:
+    /// [`Self::sparsity`] up to [`FEW_STEPS_RESOLUTION`] nodes along the
+    /// longest axis, × (128 / nodes)² above, as [`default_iterations`]
+    /// grows the steps by (nodes / 128)². The prior pulls a faint density
+    /// by the same share at every step, so over a default run a finer
+    /// grid's pull then stays a 128-node run's, while each of its nodes
+    /// is seen by fewer rays per step. Unscaled, 1e-3 at 256 nodes
+    /// cleared DOG's surfaces: 4.8–33 % of their pixels seen through,
+    /// held-out views 24–30 dB (`docs/benchmarks.md`, issue 25's
+    /// eighteenth pass).
+    pub fn applied_sparsity(&self) -> f64 {
+        let r = self.resolution.max(FEW_STEPS_RESOLUTION) as f64;
+        self.sparsity * (FEW_STEPS_RESOLUTION as f64 / r).powi(2)
     }
 
     /// The step at which stage `stage` (from 0) of `stages` ends: the
@@ -347,9 +363,10 @@ mod tests {
         assert_eq!(bad.check().unwrap_err().0, "tv_edge");
     }
 
-    /// The sparsity prior reaches total variation's weights as it is, so
-    /// that sparsity alone still runs the step; a negative or infinite
-    /// weight is refused.
+    /// The sparsity prior reaches total variation's weights (as it is up
+    /// to 128 nodes, falling as the square of the nodes above), so that
+    /// sparsity alone still runs the step; a negative or infinite weight
+    /// is refused.
     #[test]
     fn the_sparsity_prior_rides_on_total_variations_step() {
         let knobs = TrainKnobs {
@@ -360,6 +377,14 @@ mod tests {
         let tv = knobs.tv_weights(0.01);
         assert_eq!(tv.sparsity, 2e-3);
         assert!(!tv.is_none());
+        // Stated for 128 nodes: as it is below, a quarter at 256.
+        for (resolution, applied) in [(24, 2e-3), (128, 2e-3), (256, 5e-4), (512, 1.25e-4)] {
+            let at = TrainKnobs {
+                resolution,
+                ..knobs
+            };
+            assert!((at.tv_weights(0.01).sparsity - applied).abs() < 1e-15);
+        }
         for v in [-1e-3, f64::INFINITY] {
             let bad = TrainKnobs {
                 sparsity: v,
