@@ -280,6 +280,14 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         b.max.z,
         dataset.bounds_source
     );
+    if knobs.applied_sparsity() != knobs.sparsity {
+        eprintln!(
+            "sparsity prior {:.3e} at {} nodes (--sparsity {:e} is stated for 128 nodes)",
+            knobs.applied_sparsity(),
+            knobs.resolution,
+            knobs.sparsity
+        );
+    }
     let started = Instant::now();
     let bar = progress_bar("training", knobs.iterations as u64);
     let background = DVec3::from_array(args.background.map(|v| v as f64));
