@@ -127,7 +127,8 @@ pub struct TrainKnobs {
     /// Train the stages after the first only in the bricks of 8³ nodes
     /// around the surfaces the stage before made visible
     /// ([`super::sparse_stage`]); the rest held empty. A stage whose dense
-    /// grid would not fit one storage binding is trained so always.
+    /// grid would not fit one storage binding is trained so always, a
+    /// resumed field's only stage included (around what it makes visible).
     pub sparse: bool,
     /// Seed of every random choice.
     pub seed: u64,

@@ -269,6 +269,12 @@ pub fn train(
     let final_res = control
         .resume
         .map_or(grid_size(bounds.size(), knobs.resolution), |f| f.resolution);
+    // The sparsity prior's weight follows the grid trained: a resumed
+    // field's own nodes, not `knobs.resolution`.
+    let prior_knobs = TrainKnobs {
+        resolution: final_res.max_element(),
+        ..*knobs
+    };
     let stages = if control.resume.is_some() {
         1
     } else {
@@ -314,9 +320,12 @@ pub fn train(
     let view_march = view_march(knobs);
     'stages: for s in 0..stages {
         let target = stage_res(s);
-        let sparse =
-            s > 0 && (knobs.sparse || !GpuTrainer::dense_fits(ctx.info(), target, knobs.sh_degree));
-        // The bricks around what the stage before made visible.
+        // A resumed field trains sparsely from its first stage where its
+        // dense grid would not fit one binding (a 256-node field).
+        let sparse = (s > 0 || control.resume.is_some())
+            && (knobs.sparse || !GpuTrainer::dense_fits(ctx.info(), target, knobs.sh_degree));
+        // The bricks around what the stage before (or the resumed field)
+        // made visible.
         let layout = if sparse {
             let rays = super::prune::training_rays(dataset, &pool);
             let visibility =
@@ -344,7 +353,7 @@ pub fn train(
             );
         }
         let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, march, layout)?;
-        gpu.tv_weights = knobs.tv_weights(field.spacing().min_element());
+        gpu.tv_weights = prior_knobs.tv_weights(field.spacing().min_element());
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         gpu.set_sky(ctx, sky.as_ref())?;

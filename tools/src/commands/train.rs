@@ -280,11 +280,18 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         b.max.z,
         dataset.bounds_source
     );
-    if knobs.applied_sparsity() != knobs.sparsity {
+    // The grid trained: a resumed field's own nodes.
+    let prior = TrainKnobs {
+        resolution: resume
+            .as_ref()
+            .map_or(args.resolution, |f| f.resolution.max_element()),
+        ..knobs
+    };
+    if prior.applied_sparsity() != knobs.sparsity {
         eprintln!(
             "sparsity prior {:.3e} at {} nodes (--sparsity {:e} is stated for 128 nodes)",
-            knobs.applied_sparsity(),
-            knobs.resolution,
+            prior.applied_sparsity(),
+            prior.resolution,
             knobs.sparsity
         );
     }
