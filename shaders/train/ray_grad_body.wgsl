@@ -1,5 +1,6 @@
 // The body of the training kernel: one training ray per invocation, the
-// march's quadrature over the trained grid (no empty-space skipping), the
+// march's quadrature over the trained grid (no empty-space skipping but
+// a sparse grid's dropped bricks: past_dropped_brick), the
 // pixel's loss, and the loss's gradient with respect to every value the
 // ray read. The trained nodes are laid out as a field's on the device (a
 // sparse grid's pool of bricks, field/bricks.wgsl), the view-dependent
@@ -86,6 +87,36 @@ fn field_node_index(i: vec3<u32>) -> u32 {
     }
     let r = pc.resolution;
     return i.x + r.x * (i.y + r.y * i.z);
+}
+
+// The first sample past a dropped brick, where sample `s` (its cell
+// `cell`) lies inside one with all eight of its cell's corners: every
+// sample until then reads only zeros, so it adds no light, dims nothing
+// and takes no gradient (a density's gradient is cut where it is not
+// above zero), and skipping it changes no result. Otherwise (a trained
+// brick, a cell across two bricks, a dense grid) s itself. A sample is
+// skipped only where its midpoint lies inside the brick's cells by a
+// thousandth of a step, so rounding never skips one that reads a trained
+// node. The forward and the backward skip alike.
+fn past_dropped_brick(origin: vec3<f32>, dir: vec3<f32>, t0: f32, s: u32, cell: TrilinearCell) -> u32 {
+    if pc.brick_dims.x == 0u || !cell.inside {
+        return s;
+    }
+    let local = cell.base % BRICK_SIDE;
+    if any(local == vec3<u32>(BRICK_SIDE - 1u)) {
+        return s;
+    }
+    if bricks[brick_table_index(cell.base, pc.brick_dims)] != EMPTY_BRICK {
+        return s;
+    }
+    // The cells whose corners all lie in the brick: nodes 8b to 8b + 7.
+    let spacing = (pc.bounds_max - pc.bounds_min) / vec3<f32>(pc.resolution - vec3<u32>(1u));
+    let first = vec3<f32>(cell.base - local);
+    let lo = pc.bounds_min + first * spacing;
+    let hi = pc.bounds_min + (first + vec3<f32>(f32(BRICK_SIDE - 1u))) * spacing;
+    let exit = ray_box(origin, dir, lo, hi).y;
+    let next = ceil((exit - t0) / pc.step - 0.5 - 1e-3);
+    return max(s + 1u, u32(max(next, 0.0)));
 }
 
 // The trilinear (r, g, b, σ) of the nodes, σ before the clamp at zero.
@@ -180,6 +211,11 @@ fn train_ray(index: u32) {
             }
             let b = min(a + pc.step, t1);
             let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
+            let past = past_dropped_brick(ray.origin, ray.dir, t0, used, cell);
+            if past != used {
+                used = past;
+                continue;
+            }
             let v = sample_at(cell);
             let alpha = 1.0 - exp(-density_at(v.w) * (b - a));
             let w = transmittance * alpha;
@@ -226,11 +262,25 @@ fn train_ray(index: u32) {
     var w_before = 0.0;
     var wt_before = 0.0;
     var e_so_far = 0.0;
-    for (var s = 0u; s < used; s++) {
+    var next = 0u;
+    loop {
+        let s = next;
+        if s >= used {
+            break;
+        }
+        next = s + 1u;
         let a = t0 + f32(s) * pc.step;
+        if a >= t1 {
+            break;
+        }
         let b = min(a + pc.step, t1);
         let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
         if !cell.inside {
+            continue;
+        }
+        let past = past_dropped_brick(ray.origin, ray.dir, t0, s, cell);
+        if past != s {
+            next = past;
             continue;
         }
         let v = sample_at(cell);
