@@ -229,6 +229,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         t.contains("held-out frame 1: PSNR") && field.is_file(),
         "{t}"
     );
+    // Where a step's time went, the training rays' pass among the rest.
+    assert!(t.contains("a step took") && t.contains("train-rays"), "{t}");
     // The sky learnt behind it, beside it.
     let sky = dir.join("views.sky.exr");
     assert!(t.contains("learnt a sky of 8x4 texels"), "{t}");
@@ -292,35 +294,40 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     assert_ne!(resumed.nodes, trained.nodes);
     assert_eq!(resumed.sh_degree, 1);
     assert!(resumed.sh.iter().flatten().any(|c| *c != 0.0));
-    // Resumed again without the flag, it keeps its degree; with
-    // `--sparse` its only stage trains the bricks it makes visible (as a
-    // resumed field too large for one binding always does).
+    // Resumed again without the flag, it keeps its degree, and its only
+    // stage trains the bricks it makes visible (the default, as a resumed
+    // field too large for one binding always does); `--sparse=false`
+    // trains it dense.
     let again = dir.join("again.inlayfield");
-    let o = inlay(&[
-        "train",
-        out.to_str().unwrap(),
-        "--out",
-        again.to_str().unwrap(),
-        "--resume",
-        stopped.to_str().unwrap(),
-        "--iterations",
-        "1",
-        "--batch",
-        "16",
-        "--hold-out",
-        "0",
-        "--sparse",
-    ]);
-    assert!(o.status.success(), "{}", text(&o));
-    assert!(
-        text(&o).contains("bricks of 8³ nodes (sparse)"),
-        "{}",
-        text(&o)
-    );
-    assert_eq!(
-        inlay_passes::field::load_field(&again).unwrap().sh_degree,
-        1
-    );
+    for (flags, sparse) in [(&[][..], true), (&["--sparse=false"][..], false)] {
+        let mut args = vec![
+            "train",
+            out.to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+            "--resume",
+            stopped.to_str().unwrap(),
+            "--iterations",
+            "1",
+            "--batch",
+            "16",
+            "--hold-out",
+            "0",
+        ];
+        args.extend_from_slice(flags);
+        let o = inlay(&args);
+        assert!(o.status.success(), "{}", text(&o));
+        assert_eq!(
+            text(&o).contains("bricks of 8³ nodes (sparse)"),
+            sparse,
+            "{}",
+            text(&o)
+        );
+        assert_eq!(
+            inlay_passes::field::load_field(&again).unwrap().sh_degree,
+            1
+        );
+    }
     for (flag, value, says) in [
         ("--time-budget", "0", "--time-budget"),
         ("--stages", "9", "--stages"),

@@ -29,8 +29,19 @@ pub struct TrainKnobs {
     pub iterations: u32,
     /// Rays per step.
     pub batch: u32,
-    /// The march's samples along the field's diagonal.
+    /// The march's samples along the field's diagonal, on the final grid;
+    /// a coarser stage takes [`Self::coarse_samples`] × as many per node
+    /// spacing ([`Self::stage_samples`]).
     pub samples_per_ray: u32,
+    /// A coarse stage's samples per node spacing as a multiple of the
+    /// final grid's (at most [`Self::samples_per_ray`] along the
+    /// diagonal): 1 marches every stage alike; 4 on a three-stage run
+    /// marches every stage at [`Self::samples_per_ray`], as before issue
+    /// 25's nineteenth pass. The default, 2, halves the first stage's
+    /// samples: at 1 ROOM's surfaces moved 0.1–0.4 spacings further off
+    /// and its held-out views lost 0.1 dB, at 2 they kept their figures
+    /// (`docs/benchmarks.md`).
+    pub coarse_samples: f64,
     /// Colour step size, as a fraction of the pixels' mean radiance; a
     /// colour above [`super::trainer::RELATIVE_STEP_FLOOR`] × the loss's
     /// floor steps by this fraction of itself (a lamp's light, not the
@@ -77,7 +88,7 @@ pub struct TrainKnobs {
     /// foliage train as faint glowing density, 0.5 dB; 2e-3 and 3e-3 put
     /// ROOM's surfaces about a spacing behind the recipe's
     /// (`docs/benchmarks.md`, issue 25's fifteenth pass). Stated for 128
-    /// nodes; finer grids apply less ([`Self::applied_sparsity`]).
+    /// nodes; finer grids apply less ([`Self::sparsity_at`]).
     pub sparsity: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
@@ -129,6 +140,11 @@ pub struct TrainKnobs {
     /// ([`super::sparse_stage`]); the rest held empty. A stage whose dense
     /// grid would not fit one storage binding is trained so always, a
     /// resumed field's only stage included (around what it makes visible).
+    /// On by default since issue 25's nineteenth pass: DOG's last stage
+    /// kept 667 of 2304 bricks, its steps over every node (Adam, total
+    /// variation) took under a third of the time, and DOG's and ROOM's
+    /// held-out views scored within 0.1 dB of the dense grid's
+    /// (`docs/benchmarks.md`).
     pub sparse: bool,
     /// Seed of every random choice.
     pub seed: u64,
@@ -143,6 +159,7 @@ impl Default for TrainKnobs {
             iterations: 3000,
             batch: 4096,
             samples_per_ray: 256,
+            coarse_samples: 2.0,
             rate: 0.1,
             density_rate: 5.0,
             rate_decay: 0.1,
@@ -157,11 +174,15 @@ impl Default for TrainKnobs {
             sh_degree: 0,
             learn_exposure: false,
             prune: 0.01,
-            sparse: false,
+            sparse: true,
             seed: 1,
         }
     }
 }
+
+/// The fewest march samples along the diagonal a coarse stage takes
+/// ([`TrainKnobs::stage_samples`]).
+pub const MIN_STAGE_SAMPLES: u32 = 16;
 
 /// The steps `inlay train` takes when not told: [`TrainKnobs::default`]'s
 /// 3000 for a grid of up to 128 nodes along its longest axis (2000 before
@@ -193,8 +214,9 @@ pub const FEW_STEPS_RESOLUTION: u32 = 128;
 impl TrainKnobs {
     /// The total variation's weights on a grid of node spacing `h`: the
     /// edge [`Self::tv_edge`] (an optical depth per spacing) as a density
-    /// difference, τ/h.
-    pub fn tv_weights(&self, h: f64) -> super::tv::TvWeights {
+    /// difference, τ/h; the sparsity prior as a grid of `nodes` along its
+    /// longest axis applies it ([`Self::sparsity_at`]).
+    pub fn tv_weights(&self, h: f64, nodes: u32) -> super::tv::TvWeights {
         super::tv::TvWeights {
             colour: self.tv_colour,
             density: self.tv_density,
@@ -203,13 +225,13 @@ impl TrainKnobs {
             } else {
                 f64::INFINITY
             },
-            sparsity: self.applied_sparsity(),
+            sparsity: self.sparsity_at(nodes),
         }
     }
 
-    /// The sparsity prior's weight as each step applies it:
-    /// [`Self::sparsity`] up to [`FEW_STEPS_RESOLUTION`] nodes along the
-    /// longest axis, × (128 / nodes)² above, as [`default_iterations`]
+    /// The sparsity prior's weight as each step of a grid of `nodes` along
+    /// its longest axis applies it: [`Self::sparsity`] up to
+    /// [`FEW_STEPS_RESOLUTION`] nodes, × (128 / nodes)² above, as [`default_iterations`]
     /// grows the steps by (nodes / 128)². The prior pulls a faint density
     /// by the same share at every step, so over a default run a finer
     /// grid's pull then stays a 128-node run's, while each of its nodes
@@ -217,9 +239,27 @@ impl TrainKnobs {
     /// cleared DOG's surfaces: 4.8–33 % of their pixels seen through,
     /// held-out views 24–30 dB (`docs/benchmarks.md`, issue 25's
     /// eighteenth pass).
-    pub fn applied_sparsity(&self) -> f64 {
-        let r = self.resolution.max(FEW_STEPS_RESOLUTION) as f64;
+    pub fn sparsity_at(&self, nodes: u32) -> f64 {
+        let r = nodes.max(FEW_STEPS_RESOLUTION) as f64;
         self.sparsity * (FEW_STEPS_RESOLUTION as f64 / r).powi(2)
+    }
+
+    /// The march's samples along the diagonal of a stage whose grid has
+    /// `stage_nodes` along its longest axis where the final grid has
+    /// `final_nodes`: [`Self::samples_per_ray`] scaled to
+    /// [`Self::coarse_samples`] × the final grid's samples per node
+    /// spacing (a coarse grid holds nothing fewer steps would miss),
+    /// never below 16 or above the final grid's. Half of a default run's
+    /// steps are on a grid a quarter as fine, which then marches half the
+    /// samples (`docs/benchmarks.md`, issue 25's nineteenth pass).
+    pub fn stage_samples(&self, stage_nodes: u32, final_nodes: u32) -> u32 {
+        let share = self.coarse_samples * stage_nodes as f64 / final_nodes.max(1) as f64;
+        let scaled = (self.samples_per_ray as f64 * share)
+            .ceil()
+            .min(u32::MAX as f64) as u32;
+        scaled
+            .max(self.samples_per_ray.min(MIN_STAGE_SAMPLES))
+            .min(self.samples_per_ray)
     }
 
     /// The step at which stage `stage` (from 0) of `stages` ends: the
@@ -256,6 +296,12 @@ impl TrainKnobs {
             return bad(
                 "iterations",
                 "iterations and batch must be positive, samples_per_ray in 4..=8192".into(),
+            );
+        }
+        if !(self.coarse_samples >= 1.0 && self.coarse_samples.is_finite()) {
+            return bad(
+                "coarse_samples",
+                format!("{} must be at least 1", self.coarse_samples),
             );
         }
         if !(self.first_stage_share > 0.0 && self.first_stage_share < 1.0) {
@@ -347,15 +393,15 @@ mod tests {
             tv_edge: 0.02,
             ..TrainKnobs::default()
         };
-        let tv = knobs.tv_weights(0.01);
+        let tv = knobs.tv_weights(0.01, 128);
         assert!((tv.density_edge - 2.0).abs() < 1e-12);
         assert_eq!(tv.density, knobs.tv_density);
-        assert!((knobs.tv_weights(0.005).density_edge - 4.0).abs() < 1e-12);
+        assert!((knobs.tv_weights(0.005, 128).density_edge - 4.0).abs() < 1e-12);
         let off = TrainKnobs {
             tv_edge: 0.0,
             ..TrainKnobs::default()
         }
-        .tv_weights(0.01);
+        .tv_weights(0.01, 128);
         assert_eq!(off.density_edge_inverse(), 0.0);
         let bad = TrainKnobs {
             tv_edge: -1.0,
@@ -375,16 +421,16 @@ mod tests {
             sparsity: 2e-3,
             ..TrainKnobs::default()
         };
-        let tv = knobs.tv_weights(0.01);
+        let tv = knobs.tv_weights(0.01, 128);
         assert_eq!(tv.sparsity, 2e-3);
         assert!(!tv.is_none());
         // Stated for 128 nodes: as it is below, a quarter at 256.
-        for (resolution, applied) in [(24, 2e-3), (128, 2e-3), (256, 5e-4), (512, 1.25e-4)] {
-            let at = TrainKnobs {
-                resolution,
-                ..knobs
-            };
-            assert!((at.tv_weights(0.01).sparsity - applied).abs() < 1e-15);
+        for (nodes, applied) in [(24, 2e-3), (128, 2e-3), (256, 5e-4), (512, 1.25e-4)] {
+            assert!((knobs.tv_weights(0.01, nodes).sparsity - applied).abs() < 1e-15);
+            assert_eq!(
+                knobs.sparsity_at(nodes),
+                knobs.tv_weights(0.01, nodes).sparsity
+            );
         }
         for v in [-1e-3, f64::INFINITY] {
             let bad = TrainKnobs {
@@ -421,6 +467,47 @@ mod tests {
                 ..knobs
             };
             assert_eq!(bad.check().unwrap_err().0, "first_stage_share");
+        }
+    }
+
+    /// A coarse stage takes the final grid's samples per node spacing
+    /// (× the knob): a quarter of them on a grid a quarter as fine,
+    /// rounded up, never below 16 (or the knob, where it is less) nor
+    /// above the knob.
+    #[test]
+    fn coarse_stages_take_the_samples_per_spacing() {
+        assert_eq!(TrainKnobs::default().coarse_samples, 2.0);
+        let knobs = TrainKnobs {
+            coarse_samples: 1.0,
+            ..TrainKnobs::default()
+        };
+        assert_eq!(knobs.samples_per_ray, 256);
+        assert_eq!(knobs.stage_samples(128, 128), 256);
+        assert_eq!(knobs.stage_samples(64, 128), 128);
+        assert_eq!(knobs.stage_samples(32, 128), 64);
+        assert_eq!(knobs.stage_samples(33, 128), 66);
+        assert_eq!(knobs.stage_samples(2, 128), 16);
+        assert_eq!(knobs.stage_samples(200, 128), 256);
+        let few = TrainKnobs {
+            samples_per_ray: 10,
+            ..knobs
+        };
+        assert_eq!(few.stage_samples(8, 128), 10);
+        // Twice the final grid's samples per spacing; four times is every
+        // stage at the knob.
+        for (coarse_samples, stage, samples) in [(2.0, 32, 128), (2.0, 64, 256), (4.0, 32, 256)] {
+            let k = TrainKnobs {
+                coarse_samples,
+                ..knobs
+            };
+            assert_eq!(k.stage_samples(stage, 128), samples);
+        }
+        for bad in [0.5, f64::NAN, f64::INFINITY] {
+            let k = TrainKnobs {
+                coarse_samples: bad,
+                ..knobs
+            };
+            assert_eq!(k.check().unwrap_err().0, "coarse_samples");
         }
     }
 

@@ -16,6 +16,7 @@ pub mod prune;
 pub mod render;
 pub mod sh_pages;
 pub mod sparse_stage;
+pub mod step_times;
 pub mod trainer;
 pub mod tv;
 pub mod visibility;
@@ -28,6 +29,7 @@ pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
+pub use step_times::StepTimes;
 pub use trainer::{
     resample, train, view_march, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
 };

@@ -96,6 +96,8 @@ pub struct Trained {
     /// no photograph looks past the field, are filled from the nearest
     /// of these: [`Sky::fill_unseen`]).
     pub sky_seen: usize,
+    /// Where the steps' time went, pass by pass.
+    pub step_times: super::StepTimes,
 }
 
 /// Nodes per axis for `nodes` along the bounds' longest axis.
@@ -269,12 +271,6 @@ pub fn train(
     let final_res = control
         .resume
         .map_or(grid_size(bounds.size(), knobs.resolution), |f| f.resolution);
-    // The sparsity prior's weight follows the grid trained: a resumed
-    // field's own nodes, not `knobs.resolution`.
-    let prior_knobs = TrainKnobs {
-        resolution: final_res.max_element(),
-        ..*knobs
-    };
     let stages = if control.resume.is_some() {
         1
     } else {
@@ -317,6 +313,7 @@ pub fn train(
     let mut rays_done = 0u64;
     let mut step = 0u32;
     let mut bricks = None;
+    let mut step_times = super::StepTimes::default();
     let view_march = view_march(knobs);
     'stages: for s in 0..stages {
         let target = stage_res(s);
@@ -352,8 +349,14 @@ pub fn train(
                 l.table.len()
             );
         }
-        let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, march, layout)?;
-        gpu.tv_weights = prior_knobs.tv_weights(field.spacing().min_element());
+        let stage_march = MarchKnobs {
+            samples_per_ray: knobs.stage_samples(res.max_element(), final_res.max_element()),
+            ..march
+        };
+        let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, stage_march, layout)?;
+        // The sparsity prior's weight follows the grid trained: a resumed
+        // field's own nodes, not `knobs.resolution`.
+        gpu.tv_weights = knobs.tv_weights(field.spacing().min_element(), final_res.max_element());
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         gpu.set_sky(ctx, sky.as_ref())?;
@@ -366,6 +369,7 @@ pub fn train(
                 sky_seen = gpu.sky_seen(&mut renderer)?;
                 break 'stages;
             }
+            let step_started = Instant::now();
             let batch = pool.batch(dataset, knobs.batch as usize, knobs.seed, step as u64);
             let records: Vec<TrainRay> = batch
                 .iter()
@@ -388,6 +392,10 @@ pub fn train(
                 knobs.epsilon * scale,
                 Some((&adam, 1.0 / records.len() as f32)),
             )?;
+            step_times.add(
+                renderer.latest_timings(),
+                step_started.elapsed().as_secs_f64(),
+            );
             rays_done += records.len() as u64;
             step += 1;
             let loss = out.iter().map(|o| o[3] as f64).sum::<f64>() / out.len() as f64;
@@ -447,6 +455,7 @@ pub fn train(
         bricks,
         sky,
         sky_seen: sky_seen.iter().filter(|s| **s).count(),
+        step_times,
     })
 }
 

@@ -48,9 +48,16 @@ pub struct TrainArgs {
     /// Rays per step.
     #[arg(long, default_value_t = TrainKnobs::default().batch)]
     pub batch: u32,
-    /// March samples along the field's diagonal.
+    /// March samples along the field's diagonal on the final grid (a
+    /// coarser stage takes --coarse-samples × as many per node spacing:
+    /// 128 on the 32-node stage of a 128-node run).
     #[arg(long, default_value_t = TrainKnobs::default().samples_per_ray)]
     pub samples_per_ray: u32,
+    /// A coarse stage's samples per node spacing, as a multiple of the
+    /// final grid's (4 on a three-stage run: every stage at
+    /// --samples-per-ray).
+    #[arg(long, default_value_t = TrainKnobs::default().coarse_samples)]
+    pub coarse_samples: f64,
     /// Colour step size (fraction of the mean radiance; a colour above 8 × the loss's floor steps by this fraction of itself).
     #[arg(long, default_value_t = TrainKnobs::default().rate)]
     pub rate: f64,
@@ -113,9 +120,16 @@ pub struct TrainArgs {
     #[arg(long, default_value_t = TrainKnobs::default().prune)]
     pub prune: f64,
     /// Train the stages after the first only in the bricks of 8³ nodes
-    /// around what the stage before made visible (always where a stage's
-    /// dense grid would not fit the device's storage binding).
-    #[arg(long)]
+    /// around what the stage before made visible (the default; `--sparse=false`
+    /// trains them dense where the grid fits the device's storage binding).
+    #[arg(
+        long,
+        default_value_t = TrainKnobs::default().sparse,
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "true",
+        action = clap::ArgAction::Set
+    )]
     pub sparse: bool,
     /// Views never trained on, scored at the end.
     #[arg(long, default_value_t = 2)]
@@ -184,19 +198,18 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         }
         _ => None,
     };
+    // The grid trained along its longest axis: a resumed field's own nodes.
+    let nodes = resume
+        .as_ref()
+        .map_or(args.resolution, |f| f.resolution.max_element());
     let knobs = TrainKnobs {
         resolution: args.resolution,
         stages: args.stages,
         first_stage_share: args.first_stage_share,
-        iterations: args.iterations.unwrap_or_else(|| {
-            default_iterations(
-                resume
-                    .as_ref()
-                    .map_or(args.resolution, |f| f.resolution.max_element()),
-            )
-        }),
+        iterations: args.iterations.unwrap_or_else(|| default_iterations(nodes)),
         batch: args.batch,
         samples_per_ray: args.samples_per_ray,
+        coarse_samples: args.coarse_samples,
         rate: args.rate,
         density_rate: args.density_rate,
         epsilon: args.epsilon,
@@ -280,18 +293,10 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         b.max.z,
         dataset.bounds_source
     );
-    // The grid trained: a resumed field's own nodes.
-    let prior = TrainKnobs {
-        resolution: resume
-            .as_ref()
-            .map_or(args.resolution, |f| f.resolution.max_element()),
-        ..knobs
-    };
-    if prior.applied_sparsity() != knobs.sparsity {
+    if knobs.sparsity_at(nodes) != knobs.sparsity {
         eprintln!(
-            "sparsity prior {:.3e} at {} nodes (--sparsity {:e} is stated for 128 nodes)",
-            prior.applied_sparsity(),
-            prior.resolution,
+            "sparsity prior {:.3e} at {nodes} nodes (--sparsity {:e} is stated for 128 nodes)",
+            knobs.sparsity_at(nodes),
             knobs.sparsity
         );
     }
@@ -345,6 +350,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         f.resolution.z,
         trained.history.last().map_or(f64::NAN, |h| h.1)
     );
+    print_step_times(&trained.step_times);
     if knobs.learn_exposure {
         let (low, high) = luminance_range(&trained.gains);
         eprintln!("learnt exposure gains (luminance, frame 0 = 1): {low:.3} to {high:.3}");
@@ -448,6 +454,24 @@ fn percent_of(share: f64) -> String {
     } else {
         format!("{:.1} %", 100.0 * share)
     }
+}
+
+/// Where a step's time went: its wall-clock mean and each pass's GPU
+/// mean, largest first.
+fn print_step_times(times: &inlay_passes::train::StepTimes) {
+    if times.steps == 0 {
+        return;
+    }
+    let passes: Vec<String> = times
+        .per_step()
+        .iter()
+        .map(|(p, ms)| format!("{p} {ms:.1}"))
+        .collect();
+    eprintln!(
+        "a step took {:.1} ms; GPU ms per step: {}",
+        times.wall_ms_per_step(),
+        passes.join(", ")
+    );
 }
 
 /// The held-out views one under another: photograph | field | |difference|.
