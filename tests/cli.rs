@@ -187,6 +187,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    assert!(!text(&o).contains("saturate even"), "{}", text(&o));
     let o = inlay(&["dataset", out.to_str().unwrap()]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
@@ -199,6 +200,37 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     let t = text(&o);
     assert!(o.status.success() && t.contains("frames: 6 usable"), "{t}");
     assert!(t.contains("exposure_time given for 6 frames"), "{t}");
+    assert!(!t.contains("white in every bracket"), "{t}");
+    // Brackets that do not hold the brightest pixels are called out where
+    // they are written and where they are read.
+    let short = dir.join("dog-ev1");
+    let o = inlay(&[
+        "render-views",
+        scene,
+        "--views",
+        "1",
+        "--size",
+        "16x12",
+        "--samples",
+        "2",
+        "--brackets=1",
+        "--out",
+        short.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("saturate even the shortest bracket (EV +1)")
+            && t.contains("or below would record them"),
+        "{t}"
+    );
+    let o = inlay(&["dataset", short.join("brackets").to_str().unwrap()]);
+    let t = text(&o);
+    assert!(
+        o.status.success()
+            && t.contains("of 1 of its 1 bracketed poses are white in every bracket"),
+        "{t}"
+    );
 
     // `inlay train` takes it: a tiny grid, a few steps, the field written
     // and readable by `render`.

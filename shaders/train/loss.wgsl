@@ -5,13 +5,18 @@
 // (the same, only below it); kind 2, a bracket (squared error of
 // srgb(exposure × C) against the recorded encoded value, clipped at white
 // only where the photograph recorded white; below white the sRGB curve
-// continued past 1).
+// continued past 1; weighed by bracket_scale so that it reads as a relative
+// error).
 
 #include "common/tonemap.wgsl"
 
 // A render darker than this share of its photograph is weighed as if it
 // were at it (passes/src/train/loss.rs RENDER_FLOOR_SHARE).
 const RENDER_FLOOR_SHARE: f32 = 0.0625;
+
+// The least a bracket's code residual is divided by: two 8-bit levels
+// (passes/src/train/loss.rs BRACKET_CODE_FLOOR).
+const BRACKET_CODE_FLOOR: f32 = 0.00784313725;
 
 struct PixelLoss {
     loss: f32,
@@ -27,6 +32,24 @@ fn train_srgb_encode(v: f32) -> vec2<f32> {
     return vec2<f32>(1.055 * pow(v, 1.0 / 2.4) - 0.055, 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
 }
 
+// sRGB-encoded [0, 1] to linear (passes/src/dataset/pixels.rs srgb_to_linear).
+fn train_srgb_decode(c: f32) -> f32 {
+    if c <= 0.04045 {
+        return c / 12.92;
+    }
+    return pow((c + 0.055) / 1.055, 2.4);
+}
+
+// The held weight of a bracket's squared code residual: 1/σ², σ the code
+// difference a relative error of 1 makes at the relative loss's
+// denominator, plus the code floor (passes/src/train/loss.rs bracket_scale).
+fn bracket_scale(c: f32, encoded: f32, exposure: f32, epsilon: f32) -> f32 {
+    let y = train_srgb_decode(min(encoded, 1.0)) / exposure;
+    let d = max(max(c, RENDER_FLOOR_SHARE * y), 0.0) + epsilon;
+    let sigma = train_srgb_encode(exposure * d).y * exposure * d + BRACKET_CODE_FLOOR;
+    return 1.0 / (sigma * sigma);
+}
+
 fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, epsilon: f32) -> PixelLoss {
     var out = PixelLoss(0.0, vec3<f32>(0.0));
     for (var k = 0u; k < 3u; k++) {
@@ -36,9 +59,10 @@ fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, e
             let white = target_value[k] >= 1.0;
             let e = train_srgb_encode(select(max(v, 0.0), clamp(v, 0.0, 1.0), white));
             let r = e.x - target_value[k];
-            out.loss += r * r;
+            let scale = bracket_scale(c[k], target_value[k], exposure, epsilon);
+            out.loss += r * r * scale;
             if v > 0.0 && (v < 1.0 || !white) {
-                out.grad[k] = 2.0 * r * e.y * exposure;
+                out.grad[k] = 2.0 * r * e.y * exposure * scale;
             }
         } else {
             var r = c[k] - target_value[k];

@@ -190,6 +190,43 @@ pub fn bracket_reading(v: f32, exposure: f32) -> (f32, bool) {
     )
 }
 
+/// The light a capture's brackets cannot record: pixels that saturate
+/// even the shortest exposure, where every bracket says only that the
+/// radiance is at least white over that exposure. A light there is as
+/// bright in a trained field as the rest of the loss happens to make it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct UnrecordedLight {
+    /// Pixels saturated (in any channel) in the shortest bracket.
+    pub pixels: u64,
+    /// Views with at least one such pixel.
+    pub views: u32,
+    /// The brightest channel of any of them, linear radiance.
+    pub brightest: f32,
+}
+
+impl UnrecordedLight {
+    /// Adds one view's radiance, bracketed down to exposure `shortest`.
+    pub fn add_view(&mut self, rgb: &[[f32; 3]], shortest: f32) {
+        let mut seen = false;
+        for p in rgb {
+            if p.iter().any(|&c| bracket_reading(c, shortest).1) {
+                self.pixels += 1;
+                self.brightest = self.brightest.max(p[0].max(p[1]).max(p[2]));
+                seen = true;
+            }
+        }
+        self.views += seen as u32;
+    }
+
+    /// The exposure value, in whole stops, at or below which a bracket
+    /// records every pixel added (the brightest below the 8-bit code's
+    /// white, with a margin for its rounding); None when every pixel was
+    /// recorded.
+    pub fn stops_needed(&self) -> Option<i32> {
+        (self.pixels > 0).then(|| (-(self.brightest as f64 / 0.99).log2()).floor() as i32)
+    }
+}
+
 /// A bracketed LDR frame as PNG bytes: clip(`exposure` × radiance) through
 /// the sRGB curve, 8 bits, as a camera with an sRGB response records it.
 pub fn bracket_png(rgb: &[[f32; 3]], width: u32, height: u32, exposure: f32) -> Vec<u8> {
@@ -213,6 +250,30 @@ pub fn bracket_png(rgb: &[[f32; 3]], width: u32, height: u32, exposure: f32) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A light past the shortest bracket's white is counted, and a bracket
+    /// at the stops it names records it; one every bracket records is not
+    /// counted.
+    #[test]
+    fn unrecorded_light_names_the_bracket_that_records_it() {
+        let view = [[160.0, 80.0, 20.0], [0.5, 0.5, 0.5], [128.0, 1.0, 1.0]];
+        let mut light = UnrecordedLight::default();
+        light.add_view(&view, 2f32.powi(-6));
+        light.add_view(&[[0.2; 3]], 2f32.powi(-6));
+        assert_eq!((light.pixels, light.views, light.brightest), (2, 1, 160.0));
+        let ev = light.stops_needed().expect("the lamp saturates 1/64");
+        assert_eq!(ev, -8);
+        for p in view {
+            assert!(p.iter().all(|&c| !bracket_reading(c, 2f32.powi(ev)).1));
+        }
+        // Exactly white at EV -7 saturates it: -8 is needed.
+        let mut at_white = UnrecordedLight::default();
+        at_white.add_view(&[[128.0; 3]], 2f32.powi(-6));
+        assert_eq!(at_white.stops_needed(), Some(-8));
+        let mut none = UnrecordedLight::default();
+        none.add_view(&view, 2f32.powi(-9));
+        assert_eq!((none.pixels, none.stops_needed()), (0, None));
+    }
     use crate::camera::CameraFrame;
     use crate::dataset::{load_dataset, BoundsSource, Dialect, LoadOptions};
 

@@ -26,7 +26,10 @@
 //!   the sRGB curve continued past 1, so a render too bright for it is
 //!   pulled down however bright (clipped, it gave no gradient past white:
 //!   a field too bright in a pixel was held there by every exposure that
-//!   saw it so).
+//!   saw it so). Each channel's squared difference is divided by the code
+//!   difference a relative error of 1 makes there ([`bracket_scale`]), so
+//!   a well-exposed bracket weighs a pixel by its relative error, as a
+//!   linear view does.
 
 use glam::DVec3;
 
@@ -66,6 +69,30 @@ fn srgb_encode(v: f64) -> (f64, f64) {
     }
 }
 
+/// The least a bracket's residual is divided by, in sRGB code values: two
+/// 8-bit levels, so that a pixel a bracket records a few levels above
+/// black (where the code says little of the radiance) weighs by its code
+/// difference, not as a relative error.
+pub const BRACKET_CODE_FLOOR: f64 = 2.0 / 255.0;
+
+/// The held weight 1/σ² of one channel of a bracket's squared code
+/// residual (render `c`, recorded code `encoded`, exposure `exposure`, ε
+/// the relative loss's floor): σ is the code difference that a relative
+/// error of 1 in the radiance makes, slope(e·D)·e·D with D the relative
+/// loss's denominator (max(c, s·Y) + ε, Y the recorded radiance), plus
+/// [`BRACKET_CODE_FLOOR`]. So a well-exposed bracket weighs a pixel by its
+/// relative error, as a linear view does, whatever its brightness: squared
+/// code differences alone weigh a render 20 % dim 0.41 times as much at
+/// 0.31 of white (PLANTS' lamp in the bracket that records it) as at 0.9,
+/// and a dark pixel the lamp's blur lights in a long exposure far more
+/// than a lamp pixel 20 % dim in the short one that records it.
+pub fn bracket_scale(c: f64, encoded: f64, exposure: f64, epsilon: f64) -> f64 {
+    let y = crate::dataset::pixels::srgb_to_linear(encoded.min(1.0) as f32) as f64 / exposure;
+    let d = c.max(RENDER_FLOOR_SHARE * y).max(0.0) + epsilon;
+    let sigma = srgb_encode(exposure * d).1 * exposure * d + BRACKET_CODE_FLOOR;
+    1.0 / (sigma * sigma)
+}
+
 /// The loss of rendered pixel `c` against `target` (ε the relative loss's
 /// floor, in radiance) and its gradient with respect to `c`.
 pub fn pixel_loss(c: DVec3, target: PixelTarget, epsilon: f64) -> (f64, DVec3) {
@@ -95,9 +122,10 @@ pub fn pixel_loss(c: DVec3, target: PixelTarget, epsilon: f64) -> (f64, DVec3) {
                 let white = encoded[k] >= 1.0;
                 let (e, slope) = srgb_encode(if white { v.clamp(0.0, 1.0) } else { v.max(0.0) });
                 let r = e - encoded[k];
-                loss += r * r;
+                let scale = bracket_scale(c[k], encoded[k], exposure, epsilon);
+                loss += r * r * scale;
                 if v > 0.0 && (v < 1.0 || !white) {
-                    grad[k] = 2.0 * r * slope * exposure;
+                    grad[k] = 2.0 * r * slope * exposure * scale;
                 }
             }
             (loss, grad)
@@ -136,7 +164,12 @@ mod tests {
                 a[k] += h;
                 b[k] -= h;
                 let held = |x: DVec3| match t {
-                    PixelTarget::Bracket { .. } => pixel_loss(x, t, 1e-2).0,
+                    PixelTarget::Bracket { encoded, exposure } => {
+                        let v = (exposure * x[k]).max(0.0);
+                        let v = if encoded[k] >= 1.0 { v.min(1.0) } else { v };
+                        (srgb_encode(v).0 - encoded[k]).powi(2)
+                            * bracket_scale(c[k], encoded[k], exposure, 1e-2)
+                    }
                     PixelTarget::Value(y) | PixelTarget::AtLeast(y) => {
                         let r = x[k] - y[k];
                         let r = if matches!(t, PixelTarget::AtLeast(_)) {
@@ -203,9 +236,48 @@ mod tests {
         assert!(g2.min_element() > 0.0 && g8.min_element() > 0.0);
         assert!(l8 > l2 && l2 > 3.0 * 0.25, "{l2} {l8}");
         let below = pixel_loss(DVec3::splat(1.2), grey, 1e-2).0;
-        let expected = 3.0 * (crate::dataset::pixels::srgb_encode(0.6) - 0.5f64).powi(2);
+        let expected = 3.0
+            * (crate::dataset::pixels::srgb_encode(0.6) - 0.5f64).powi(2)
+            * bracket_scale(1.2, 0.5, 0.5, 1e-2);
         assert!((below - expected).abs() < 1e-12);
         let (under, over) = (srgb_encode(1.0 - 1e-9).0, srgb_encode(1.0 + 1e-9).0);
         assert!((under - 1.0).abs() < 1e-8 && (over - 1.0).abs() < 1e-8);
+    }
+
+    /// A well-exposed bracket weighs a render by its relative error, as a
+    /// linear view does: 20 % dim costs 0.77–0.84 of the linear loss (the
+    /// sRGB curve flattens over the 20 %) whether the bracket recorded the
+    /// pixel at 3 % or 90 % of white (as
+    /// squared code differences alone, 0.31 of white, PLANTS' lamp in its
+    /// shortest bracket, cost 0.41 of 0.9 of white's). A pixel a bracket
+    /// records near black weighs by its code difference over the floor.
+    #[test]
+    fn a_bracket_weighs_a_render_by_its_relative_error() {
+        let eps = 1e-3;
+        let mut ratios = Vec::new();
+        for (radiance, exposure) in [(160.0, 1.0 / 512.0), (0.9, 1.0), (0.4, 0.125), (0.03, 1.0)] {
+            let y = DVec3::splat(radiance);
+            let encoded = DVec3::splat(crate::dataset::pixels::srgb_encode(radiance * exposure));
+            let bracket = PixelTarget::Bracket { encoded, exposure };
+            let dim = 0.8 * y;
+            let (b, _) = pixel_loss(dim, bracket, eps);
+            let (l, _) = pixel_loss(dim, PixelTarget::Value(y), eps);
+            ratios.push(b / l);
+            assert!(
+                (0.7..0.95).contains(&(b / l)),
+                "{radiance} at {exposure}: {b} against {l}"
+            );
+        }
+        let (low, high) = ratios
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), r| (a.min(*r), b.max(*r)));
+        assert!(high / low < 1.15, "{ratios:?}");
+        // Recorded at a few levels above black: bounded by the floor.
+        let faint = PixelTarget::Bracket {
+            encoded: DVec3::splat(1.0 / 255.0),
+            exposure: 1.0 / 512.0,
+        };
+        let (l, _) = pixel_loss(DVec3::splat(0.0), faint, eps);
+        assert!(l <= 3.0 * 0.25 + 1e-12 && l > 0.5, "{l}");
     }
 }

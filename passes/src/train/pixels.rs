@@ -128,6 +128,87 @@ pub fn merged_luminance(dataset: &Dataset, set: &[u32], pixel: u32) -> Option<f6
     Some(reading(unsaturated.unwrap_or(last)))
 }
 
+/// What a dataset's brackets cannot tell: pixels that every bracket of
+/// their pose recorded white (in some channel), where the photographs say
+/// only that the radiance is at least white over the shortest exposure.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SaturatedInEveryBracket {
+    /// Such pixels, counted once per pose.
+    pub pixels: usize,
+    /// The poses with at least one.
+    pub poses: usize,
+    /// The poses taken as brackets.
+    pub bracketed_poses: usize,
+    /// The shortest exposure among the poses with such pixels.
+    pub shortest: f64,
+}
+
+impl SaturatedInEveryBracket {
+    /// What to tell the user, where there are such pixels.
+    pub fn warning(&self) -> Option<String> {
+        (self.pixels > 0).then(|| {
+            format!(
+                "{} pixels of {} of its {} bracketed poses are white in every bracket (the \
+                 shortest exposure there {:.4}): the photographs say only that their radiance is \
+                 at least {:.1} there, so a light there is as bright as the rest of the loss \
+                 makes it; a shorter bracket would record it",
+                self.pixels,
+                self.poses,
+                self.bracketed_poses,
+                self.shortest,
+                1.0 / self.shortest
+            )
+        })
+    }
+}
+
+/// The pixels of `dataset` that every bracket of their pose
+/// ([`bracket_sets`], over every frame) recorded white, where it saw them
+/// at all.
+pub fn saturated_in_every_bracket(dataset: &Dataset) -> SaturatedInEveryBracket {
+    let frames: Vec<u32> = (0..dataset.frames.len() as u32).collect();
+    let sets = bracket_sets(dataset, &frames);
+    let mut out = SaturatedInEveryBracket {
+        shortest: f64::INFINITY,
+        ..Default::default()
+    };
+    for &f in &frames {
+        let set = &sets[f as usize];
+        // Each pose once: at its longest exposure's frame.
+        if set[0] != f || !is_bracket(&dataset.frames[f as usize]) {
+            continue;
+        }
+        out.bracketed_poses += 1;
+        let members: Vec<&Frame> = set.iter().map(|&i| &dataset.frames[i as usize]).collect();
+        let pixels = members[0].image.state.len();
+        let white = (0..pixels)
+            .filter(|&p| {
+                let seen = members
+                    .iter()
+                    .filter(|m| m.image.state[p] != PixelState::Masked);
+                let mut any = false;
+                for m in seen {
+                    if m.image.state[p] != PixelState::LowerBound {
+                        return false;
+                    }
+                    any = true;
+                }
+                any
+            })
+            .count();
+        if white > 0 {
+            out.pixels += white;
+            out.poses += 1;
+            let last = members.last().expect("a pose has its own frame");
+            out.shortest = out.shortest.min(recorded_exposure(last));
+        }
+    }
+    if out.poses == 0 {
+        out.shortest = 0.0;
+    }
+    out
+}
+
 /// The training pixels: every usable pixel of the frames not held out.
 #[derive(Debug, Clone)]
 pub struct PixelPool {

@@ -726,6 +726,37 @@ mod tests {
         );
     }
 
+    /// A lamp past the shortest bracket's white is counted once for its
+    /// pose; one the shortest records is not; linear frames have no
+    /// brackets to count.
+    #[test]
+    fn a_light_every_bracket_saturates_is_counted() {
+        let lamp = |v: f32| -> Vec<f32> { (0..50).map(|i| if i == 7 { v } else { 0.3 }).collect() };
+        let brackets = |v: f32| Dataset {
+            frames: [1.0 / 64.0, 1.0 / 8.0, 1.0]
+                .map(|e| frame_of(&lamp(v), Some(e)))
+                .to_vec(),
+            ..dataset_with(0)
+        };
+        let s = super::super::pixels::saturated_in_every_bracket(&brackets(160.0));
+        assert_eq!((s.pixels, s.poses, s.bracketed_poses), (1, 1, 1));
+        assert_eq!(s.shortest, 1.0 / 64.0);
+        let w = s.warning().expect("a pixel to warn of");
+        assert!(
+            w.contains("1 pixels of 1 of its 1") && w.contains("at least 64.0"),
+            "{w}"
+        );
+        let s = super::super::pixels::saturated_in_every_bracket(&brackets(40.0));
+        assert_eq!((s.pixels, s.poses, s.bracketed_poses), (0, 0, 1));
+        assert_eq!(s.warning(), None);
+        let linear = Dataset {
+            frames: vec![frame_of(&lamp(160.0), None)],
+            ..dataset_with(0)
+        };
+        let s = super::super::pixels::saturated_in_every_bracket(&linear);
+        assert_eq!((s.pixels, s.bracketed_poses), (0, 0));
+    }
+
     /// A random background is refused, naming the file, for photographs
     /// with transparent pixels, and taken for opaque ones; a fixed one
     /// either way.

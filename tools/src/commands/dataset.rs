@@ -127,6 +127,9 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         "pixels: {total}; masked: {} NaN or infinite, {} negative, {} by masks; {} saturated (lower bounds)",
         c.non_finite, c.negative, c.masked, c.saturated
     );
+    if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&d).warning() {
+        println!("warning: {w}");
+    }
     let mut lum: Vec<f32> = d
         .frames
         .iter()

@@ -16,7 +16,7 @@ use inlay_engine::HdrImage;
 use inlay_passes::bake::{render_reference, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::dataset::capture::{
-    bracket_png, cap_cameras, transforms_json, Capture, WrittenFrame,
+    bracket_png, cap_cameras, transforms_json, Capture, UnrecordedLight, WrittenFrame,
 };
 use inlay_passes::scene::load_scene;
 
@@ -139,6 +139,8 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
     let mut outputs = Outputs::new();
     let mut frames = Vec::new();
     let mut bracketed = Vec::new();
+    let shortest = args.brackets.iter().copied().reduce(f64::min);
+    let mut unrecorded = UnrecordedLight::default();
     for (i, camera) in cameras.iter().enumerate() {
         let frame = CameraFrame::new(camera, w, h);
         let pixels = render_reference(
@@ -167,6 +169,9 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
             exposure_time: None,
         });
         let rgb: Vec<[f32; 3]> = pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        if let Some(ev) = shortest {
+            unrecorded.add_view(&rgb, 2f64.powf(ev) as f32);
+        }
         for ev in &args.brackets {
             let exposure = 2f64.powf(*ev);
             let file = format!("view-{i:03}-ev{ev:+}.png");
@@ -206,5 +211,16 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
         started.elapsed().as_secs_f64(),
         written.len()
     );
+    if let (Some(ev), Some(needed)) = (shortest, unrecorded.stops_needed()) {
+        eprintln!(
+            "warning: {} pixels of {} views saturate even the shortest bracket (EV {ev:+}), up to \
+             {:.1} times its white: the brackets hold only a lower bound there, so a field \
+             trained from them keeps whatever brightness its loss gives those lights; a bracket \
+             at EV {needed:+} or below would record them",
+            unrecorded.pixels,
+            unrecorded.views,
+            unrecorded.brightest as f64 * 2f64.powf(ev)
+        );
+    }
     Ok(())
 }

@@ -293,6 +293,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         b.max.z,
         dataset.bounds_source
     );
+    if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&dataset).warning() {
+        eprintln!("warning: {}: {w}", dataset.file.display());
+    }
     if knobs.sparsity_at(nodes) != knobs.sparsity {
         eprintln!(
             "sparsity prior {:.3e} at {nodes} nodes (--sparsity {:e} is stated for 128 nodes)",
