@@ -202,6 +202,10 @@ pub struct UnrecordedLight {
     pub views: u32,
     /// The brightest channel of any of them, linear radiance.
     pub brightest: f32,
+    /// Their light (the sum of their channels), linear radiance.
+    pub light: f64,
+    /// Every pixel's light added.
+    pub total_light: f64,
 }
 
 impl UnrecordedLight {
@@ -209,13 +213,26 @@ impl UnrecordedLight {
     pub fn add_view(&mut self, rgb: &[[f32; 3]], shortest: f32) {
         let mut seen = false;
         for p in rgb {
+            let light = p.iter().map(|&c| c as f64).sum::<f64>();
+            self.total_light += light;
             if p.iter().any(|&c| bracket_reading(c, shortest).1) {
+                self.light += light;
                 self.pixels += 1;
                 self.brightest = self.brightest.max(p[0].max(p[1]).max(p[2]));
                 seen = true;
             }
         }
         self.views += seen as u32;
+    }
+
+    /// The share of the views' light in the pixels the shortest bracket
+    /// does not record (0 with no views).
+    pub fn light_share(&self) -> f64 {
+        if self.total_light > 0.0 {
+            self.light / self.total_light
+        } else {
+            0.0
+        }
     }
 
     /// The exposure value, in whole stops, at or below which a bracket
@@ -261,6 +278,8 @@ mod tests {
         light.add_view(&view, 2f32.powi(-6));
         light.add_view(&[[0.2; 3]], 2f32.powi(-6));
         assert_eq!((light.pixels, light.views, light.brightest), (2, 1, 160.0));
+        let share = (260.0 + 130.0) / (260.0 + 1.5 + 130.0 + 0.6);
+        assert!((light.light_share() - share).abs() < 1e-9);
         let ev = light.stops_needed().expect("the lamp saturates 1/64");
         assert_eq!(ev, -8);
         for p in view {
