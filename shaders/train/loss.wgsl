@@ -5,8 +5,8 @@
 // (the same, only below it); kind 2, a bracket (squared error of
 // srgb(exposure × C) against the recorded encoded value, clipped at white
 // only where the photograph recorded white; below white the sRGB curve
-// continued past 1; weighed by bracket_scale so that it reads as a relative
-// error).
+// continued past 1; less its rounding and weighed by bracket_scale, so that
+// it reads as the linear loss would).
 
 #include "common/tonemap.wgsl"
 
@@ -32,6 +32,16 @@ fn train_srgb_encode(v: f32) -> vec2<f32> {
     return vec2<f32>(1.055 * pow(v, 1.0 / 2.4) - 0.055, 1.055 / 2.4 * pow(v, 1.0 / 2.4 - 1.0));
 }
 
+// Half an 8-bit level (passes/src/train/loss.rs BRACKET_HALF_LEVEL).
+const BRACKET_HALF_LEVEL: f32 = 0.00196078431;
+
+// A bracket's code residual less the rounding it may hold: 0 within half a
+// level of the recorded code, beyond it the excess (passes/src/train/loss.rs
+// quantised_residual).
+fn quantised_residual(r: f32) -> f32 {
+    return sign(r) * max(abs(r) - BRACKET_HALF_LEVEL, 0.0);
+}
+
 // sRGB-encoded [0, 1] to linear (passes/src/dataset/pixels.rs srgb_to_linear).
 fn train_srgb_decode(c: f32) -> f32 {
     if c <= 0.04045 {
@@ -41,12 +51,13 @@ fn train_srgb_decode(c: f32) -> f32 {
 }
 
 // The held weight of a bracket's squared code residual: 1/σ², σ the code
-// difference a relative error of 1 makes at the relative loss's
-// denominator, plus the code floor (passes/src/train/loss.rs bracket_scale).
+// difference an error of the linear loss's denominator makes at the
+// pixel's level, plus the code floor (passes/src/train/loss.rs
+// bracket_scale).
 fn bracket_scale(c: f32, encoded: f32, exposure: f32, epsilon: f32) -> f32 {
     let y = train_srgb_decode(min(encoded, 1.0)) / exposure;
-    let d = max(max(c, RENDER_FLOOR_SHARE * y), 0.0) + epsilon;
-    let sigma = train_srgb_encode(exposure * d).y * exposure * d + BRACKET_CODE_FLOOR;
+    let level = max(max(c, RENDER_FLOOR_SHARE * y), 0.0);
+    let sigma = train_srgb_encode(exposure * level).y * exposure * (level + epsilon) + BRACKET_CODE_FLOOR;
     return 1.0 / (sigma * sigma);
 }
 
@@ -58,7 +69,7 @@ fn pixel_loss(c: vec3<f32>, kind: u32, target_value: vec3<f32>, exposure: f32, e
             // Recorded white: the render is clipped as the sensor was.
             let white = target_value[k] >= 1.0;
             let e = train_srgb_encode(select(max(v, 0.0), clamp(v, 0.0, 1.0), white));
-            let r = e.x - target_value[k];
+            let r = quantised_residual(e.x - target_value[k]);
             let scale = bracket_scale(c[k], target_value[k], exposure, epsilon);
             out.loss += r * r * scale;
             if v > 0.0 && (v < 1.0 || !white) {
