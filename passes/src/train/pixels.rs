@@ -183,17 +183,11 @@ pub fn saturated_in_every_bracket(dataset: &Dataset) -> SaturatedInEveryBracket 
         let pixels = members[0].image.state.len();
         let white = (0..pixels)
             .filter(|&p| {
-                let seen = members
+                let mut seen = members
                     .iter()
-                    .filter(|m| m.image.state[p] != PixelState::Masked);
-                let mut any = false;
-                for m in seen {
-                    if m.image.state[p] != PixelState::LowerBound {
-                        return false;
-                    }
-                    any = true;
-                }
-                any
+                    .filter(|m| m.image.state[p] != PixelState::Masked)
+                    .peekable();
+                seen.peek().is_some() && seen.all(|m| m.image.state[p] == PixelState::LowerBound)
             })
             .count();
         if white > 0 {

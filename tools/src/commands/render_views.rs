@@ -215,9 +215,8 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
         eprintln!(
             "warning: {} pixels of {} views saturate even the shortest bracket (EV {ev:+}), up to \
              {:.1} times its white, with {:.0} % of the views' light: the brackets hold only a \
-             lower bound there, so a field \
-             trained from them keeps whatever brightness its loss gives those lights; a bracket \
-             at EV {needed:+} or below would record them",
+             lower bound there, so a field trained from them keeps whatever brightness its loss \
+             gives those lights; a bracket at EV {needed:+} or below would record them",
             unrecorded.pixels,
             unrecorded.views,
             unrecorded.brightest as f64 * 2f64.powf(ev),
