@@ -52,6 +52,11 @@ impl BrickLayout {
     pub fn from_kept(resolution: UVec3, keep: &[bool]) -> Self {
         let dims = Self::dims_of(resolution);
         assert_eq!(keep.len(), (dims.x * dims.y * dims.z) as usize);
+        Self::numbered(dims, keep)
+    }
+
+    /// Slots numbered in table order over the bricks `keep` says.
+    fn numbered(dims: UVec3, keep: &[bool]) -> Self {
         let mut slots = 0;
         let table = keep
             .iter()
@@ -88,6 +93,21 @@ impl BrickLayout {
             }
         }
         Self::from_kept(r, &keep)
+    }
+
+    /// The layout keeping every brick either `self` or `other` keeps
+    /// (slots renumbered in table order).
+    ///
+    /// Panics if the two are over different grids of bricks.
+    pub fn union(&self, other: &BrickLayout) -> BrickLayout {
+        assert_eq!(self.dims, other.dims);
+        let keep: Vec<bool> = self
+            .table
+            .iter()
+            .zip(&other.table)
+            .map(|(&a, &b)| a != EMPTY_BRICK || b != EMPTY_BRICK)
+            .collect();
+        Self::numbered(self.dims, &keep)
     }
 
     /// Each slot's index in the table.

@@ -63,6 +63,27 @@ pub fn stage_bricks(
     BrickLayout::from_kept(target, &keep)
 }
 
+/// The bricks a stage of `target` nodes trains after `before` (the stage
+/// before, or a resumed field): [`stage_bricks`], and where `before` is
+/// already at `target` (a resumed field) every brick it holds a non-zero
+/// value in too ([`BrickLayout::of`]). A resumed field then starts as it
+/// was saved: the visibility rule alone dropped the haze and faint colour
+/// that the saved views were scored with, and a PLANTS field resumed for
+/// one step at no rate read 0.3–0.8 dB lower on its held-out views.
+pub fn stage_layout(
+    before: &GridField,
+    visibility: &[f32],
+    threshold: f64,
+    target: UVec3,
+) -> BrickLayout {
+    let seen = stage_bricks(before, visibility, threshold, target);
+    if before.resolution == target {
+        seen.union(&BrickLayout::of(before))
+    } else {
+        seen
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,6 +119,50 @@ mod tests {
                 UVec3::new(3, 0, 8),
                 UVec3::new(4, 0, 8)
             ]
+        );
+    }
+
+    /// A resumed field (the target its own resolution) keeps every brick
+    /// it holds a value in, haze included, besides those its visible
+    /// surfaces mark; a finer stage after it keeps only the latter.
+    #[test]
+    fn a_resumed_field_keeps_the_bricks_it_holds() {
+        let r = UVec3::splat(24);
+        let mut field = GridField::new(
+            r,
+            Aabb::new(DVec3::ZERO, DVec3::ONE),
+            vec![[0.0; 4]; (r.x * r.y * r.z) as usize],
+            4,
+        );
+        // A surface in brick (0, 0, 0), seen; haze in brick (2, 2, 2), seen
+        // too but below the surface's density.
+        let h = field.spacing().min_element();
+        let surface = field.index(3, 3, 3);
+        field.nodes[surface] = [0.5, 0.5, 0.5, (10.0 * MIN_DEPTH / h) as f32];
+        let haze = field.index(20, 20, 20);
+        field.nodes[haze] = [0.2, 0.2, 0.2, (0.1 * MIN_DEPTH / h) as f32];
+        let mut visibility = vec![0.0f32; field.nodes.len()];
+        visibility[surface] = 0.5;
+        visibility[haze] = 0.5;
+        let kept = |l: &BrickLayout| {
+            (0..l.table.len())
+                .filter(|&b| l.table[b] != crate::field::bricks::EMPTY_BRICK)
+                .count()
+        };
+        let seen = stage_bricks(&field, &visibility, 0.01, r);
+        let resumed = stage_layout(&field, &visibility, 0.01, r);
+        assert_eq!(kept(&seen), 1, "the visibility rule drops the haze");
+        assert_eq!(kept(&resumed), 2);
+        assert_eq!(resumed.slots, 2);
+        assert_ne!(
+            resumed.table[brick_index(resumed.dims, UVec3::splat(2))],
+            crate::field::bricks::EMPTY_BRICK
+        );
+        // Finer, the haze's brick is not kept.
+        let finer = UVec3::splat(48);
+        assert_eq!(
+            stage_layout(&field, &visibility, 0.01, finer),
+            stage_bricks(&field, &visibility, 0.01, finer)
         );
     }
 }

@@ -322,12 +322,12 @@ pub fn train(
         let sparse = (s > 0 || control.resume.is_some())
             && (knobs.sparse || !GpuTrainer::dense_fits(ctx.info(), target, knobs.sh_degree));
         // The bricks around what the stage before (or the resumed field)
-        // made visible.
+        // made visible, and those a resumed field holds.
         let layout = if sparse {
             let rays = super::prune::training_rays(dataset, &pool);
             let visibility =
                 node_visibility_gpu(&mut renderer, lib, &field, &rays, &view_march, Auto)?;
-            Some(super::sparse_stage::stage_bricks(
+            Some(super::sparse_stage::stage_layout(
                 &field,
                 &visibility,
                 knobs.prune,

@@ -138,7 +138,8 @@ pub struct TrainArgs {
     #[arg(long)]
     pub time_budget: Option<f64>,
     /// Continue from this field (its resolution and bounds, one stage)
-    /// instead of a grey grid.
+    /// instead of a grey grid; trained sparsely, it keeps every brick it
+    /// holds a value in.
     #[arg(long)]
     pub resume: Option<PathBuf>,
     /// Picture of the held-out views: photograph | field | difference.
