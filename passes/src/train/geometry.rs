@@ -7,6 +7,8 @@
 //! shadows and the environment estimate even where the held-out views'
 //! PSNR is good, and the PSNR cannot tell.
 
+use glam::DVec3;
+
 use crate::dataset::{Frame, PixelState};
 use crate::field::GridField;
 use crate::geometry::{ray_box, Ray};
@@ -43,6 +45,13 @@ pub struct GeometryScore {
     /// spacings: negative where the field's surfaces lie in front of the
     /// known ones (NaN where none was compared).
     pub median_signed_error: f64,
+    /// Median over the same pixels of |D̂/Ô − t_surface|·|d·n| (d the
+    /// ray's unit direction, n the known surface's normal where the ray
+    /// meets it), in node spacings: how far the field's depth lies from
+    /// the known surface's tangent plane. A ray meeting a floor at 16° of
+    /// elevation reads an offset δ along its normal as δ / sin 16° ≈ 3.6δ
+    /// of depth; this reads δ (NaN where none was compared).
+    pub median_normal_offset: f64,
     /// Share of the pixels with a known surface inside the bounds where
     /// the field is not opaque: the camera sees through it (NaN: no such
     /// pixel).
@@ -58,21 +67,26 @@ pub struct GeometryScore {
     pub haze: f64,
 }
 
+/// The first known surface along a ray within (t_min, t_max): its
+/// distance and its unit normal there, None where there is none.
+pub type KnownSurface<'a> = dyn Fn(&Ray, f64, f64) -> Option<(f64, DVec3)> + Sync + 'a;
+
 /// Scores `field`'s geometry in `frame`'s usable pixels: `surface(ray,
 /// t_min, t_max)` gives the distance to the first known surface along the
-/// ray within (t_min, t_max), None where there is none.
+/// ray within (t_min, t_max) and the surface's unit normal there, None
+/// where there is none.
 pub fn geometry_score(
     frame: &Frame,
     field: &GridField,
     march: &MarchKnobs,
-    surface: &(dyn Fn(&Ray, f64, f64) -> Option<f64> + Sync),
+    surface: &KnownSurface<'_>,
 ) -> GeometryScore {
     use rayon::prelude::*;
     let spacing = field.spacing().min_element();
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     // Per pixel: (a known surface, the field opaque, signed depth error,
-    // the opacity in front of the known surface).
-    let pixels: Vec<(bool, bool, f64, f64)> = (0..w * h)
+    // the opacity in front of the known surface, |d·n| there).
+    let pixels: Vec<(bool, bool, f64, f64, f64)> = (0..w * h)
         .into_par_iter()
         .filter(|&p| frame.image.state[p as usize] != PixelState::Masked)
         .filter_map(|p| {
@@ -82,10 +96,11 @@ pub fn geometry_score(
             let m = march_ray(field, &ray, f64::INFINITY, march);
             let opaque = m.opacity >= SURFACE_OPACITY;
             let error = match known {
-                Some(t) if opaque => (m.depth / m.opacity - t) / spacing,
+                Some((t, _)) if opaque => (m.depth / m.opacity - t) / spacing,
                 _ => f64::NAN,
             };
-            let haze = known.map_or(f64::NAN, |t| {
+            let facing = known.map_or(f64::NAN, |(_, n)| (ray.dir.dot(n) / ray.dir.length()).abs());
+            let haze = known.map_or(f64::NAN, |(t, _)| {
                 let front = t - HAZE_MARGIN * spacing;
                 if front <= t0 {
                     0.0
@@ -93,14 +108,20 @@ pub fn geometry_score(
                     march_ray(field, &ray, front, march).opacity
                 }
             });
-            Some((known.is_some(), opaque, error, haze))
+            Some((known.is_some(), opaque, error, haze, facing))
         })
         .collect();
     let mut signed: Vec<f64> = pixels.iter().map(|p| p.2).filter(|e| !e.is_nan()).collect();
     let mut errors: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
+    let mut offsets: Vec<f64> = pixels
+        .iter()
+        .filter(|p| !p.2.is_nan())
+        .map(|p| (p.2 * p.4).abs())
+        .collect();
     errors.sort_by(f64::total_cmp);
     signed.sort_by(f64::total_cmp);
-    type Pixel = (bool, bool, f64, f64);
+    offsets.sort_by(f64::total_cmp);
+    type Pixel = (bool, bool, f64, f64, f64);
     let share = |of: &dyn Fn(&Pixel) -> bool, among: &dyn Fn(&Pixel) -> bool| {
         let n = pixels.iter().filter(|p| among(p)).count();
         let k = pixels.iter().filter(|p| among(p) && of(p)).count();
@@ -114,6 +135,7 @@ pub fn geometry_score(
         compared: errors.len(),
         median_error: median(&errors),
         median_signed_error: median(&signed),
+        median_normal_offset: median(&offsets),
         see_through: share(&|p| !p.1, &|p| p.0),
         floating: share(&|p| p.1, &|p| !p.0),
         haze: mean(pixels.iter().map(|p| p.3).filter(|o| !o.is_nan())),
@@ -197,10 +219,10 @@ mod tests {
     }
 
     /// The plane y = `y` as the known surface.
-    fn plane(y: f64) -> impl Fn(&Ray, f64, f64) -> Option<f64> + Sync {
+    fn plane(y: f64) -> impl Fn(&Ray, f64, f64) -> Option<(f64, DVec3)> + Sync {
         move |ray: &Ray, t0: f64, t1: f64| {
             let t = (y - ray.origin.y) / ray.dir.y;
-            (t > t0 && t < t1).then_some(t)
+            (t > t0 && t < t1).then_some((t, DVec3::Y))
         }
     }
 
@@ -235,6 +257,41 @@ mod tests {
             "{on:?} {off:?}"
         );
         assert_eq!(off.median_signed_error, -off.median_error, "{off:?}");
+        // Within 25° of the normal, the normal offset is 0.9–1 of the error.
+        assert!(
+            off.median_normal_offset <= off.median_error
+                && off.median_normal_offset > 0.9 * off.median_error,
+            "{off:?}"
+        );
+    }
+
+    /// Seen at a grazing angle, the same offset reads several times as
+    /// much depth along the rays, and the same along the slab's normal:
+    /// a camera 0.55 above the slab's top and 2.5 along x meets it at
+    /// 9–16° of elevation.
+    #[test]
+    fn an_offset_along_the_normal_does_not_grow_at_grazing_rays() {
+        let h = 2.0 / 23.0;
+        let top = -1.0 + 11.0 * h;
+        let field = slab(top + 0.5 * h);
+        let f = Frame {
+            pose: Pose::looking_at(
+                DVec3::new(2.5, top + 0.55, 0.0),
+                DVec3::new(0.0, top, 0.0),
+                DVec3::Y,
+            ),
+            intrinsics: Intrinsics::centred(32, 32, 12.0),
+            ..frame()
+        };
+        let on = geometry_score(&f, &field, &march(), &plane(top + 0.5 * h));
+        let off = geometry_score(&f, &field, &march(), &plane(top - 1.5 * h));
+        // (Fewer rays meet the lower plane inside the bounds.)
+        assert!(on.compared > 300 && off.compared > 300, "{on:?} {off:?}");
+        let along = off.median_error - on.median_error;
+        let normal = off.median_normal_offset - on.median_normal_offset;
+        assert!(along > 6.0, "{on:?} {off:?}");
+        assert!((normal - 2.0).abs() < 0.3, "{on:?} {off:?}");
+        assert!(on.median_normal_offset <= on.median_error);
     }
 
     /// Fog of density 2 above the slab hides 1 − e^(−2L) of it, L the
@@ -271,7 +328,7 @@ mod tests {
         let empty = geometry_score(&f, &slab(-2.0), &march(), &plane(0.0));
         assert!(empty.compared == 0 && empty.see_through == 1.0 && empty.median_error.is_nan());
         assert_eq!(empty.haze, 0.0, "{empty:?}");
-        let nothing = |_: &Ray, _: f64, _: f64| None;
+        let nothing = |_: &Ray, _: f64, _: f64| None::<(f64, DVec3)>;
         let full = geometry_score(&f, &slab(0.0), &march(), &nothing);
         assert!(full.compared == 0 && full.floating == 1.0 && full.see_through.is_nan());
         assert!(full.haze.is_nan(), "{full:?}");

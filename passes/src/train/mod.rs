@@ -24,7 +24,7 @@ pub mod visibility;
 pub use crate::field::Sky;
 pub use adam::{adam_step, AdamKnobs};
 pub use behind::Behind;
-pub use geometry::{geometry_score, GeometryScore, HAZE_MARGIN};
+pub use geometry::{geometry_score, GeometryScore, KnownSurface, HAZE_MARGIN};
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{default_iterations, TrainKnobs};
 pub use loss::{pixel_loss, PixelTarget};

@@ -422,7 +422,9 @@ fn print_geometry(
     // Its nearest_surface alone is used: no bounces.
     let tracer = inlay_passes::bake::PathTracer::new(recipe, &scene.environment, 0);
     let surface = |ray: &inlay_passes::geometry::Ray, t0: f64, t1: f64| {
-        tracer.nearest_surface(ray, t0, t1).map(|(t, _)| t)
+        tracer
+            .nearest_surface(ray, t0, t1)
+            .map(|(t, i)| (t, recipe.primitives[i].shape.normal(ray.at(t))))
     };
     let march = inlay_passes::train::view_march(knobs);
     for v in &trained.held_out {
@@ -432,8 +434,9 @@ fn print_geometry(
             "no pixel's depth compared (none both on a surface and opaque)".to_string()
         } else {
             format!(
-                "median |depth error| {:.2} node spacings over {} pixels (signed {:+.2}: in front when negative)",
-                g.median_error, g.compared, g.median_signed_error
+                "median |depth error| {:.2} node spacings over {} pixels (signed {:+.2}: in front when negative; \
+                 {:.2} along the surfaces' normals)",
+                g.median_error, g.compared, g.median_signed_error, g.median_normal_offset
             )
         };
         println!(
