@@ -53,6 +53,13 @@ pub struct TrainKnobs {
     pub rate_decay: f64,
     /// The relative loss's floor, as a fraction of the mean radiance.
     pub epsilon: f64,
+    /// The radiance the rates, the loss's floor and the starting grey are
+    /// fractions of; None: the photographs' mean luminance, pixels that
+    /// look past the bounds counted black
+    /// ([`super::trainer::mean_luminance`]). A light in view but outside
+    /// the field (ROOM's Cycles set sees its bulb in front of the box)
+    /// raises that mean far above the field's own light.
+    pub scale: Option<f64>,
     /// Total variation's step on colour after each Adam step: each value
     /// moves by 2 × this × its differences to its six neighbours (at most
     /// [`super::tv::MAX_TV_WEIGHT`]).
@@ -164,6 +171,7 @@ impl Default for TrainKnobs {
             density_rate: 5.0,
             rate_decay: 0.1,
             epsilon: 4.0,
+            scale: None,
             tv_colour: 0.0,
             tv_density: 3e-3,
             tv_edge: 0.1,
@@ -309,6 +317,11 @@ impl TrainKnobs {
                 "first_stage_share",
                 format!("{} must lie between 0 and 1", self.first_stage_share),
             );
+        }
+        if let Some(scale) = self.scale {
+            if !(scale > 0.0 && scale.is_finite()) {
+                return bad("scale", format!("{scale} must be a positive radiance"));
+            }
         }
         if self.sky > crate::field::sky::MAX_SKY_HEIGHT {
             return bad(

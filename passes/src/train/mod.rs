@@ -11,6 +11,7 @@ pub mod geometry;
 pub mod gpu;
 pub mod knobs;
 pub mod loss;
+pub mod past_bounds;
 pub mod pixels;
 pub mod prune;
 pub mod render;

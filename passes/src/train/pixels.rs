@@ -237,7 +237,9 @@ impl PixelPool {
     }
 
     /// `count` pixels drawn at random (with replacement) for step `step`:
-    /// each one's ray, what it says, and its frame.
+    /// each one's ray, what it says, and its frame, in the order of their
+    /// frames and pixels (neighbouring rays of a view then march side by
+    /// side on the device, over the same nodes and about as far).
     pub fn batch(
         &self,
         dataset: &Dataset,
@@ -254,9 +256,12 @@ impl PixelPool {
             let frame = &dataset.frames[r.frame as usize];
             if let (Some(ray), Some(t)) = (pixel_ray(frame, r.pixel), pixel_target(frame, r.pixel))
             {
-                out.push((ray, t, r.frame));
+                out.push((r, ray, t));
             }
         }
-        out
+        out.sort_by_key(|(r, _, _)| (r.frame, r.pixel));
+        out.into_iter()
+            .map(|(r, ray, t)| (ray, t, r.frame))
+            .collect()
     }
 }

@@ -16,6 +16,7 @@ use super::adam::AdamKnobs;
 use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
+use super::past_bounds::pixel_sees_bounds;
 use super::pixels::{bracket_sets, is_bracket, merged_luminance, pixel_ray, PixelPool};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
@@ -23,6 +24,7 @@ use crate::dataset::{Dataset, PixelState};
 use crate::field::FieldLayout::Auto;
 use crate::field::Sky;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
+use crate::geometry::Aabb;
 use crate::march::{march_ray, MarchKnobs};
 use crate::rng::Pcg32;
 use crate::sgfit::model::luminance;
@@ -167,8 +169,11 @@ pub fn with_sh_degree(field: GridField, degree: u32) -> GridField {
 /// their linear counterparts would. Read as recorded, PLANTS' brackets at
 /// 1/64, 1/8 and 1 gave a fraction of it, and the field they trained
 /// had its surfaces 10–13 node spacings in front of the recipe's
-/// (`docs/benchmarks.md`, issue 25's fifteenth pass).
-pub fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
+/// (`docs/benchmarks.md`, issue 25's fifteenth pass). A pixel whose ray
+/// misses `bounds` counts as black: its light is not the field's to hold
+/// ([`super::past_bounds`]), and a `render-views` set, black past the
+/// bounds, reads the same scale either way.
+pub fn mean_luminance(dataset: &Dataset, pool: &PixelPool, bounds: &Aabb) -> f64 {
     let training: Vec<u32> = (0..dataset.frames.len() as u32)
         .filter(|f| !pool.held_out.contains(f))
         .collect();
@@ -177,7 +182,9 @@ pub fn mean_luminance(dataset: &Dataset, pool: &PixelPool) -> f64 {
     let (mut sum, mut n) = (0.0, 0usize);
     for r in pool.pixels.iter().step_by(step) {
         if let Some(l) = merged_luminance(dataset, &sets[r.frame as usize], r.pixel) {
-            sum += l;
+            if pixel_sees_bounds(dataset, r.frame, r.pixel, bounds) {
+                sum += l;
+            }
             n += 1;
         }
     }
@@ -261,8 +268,10 @@ pub fn train(
     let started = Instant::now();
     let pool = PixelPool::new(dataset, hold_out);
     anyhow::ensure!(!pool.pixels.is_empty(), "no usable pixel to train on");
-    let scale = mean_luminance(dataset, &pool);
     let bounds = control.resume.map_or(dataset.bounds, |f| f.bounds);
+    let scale = knobs
+        .scale
+        .unwrap_or_else(|| mean_luminance(dataset, &pool, &bounds));
     let diag = bounds.diagonal();
     let march = MarchKnobs {
         skip_empty: false,
@@ -717,13 +726,34 @@ mod tests {
                 .map(|e| frame_of(&radiance, Some(e)))
                 .to_vec(),
         );
-        let of = |d: &Dataset| mean_luminance(d, &PixelPool::new(d, 0));
+        let of = |d: &Dataset| mean_luminance(d, &PixelPool::new(d, 0), &d.bounds);
         let truth = of(&linear);
         let read = of(&brackets);
         assert!(
             (read / truth - 1.0).abs() < 0.05,
             "brackets {read}, linear {truth}"
         );
+    }
+
+    /// A batch comes in the order of its frames and pixels (the device
+    /// marches neighbouring rays of a view side by side), and holds the
+    /// pixels the seed and step draw, whatever their order.
+    #[test]
+    fn a_batch_is_drawn_at_random_and_ordered_by_frame_and_pixel() {
+        let radiance: Vec<f32> = (0..200).map(|i| i as f32 / 200.0).collect();
+        let dataset = Dataset {
+            frames: (0..3).map(|_| frame_of(&radiance, None)).collect(),
+            ..dataset_with(0)
+        };
+        let pool = PixelPool::new(&dataset, 0);
+        let batch = pool.batch(&dataset, 64, 1, 5);
+        assert_eq!(batch.len(), 64);
+        let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f)| (*f, r.dir.x)).collect();
+        assert!(keys.windows(2).all(|w| w[0].0 <= w[1].0), "{keys:?}");
+        assert!(keys.iter().any(|k| k.0 == 0) && keys.iter().any(|k| k.0 == 2));
+        // The same draw for the same seed and step, another for the next step.
+        assert_eq!(pool.batch(&dataset, 64, 1, 5), batch);
+        assert_ne!(pool.batch(&dataset, 64, 1, 6), batch);
     }
 
     /// A lamp past the shortest bracket's white is counted once for its

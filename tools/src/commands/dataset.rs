@@ -130,6 +130,9 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&d).warning() {
         println!("warning: {w}");
     }
+    if let Some(w) = inlay_passes::train::past_bounds::light_past_bounds(&d, &d.bounds).warning() {
+        println!("warning: {w}");
+    }
     let mut lum: Vec<f32> = d
         .frames
         .iter()

@@ -68,6 +68,12 @@ pub struct TrainArgs {
     /// it errors count absolutely, above it relatively.
     #[arg(long, default_value_t = TrainKnobs::default().epsilon)]
     pub epsilon: f64,
+    /// The radiance `--rate`, `--epsilon` and the starting grey are
+    /// fractions of (default: the photographs' mean, pixels that look
+    /// past the bounds counted black); for a light in view that the field
+    /// does not hold, the field's own surfaces' level.
+    #[arg(long)]
+    pub scale: Option<f64>,
     /// Total variation's weight on neighbouring nodes' colour differences.
     #[arg(long, default_value_t = TrainKnobs::default().tv_colour)]
     pub tv_colour: f64,
@@ -214,6 +220,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         rate: args.rate,
         density_rate: args.density_rate,
         epsilon: args.epsilon,
+        scale: args.scale,
         tv_colour: args.tv_colour,
         tv_density: args.tv_density,
         tv_edge: args.tv_edge,
@@ -295,6 +302,12 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         dataset.bounds_source
     );
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&dataset).warning() {
+        eprintln!("warning: {}: {w}", dataset.file.display());
+    }
+    let bounds = resume.as_ref().map_or(dataset.bounds, |f| f.bounds);
+    if let Some(w) =
+        inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds).warning()
+    {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
     if knobs.sparsity_at(nodes) != knobs.sparsity {

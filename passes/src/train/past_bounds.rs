@@ -1,0 +1,169 @@
+//! Light the photographs show past the field's bounds: pixels whose ray
+//! never enters the box. The field cannot hold it (only a learnt sky
+//! behind it can), so it is left out of the knobs' scale
+//! ([`super::trainer::mean_luminance`]) and reported where it is much of
+//! the views' light. ROOM's Cycles set sees the ceiling bulb above the
+//! bounds in some views: 119 of its 294 912 pixels held 87.5 % of the
+//! views' light, and a scale read over them was 8 times the room's.
+
+use crate::dataset::{Dataset, PixelState};
+use crate::geometry::{ray_box, Aabb};
+
+use super::pixels::{bracket_sets, merged_luminance, pixel_ray};
+
+/// The share of the views' light past the bounds from which
+/// [`LightPastBounds::warning`] speaks.
+pub const WARN_SHARE: f64 = 0.1;
+
+/// Whether pixel `pixel` of frame `f` of `dataset` looks into `bounds`
+/// (its ray enters the box in front of the camera).
+pub fn pixel_sees_bounds(dataset: &Dataset, f: u32, pixel: u32, bounds: &Aabb) -> bool {
+    pixel_ray(&dataset.frames[f as usize], pixel)
+        .and_then(|ray| ray_box(&ray, bounds))
+        .is_some_and(|(_, t1)| t1 > 0.0)
+}
+
+/// The light of a dataset's pixels whose rays miss the field's bounds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LightPastBounds {
+    /// Usable pixels (each pose once) whose ray misses the bounds.
+    pub pixels: usize,
+    /// Usable pixels in all (each pose once).
+    pub of: usize,
+    /// Their share of the views' light (luminance; 0 in a black set).
+    pub share: f64,
+    /// The brightest of them (luminance).
+    pub brightest: f64,
+}
+
+impl LightPastBounds {
+    /// What to tell the user, where the light past the bounds is at least
+    /// [`WARN_SHARE`] of the views'.
+    pub fn warning(&self) -> Option<String> {
+        (self.share >= WARN_SHARE).then(|| {
+            format!(
+                "{:.0} % of the views' light lies past the field's bounds ({} of {} pixels, up to \
+                 {:.3}): the field cannot hold it, and the knobs' scale counts it black; `--sky N` \
+                 learns it as a background behind the field. A light in view in front of the \
+                 bounds raises the scale too: `--scale` sets it to the field's own level",
+                100.0 * self.share,
+                self.pixels,
+                self.of,
+                self.brightest
+            )
+        })
+    }
+}
+
+/// The light of `dataset`'s usable pixels (each pose's brackets merged,
+/// [`merged_luminance`]) whose rays miss `bounds`.
+pub fn light_past_bounds(dataset: &Dataset, bounds: &Aabb) -> LightPastBounds {
+    let frames: Vec<u32> = (0..dataset.frames.len() as u32).collect();
+    let sets = bracket_sets(dataset, &frames);
+    let (mut past, mut all) = (0.0, 0.0);
+    let mut out = LightPastBounds::default();
+    for &f in &frames {
+        let set = &sets[f as usize];
+        // Each pose once: at its longest exposure's frame.
+        if set[0] != f {
+            continue;
+        }
+        let frame = &dataset.frames[f as usize];
+        for p in 0..frame.image.state.len() as u32 {
+            if frame.image.state[p as usize] == PixelState::Masked {
+                continue;
+            }
+            let Some(l) = merged_luminance(dataset, set, p) else {
+                continue;
+            };
+            out.of += 1;
+            all += l;
+            if !pixel_sees_bounds(dataset, f, p, bounds) {
+                out.pixels += 1;
+                past += l;
+                out.brightest = out.brightest.max(l);
+            }
+        }
+    }
+    out.share = if all > 0.0 { past / all } else { 0.0 };
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::dataset::pixels::{FrameImage, PixelCounts};
+    use crate::dataset::{BoundsSource, Dialect, Frame, Intrinsics, Pose};
+    use crate::train::pixels::PixelPool;
+    use crate::train::trainer::mean_luminance;
+
+    /// A 16 × 16 view from 5 units up +z of a box of side 2 at the origin,
+    /// 60° across: its middle looks into the box, its rim past it. Grey
+    /// 0.2 everywhere but a lamp of 1000 at pixel 0 (past the box).
+    fn dataset() -> Dataset {
+        let (w, h) = (16u32, 16u32);
+        let mut radiance = vec![[0.2f32; 3]; (w * h) as usize];
+        radiance[0] = [1000.0; 3];
+        Dataset {
+            file: "shots/transforms.json".into(),
+            dialect: Dialect::InstantNgp,
+            frames: vec![Frame {
+                index: 0,
+                image_path: "view.exr".into(),
+                pose: Pose::looking_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y),
+                intrinsics: Intrinsics::centred(w, h, 60.0),
+                exposure_time: None,
+                exif_exposure: None,
+                image: FrameImage {
+                    width: w,
+                    height: h,
+                    radiance,
+                    state: vec![PixelState::Value; (w * h) as usize],
+                    counts: PixelCounts::default(),
+                },
+            }],
+            bounds: Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            bounds_source: BoundsSource::AabbKey,
+            counts: PixelCounts::default(),
+            skipped: Vec::new(),
+        }
+    }
+
+    /// The lamp past the box is most of the view's light and is reported;
+    /// the knobs' scale reads the pixels past the box as black, so it is
+    /// the grey's share of the view that looks into the box.
+    #[test]
+    fn light_past_the_bounds_is_reported_and_left_out_of_the_scale() {
+        let d = dataset();
+        let inside = (0..256u32)
+            .filter(|&p| pixel_sees_bounds(&d, 0, p, &d.bounds))
+            .count();
+        assert!(inside > 16 && inside < 240, "{inside}");
+        let past = light_past_bounds(&d, &d.bounds);
+        assert_eq!((past.pixels, past.of), (256 - inside, 256));
+        assert_eq!(past.brightest, 1000.0);
+        let total = 1000.0 + 255.0 * 0.2;
+        let expected = (1000.0 + (256 - inside - 1) as f64 * 0.2) / total;
+        assert!((past.share - expected).abs() < 1e-4, "{past:?} {expected}");
+        let w = past
+            .warning()
+            .expect("most of the light is past the bounds");
+        assert!(
+            w.contains(&format!("{} of 256 pixels", 256 - inside)),
+            "{w}"
+        );
+        let scale = mean_luminance(&d, &PixelPool::new(&d, 0), &d.bounds);
+        let grey = 0.2 * inside as f64 / 256.0;
+        assert!((scale / grey - 1.0).abs() < 1e-4, "{scale} {grey}");
+        // Bounds that hold every pixel's ray: nothing past them, and the
+        // scale is the plain mean.
+        let wide = Aabb::new(DVec3::splat(-4.0), DVec3::splat(4.0));
+        let none = light_past_bounds(&d, &wide);
+        assert_eq!((none.pixels, none.share), (0, 0.0));
+        assert_eq!(none.warning(), None);
+        let plain = mean_luminance(&d, &PixelPool::new(&d, 0), &wide);
+        assert!((plain / (total / 256.0) - 1.0).abs() < 1e-4, "{plain}");
+    }
+}
