@@ -4,7 +4,10 @@
 //! ([`super::trainer::mean_luminance`]) and reported where it is much of
 //! the views' light. ROOM's Cycles set sees the ceiling bulb above the
 //! bounds in some views: 119 of its 294 912 pixels held 87.5 % of the
-//! views' light, and a scale read over them was 8 times the room's.
+//! views' light, and a scale read over them was 8 times the room's. Half
+//! of those pixels look past the box; the rest see the bulb in front of
+//! it, along rays that go on into the room, and still count, so the
+//! scale falls to 3 times the room's (`--scale` sets it outright).
 
 use crate::dataset::{Dataset, PixelState};
 use crate::geometry::{ray_box, Aabb};
