@@ -313,11 +313,15 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "--sh-degree",
         "1",
         "--learn-exposure",
-        "--sky",
-        "4",
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    // Its sky went on from the resumed field's (beside it).
+    // Its sky went on from the resumed field's (beside it), which
+    // `--sky auto`, the default, chose.
+    assert!(
+        text(&o).contains("learning a sky of 8x4 texels behind the field: the --resume field's"),
+        "{}",
+        text(&o)
+    );
     assert!(dir.join("stopped.sky.exr").is_file());
     assert!(text(&o).contains("learnt exposure gains"), "{}", text(&o));
     // Resumed with view-dependent colour: the file carries it, trained.

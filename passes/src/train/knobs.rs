@@ -124,10 +124,12 @@ pub struct TrainKnobs {
     /// direction rather than painted into the box or missed. Starts as the
     /// fixed background; where no training ray looks past the field it
     /// is filled from the nearest texels they saw ([`super::Sky::fill_unseen`]).
-    /// Off by default: behind a capture that sees nothing past its
-    /// bounds (the `render-views` sets) it takes up a faint glow of
-    /// the light a thin field lets through, 0.5–1.5 dB of PSNR at the mean
-    /// of their held-out views (`docs/benchmarks.md`, issue 25's sixteenth pass).
+    /// 0 here: behind a capture that sees nothing past its bounds (the
+    /// `render-views` sets) it takes up a faint glow of the light a thin
+    /// field lets through, 0.5–1.5 dB of PSNR at the mean of their
+    /// held-out views (`docs/benchmarks.md`, issue 25's sixteenth pass).
+    /// `inlay train` chooses it from the views' light past the bounds
+    /// unless told ([`super::past_bounds::LightPastBounds::auto_sky`]).
     pub sky: u32,
     /// Degree of the view-dependent colour trained (spherical harmonics,
     /// 0..=2; 0: one colour per node, as a bake's).

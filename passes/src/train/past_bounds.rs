@@ -9,6 +9,8 @@
 //! it, along rays that go on into the room, and still count, so the
 //! scale falls to 3 times the room's (`--scale` sets it outright).
 
+use rayon::prelude::*;
+
 use crate::dataset::{Dataset, PixelState};
 use crate::geometry::{ray_box, Aabb};
 
@@ -17,6 +19,20 @@ use super::pixels::{bracket_sets, merged_luminance, pixel_ray};
 /// The share of the views' light past the bounds from which
 /// [`LightPastBounds::warning`] speaks.
 pub const WARN_SHARE: f64 = 0.1;
+
+/// The share of the views' light past the bounds from which `inlay
+/// train` learns a sky behind the field unless told (`--sky auto`,
+/// [`LightPastBounds::auto_sky`]). DOG's Cycles set, whose dim sky
+/// (luminance 0.05–0.08 against a median of 0.003) fills its first
+/// held-out view's corners, holds 2.3 % there, and its held-out views
+/// read 29.1 and 27.9 dB with a sky against 24.9 and 28.3 without; the
+/// `render-views` sets, black past their bounds, hold 0.2 % (the rims of
+/// pixels that graze the box) and lose 0.5–1.5 dB to a sky.
+pub const AUTO_SKY_SHARE: f64 = 0.01;
+
+/// The sky `--sky auto` learns: 2N × N texels, N this (the size the
+/// Cycles sets were measured with in `docs/benchmarks.md`).
+pub const AUTO_SKY_HEIGHT: u32 = 32;
 
 /// Whether pixel `pixel` of frame `f` of `dataset` looks into `bounds`
 /// (its ray enters the box in front of the camera).
@@ -40,15 +56,27 @@ pub struct LightPastBounds {
 }
 
 impl LightPastBounds {
+    /// The sky `--sky auto` learns behind the field: [`AUTO_SKY_HEIGHT`]
+    /// where at least [`AUTO_SKY_SHARE`] of the views' light lies past the
+    /// bounds, none otherwise (nor beside a random background, which says
+    /// what is behind the field itself).
+    pub fn auto_sky(&self, random_background: bool) -> u32 {
+        if self.share >= AUTO_SKY_SHARE && !random_background {
+            AUTO_SKY_HEIGHT
+        } else {
+            0
+        }
+    }
+
     /// What to tell the user, where the light past the bounds is at least
     /// [`WARN_SHARE`] of the views'.
     pub fn warning(&self) -> Option<String> {
         (self.share >= WARN_SHARE).then(|| {
             format!(
                 "{:.0} % of the views' light lies past the field's bounds ({} of {} pixels, up to \
-                 {:.3}): the field cannot hold it, and the knobs' scale counts it black; `--sky N` \
-                 learns it as a background behind the field. A light in view in front of the \
-                 bounds raises the scale too: `--scale` sets it to the field's own level",
+                 {:.3}): the field cannot hold it, and the knobs' scale counts it black; `inlay \
+                 train` learns it as a sky behind the field (`--sky`). A light in view in front of \
+                 the bounds raises the scale too: `--scale` sets it to the field's own level",
                 100.0 * self.share,
                 self.pixels,
                 self.of,
@@ -63,30 +91,42 @@ impl LightPastBounds {
 pub fn light_past_bounds(dataset: &Dataset, bounds: &Aabb) -> LightPastBounds {
     let frames: Vec<u32> = (0..dataset.frames.len() as u32).collect();
     let sets = bracket_sets(dataset, &frames);
+    // Each pose once (at its longest exposure's frame), the poses in
+    // parallel: (light past, light in all, the pixels' counts, brightest).
+    let per_pose: Vec<(f64, f64, LightPastBounds)> = frames
+        .par_iter()
+        .filter(|&&f| sets[f as usize][0] == f)
+        .map(|&f| {
+            let set = &sets[f as usize];
+            let frame = &dataset.frames[f as usize];
+            let (mut past, mut all) = (0.0, 0.0);
+            let mut out = LightPastBounds::default();
+            for p in 0..frame.image.state.len() as u32 {
+                if frame.image.state[p as usize] == PixelState::Masked {
+                    continue;
+                }
+                let Some(l) = merged_luminance(dataset, set, p) else {
+                    continue;
+                };
+                out.of += 1;
+                all += l;
+                if !pixel_sees_bounds(dataset, f, p, bounds) {
+                    out.pixels += 1;
+                    past += l;
+                    out.brightest = out.brightest.max(l);
+                }
+            }
+            (past, all, out)
+        })
+        .collect();
     let (mut past, mut all) = (0.0, 0.0);
     let mut out = LightPastBounds::default();
-    for &f in &frames {
-        let set = &sets[f as usize];
-        // Each pose once: at its longest exposure's frame.
-        if set[0] != f {
-            continue;
-        }
-        let frame = &dataset.frames[f as usize];
-        for p in 0..frame.image.state.len() as u32 {
-            if frame.image.state[p as usize] == PixelState::Masked {
-                continue;
-            }
-            let Some(l) = merged_luminance(dataset, set, p) else {
-                continue;
-            };
-            out.of += 1;
-            all += l;
-            if !pixel_sees_bounds(dataset, f, p, bounds) {
-                out.pixels += 1;
-                past += l;
-                out.brightest = out.brightest.max(l);
-            }
-        }
+    for (p, a, o) in per_pose {
+        past += p;
+        all += a;
+        out.pixels += o.pixels;
+        out.of += o.of;
+        out.brightest = out.brightest.max(o.brightest);
     }
     out.share = if all > 0.0 { past / all } else { 0.0 };
     out
@@ -166,6 +206,11 @@ mod tests {
         let none = light_past_bounds(&d, &wide);
         assert_eq!((none.pixels, none.share), (0, 0.0));
         assert_eq!(none.warning(), None);
+        // A sky is learnt behind the first bounds, not the wide ones, nor
+        // beside a random background.
+        assert_eq!(past.auto_sky(false), AUTO_SKY_HEIGHT);
+        assert_eq!(past.auto_sky(true), 0);
+        assert_eq!(none.auto_sky(false), 0);
         let plain = mean_luminance(&d, &PixelPool::new(&d, 0), &wide);
         assert!((plain / (total / 256.0) - 1.0).abs() < 1e-4, "{plain}");
     }

@@ -130,7 +130,14 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&d).warning() {
         println!("warning: {w}");
     }
-    if let Some(w) = inlay_passes::train::past_bounds::light_past_bounds(&d, &d.bounds).warning() {
+    let past = inlay_passes::train::past_bounds::light_past_bounds(&d, &d.bounds);
+    println!(
+        "past the bounds: {} of {} pixels, {:.1} % of the views' light",
+        past.pixels,
+        past.of,
+        100.0 * past.share
+    );
+    if let Some(w) = past.warning() {
         println!("warning: {w}");
     }
     let mut lum: Vec<f32> = d

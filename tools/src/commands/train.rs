@@ -106,9 +106,12 @@ pub struct TrainArgs {
     /// Learn a sky behind the field instead of `--background`: what the
     /// photographs see past the bounds, as an equirect map of 2N x N
     /// texels (N this; 0: none), written beside the field as
-    /// FIELD.sky.exr (and read from beside the `--resume` field).
-    #[arg(long, default_value_t = TrainKnobs::default().sky)]
-    pub sky: u32,
+    /// FIELD.sky.exr (and read from beside the `--resume` field). `auto`
+    /// (the default): the `--resume` field's sky where it has one, else
+    /// N = 32 where at least 1 % of the views' light lies past the
+    /// bounds, none otherwise.
+    #[arg(long, value_parser = parse_sky, default_value = "auto")]
+    pub sky: SkyChoice,
     /// Degree of view-dependent colour (spherical harmonics, 0..=2; 0 is
     /// one colour per node). Degree 1 adds 3 RGB coefficients a node,
     /// degree 2 8, to the file and to the device's memory. Default: the
@@ -173,13 +176,29 @@ pub struct TrainArgs {
     pub scene: Option<PathBuf>,
 }
 
+/// `--sky`: a sky of a given size, or the one the dataset asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SkyChoice {
+    /// The `--resume` field's sky where it has one, else
+    /// [`inlay_passes::train::past_bounds::LightPastBounds::auto_sky`]'s.
+    Auto,
+    /// A sky of 2N × N texels, N this (0: none).
+    Texels(u32),
+}
+
+/// Parses `--sky`: `auto` or a count of texels.
+pub fn parse_sky(s: &str) -> Result<SkyChoice, String> {
+    if s == "auto" {
+        return Ok(SkyChoice::Auto);
+    }
+    s.parse::<u32>()
+        .map(SkyChoice::Texels)
+        .map_err(|e| format!("{s}: {e} (a count of texels, or auto)"))
+}
+
 /// Runs `inlay train`.
 pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     check_output("--out", &args.out, &["inlayfield"])?;
-    let sky_out = sky_path(&args.out);
-    if args.sky > 0 {
-        check_image_output("--out's sky", &sky_out)?;
-    }
     if let Some(p) = &args.picture {
         check_image_output("--picture", p)?;
     }
@@ -187,21 +206,11 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         Some(p) => Some(inlay_passes::field::load_field(p)?),
         None => None,
     };
-    // The sky learnt with the `--resume` field, where there is one.
+    // The sky learnt with the `--resume` field, where there is one and a
+    // sky is asked for (or may be).
     let resume_sky = match &args.resume {
-        Some(p) if args.sky > 0 && sky_path(p).exists() => {
-            let file = sky_path(p);
-            let sky = inlay_passes::field::Sky::load(&file)?;
-            if sky.height != args.sky {
-                eprintln!(
-                    "{}: a sky of {}x{} texels, not --sky {}'s: a new sky starts",
-                    file.display(),
-                    sky.width,
-                    sky.height,
-                    args.sky
-                );
-            }
-            Some(sky)
+        Some(p) if args.sky != SkyChoice::Texels(0) && sky_path(p).exists() => {
+            Some(inlay_passes::field::Sky::load(&sky_path(p))?)
         }
         _ => None,
     };
@@ -209,7 +218,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     let nodes = resume
         .as_ref()
         .map_or(args.resolution, |f| f.resolution.max_element());
-    let knobs = TrainKnobs {
+    let mut knobs = TrainKnobs {
         resolution: args.resolution,
         stages: args.stages,
         first_stage_share: args.first_stage_share,
@@ -227,7 +236,11 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         sparsity: args.sparsity,
         distortion: args.distortion,
         random_background: args.random_background,
-        sky: args.sky,
+        // Set below from the dataset's light past the bounds where auto.
+        sky: match args.sky {
+            SkyChoice::Texels(n) => n,
+            SkyChoice::Auto => 0,
+        },
         sh_degree: args.sh_degree.unwrap_or(
             resume
                 .as_ref()
@@ -305,10 +318,47 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
     let bounds = resume.as_ref().map_or(dataset.bounds, |f| f.bounds);
-    if let Some(w) =
-        inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds).warning()
-    {
+    let past = inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds);
+    if let Some(w) = past.warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
+    }
+    if args.sky == SkyChoice::Auto {
+        knobs.sky = match &resume_sky {
+            Some(sky) => sky.height,
+            None => past.auto_sky(knobs.random_background),
+        };
+        if knobs.sky > 0 {
+            eprintln!(
+                "learning a sky of {}x{} texels behind the field: {}",
+                2 * knobs.sky,
+                knobs.sky,
+                match &resume_sky {
+                    Some(_) => "the --resume field's".to_string(),
+                    None => format!(
+                        "{:.1} % of the views' light lies past the bounds (--sky 0 leaves it out)",
+                        100.0 * past.share
+                    ),
+                }
+            );
+        }
+    }
+    let sky_out = sky_path(&args.out);
+    if knobs.sky > 0 {
+        check_image_output("--out's sky", &sky_out)?;
+    }
+    if let Some((sky, file)) = resume_sky
+        .as_ref()
+        .zip(args.resume.as_deref().map(sky_path))
+    {
+        if knobs.sky > 0 && sky.height != knobs.sky {
+            eprintln!(
+                "{}: a sky of {}x{} texels, not --sky {}'s: a new sky starts",
+                file.display(),
+                sky.width,
+                sky.height,
+                knobs.sky
+            );
+        }
     }
     if knobs.sparsity_at(nodes) != knobs.sparsity {
         eprintln!(
@@ -524,7 +574,7 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
 
 #[cfg(test)]
 mod tests {
-    use super::percent_of;
+    use super::{parse_sky, percent_of, SkyChoice};
 
     /// A view whose every pixel holds a surface has no "others" to float
     /// among: that is said, not printed as NaN.
@@ -532,5 +582,14 @@ mod tests {
     fn a_share_of_nothing_is_said_not_printed_as_nan() {
         assert_eq!(percent_of(0.0123), "1.2 %");
         assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
+    }
+
+    /// `--sky` reads `auto` or a count, and names what it wants otherwise.
+    #[test]
+    fn sky_reads_auto_or_a_count() {
+        assert_eq!(parse_sky("auto"), Ok(SkyChoice::Auto));
+        assert_eq!(parse_sky("0"), Ok(SkyChoice::Texels(0)));
+        assert_eq!(parse_sky("32"), Ok(SkyChoice::Texels(32)));
+        assert!(parse_sky("big").unwrap_err().contains("or auto"));
     }
 }
