@@ -609,6 +609,47 @@ fn a_sky_is_learnt_behind_a_field_whose_views_see_past_it() {
     );
     // Measured 0.026.
     assert!(seen > 5000 && diff / total < 0.1, "{}", diff / total);
+
+    // Resumed for one step that moves nothing, the sky goes on as it was
+    // saved: the texels the step's rays miss are not filled again from
+    // the few it reaches.
+    let still = inlay_passes::train::TrainKnobs {
+        iterations: 1,
+        rate: 1e-12,
+        density_rate: 1e-12,
+        tv_density: 0.0,
+        sparsity: 0.0,
+        prune: 0.0,
+        batch: 256,
+        ..knobs
+    };
+    let control = inlay_passes::train::TrainControl {
+        resume: Some(&learnt.field),
+        resume_sky: Some(sky),
+        ..Default::default()
+    };
+    let resumed = inlay_passes::train::train(
+        &ctx,
+        &lib,
+        &dataset,
+        &still,
+        2,
+        DVec3::ZERO,
+        &control,
+        &|_| {},
+    )
+    .unwrap();
+    let again = resumed.sky.as_ref().unwrap();
+    assert!(resumed.sky_seen < sky.texels.len(), "{}", resumed.sky_seen);
+    let moved = sky
+        .texels
+        .iter()
+        .zip(&again.texels)
+        .map(|(a, b)| (*a - *b).abs().max_element() / a.abs().max_element().max(1e-3))
+        .fold(0.0, f64::max);
+    // Before, the step's 256 rays reached a few texels and the rest were
+    // filled again from them.
+    assert!(moved < 1e-4, "the resumed sky moved by {moved}");
 }
 
 /// A 24-node grid trained on `dataset` (600 steps, 2 views held out),

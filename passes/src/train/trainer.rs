@@ -312,9 +312,12 @@ pub fn train(
     };
     let mut field = with_sh_degree(start, knobs.sh_degree);
     let mut gains = vec![DVec3::ONE; dataset.frames.len().max(1)];
-    let mut sky = (knobs.sky > 0).then(|| match control.resume_sky {
-        Some(s) if s.height == knobs.sky => s.clone(),
-        _ => Sky::uniform(knobs.sky, background),
+    // A resumed sky of the knobs' size goes on as it was saved: every
+    // texel holds what its own run learnt or filled in.
+    let resumed_sky = control.resume_sky.filter(|s| s.height == knobs.sky);
+    let mut sky = (knobs.sky > 0).then(|| match resumed_sky {
+        Some(s) => s.clone(),
+        None => Sky::uniform(knobs.sky, background),
     });
     let mut sky_seen = Vec::new();
     let mut renderer = Renderer::new(ctx, 1)?;
@@ -425,7 +428,10 @@ pub fn train(
         sky = gpu.sky(&mut renderer)?;
         sky_seen = gpu.sky_seen(&mut renderer)?;
     }
-    if let Some(s) = &mut sky {
+    // Only a new sky is filled: a resumed one's texels that this run's
+    // rays missed keep their values (filled from this run's few texels,
+    // a short resume smoothed away what the first run learnt).
+    if let (Some(s), None) = (&mut sky, resumed_sky) {
         s.fill_unseen(&sky_seen);
     }
     // Pruned unless Ctrl-C ended the run (the field so far, at once).
