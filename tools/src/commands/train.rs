@@ -108,7 +108,7 @@ pub struct TrainArgs {
     /// texels (N this; 0: none), written beside the field as
     /// FIELD.sky.exr (and read from beside the `--resume` field). `auto`
     /// (the default): the `--resume` field's sky where it has one, else
-    /// N = 32 where at least 1 % of the views' light lies past the
+    /// N = 8 where at least 1 % of the views' light lies past the
     /// bounds, none otherwise.
     #[arg(long, value_parser = parse_sky, default_value = "auto")]
     pub sky: SkyChoice,
