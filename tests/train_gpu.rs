@@ -587,6 +587,19 @@ fn a_sky_is_learnt_behind_a_field_whose_views_see_past_it() {
             a.psnr
         );
         assert!((b.brightness - 1.0).abs() < 0.1, "{}", b.brightness);
+        // Part of each view looks past the box, part into it: the field
+        // is also scored over the latter alone.
+        let (psnr, share) = b
+            .in_bounds
+            .expect("the view looks both into and past the box");
+        eprintln!(
+            "  over the {:.0} % that look into the box: {psnr:.2} dB",
+            100.0 * share
+        );
+        assert!(
+            share > 0.05 && share < 0.95 && psnr.is_finite(),
+            "{share} {psnr}"
+        );
     }
     // Where the training views look past the box, the learnt sky is the
     // scene's environment (the directions no view saw stay as they began).

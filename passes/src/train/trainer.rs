@@ -62,6 +62,11 @@ pub struct HeldOutView {
     /// brighter or darker than its photographs as a whole, which the
     /// relative error cannot tell.
     pub brightness: f64,
+    /// Where some of the view's pixels look past the field's bounds (a
+    /// sky, a far wall) and some into them: the PSNR over those that look
+    /// into the bounds alone, and their share of the usable pixels. The
+    /// field is judged by these; the rest show only what lies behind it.
+    pub in_bounds: Option<(f64, f64)>,
     /// The photograph (linear, brackets at their exposure and clipped).
     pub truth: Vec<[f32; 3]>,
     /// The field's rendering of it, the same way.
@@ -641,11 +646,29 @@ pub fn score_view<'a>(
         .collect();
     let truth: Vec<[f32; 3]> = frame.image.radiance.clone();
     let s = view_scores(&rendered, &truth, &frame.image.state);
+    // The same scores over the pixels that look into the bounds.
+    let inside: Vec<PixelState> = (0..w * h)
+        .map(|p| match frame.image.state[p as usize] {
+            PixelState::Masked => PixelState::Masked,
+            _ if !pixel_sees_bounds(dataset, f, p, &field.bounds) => PixelState::Masked,
+            state => state,
+        })
+        .collect();
+    let usable =
+        |states: &[PixelState]| states.iter().filter(|s| **s != PixelState::Masked).count();
+    let (all, seen) = (usable(&frame.image.state), usable(&inside));
+    let in_bounds = (seen > 0 && seen < all).then(|| {
+        (
+            view_scores(&rendered, &truth, &inside).psnr,
+            seen as f64 / all as f64,
+        )
+    });
     HeldOutView {
         frame: f,
         psnr: s.psnr,
         relative_error: s.relative_error,
         brightness: s.brightness,
+        in_bounds,
         truth,
         rendered,
         size: (w, h),

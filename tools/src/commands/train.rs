@@ -434,8 +434,14 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         );
     }
     for v in &trained.held_out {
+        let inside = v.in_bounds.map_or(String::new(), |(psnr, share)| {
+            format!(
+                " ({psnr:.2} dB over the {:.0} % of its pixels that look into the bounds)",
+                100.0 * share
+            )
+        });
         println!(
-            "held-out frame {}: PSNR {:.2} dB, relative error {:.3}, brightness field / photograph {:.3}",
+            "held-out frame {}: PSNR {:.2} dB{inside}, relative error {:.3}, brightness field / photograph {:.3}",
             v.frame, v.psnr, v.relative_error, v.brightness
         );
     }
