@@ -263,6 +263,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     );
     // Where a step's time went, the training rays' pass among the rest.
     assert!(t.contains("a step took") && t.contains("train-rays"), "{t}");
+    // And the radiance the knobs were fractions of.
+    assert!(t.contains("knobs' scale: radiance"), "{t}");
     // The sky learnt behind it, beside it.
     let sky = dir.join("views.sky.exr");
     assert!(t.contains("learnt a sky of 8x4 texels"), "{t}");

@@ -860,7 +860,7 @@ fn a_lamp_in_view_is_learnt_with_its_light() {
     let brightest = brightest_node(&trained.field);
     eprintln!(
         "mean radiance {:.3}, brightest node {brightest:.1}",
-        trained.mean_radiance
+        trained.scale
     );
     assert!(brightest > 50.0, "brightest node {brightest}");
     for v in &trained.held_out {
@@ -966,7 +966,7 @@ fn brackets_train_the_hdr_field_their_linear_views_do() {
     )
     .unwrap();
     common::assert_no_validation_errors(&ctx);
-    let scale = hdr.mean_radiance / linear.mean_radiance;
+    let scale = hdr.scale / linear.scale;
     let brightest = brightest_node(&hdr.field);
     let brightness = |field: &GridField| {
         let views = held.map(|f| {

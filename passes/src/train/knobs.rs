@@ -54,11 +54,12 @@ pub struct TrainKnobs {
     /// The relative loss's floor, as a fraction of the mean radiance.
     pub epsilon: f64,
     /// The radiance the rates, the loss's floor and the starting grey are
-    /// fractions of; None: the photographs' mean luminance, pixels that
-    /// look past the bounds counted black
-    /// ([`super::trainer::mean_luminance`]). A light in view but outside
-    /// the field (ROOM's Cycles set sees its bulb in front of the box)
-    /// raises that mean far above the field's own light.
+    /// fractions of; None: the mean over the training poses of each
+    /// one's mean luminance, pixels that look past the bounds counted
+    /// black and poses far brighter than the median one left out
+    /// ([`super::trainer::radiance_scale`]), so that a light outside the
+    /// field that a few views see (ROOM's Cycles set sees its bulb in
+    /// front of the box) does not set it.
     pub scale: Option<f64>,
     /// Total variation's step on colour after each Adam step: each value
     /// moves by 2 × this × its differences to its six neighbours (at most

@@ -1,13 +1,15 @@
 //! Light the photographs show past the field's bounds: pixels whose ray
 //! never enters the box. The field cannot hold it (only a learnt sky
 //! behind it can), so it is left out of the knobs' scale
-//! ([`super::trainer::mean_luminance`]) and reported where it is much of
+//! ([`super::trainer::radiance_scale`]) and reported where it is much of
 //! the views' light. ROOM's Cycles set sees the ceiling bulb above the
 //! bounds in some views: 119 of its 294 912 pixels held 87.5 % of the
 //! views' light, and a scale read over them was 8 times the room's. Half
 //! of those pixels look past the box; the rest see the bulb in front of
-//! it, along rays that go on into the room, and still count, so the
-//! scale falls to 3 times the room's (`--scale` sets it outright).
+//! it, along rays that go on into the room, and still count: a mean
+//! over the pixels left read 3 times the room's, so the scale leaves out
+//! the few views that see the bulb, each far brighter than the median
+//! view (`--scale` sets it outright).
 
 use rayon::prelude::*;
 
@@ -147,7 +149,7 @@ mod tests {
     use crate::dataset::pixels::{FrameImage, PixelCounts};
     use crate::dataset::{BoundsSource, Dialect, Frame, Intrinsics, Pose};
     use crate::train::pixels::PixelPool;
-    use crate::train::trainer::mean_luminance;
+    use crate::train::trainer::radiance_scale;
 
     /// A 16 × 16 view from 5 units up +z of a box of side 2 at the origin,
     /// 60° across: its middle looks into the box, its rim past it. Grey
@@ -204,7 +206,7 @@ mod tests {
             w.contains(&format!("{} of 256 pixels", 256 - inside)),
             "{w}"
         );
-        let scale = mean_luminance(&d, &PixelPool::new(&d, 0), &d.bounds);
+        let scale = radiance_scale(&d, &PixelPool::new(&d, 0), &d.bounds);
         let grey = 0.2 * inside as f64 / 256.0;
         assert!((scale / grey - 1.0).abs() < 1e-4, "{scale} {grey}");
         // Bounds that hold every pixel's ray: nothing past them, and the
@@ -218,7 +220,7 @@ mod tests {
         assert_eq!(past.auto_sky(false), AUTO_SKY_HEIGHT);
         assert_eq!(past.auto_sky(true), 0);
         assert_eq!(none.auto_sky(false), 0);
-        let plain = mean_luminance(&d, &PixelPool::new(&d, 0), &wide);
+        let plain = radiance_scale(&d, &PixelPool::new(&d, 0), &wide);
         assert!((plain / (total / 256.0) - 1.0).abs() < 1e-4, "{plain}");
     }
 }

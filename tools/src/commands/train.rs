@@ -69,9 +69,10 @@ pub struct TrainArgs {
     #[arg(long, default_value_t = TrainKnobs::default().epsilon)]
     pub epsilon: f64,
     /// The radiance `--rate`, `--epsilon` and the starting grey are
-    /// fractions of (default: the photographs' mean, pixels that look
-    /// past the bounds counted black); for a light in view that the field
-    /// does not hold, the field's own surfaces' level.
+    /// fractions of (default: the photographs' mean luminance, pixels that
+    /// look past the bounds counted black, a photograph more than 4 times
+    /// as bright as the median one left out). For a light that most views
+    /// see but the field does not hold, the field's own surfaces' level.
     #[arg(long)]
     pub scale: Option<f64>,
     /// Total variation's weight on neighbouring nodes' colour differences.
@@ -416,6 +417,19 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         f.resolution.y,
         f.resolution.z,
         trained.history.last().map_or(f64::NAN, |h| h.1)
+    );
+    eprintln!(
+        "knobs' scale: radiance {:.4} ({})",
+        trained.scale,
+        if args.scale.is_some() {
+            "--scale".to_string()
+        } else {
+            format!(
+                "the photographs' mean luminance, pixels past the bounds black and photographs \
+                 over {} times the median one's left out; --scale sets it",
+                inlay_passes::train::trainer::SCALE_OUTLIER
+            )
+        }
     );
     print_step_times(&trained.step_times);
     if knobs.learn_exposure {
