@@ -804,8 +804,9 @@ mod tests {
     }
 
     /// A light that one view of three sees sets no scale: the view is
-    /// left out (its mean is 34 times the others'), and the scale is the
-    /// others' grey.
+    /// left out (its mean is 101 times the others'; over every pixel of
+    /// the three the mean would be 34 times their grey), and the scale
+    /// is the others' grey.
     #[test]
     fn a_light_few_views_see_sets_no_scale() {
         let grey = vec![0.2f32; 50];
