@@ -100,44 +100,64 @@ impl LightPastBounds {
 pub fn light_past_bounds(dataset: &Dataset, bounds: &Aabb) -> LightPastBounds {
     let frames: Vec<u32> = (0..dataset.frames.len() as u32).collect();
     let sets = bracket_sets(dataset, &frames);
-    // Each pose once (at its longest exposure's frame), the poses in
-    // parallel: (light past, light in all, the pixels' counts, brightest).
-    let per_pose: Vec<(f64, f64, LightPastBounds)> = frames
+    // Each pose once (at its longest exposure's frame), in parallel.
+    let poses: Vec<PoseLight> = frames
         .par_iter()
         .filter(|&&f| sets[f as usize][0] == f)
-        .map(|&f| {
-            let set = &sets[f as usize];
-            let frame = &dataset.frames[f as usize];
-            let (mut past, mut all) = (0.0, 0.0);
-            let mut out = LightPastBounds::default();
-            for p in 0..frame.image.state.len() as u32 {
-                if frame.image.state[p as usize] == PixelState::Masked {
-                    continue;
-                }
-                let Some(l) = merged_luminance(dataset, set, p) else {
-                    continue;
-                };
-                out.of += 1;
-                all += l;
-                if !pixel_sees_bounds(dataset, f, p, bounds) {
-                    out.pixels += 1;
-                    past += l;
-                    out.brightest = out.brightest.max(l);
-                }
-            }
-            (past, all, out)
-        })
+        .map(|&f| pose_light(dataset, &sets[f as usize], bounds))
         .collect();
     let (mut past, mut all) = (0.0, 0.0);
     let mut out = LightPastBounds::default();
-    for (p, a, o) in per_pose {
-        past += p;
-        all += a;
-        out.pixels += o.pixels;
-        out.of += o.of;
-        out.brightest = out.brightest.max(o.brightest);
+    for pose in poses {
+        past += pose.past;
+        all += pose.inside + pose.past;
+        out.pixels += pose.pixels_past;
+        out.of += pose.pixels;
+        out.brightest = out.brightest.max(pose.brightest_past);
     }
     out.share = if all > 0.0 { past / all } else { 0.0 };
+    out
+}
+
+/// One pose's light: its usable pixels' luminance (its brackets merged,
+/// [`merged_luminance`]), summed apart for the pixels whose ray looks
+/// into the bounds and for those whose ray misses them.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PoseLight {
+    /// The light of the pixels that look into the bounds.
+    pub inside: f64,
+    /// The light of the pixels that look past them.
+    pub past: f64,
+    /// The usable pixels.
+    pub pixels: usize,
+    /// The usable pixels that look past the bounds.
+    pub pixels_past: usize,
+    /// The brightest pixel past the bounds (luminance; 0 if none).
+    pub brightest_past: f64,
+}
+
+/// [`PoseLight`] of the pose whose frames are `set` (the longest exposure
+/// first, [`bracket_sets`]), against `bounds`.
+pub fn pose_light(dataset: &Dataset, set: &[u32], bounds: &Aabb) -> PoseLight {
+    let f = set[0];
+    let frame = &dataset.frames[f as usize];
+    let mut out = PoseLight::default();
+    for p in 0..frame.image.state.len() as u32 {
+        if frame.image.state[p as usize] == PixelState::Masked {
+            continue;
+        }
+        let Some(l) = merged_luminance(dataset, set, p) else {
+            continue;
+        };
+        out.pixels += 1;
+        if pixel_sees_bounds(dataset, f, p, bounds) {
+            out.inside += l;
+        } else {
+            out.pixels_past += 1;
+            out.past += l;
+            out.brightest_past = out.brightest_past.max(l);
+        }
+    }
     out
 }
 

@@ -16,8 +16,8 @@ use super::adam::AdamKnobs;
 use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
-use super::past_bounds::pixel_sees_bounds;
-use super::pixels::{bracket_sets, is_bracket, merged_luminance, pixel_ray, PixelPool};
+use super::past_bounds::{pixel_sees_bounds, pose_light};
+use super::pixels::{bracket_sets, is_bracket, pixel_ray, PixelPool};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
@@ -177,7 +177,7 @@ pub const SCALE_OUTLIER: f64 = 4.0;
 /// The loss's and the colours' scale: the mean, over the training poses,
 /// of each pose's mean luminance (a median over pixels would be zero
 /// where most pixels see empty space), in the scene's radiance: the
-/// brackets of a pose are merged at each pixel ([`merged_luminance`]),
+/// brackets of a pose are merged at each pixel ([`super::pixels::merged_luminance`]),
 /// so that bracketed photographs give the scale their linear
 /// counterparts would. Read as recorded, PLANTS' brackets at 1/64, 1/8
 /// and 1 gave a fraction of it, and the field they trained had its
@@ -201,22 +201,9 @@ pub fn radiance_scale(dataset: &Dataset, pool: &PixelPool, bounds: &Aabb) -> f64
     let mut means: Vec<f64> = training
         .par_iter()
         .filter(|&&f| sets[f as usize][0] == f)
-        .filter_map(|&f| {
-            let frame = &dataset.frames[f as usize];
-            let (mut sum, mut n) = (0.0, 0usize);
-            for p in 0..frame.image.state.len() as u32 {
-                if frame.image.state[p as usize] == PixelState::Masked {
-                    continue;
-                }
-                if let Some(l) = merged_luminance(dataset, &sets[f as usize], p) {
-                    if pixel_sees_bounds(dataset, f, p, bounds) {
-                        sum += l;
-                    }
-                    n += 1;
-                }
-            }
-            (n > 0).then(|| sum / n as f64)
-        })
+        .map(|&f| pose_light(dataset, &sets[f as usize], bounds))
+        .filter(|pose| pose.pixels > 0)
+        .map(|pose| pose.inside / pose.pixels as f64)
         .collect();
     if means.is_empty() {
         return 1e-6;
