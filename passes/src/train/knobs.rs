@@ -95,15 +95,19 @@ pub struct TrainKnobs {
     /// 3.4 at the same held-out PSNR, and cost PLANTS, whose lamp and
     /// foliage train as faint glowing density, 0.5 dB; 2e-3 and 3e-3 put
     /// ROOM's surfaces about a spacing behind the recipe's
-    /// (`docs/benchmarks.md`, issue 25's fifteenth pass). Stated for 128
+    /// (`docs/benchmarks.md`, issue 25's fifteenth pass; again at the
+    /// twenty-third: 2e-3 brings DOG's and CUPS' surfaces closer, puts
+    /// ROOM's behind, costs PLANTS 2 dB). Stated for 128
     /// nodes; finer grids apply less ([`Self::sparsity_at`]).
     pub sparsity: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):
     /// pulls each ray's weight into one short stretch, surfaces into thin
     /// shells; 0 leaves it out. On DOG at 128 nodes from 64 views of 256²,
     /// 0.1 raised the held-out views by 1.3 and 2.2 dB, 0.5 overshot
-    /// (`docs/benchmarks.md`, "Distortion loss"); off by default until
-    /// measured on a real capture.
+    /// (`docs/benchmarks.md`, "Distortion loss"); with today's other
+    /// defaults 0.03 and 0.1 moved DOG's surfaces from 48 views of
+    /// 160 × 120 further off, the haze in front of them thicker (issue
+    /// 25's twenty-third pass). Off by default.
     pub distortion: f64,
     /// Each step's rays end on a random colour behind the field (each
     /// channel uniform over 0 to twice the photographs' mean radiance)

@@ -89,13 +89,16 @@ pub struct TrainArgs {
     pub tv_edge: f64,
     /// Weight of the density's sparsity prior, taken with total variation:
     /// pulls a density below the edge (a haze) toward zero and leaves an
-    /// opaque surface be (0: none). Stated for 128 nodes: a grid of
+    /// opaque surface be (0: none); 2e-3 sets surfaces of one colour
+    /// closer to where they are, and costs foliage and other faint
+    /// matter. Stated for 128 nodes: a grid of
     /// r > 128 nodes applies it × (128 / r)², as its steps grow by (r / 128)².
     #[arg(long, default_value_t = TrainKnobs::default().sparsity)]
     pub sparsity: f64,
     /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
-    /// weight into one short stretch, so surfaces train as thin shells
-    /// rather than haze (0: none).
+    /// weight into one short stretch (0: none). With the other defaults it
+    /// can thicken a faint haze in front of the surfaces into them
+    /// rather than clear it: measure before relying on it.
     #[arg(long, default_value_t = TrainKnobs::default().distortion)]
     pub distortion: f64,
     /// Each step's rays end on a random colour behind the field instead of
