@@ -96,8 +96,8 @@ pub struct TrainKnobs {
     /// foliage train as faint glowing density, 0.5 dB; 2e-3 and 3e-3 put
     /// ROOM's surfaces about a spacing behind the recipe's
     /// (`docs/benchmarks.md`, issue 25's fifteenth pass; again at the
-    /// twenty-third: 2e-3 brings DOG's and CUPS' surfaces closer, puts
-    /// ROOM's behind, costs PLANTS 2 dB). Stated for 128
+    /// twenty-third: 2e-3 brings DOG's surfaces and CUPS' lowest view
+    /// closer, puts ROOM's behind, costs PLANTS 2 dB). Stated for 128
     /// nodes; finer grids apply less ([`Self::sparsity_at`]).
     pub sparsity: f64,
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`]):

@@ -89,9 +89,9 @@ pub struct TrainArgs {
     pub tv_edge: f64,
     /// Weight of the density's sparsity prior, taken with total variation:
     /// pulls a density below the edge (a haze) toward zero and leaves an
-    /// opaque surface be (0: none); 2e-3 sets surfaces of one colour
-    /// closer to where they are, and costs foliage and other faint
-    /// matter. Stated for 128 nodes: a grid of
+    /// opaque surface be (0: none); 2e-3 clears more haze, and can put
+    /// plain surfaces behind where they are and costs foliage and other
+    /// faint matter. Stated for 128 nodes: a grid of
     /// r > 128 nodes applies it × (128 / r)², as its steps grow by (r / 128)².
     #[arg(long, default_value_t = TrainKnobs::default().sparsity)]
     pub sparsity: f64,
