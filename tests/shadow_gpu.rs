@@ -480,6 +480,106 @@ fn compare_cast_shadow(
     }
 }
 
+/// One frame of BOOKS' cast scene (`scene`, from `cast_scene`) under
+/// `test_lobes` at `w` × `h`, read back: the march's colour and depth, ρ at full
+/// resolution (`reference`), and `pass`'s ρ at its scale (`low`) and
+/// after its `finish` (`fine`), as the cast-shadow tests at a scale
+/// compare them.
+struct ScaledCast {
+    colour: Vec<[f32; 4]>,
+    depth: Vec<[f32; 4]>,
+    reference: Vec<[f32; 4]>,
+    low: Vec<[f32; 4]>,
+    fine: Vec<[f32; 4]>,
+}
+
+fn run_scaled_cast(
+    ctx: &Arc<inlay_engine::Context>,
+    scene: &CastScene,
+    pass: &CastShadowPass,
+    (w, h): (u32, u32),
+) -> ScaledCast {
+    let lib = embedded_library();
+    let CastScene {
+        gpu_field,
+        placed,
+        ssdf,
+        fh,
+        march_knobs,
+        spec,
+        ..
+    } = scene;
+    let march_knobs = *march_knobs;
+    let lobes = test_lobes();
+    let lobe_buf = lobe_buffer(ctx, &lobes);
+    let (lw, lh) = inlay_passes::shadow::upsample::low_size(w, h, pass.scale_at(w, h));
+    let cam = CameraFrame::new(spec, w, h);
+    let march = MarchPass::new(ctx, &lib, march_knobs).unwrap();
+    let full = CastShadowPass::new(ctx, &lib, march_knobs, CastScale::Fixed(1), 1.0).unwrap();
+    let desc = |width, height, format| ImageDesc {
+        width,
+        height,
+        format,
+    };
+    let rb = [
+        Readback::new(ctx, desc(w, h, MARCH_COLOUR_FORMAT)).unwrap(),
+        Readback::new(ctx, desc(w, h, MARCH_DEPTH_FORMAT)).unwrap(),
+        Readback::new(ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
+        Readback::new(ctx, desc(lw, lh, SHADOW_FORMAT)).unwrap(),
+        Readback::new(ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
+    ];
+    common::run_frame(ctx, |graph| {
+        let m = march.add(graph, gpu_field, &cam, None);
+        let light = LightLobes {
+            environment: None,
+            buffer: graph.import_buffer(&lobe_buf, None),
+            count: lobes.len() as u32,
+            direct: None,
+        };
+        let table = fh.import(graph);
+        let records = ObjectRecords::upload(graph, [placed]);
+        let s = ssdf.import(graph, placed, (records, 0), OutsideMode::Correct);
+        let reference = full.add(graph, gpu_field, &cam, &m, light, table, s, None);
+        let low = pass.add(graph, gpu_field, &cam, &m, light, table, s, None);
+        let inputs = inlay_passes::shadow::cast::CastInputs {
+            lobes: light,
+            fh_table: table,
+            ssdf: s,
+        };
+        let fine = pass.finish(graph, gpu_field, &cam, &m, low, &[inputs]);
+        rb[0].add_to_graph(graph, m.colour_opacity);
+        rb[1].add_to_graph(graph, m.depth);
+        rb[2].add_to_graph(graph, reference);
+        rb[3].add_to_graph(graph, low);
+        rb[4].add_to_graph(graph, fine);
+    });
+    let [colour, depth, reference, low, fine] = rb.map(|r| r.read().unwrap().pixels);
+    ScaledCast {
+        colour,
+        depth,
+        reference,
+        low,
+        fine,
+    }
+}
+
+/// ρ of a read-back pixel.
+fn rgb(p: &[f32; 4]) -> DVec3 {
+    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+}
+
+impl ScaledCast {
+    /// Each pixel's depth along its ray (None where the field is empty),
+    /// as the upsampling weighs blocks by.
+    fn depths(&self) -> Vec<Option<f64>> {
+        self.colour
+            .iter()
+            .zip(&self.depth)
+            .map(|(c, d)| (c[3] > 1e-4).then(|| d[0] as f64 / c[3] as f64))
+            .collect()
+    }
+}
+
 /// At half resolution (`[shadows] cast_scale = 2`): each block's ρ is the
 /// full-resolution pass's at the block's source pixel (the same kernel at
 /// the same point: 1e-6), and `shadow-upsample` is its f64 mirror
@@ -493,99 +593,41 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
     use inlay_passes::shadow::upsample::{low_size, source_pixel};
     let ctx = common::gpu();
     let lib = embedded_library();
-    let CastScene {
-        gpu_field,
-        placed,
-        ssdf,
-        fh,
-        march_knobs,
-        spec,
-        ..
-    } = cast_scene(&ctx);
-    let lobes = test_lobes();
-    let lobe_buf = lobe_buffer(&ctx, &lobes);
     let (w, h) = (47u32, 35u32);
     let (lw, lh) = low_size(w, h, 2);
-    let cam = CameraFrame::new(&spec, w, h);
-    let march = MarchPass::new(&ctx, &lib, march_knobs).unwrap();
-    let full = CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(1), 1.0).unwrap();
-    let half = CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(2), 1.0).unwrap();
     let spread = 0.02;
-    let refined =
-        CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(2), spread).unwrap();
+    let scene = cast_scene(&ctx);
+    let knobs = scene.march_knobs;
+    let pass = |s| CastShadowPass::new(&ctx, &lib, knobs, CastScale::Fixed(2), s).unwrap();
+    let (half, refined) = (pass(1.0), pass(spread));
     assert!(!half.refines() && refined.refines());
-    assert!(CastShadowPass::new(&ctx, &lib, march_knobs, CastScale::Fixed(9), 1.0).is_err());
-    let desc = |width, height, format| ImageDesc {
-        width,
-        height,
-        format,
-    };
-    let rb = [
-        Readback::new(&ctx, desc(w, h, MARCH_COLOUR_FORMAT)).unwrap(),
-        Readback::new(&ctx, desc(w, h, MARCH_DEPTH_FORMAT)).unwrap(),
-        Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
-        Readback::new(&ctx, desc(lw, lh, SHADOW_FORMAT)).unwrap(),
-        Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
-        Readback::new(&ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
-    ];
-    common::run_frame(&ctx, |graph| {
-        let m = march.add(graph, &gpu_field, &cam, None);
-        let light = LightLobes {
-            environment: None,
-            buffer: graph.import_buffer(&lobe_buf, None),
-            count: lobes.len() as u32,
-            direct: None,
-        };
-        let table = fh.import(graph);
-        let records = ObjectRecords::upload(graph, [&placed]);
-        let s = ssdf.import(graph, &placed, (records, 0), OutsideMode::Correct);
-        let reference = full.add(graph, &gpu_field, &cam, &m, light, table, s, None);
-        let low = half.add(graph, &gpu_field, &cam, &m, light, table, s, None);
-        let up = half.finish(graph, &gpu_field, &cam, &m, low, &[]);
-        let inputs = inlay_passes::shadow::cast::CastInputs {
-            lobes: light,
-            fh_table: table,
-            ssdf: s,
-        };
-        let low2 = refined.add(graph, &gpu_field, &cam, &m, light, table, s, None);
-        let fine = refined.finish(graph, &gpu_field, &cam, &m, low2, &[inputs]);
-        rb[0].add_to_graph(graph, m.colour_opacity);
-        rb[1].add_to_graph(graph, m.depth);
-        rb[2].add_to_graph(graph, reference);
-        rb[3].add_to_graph(graph, low);
-        rb[4].add_to_graph(graph, up);
-        rb[5].add_to_graph(graph, fine);
-    });
-    let [colour, depth, reference, low, up, fine] = rb.map(|r| r.read().unwrap());
-    let rgb = |p: &[f32; 4]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    assert!(CastShadowPass::new(&ctx, &lib, knobs, CastScale::Fixed(9), 1.0).is_err());
+    let plain = run_scaled_cast(&ctx, &scene, &half, (w, h));
+    let fine = run_scaled_cast(&ctx, &scene, &refined, (w, h)).fine;
+    let (reference, low, up) = (&plain.reference, &plain.low, &plain.fine);
     let mut shadowed = 0;
     for y in 0..lh {
         for x in 0..lw {
             let (sx, sy) = source_pixel(x, y, 2, w, h);
-            let a = rgb(&low.pixels[(y * lw + x) as usize]);
-            let b = rgb(&reference.pixels[(sy * w + sx) as usize]);
+            let a = rgb(&low[(y * lw + x) as usize]);
+            let b = rgb(&reference[(sy * w + sx) as usize]);
             assert!((a - b).abs().max_element() < 1e-6, "({x}, {y}): {a} vs {b}");
             shadowed += (a.y < 0.9) as u32;
         }
     }
     assert!(shadowed >= 3, "{shadowed} shadowed blocks");
-    let z: Vec<Option<f64>> = colour
-        .pixels
-        .iter()
-        .zip(&depth.pixels)
-        .map(|(c, d)| (c[3] > 1e-4).then(|| d[0] as f64 / c[3] as f64))
-        .collect();
-    let low_rho: Vec<DVec3> = low.pixels.iter().map(rgb).collect();
+    let z = plain.depths();
+    let low_rho: Vec<DVec3> = low.iter().map(rgb).collect();
     let mirror = inlay_passes::shadow::upsample_shadow(&low_rho, &z, w, h, 2);
     for (i, m) in mirror.iter().enumerate() {
-        let g = rgb(&up.pixels[i]);
+        let g = rgb(&up[i]);
         assert!((g - *m).abs().max_element() < 1e-5, "pixel {i}: {g} vs {m}");
     }
     let flags = inlay_passes::shadow::upsample::upsample_with_flags(&low_rho, &z, w, h, 2, spread);
     let (mut flagged, mut other) = (0, 0);
     for (i, (m, flag)) in flags.iter().enumerate() {
-        let g = rgb(&fine.pixels[i]);
-        let exact = rgb(&reference.pixels[i]);
+        let g = rgb(&fine[i]);
+        let exact = rgb(&reference[i]);
         let near = |a: DVec3, b: DVec3, tol: f64| (a - b).abs().max_element() < tol;
         let (expect, alternative) = if *flag { (exact, *m) } else { (*m, exact) };
         flagged += *flag as u32;
@@ -608,6 +650,63 @@ fn half_resolution_cast_shadow_matches_the_full_one_and_its_mirror() {
         "{flagged} of {n} pixels refined"
     );
     eprintln!("refined {flagged} of {n} pixels ({other} by f32 otherwise than the mirror)");
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// At a quarter of the resolution with refinement (`cast_scale = 4`), the
+/// shadow is brought to scale 2, refined, then to full resolution and
+/// refined again (`shadow::upsample::refine_levels`, the f64 mirror, with
+/// the full-resolution pass's ρ as the exact value at each flagged point):
+/// the GPU gives the mirror's image (1e-5: f32 weights) but where f32
+/// decides a flag otherwise (at most 2 % of the pixels: a flag at one
+/// level moves the blends below it), and takes fewer points exactly than
+/// one step from 4 to 1 would.
+#[test]
+fn cast_shadow_refined_a_level_at_a_time_matches_its_mirror() {
+    use inlay_passes::shadow::upsample::{refine_levels, upsample_with_flags};
+    let ctx = common::gpu();
+    let lib = embedded_library();
+    let (w, h, scale, spread) = (61u32, 45u32, 4u32, 0.02);
+    let scene = cast_scene(&ctx);
+    let pass = CastShadowPass::new(
+        &ctx,
+        &lib,
+        scene.march_knobs,
+        CastScale::Fixed(scale),
+        spread,
+    )
+    .unwrap();
+    let c = run_scaled_cast(&ctx, &scene, &pass, (w, h));
+    let z = c.depths();
+    let low_rho: Vec<DVec3> = c.low.iter().map(rgb).collect();
+    let taken = std::cell::Cell::new(0usize);
+    let exact = |x: u32, y: u32| {
+        taken.set(taken.get() + 1);
+        rgb(&c.reference[(y * w + x) as usize])
+    };
+    let mirror = refine_levels(&low_rho, &z, (w, h), scale, spread, exact);
+    let n = (w * h) as usize;
+    let (mut other, mut shadowed) = (0, 0);
+    for (i, m) in mirror.iter().enumerate() {
+        let g = rgb(&c.fine[i]);
+        other += ((g - *m).abs().max_element() >= 1e-5) as usize;
+        shadowed += (rgb(&c.reference[i]).y < 0.9) as usize;
+    }
+    assert!(shadowed >= 20, "{shadowed} shadowed pixels");
+    assert!(other * 50 <= n, "{other} of {n} pixels off the mirror");
+    let one_step = upsample_with_flags(&low_rho, &z, w, h, scale, spread)
+        .iter()
+        .filter(|(_, f)| *f)
+        .count();
+    assert!(
+        taken.get() > 0 && taken.get() < one_step,
+        "{} points taken exactly by levels, {one_step} in one step",
+        taken.get()
+    );
+    eprintln!(
+        "levels took {} points exactly (one step: {one_step}); {other} of {n} pixels off the mirror",
+        taken.get()
+    );
     common::assert_no_validation_errors(&ctx);
 }
 

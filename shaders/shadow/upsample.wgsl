@@ -1,17 +1,19 @@
-// The cast shadow taken at one pixel of each s × s block brought back to
-// full resolution (mirrors passes/src/shadow/upsample.rs upsample_shadow):
-// each pixel blends the four nearest blocks bilinearly, each weighted down
-// as the depth at its source pixel departs from the pixel's (to zero at
-// UPSAMPLE_DEPTH_FALLOFF relative), or takes the block nearest in depth
-// where none lies on its surface; ρ = 1 where the field is empty. A pixel
-// is flagged for shadow-refine (ρ taken exactly) where fewer than two of
-// the corners it blends lie on its surface or their ρ spread by more than
-// pc.refine_spread in some channel (upsample_with_flags); `main_listed`
-// also appends each flagged pixel's index (y·width + x) to refine_list,
-// counting them in refine_count and their workgroups of
-// REFINE_WORKGROUP in refine_args (shadow-refine's indirect dispatch,
-// which so runs over those pixels alone). Each block's depth is read from
-// the alpha of `low_shadow`, where cast-shadow keeps its source pixel's.
+// The cast shadow taken at one pixel of each s × s block brought to a
+// finer image, of one pixel of each pc.out_scale × pc.out_scale block (1:
+// full resolution; mirrors passes/src/shadow/upsample.rs upsample_level):
+// each output pixel, at its block's source pixel, blends the four nearest
+// blocks bilinearly, each weighted down as the depth at its source pixel
+// departs from the pixel's (to zero at UPSAMPLE_DEPTH_FALLOFF relative),
+// or takes the block nearest in depth where none lies on its surface;
+// ρ = 1 where the field is empty. A pixel is flagged for shadow-refine (ρ
+// taken exactly) where fewer than two of the corners it blends lie on its
+// surface or their ρ spread by more than pc.refine_spread in some channel;
+// `main_listed` also appends each flagged pixel's index (y·w + x of the
+// output image) to refine_list, counting them in refine_count and their
+// workgroups of REFINE_WORKGROUP in refine_args (shadow-refine's indirect
+// dispatch, which so runs over those pixels alone). Each block's depth is
+// read from the alpha of `low_shadow`, where cast-shadow (and this pass,
+// for an output above full resolution) keeps its source pixel's.
 
 struct UpsamplePush {
     width: u32,
@@ -19,6 +21,11 @@ struct UpsamplePush {
     scale: u32,
     // Largest spread of the blocks' ρ a pixel blends (≥ 1: refine none).
     refine_spread: f32,
+    // The output's scale (1: full resolution), below pc.scale.
+    out_scale: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 var<immediate> pc: UpsamplePush;
@@ -43,31 +50,51 @@ fn upsample_depth(p: vec2<u32>) -> f32 {
     return textureLoad(field_depth, vec2<i32>(p), 0).r / o;
 }
 
-// ρ at full-resolution pixel p, and whether shadow-refine takes it again.
+// ρ at full-resolution pixel p, whether shadow-refine takes it again, and
+// p's depth (upsample_depth).
 struct Upsampled {
     rho: vec3<f32>,
     refine: bool,
+    depth: f32,
+}
+
+// The output image's width (upsample.rs low_size at pc.out_scale).
+fn upsample_out_width() -> u32 {
+    return (pc.width + pc.out_scale - 1u) / pc.out_scale;
+}
+
+// Whether output pixel `id` lies off the output image.
+fn upsample_outside(id: vec2<u32>) -> bool {
+    return id.x >= upsample_out_width() || id.y >= (pc.height + pc.out_scale - 1u) / pc.out_scale;
+}
+
+// Output pixel `id`'s value at its source pixel (upsample.rs
+// source_pixel): ρ, and in alpha 1 at full resolution, else the source
+// pixel's depth, which the next finer image weighs this one's blocks by.
+fn upsample_out(id: vec2<u32>) -> Upsampled {
+    let p = min(id * pc.out_scale + vec2<u32>(pc.out_scale / 2u), vec2<u32>(pc.width - 1u, pc.height - 1u));
+    let u = upsample_pixel(p);
+    textureStore(out_shadow, vec2<i32>(id), vec4<f32>(u.rho, select(u.depth, 1.0, pc.out_scale == 1u)));
+    return u;
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if upsample_outside(id.xy) {
         return;
     }
-    let u = upsample_pixel(id.xy);
-    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(u.rho, 1.0));
+    upsample_out(id.xy);
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_listed(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= pc.width || id.y >= pc.height {
+    if upsample_outside(id.xy) {
         return;
     }
-    let u = upsample_pixel(id.xy);
-    textureStore(out_shadow, vec2<i32>(id.xy), vec4<f32>(u.rho, 1.0));
+    let u = upsample_out(id.xy);
     if u.refine {
         let i = atomicAdd(&refine_count, 1u);
-        refine_list[i] = id.y * pc.width + id.x;
+        refine_list[i] = id.y * upsample_out_width() + id.x;
         if i % REFINE_WORKGROUP == 0u {
             atomicAdd(&refine_args[0], 1u);
         }
@@ -78,7 +105,7 @@ fn upsample_pixel(p: vec2<u32>) -> Upsampled {
     let id = vec3<u32>(p, 0u);
     let z = upsample_depth(id.xy);
     if z < 0.0 {
-        return Upsampled(vec3<f32>(1.0), false);
+        return Upsampled(vec3<f32>(1.0), false, z);
     }
     let low = vec2<u32>((pc.width + pc.scale - 1u) / pc.scale, (pc.height + pc.scale - 1u) / pc.scale);
     let t = max((vec2<f32>(id.xy) + vec2<f32>(0.5)) / f32(pc.scale) - vec2<f32>(0.5), vec2<f32>(0.0));
@@ -125,5 +152,5 @@ fn upsample_pixel(p: vec2<u32>) -> Upsampled {
     }
     let d = hi - lo;
     let refine = pc.refine_spread < 1.0 && (on_surface < 2u || max(d.x, max(d.y, d.z)) > pc.refine_spread);
-    return Upsampled(rho, refine);
+    return Upsampled(rho, refine, z);
 }

@@ -203,15 +203,17 @@ pub struct ShadowKnobs {
     /// The cast shadow is taken at one pixel of each s × s block and
     /// brought back to full resolution (1: every pixel, the paper;
     /// [`crate::shadow::upsample`]), s fixed or growing with the image
-    /// ([`CastScale`]). The default, automatic (2 up to 640 × 360, 4 at
-    /// 1280 × 720) with `cast_refine` 0.02, keeps ρ within 0.01 of the
-    /// full resolution's on all but a few pixels of each bundled scene
-    /// (docs/benchmarks.md, issue 26's third and seventh passes).
+    /// ([`CastScale`]). The default, automatic (2 up to 320 × 180, 4 at
+    /// 640 × 360, 8 at 1280 × 720) with `cast_refine` 0.02, keeps ρ within
+    /// 0.02 of the full resolution's on all but 0–0.05 % of each bundled
+    /// scene's field pixels (docs/benchmarks.md, issue 26's third, seventh
+    /// and tenth passes).
     pub cast_scale: CastScale,
     /// Above 1 `cast_scale`, a pixel whose neighbouring blocks' ρ spread
     /// by more than this (or of which fewer than two blocks lie on its
-    /// surface) is taken at full resolution (`shadow-refine`); ≥ 1 refines
-    /// none.
+    /// surface) is taken exactly (`shadow-refine`), at each image from
+    /// the cast scale's half to full resolution
+    /// ([`crate::shadow::upsample::refine_levels`]); ≥ 1 refines none.
     pub cast_refine: f64,
 }
 

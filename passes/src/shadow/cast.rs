@@ -71,11 +71,20 @@ inlay_engine::gpu_struct! {
         /// Largest spread of the blocks' ρ a pixel blends before
         /// `shadow-refine` takes it exactly (≥ 1: none).
         pub refine_spread: f32,
+        /// The output's scale (1: full resolution), below `scale`.
+        pub out_scale: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
 /// The pass bringing a cast shadow taken at a fraction of the resolution
-/// back to full resolution ([`super::upsample`]).
+/// to a finer one: full resolution, or half its scale when the pass
+/// refines ([`super::upsample`]).
 pub const SHADOW_UPSAMPLE_INFO: PassInfo = PassInfo {
     name: "shadow-upsample",
     module: Table1Module::Shadow,
@@ -85,8 +94,8 @@ pub const SHADOW_UPSAMPLE_INFO: PassInfo = PassInfo {
 /// The upsampling pass's name in the frame graph.
 pub const SHADOW_UPSAMPLE: &str = SHADOW_UPSAMPLE_INFO.name;
 
-/// The pass taking ρ exactly, at full resolution, where `shadow-upsample`
-/// flagged a pixel ([`super::upsample::upsample_with_flags`]).
+/// The pass taking ρ exactly where `shadow-upsample` flagged a pixel of
+/// the image it wrote ([`super::upsample::upsample_level`]).
 pub const SHADOW_REFINE_INFO: PassInfo = PassInfo {
     name: "shadow-refine",
     module: Table1Module::Shadow,
@@ -249,7 +258,8 @@ impl CastShadowPass {
     /// The full-resolution ρ from the last [`Self::add`]'s `low` image: as
     /// it is at scale 1, else through `shadow-upsample` and, when the pass
     /// refines, one `shadow-refine` per object of `objects` (those `low`
-    /// chained, in order).
+    /// chained, in order), at each scale [`super::upsample::next_level`]
+    /// gives in turn (the f64 mirror: [`super::upsample::refine_levels`]).
     pub fn finish(
         &self,
         graph: &mut FrameGraph,
@@ -260,15 +270,53 @@ impl CastShadowPass {
         objects: &[CastInputs],
     ) -> ImageHandle {
         let (width, height) = (camera.width, camera.height);
-        let scale = self.scale_at(width, height);
-        if scale == 1 {
-            return low;
+        let mut scale = self.scale_at(width, height);
+        let mut image = low;
+        while scale > 1 {
+            // With refinement, each image is brought to one of half its
+            // scale and refined there, so that the next's blends span
+            // fewer pixels; without, to full resolution at once.
+            let out_scale = super::upsample::next_level(scale, self.refines());
+            image = self.upsample_level(
+                graph,
+                field,
+                camera,
+                march,
+                (image, scale),
+                out_scale,
+                objects,
+            );
+            scale = out_scale;
         }
+        image
+    }
+
+    /// One level of [`Self::finish`]: `low` (ρ at its scale) brought to
+    /// `out_scale` by `shadow-upsample` and, when the pass refines, taken
+    /// exactly by one `shadow-refine` per object of `objects` at the
+    /// pixels it flagged.
+    #[allow(clippy::too_many_arguments)]
+    fn upsample_level(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        camera: &CameraFrame,
+        march: &MarchOutputs,
+        (low, scale): (ImageHandle, u32),
+        out_scale: u32,
+        objects: &[CastInputs],
+    ) -> ImageHandle {
+        let (width, height) = (camera.width, camera.height);
+        let (out_width, out_height) = super::upsample::low_size(width, height, out_scale);
         let mut up = graph.create_image(
-            "shadow-full",
+            if out_scale == 1 {
+                "shadow-full"
+            } else {
+                "shadow-level"
+            },
             ImageDesc {
-                width,
-                height,
+                width: out_width,
+                height: out_height,
                 format: SHADOW_FORMAT,
             },
         );
@@ -277,11 +325,15 @@ impl CastShadowPass {
             height,
             scale,
             refine_spread: self.refine_spread.min(1.0) as f32,
+            out_scale,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         };
         // The list shadow-refine runs over.
         let mut list = self
             .refines()
-            .then(|| PixelList::new(graph, "shadow-refine", width as u64 * height as u64));
+            .then(|| PixelList::new(graph, "shadow-refine", out_width as u64 * out_height as u64));
         let pipeline = match list {
             Some(_) => &self.upsample_listed,
             None => &self.upsample,
@@ -299,7 +351,7 @@ impl CastShadowPass {
                 .write("refine_list", &mut l.pixels)
                 .read_write("refine_args", &mut l.args);
         }
-        upsample.threads([width, height, 1]);
+        upsample.threads([out_width, out_height, 1]);
         let Some(list) = list else {
             return up;
         };
@@ -308,7 +360,7 @@ impl CastShadowPass {
                 image: up,
                 list,
                 chained: i > 0,
-                scale: 1,
+                scale: out_scale,
             };
             up = self.dispatch(graph, field, camera, march, *o, &mut target);
         }
@@ -409,7 +461,7 @@ impl CastShadowPass {
                 self.classify.pick(previous.is_some(), direct.is_some()),
             ),
             Target::Listed { chained, scale, .. } => (
-                if scale == 1 && frame_scale > 1 {
+                if scale < frame_scale {
                     SHADOW_REFINE
                 } else {
                     CAST_SHADOW

@@ -11,7 +11,11 @@
 //! fewer than two blocks on the pixel's surface, or blocks whose ρ spread
 //! by more than `[shadows] cast_refine`), so a shadow's edges and small
 //! shadows keep the full resolution's ρ at about the half resolution's
-//! cost.
+//! cost. With refinement the image is brought down a level at a time, each
+//! of half the scale of the one before ([`next_level`], [`refine_levels`]):
+//! the pixels a shadow's edge flags lie in a band as wide as the blocks
+//! blended, so refining at 4, then 2, then 1 from 8 takes ρ exactly at
+//! about half the points one step from 8 to 1 does, for the same flags.
 
 use glam::DVec3;
 
@@ -20,8 +24,9 @@ pub const MAX_CAST_SCALE: u32 = 8;
 
 /// The low image [`CastScale::Auto`] keeps the cast shadow's at most: the
 /// scale grows with the image so that about this many pixels of it are
-/// taken (320 × 180 at 1280 × 720, scale 4).
-pub const AUTO_LOW_SIZE: (u32, u32) = (320, 180);
+/// taken (scale 4 at 640 × 360, 8 at 1280 × 720; docs/benchmarks.md,
+/// issue 26's tenth pass, measures the trade against scale 4 there).
+pub const AUTO_LOW_SIZE: (u32, u32) = (160, 90);
 
 /// How coarsely the cast shadow is taken (`[shadows] cast_scale`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -31,8 +36,9 @@ pub enum CastScale {
     Fixed(u32),
     /// At a scale that grows with the image ([`Self::at`]): a shadow's
     /// extent in pixels grows with the image, and its edges are refined
-    /// at full resolution either way, so a 1280 × 720 image is taken at 4
-    /// with the error of 2 (docs/benchmarks.md, issue 26's seventh pass).
+    /// at full resolution either way, so a 1280 × 720 image is taken at 8
+    /// with about the error of 4 (docs/benchmarks.md, issue 26's seventh
+    /// and tenth passes).
     Auto,
 }
 
@@ -104,11 +110,27 @@ pub fn upsample_with_flags(
     scale: u32,
     spread: f64,
 ) -> Vec<(DVec3, bool)> {
+    upsample_level(low, depth, (width, height), scale, 1, spread)
+}
+
+/// [`upsample_with_flags`] onto the image at `out_scale` (below `scale`)
+/// rather than at full resolution: each of its pixels takes the value at
+/// its block's [`source_pixel`] (`shadow-upsample` with `out_scale`).
+pub fn upsample_level(
+    low: &[DVec3],
+    depth: &[Option<f64>],
+    (width, height): (u32, u32),
+    scale: u32,
+    out_scale: u32,
+    spread: f64,
+) -> Vec<(DVec3, bool)> {
     let (lw, lh) = low_size(width, height, scale);
+    let (ow, oh) = low_size(width, height, out_scale);
     let depth_at = |x: u32, y: u32| depth[(y * width + x) as usize];
-    let mut out = Vec::with_capacity((width * height) as usize);
-    for y in 0..height {
-        for x in 0..width {
+    let mut out = Vec::with_capacity((ow * oh) as usize);
+    for oy in 0..oh {
+        for ox in 0..ow {
+            let (x, y) = source_pixel(ox, oy, out_scale, width, height);
             let Some(z) = depth_at(x, y) else {
                 out.push((DVec3::ONE, false));
                 continue;
@@ -156,6 +178,55 @@ pub fn upsample_with_flags(
     out
 }
 
+/// The scale of the image the cast shadow at `scale` is brought to next:
+/// half of it when the flagged pixels are refined (`refines`), so that
+/// each image's blends span half the pixels of the one before and a
+/// shadow's edge is refined over a band half as wide; else full
+/// resolution at once (halving would only blend more often).
+pub fn next_level(scale: u32, refines: bool) -> u32 {
+    if refines {
+        (scale / 2).max(1)
+    } else {
+        1
+    }
+}
+
+/// ρ at full resolution as `CastShadowPass::finish` takes it from `low`
+/// (at `scale`): brought to [`next_level`] by [`upsample_level`], the
+/// flagged pixels replaced by `exact` at their source pixel (when
+/// `spread` < 1), and so on until full resolution.
+pub fn refine_levels(
+    low: &[DVec3],
+    depth: &[Option<f64>],
+    (width, height): (u32, u32),
+    scale: u32,
+    spread: f64,
+    exact: impl Fn(u32, u32) -> DVec3,
+) -> Vec<DVec3> {
+    let refines = spread < 1.0;
+    let mut image = low.to_vec();
+    let mut scale = scale;
+    while scale > 1 {
+        let out_scale = next_level(scale, refines);
+        let (ow, _) = low_size(width, height, out_scale);
+        image = upsample_level(&image, depth, (width, height), scale, out_scale, spread)
+            .into_iter()
+            .enumerate()
+            .map(|(i, (rho, flag))| {
+                let (ox, oy) = (i as u32 % ow, i as u32 / ow);
+                let (x, y) = source_pixel(ox, oy, out_scale, width, height);
+                if flag {
+                    exact(x, y)
+                } else {
+                    rho
+                }
+            })
+            .collect();
+        scale = out_scale;
+    }
+    image
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,12 +238,12 @@ mod tests {
         let auto = CastScale::Auto;
         assert_eq!(auto.at(160, 90), 2);
         assert_eq!(auto.at(320, 180), 2);
-        assert_eq!(auto.at(640, 360), 2);
-        assert_eq!(auto.at(1280, 720), 4);
-        assert_eq!(auto.at(1281, 720), 5);
-        assert_eq!(auto.at(1920, 1080), 6);
-        assert_eq!(auto.at(720, 1280), 8);
-        assert_eq!(auto.at(7680, 4320), MAX_CAST_SCALE);
+        assert_eq!(auto.at(480, 270), 3);
+        assert_eq!(auto.at(640, 360), 4);
+        assert_eq!(auto.at(641, 360), 5);
+        assert_eq!(auto.at(1280, 720), 8);
+        assert_eq!(auto.at(360, 640), 8);
+        assert_eq!(auto.at(1920, 1080), MAX_CAST_SCALE);
         for (w, h) in [(321, 181), (1000, 700), (2560, 1440)] {
             let s = auto.at(w, h);
             let (lw, lh) = low_size(w, h, s);
@@ -268,5 +339,61 @@ mod tests {
         assert!(upsample_with_flags(&low, &depth, w, h, 2, 1.0)
             .iter()
             .all(|(_, f)| !f));
+    }
+
+    /// Refined a level at a time, a sharp edge and a constant ρ come back
+    /// exact at every pixel, with fewer exact points than one step from
+    /// the cast scale to full resolution takes; without refinement the
+    /// levels are one upsampling.
+    #[test]
+    fn levels_refine_an_edge_with_fewer_exact_points() {
+        use std::cell::Cell;
+        let (w, h, scale) = (61u32, 13u32, 8u32);
+        let truth = |x: u32, _y: u32| DVec3::splat(if x < 27 { 1.0 } else { 0.3 });
+        let depth = vec![Some(2.0); (w * h) as usize];
+        let (lw, lh) = low_size(w, h, scale);
+        let low: Vec<DVec3> = (0..lw * lh)
+            .map(|i| {
+                let (x, y) = source_pixel(i % lw, i / lw, scale, w, h);
+                truth(x, y)
+            })
+            .collect();
+        let taken = Cell::new(0u32);
+        // Counts the points taken exactly.
+        let exact = |x, y| {
+            taken.set(taken.get() + 1);
+            truth(x, y)
+        };
+        let out = refine_levels(&low, &depth, (w, h), scale, 0.02, exact);
+        for (i, r) in out.iter().enumerate() {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            let off = (*r - truth(x, y)).abs().max_element();
+            assert!(off < 1e-12, "({x}, {y}): {r}");
+        }
+        let one_step = upsample_with_flags(&low, &depth, w, h, scale, 0.02)
+            .iter()
+            .filter(|(_, f)| *f)
+            .count() as u32;
+        assert!(
+            taken.get() * 3 < one_step * 2,
+            "{} exact points against {one_step}",
+            taken.get()
+        );
+        assert_eq!(
+            (
+                next_level(8, true),
+                next_level(3, true),
+                next_level(8, false)
+            ),
+            (4, 1, 1)
+        );
+        let flat = vec![DVec3::splat(0.6); (lw * lh) as usize];
+        let none = |_, _| -> DVec3 { panic!("nothing to refine on a constant ρ") };
+        let out = refine_levels(&flat, &depth, (w, h), scale, 0.02, none);
+        assert!(out
+            .iter()
+            .all(|r| (*r - DVec3::splat(0.6)).abs().max_element() < 1e-12));
+        let once = refine_levels(&low, &depth, (w, h), scale, 1.0, |_, _| DVec3::ZERO);
+        assert_eq!(once, upsample_shadow(&low, &depth, w, h, scale));
     }
 }
