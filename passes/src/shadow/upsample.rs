@@ -37,8 +37,9 @@ pub enum CastScale {
     /// At a scale that grows with the image ([`Self::at`]): a shadow's
     /// extent in pixels grows with the image, and its edges are refined
     /// at full resolution either way, so a 1280 × 720 image is taken at 8
-    /// with about the error of 4 (docs/benchmarks.md, issue 26's seventh
-    /// and tenth passes).
+    /// with about as many pixels off as at 4, the mean error in shadow
+    /// about doubled (docs/benchmarks.md, issue 26's seventh and tenth
+    /// passes).
     Auto,
 }
 
