@@ -196,6 +196,12 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "{t}"
     );
     assert!(t.contains("from the file's `aabb`"), "{t}");
+    // The pixels past the field's bounds are transparent: their alpha is
+    // the share of the pixel the field covers.
+    assert!(
+        t.contains("with alpha below 1") && !t.contains("; 0 with alpha below 1"),
+        "{t}"
+    );
     let o = inlay(&["dataset", out.join("brackets").to_str().unwrap()]);
     let t = text(&o);
     assert!(o.status.success() && t.contains("frames: 6 usable"), "{t}");

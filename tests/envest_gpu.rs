@@ -282,6 +282,7 @@ fn photographed(
                 .map(|m| m.colour.as_vec3().to_array())
                 .collect(),
             state: vec![PixelState::Value; (w * h) as usize],
+            alpha: Vec::new(),
             counts: Default::default(),
         },
         scale: 1.0,

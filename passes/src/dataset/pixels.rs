@@ -29,8 +29,8 @@ pub struct PixelCounts {
     pub masked: usize,
     /// Saturated LDR pixels (lower bounds).
     pub saturated: usize,
-    /// LDR pixels whose alpha is below 1, composited over the background
-    /// when read.
+    /// Pixels whose alpha is below 1, composited over the background when
+    /// read (their alpha kept: [`FrameImage::alpha`]).
     pub transparent: usize,
 }
 
@@ -55,6 +55,11 @@ pub struct FrameImage {
     pub radiance: Vec<[f32; 3]>,
     /// What each pixel tells.
     pub state: Vec<PixelState>,
+    /// Each pixel's alpha (the share of it a surface covers), where some
+    /// pixel's is below 1; empty where every pixel is opaque. The radiance
+    /// is already composited over the background the frame was read with;
+    /// the alpha lets a trainer put another behind it.
+    pub alpha: Vec<f32>,
     /// How many pixels are not values, and why.
     pub counts: PixelCounts,
 }
@@ -108,16 +113,40 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-/// Reads the frame at `path`. An alpha channel of an LDR image is
-/// composited over `background` (linear RGB) in linear light: the pixel's
-/// radiance is the coverage-weighted mix of the two. EXR alpha is ignored
-/// (EXR frames are radiance).
+impl FrameImage {
+    /// Pixel `i`'s alpha: 1 where the frame is opaque.
+    pub fn alpha_at(&self, i: usize) -> f32 {
+        self.alpha.get(i).copied().unwrap_or(1.0)
+    }
+}
+
+/// Reads the frame at `path`. An alpha channel is composited over
+/// `background` (linear RGB) in linear light, and kept
+/// ([`FrameImage::alpha`]): an LDR image's colour is straight (the pixel's
+/// radiance is the alpha-weighted mix of it and the background), an EXR's
+/// premultiplied (its radiance plus 1 − alpha of the background), as
+/// OpenEXR defines it. An EXR without an alpha channel is opaque.
 pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, String> {
     let mut counts = PixelCounts::default();
+    let mut alpha = Vec::new();
     let (width, height, rgb, saturated) = match image_kind(path) {
         Some(ImageKind::Exr) => {
             let img = inlay_engine::HdrImage::load_exr(path).map_err(|e| e.to_string())?;
-            let rgb: Vec<[f32; 3]> = img.pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+            alpha = img.pixels.iter().map(|p| p[3].clamp(0.0, 1.0)).collect();
+            let rgb: Vec<[f32; 3]> = img
+                .pixels
+                .iter()
+                .map(|p| {
+                    // A NaN alpha leaves a NaN pixel, masked below.
+                    let a = if p[3].is_nan() {
+                        p[3]
+                    } else {
+                        p[3].clamp(0.0, 1.0)
+                    };
+                    counts.transparent += usize::from(a < 1.0);
+                    [0, 1, 2].map(|k| p[k] + (1.0 - a) * background[k])
+                })
+                .collect();
             (img.width, img.height, rgb, vec![false; img.pixels.len()])
         }
         Some(ImageKind::Srgb) => {
@@ -128,6 +157,7 @@ pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, Strin
             let mut sat = Vec::with_capacity((w * h) as usize);
             for p in img.pixels() {
                 let a = p[3] as f32 / 65535.0;
+                alpha.push(a);
                 counts.transparent += usize::from(p[3] < u16::MAX);
                 let mut c = [0f32; 3];
                 for k in 0..3 {
@@ -141,6 +171,9 @@ pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, Strin
         }
         None => return Err("not an .exr, .png, .jpg or .jpeg file".into()),
     };
+    if counts.transparent == 0 {
+        alpha = Vec::new();
+    }
     let mut radiance = rgb;
     let state = radiance
         .iter_mut()
@@ -167,6 +200,7 @@ pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, Strin
         height,
         radiance,
         state,
+        alpha,
         counts,
     })
 }

@@ -120,6 +120,12 @@ fn blender_synthetic_frames_are_composited_and_saturation_is_a_lower_bound() {
     }
     assert_eq!(d.counts.saturated, 4 * 6);
     assert_eq!(d.counts.transparent, 4 * 6 * 2);
+    // The alpha is kept, so that a trainer can put another background
+    // behind the pixel.
+    assert_eq!(
+        (img.alpha_at(0), img.alpha_at(1), img.alpha_at(2)),
+        (1.0, 0.0, a)
+    );
     // The cameras look at the origin from 3 m: the common view is there.
     assert!(d.bounds.center().length() < 1e-6, "{:?}", d.bounds);
 }
@@ -164,6 +170,51 @@ fn instant_ngp_exr_frames_mask_bad_pixels_and_take_aabb_scale() {
     );
     assert_eq!(d.frames[2].intrinsics.fy, 6.5);
     assert_eq!(d.frames[2].exposure_time, Some(0.01));
+}
+
+/// An EXR's alpha is premultiplied (OpenEXR's convention): its radiance
+/// plus 1 − alpha of the background, the alpha kept; an EXR without
+/// transparent pixels keeps none; a NaN alpha masks the pixel.
+#[test]
+fn exr_alpha_composites_premultiplied_radiance_over_the_background() {
+    let dir = folder("exr-alpha");
+    let path = dir.join("a.exr");
+    let pixels = vec![
+        [0.5, 1.0, 2.0, 1.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.2, 0.4, 0.6, 0.25],
+        [1.0, 1.0, 1.0, f32::NAN],
+    ];
+    inlay_engine::HdrImage {
+        width: 4,
+        height: 1,
+        pixels,
+    }
+    .write_file(&path, 1.0)
+    .unwrap();
+    let bg = [0.25f32, 0.5, 0.75];
+    let img = pixels::load_image(&path, bg).unwrap();
+    assert_eq!(img.radiance[0], [0.5, 1.0, 2.0]);
+    assert_eq!(img.radiance[1], bg);
+    for k in 0..3 {
+        let want = [0.2, 0.4, 0.6][k] + 0.75 * bg[k];
+        assert!(
+            (img.radiance[2][k] - want).abs() < 1e-6,
+            "{:?}",
+            img.radiance[2]
+        );
+    }
+    assert_eq!(img.state[3], PixelState::Masked);
+    assert_eq!(
+        (img.alpha_at(0), img.alpha_at(1), img.alpha_at(2)),
+        (1.0, 0.0, 0.25)
+    );
+    assert_eq!(img.counts.transparent, 2);
+    let opaque = dir.join("b.exr");
+    write_exr(&opaque, 2, 1, |_, _| [1.0, 2.0, 3.0]);
+    let img = pixels::load_image(&opaque, bg).unwrap();
+    assert!(img.alpha.is_empty());
+    assert_eq!(img.radiance[1], [1.0, 2.0, 3.0]);
 }
 
 #[test]

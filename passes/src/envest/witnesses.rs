@@ -443,6 +443,7 @@ mod tests {
                 height: witness.intrinsics.height,
                 radiance,
                 state,
+                alpha: Vec::new(),
                 counts: Default::default(),
             },
             scale,

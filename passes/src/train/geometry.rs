@@ -213,6 +213,7 @@ mod tests {
                 height: h,
                 radiance: vec![[0.5; 3]; (w * h) as usize],
                 state: vec![PixelState::Value; (w * h) as usize],
+                alpha: Vec::new(),
                 counts: PixelCounts::default(),
             },
         }

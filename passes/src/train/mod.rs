@@ -32,5 +32,6 @@ pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
 pub use step_times::StepTimes;
 pub use trainer::{
-    resample, train, view_march, with_sh_degree, HeldOutView, TrainControl, TrainProgress, Trained,
+    resample, train, transparent_pixels, view_march, with_sh_degree, HeldOutView, TrainControl,
+    TrainProgress, Trained, TransparentPixels,
 };

@@ -193,6 +193,7 @@ mod tests {
                     height: h,
                     radiance,
                     state: vec![PixelState::Value; (w * h) as usize],
+                    alpha: Vec::new(),
                     counts: PixelCounts::default(),
                 },
             }],

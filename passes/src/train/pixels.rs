@@ -52,11 +52,17 @@ pub fn pixel_ray(frame: &Frame, pixel: u32) -> Option<Ray> {
     })
 }
 
-/// What pixel `pixel` of `frame` says.
-pub fn pixel_target(frame: &Frame, pixel: u32) -> Option<PixelTarget> {
+/// What pixel `pixel` of `frame` says, with `shift` added behind it: a
+/// transparent pixel (alpha a) read over one background and trained over
+/// another says its radiance plus (1 − a)·`shift`, `shift` the second
+/// background less the first. A bracket takes no shift (its recorded code
+/// cannot be moved; the trainer refuses another background behind a
+/// transparent one).
+pub fn pixel_target(frame: &Frame, pixel: u32, shift: DVec3) -> Option<PixelTarget> {
     let i = pixel as usize;
     let c = frame.image.radiance[i];
-    let value = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+    let value = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)
+        + (1.0 - frame.image.alpha_at(i) as f64) * shift;
     match frame.image.state[i] {
         PixelState::Masked => None,
         _ if is_bracket(frame) => Some(PixelTarget::Bracket {
@@ -237,7 +243,8 @@ impl PixelPool {
     }
 
     /// `count` pixels drawn at random (with replacement) for step `step`:
-    /// each one's ray, what it says, and its frame, in the order of their
+    /// each one's ray, what it says (with `shift` behind its transparent
+    /// part: [`pixel_target`]), and its frame, in the order of their
     /// frames and pixels (neighbouring rays of a view then march side by
     /// side on the device, over the same nodes and about as far).
     pub fn batch(
@@ -246,6 +253,7 @@ impl PixelPool {
         count: usize,
         seed: u64,
         step: u64,
+        shift: DVec3,
     ) -> Vec<(Ray, PixelTarget, u32)> {
         let mut rng = Pcg32::new(seed, 0x7EA1_0000_0000 ^ step);
         let mut out = Vec::with_capacity(count);
@@ -254,8 +262,10 @@ impl PixelPool {
             tries += 1;
             let r = self.pixels[rng.next_u32() as usize % self.pixels.len()];
             let frame = &dataset.frames[r.frame as usize];
-            if let (Some(ray), Some(t)) = (pixel_ray(frame, r.pixel), pixel_target(frame, r.pixel))
-            {
+            if let (Some(ray), Some(t)) = (
+                pixel_ray(frame, r.pixel),
+                pixel_target(frame, r.pixel, shift),
+            ) {
                 out.push((r, ray, t));
             }
         }

@@ -238,15 +238,51 @@ pub fn step_background(knobs: &TrainKnobs, background: DVec3, scale: f64, step: 
 /// batches' pixels').
 const RANDOM_BACKGROUND_STREAM: u64 = 0xB6_0000_0000;
 
+/// The photographs' pixels whose alpha is below 1.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TransparentPixels {
+    /// In frames of linear radiance (EXR, or PNG/JPEG without an exposure
+    /// time): a random background goes behind them.
+    pub linear: usize,
+    /// In exposure brackets, whose recorded codes take no other background.
+    pub brackets: usize,
+}
+
+impl TransparentPixels {
+    /// Whether a random background suits the photographs by default: they
+    /// say where nothing is (some pixel's alpha below 1) and every such
+    /// pixel can take it.
+    pub fn takes_random_background(&self) -> bool {
+        self.linear > 0 && self.brackets == 0
+    }
+}
+
+/// Counts `dataset`'s transparent pixels.
+pub fn transparent_pixels(dataset: &Dataset) -> TransparentPixels {
+    let mut out = TransparentPixels::default();
+    for f in &dataset.frames {
+        let n = f.image.alpha.iter().filter(|a| **a < 1.0).count();
+        if super::pixels::is_bracket(f) {
+            out.brackets += n;
+        } else {
+            out.linear += n;
+        }
+    }
+    out
+}
+
 /// Why `dataset` cannot be trained with `knobs`, before any work: a random
-/// background behind photographs with transparent pixels, already
-/// composited over a fixed one when read.
+/// background behind exposure brackets with transparent pixels (a
+/// bracket's code was recorded over the fixed background, and another
+/// cannot be put behind it). Transparent linear frames take it: their
+/// alpha composites each step's background.
 pub fn check_dataset(knobs: &TrainKnobs, dataset: &Dataset) -> anyhow::Result<()> {
-    let transparent = dataset.counts.transparent;
+    let transparent = transparent_pixels(dataset).brackets;
     anyhow::ensure!(
         !knobs.random_background || transparent == 0,
-        "random background: {} has {transparent} pixels with alpha below 1, composited over the \
-         fixed background when read; train them over it (no random background)",
+        "random background: {} has {transparent} pixels with alpha below 1 in its exposure \
+         brackets, whose codes were recorded over the fixed background; train them over it (no \
+         random background)",
         dataset.file.display()
     );
     Ok(())
@@ -413,7 +449,16 @@ pub fn train(
                 break 'stages;
             }
             let step_started = Instant::now();
-            let batch = pool.batch(dataset, knobs.batch as usize, knobs.seed, step as u64);
+            // The photographs' transparent pixels are read over
+            // `background`; the step's own goes behind them instead.
+            let behind = step_background(knobs, background, scale, step);
+            let batch = pool.batch(
+                dataset,
+                knobs.batch as usize,
+                knobs.seed,
+                step as u64,
+                behind - background,
+            );
             let records: Vec<TrainRay> = batch
                 .iter()
                 .map(|(r, t, f)| TrainRay::new(r.origin, r.dir, *t, 1.0).in_frame(*f))
@@ -431,7 +476,7 @@ pub fn train(
             let out = gpu.run_batch(
                 &mut renderer,
                 &records,
-                step_background(knobs, background, scale, step),
+                behind,
                 knobs.epsilon * scale,
                 Some((&adam, 1.0 / records.len() as f32)),
             )?;
@@ -749,6 +794,7 @@ mod tests {
                 height: 1,
                 radiance: recorded.iter().map(|(v, _)| [*v; 3]).collect(),
                 state: recorded.iter().map(|(_, s)| *s).collect(),
+                alpha: Vec::new(),
                 counts: Default::default(),
             },
         }
@@ -838,14 +884,14 @@ mod tests {
             ..dataset_with(0)
         };
         let pool = PixelPool::new(&dataset, 0);
-        let batch = pool.batch(&dataset, 64, 1, 5);
+        let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO);
         assert_eq!(batch.len(), 64);
         let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f)| (*f, r.dir.x)).collect();
         assert!(keys.windows(2).all(|w| w[0].0 <= w[1].0), "{keys:?}");
         assert!(keys.iter().any(|k| k.0 == 0) && keys.iter().any(|k| k.0 == 2));
         // The same draw for the same seed and step, another for the next step.
-        assert_eq!(pool.batch(&dataset, 64, 1, 5), batch);
-        assert_ne!(pool.batch(&dataset, 64, 1, 6), batch);
+        assert_eq!(pool.batch(&dataset, 64, 1, 5, DVec3::ZERO), batch);
+        assert_ne!(pool.batch(&dataset, 64, 1, 6, DVec3::ZERO), batch);
     }
 
     /// A lamp past the shortest bracket's white is counted once for its
@@ -879,24 +925,63 @@ mod tests {
         assert_eq!((s.pixels, s.bracketed_poses), (0, 0));
     }
 
-    /// A random background is refused, naming the file, for photographs
-    /// with transparent pixels, and taken for opaque ones; a fixed one
-    /// either way.
+    /// A random background is refused, naming the file, behind exposure
+    /// brackets with transparent pixels, and taken behind transparent
+    /// linear frames (their alpha composites it) and opaque brackets; a
+    /// fixed one either way.
     #[test]
-    fn a_random_background_needs_opaque_photographs() {
+    fn a_random_background_is_refused_only_behind_transparent_brackets() {
         let random = TrainKnobs {
             random_background: true,
             ..TrainKnobs::default()
         };
-        let e = check_dataset(&random, &dataset_with(3))
+        let transparent = |exposure| {
+            let mut f = frame_of(&[0.2, 0.4, 0.6], exposure);
+            f.image.alpha = vec![1.0, 0.5, 0.0];
+            f
+        };
+        let with = |frames| Dataset {
+            frames,
+            ..dataset_with(0)
+        };
+        let e = check_dataset(&random, &with(vec![transparent(Some(1.0))]))
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("shots/transforms.json") && e.contains("3 pixels"),
+            e.contains("shots/transforms.json") && e.contains("2 pixels"),
             "{e}"
         );
-        assert!(check_dataset(&random, &dataset_with(0)).is_ok());
-        assert!(check_dataset(&TrainKnobs::default(), &dataset_with(3)).is_ok());
+        assert!(check_dataset(&random, &with(vec![transparent(None)])).is_ok());
+        let opaque = frame_of(&[0.2; 3], Some(1.0));
+        assert!(check_dataset(&random, &with(vec![opaque])).is_ok());
+        let fixed = TrainKnobs::default();
+        assert!(check_dataset(&fixed, &with(vec![transparent(Some(1.0))])).is_ok());
+    }
+
+    /// A transparent pixel trained over another background says its
+    /// radiance plus its uncovered share of the difference; an opaque one
+    /// and a bracket say what they recorded.
+    #[test]
+    fn a_transparent_pixel_takes_the_steps_background_behind_it() {
+        use super::super::pixels::pixel_target;
+        use super::super::PixelTarget;
+        let shift = DVec3::new(1.0, 2.0, 3.0);
+        let mut linear = frame_of(&[0.2, 0.4, 0.6], None);
+        linear.image.alpha = vec![1.0, 0.25, 0.0];
+        let value = |f: &crate::dataset::Frame, p| match pixel_target(f, p, shift) {
+            Some(PixelTarget::Value(v)) => v,
+            t => panic!("{t:?}"),
+        };
+        let close = |a: DVec3, b: DVec3| (a - b).abs().max_element() < 1e-6;
+        assert!(close(value(&linear, 0), DVec3::splat(0.2)));
+        assert!(close(value(&linear, 1), DVec3::splat(0.4) + 0.75 * shift));
+        assert!(close(value(&linear, 2), DVec3::splat(0.6) + shift));
+        let mut bracket = frame_of(&[0.2, 0.4, 0.6], Some(1.0));
+        bracket.image.alpha = vec![1.0, 0.25, 0.0];
+        assert_eq!(
+            pixel_target(&bracket, 1, shift),
+            pixel_target(&bracket, 1, DVec3::ZERO)
+        );
     }
 
     /// The fixed background is every step's; a random one differs from

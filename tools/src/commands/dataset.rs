@@ -21,9 +21,9 @@ pub struct DatasetArgs {
     /// The field's bounds, min x,y,z then max x,y,z (overrides the file's).
     #[arg(long, value_parser = parse_bounds, allow_hyphen_values = true)]
     pub bounds: Option<Aabb>,
-    /// Linear RGB that transparent pixels of RGBA images are composited
-    /// over.
-    #[arg(long, value_parser = parse_rgb, default_value = "1,1,1")]
+    /// Linear RGB that transparent pixels are composited over (black, as
+    /// `inlay train` reads them by default).
+    #[arg(long, value_parser = parse_rgb, default_value = "0,0,0")]
     pub background: [f32; 3],
     /// The Blender synthetic split to read.
     #[arg(long, default_value = "train")]
@@ -124,8 +124,8 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     let total: usize = d.frames.iter().map(|f| f.image.state.len()).sum();
     let c = d.counts;
     println!(
-        "pixels: {total}; masked: {} NaN or infinite, {} negative, {} by masks; {} saturated (lower bounds)",
-        c.non_finite, c.negative, c.masked, c.saturated
+        "pixels: {total}; masked: {} NaN or infinite, {} negative, {} by masks; {} saturated (lower bounds); {} with alpha below 1",
+        c.non_finite, c.negative, c.masked, c.saturated, c.transparent
     );
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&d).warning() {
         println!("warning: {w}");

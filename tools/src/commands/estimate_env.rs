@@ -277,7 +277,12 @@ fn witnesses(
             .map(|c| Witness::new(c, 16, 9))
             .collect(),
         path if photos => {
-            let options = inlay_passes::dataset::LoadOptions::default();
+            // Transparent pixels read as the light they hold: none behind
+            // the part no surface covers.
+            let options = inlay_passes::dataset::LoadOptions {
+                background: [0.0; 3],
+                ..Default::default()
+            };
             let hint = if radiance_from_photos {
                 ""
             } else {

@@ -154,12 +154,14 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
             },
             &|_, _| {},
         );
-        // Radiance over black where the field does not cover the pixel
-        // (premultiplied), or with --sky-behind over the environment.
+        // Radiance premultiplied by the share of the pixel the field
+        // covers, that share as alpha (so a trainer can put any background
+        // behind the rest), or with --sky-behind over the environment
+        // (opaque).
         let image = HdrImage {
             width: w,
             height: h,
-            pixels: pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect(),
+            pixels: pixels.to_vec(),
         };
         let file = format!("view-{i:03}.exr");
         outputs.image(&args.out.join(&file), &image, 1.0)?;

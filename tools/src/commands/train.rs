@@ -103,10 +103,13 @@ pub struct TrainArgs {
     pub distortion: f64,
     /// Each step's rays end on a random colour behind the field instead of
     /// `--background`, so that surfaces train opaque rather than
-    /// translucent (for opaque photographs: refused when a pixel's alpha
-    /// is below 1).
-    #[arg(long)]
-    pub random_background: bool,
+    /// translucent; photographs with an alpha channel take the same colour
+    /// behind their transparent part (refused for transparent exposure
+    /// brackets). `auto` (the default): on where the photographs are
+    /// linear with some pixel's alpha below 1 (they say where nothing
+    /// is) and no sky is asked for, else off; the flag alone: on.
+    #[arg(long, value_parser = parse_switch, default_value = "auto", num_args = 0..=1, default_missing_value = "on")]
+    pub random_background: Switch,
     /// Learn a sky behind the field instead of `--background`: what the
     /// photographs see past the bounds, as an equirect map of 2N x N
     /// texels (N this; 0: none), written beside the field as
@@ -190,6 +193,27 @@ pub enum SkyChoice {
     Texels(u32),
 }
 
+/// A knob that is on, off, or chosen from the dataset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Switch {
+    /// Chosen from the dataset.
+    Auto,
+    /// On.
+    On,
+    /// Off.
+    Off,
+}
+
+/// Parses `auto`, `on` or `off`.
+pub fn parse_switch(s: &str) -> Result<Switch, String> {
+    match s {
+        "auto" => Ok(Switch::Auto),
+        "on" => Ok(Switch::On),
+        "off" => Ok(Switch::Off),
+        _ => Err(format!("{s}: expected auto, on or off")),
+    }
+}
+
 /// Parses `--sky`: `auto` or a count of texels.
 pub fn parse_sky(s: &str) -> Result<SkyChoice, String> {
     if s == "auto" {
@@ -239,7 +263,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         tv_edge: args.tv_edge,
         sparsity: args.sparsity,
         distortion: args.distortion,
-        random_background: args.random_background,
+        // Set below from the photographs' alpha where auto.
+        random_background: args.random_background == Switch::On,
         // Set below from the dataset's light past the bounds where auto.
         sky: match args.sky {
             SkyChoice::Texels(n) => n,
@@ -325,6 +350,19 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     let past = inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds);
     if let Some(w) = past.warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
+    }
+    if args.random_background == Switch::Auto {
+        let alpha = inlay_passes::train::transparent_pixels(&dataset);
+        let sky_asked = resume_sky.is_some() || matches!(args.sky, SkyChoice::Texels(n) if n > 0);
+        knobs.random_background = alpha.takes_random_background() && !sky_asked;
+        if knobs.random_background {
+            eprintln!(
+                "a random colour behind the field each step: {} pixels of the photographs have \
+                 alpha below 1, so they say where nothing is (--random-background off keeps \
+                 --background)",
+                alpha.linear
+            );
+        }
     }
     if args.sky == SkyChoice::Auto {
         knobs.sky = match &resume_sky {
