@@ -132,20 +132,15 @@ pub fn load_image(path: &Path, background: [f32; 3]) -> Result<FrameImage, Strin
     let (width, height, rgb, saturated) = match image_kind(path) {
         Some(ImageKind::Exr) => {
             let img = inlay_engine::HdrImage::load_exr(path).map_err(|e| e.to_string())?;
+            // A NaN alpha stays NaN (clamp keeps it) and leaves a NaN
+            // pixel, masked below.
             alpha = img.pixels.iter().map(|p| p[3].clamp(0.0, 1.0)).collect();
+            counts.transparent = alpha.iter().filter(|a| **a < 1.0).count();
             let rgb: Vec<[f32; 3]> = img
                 .pixels
                 .iter()
-                .map(|p| {
-                    // A NaN alpha leaves a NaN pixel, masked below.
-                    let a = if p[3].is_nan() {
-                        p[3]
-                    } else {
-                        p[3].clamp(0.0, 1.0)
-                    };
-                    counts.transparent += usize::from(a < 1.0);
-                    [0, 1, 2].map(|k| p[k] + (1.0 - a) * background[k])
-                })
+                .zip(&alpha)
+                .map(|(p, a)| [0, 1, 2].map(|k| p[k] + (1.0 - a) * background[k]))
                 .collect();
             (img.width, img.height, rgb, vec![false; img.pixels.len()])
         }
