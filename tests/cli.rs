@@ -380,6 +380,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
             "1.5",
             "--first-stage-share: 1.5 must lie between 0 and 1",
         ),
+        (
+            "--refine-density-exponent",
+            "2",
+            "--refine-density-exponent: 2 must lie between 0 and 1",
+        ),
         ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
         ("--sky", "2000", "--sky: 2000 must be in 0..=1024"),
         ("--prune", "nan", "--prune: NaN must be non-negative"),

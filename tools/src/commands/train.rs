@@ -40,6 +40,11 @@ pub struct TrainArgs {
     /// stages split the rest evenly).
     #[arg(long, default_value_t = TrainKnobs::default().first_stage_share)]
     pub first_stage_share: f64,
+    /// Each density is multiplied by 2^P when a stage's grid doubles: 0
+    /// carries the field unchanged, 1 keeps each node's optical depth per
+    /// spacing (surfaces as steep per node as on the coarser grid).
+    #[arg(long, default_value_t = TrainKnobs::default().refine_density_exponent)]
+    pub refine_density_exponent: f64,
     /// Optimiser steps. Default: 3000 up to 128 nodes along the longest
     /// axis, 2000 × (nodes / 128)² above where that is more (256: 8000),
     /// for the `--resume` field's resolution when resuming.
@@ -250,6 +255,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         resolution: args.resolution,
         stages: args.stages,
         first_stage_share: args.first_stage_share,
+        refine_density_exponent: args.refine_density_exponent,
         iterations: args.iterations.unwrap_or_else(|| default_iterations(nodes)),
         batch: args.batch,
         samples_per_ray: args.samples_per_ray,
