@@ -43,8 +43,9 @@ pub struct TrainArgs {
     /// Each density is multiplied by 2^P when a stage's grid doubles: 0
     /// carries the field unchanged, 1 keeps each node's optical depth per
     /// spacing (surfaces as steep per node as on the coarser grid).
-    #[arg(long, default_value_t = TrainKnobs::default().refine_density_exponent)]
-    pub refine_density_exponent: f64,
+    /// `auto` (the default): 0.5 behind a random background, else 0.
+    #[arg(long, value_parser = parse_exponent, default_value = "auto")]
+    pub refine_density_exponent: Exponent,
     /// Optimiser steps. Default: 3000 up to 128 nodes along the longest
     /// axis, 2000 × (nodes / 128)² above where that is more (256: 8000),
     /// for the `--resume` field's resolution when resuming.
@@ -229,6 +230,26 @@ pub fn parse_sky(s: &str) -> Result<SkyChoice, String> {
         .map_err(|e| format!("{s}: {e} (a count of texels, or auto)"))
 }
 
+/// `--refine-density-exponent`: a number, or the one the background asks
+/// for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Exponent {
+    /// [`TrainKnobs::auto_refine_exponent`].
+    Auto,
+    /// This exponent.
+    Value(f64),
+}
+
+/// Parses `--refine-density-exponent`: `auto` or a number.
+pub fn parse_exponent(s: &str) -> Result<Exponent, String> {
+    if s == "auto" {
+        return Ok(Exponent::Auto);
+    }
+    s.parse::<f64>()
+        .map(Exponent::Value)
+        .map_err(|e| format!("{s}: {e} (a number between 0 and 1, or auto)"))
+}
+
 /// Runs `inlay train`.
 pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     check_output("--out", &args.out, &["inlayfield"])?;
@@ -255,7 +276,11 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         resolution: args.resolution,
         stages: args.stages,
         first_stage_share: args.first_stage_share,
-        refine_density_exponent: args.refine_density_exponent,
+        // Set below from the background where auto.
+        refine_density_exponent: match args.refine_density_exponent {
+            Exponent::Auto => 0.0,
+            Exponent::Value(p) => p,
+        },
         iterations: args.iterations.unwrap_or_else(|| default_iterations(nodes)),
         batch: args.batch,
         samples_per_ray: args.samples_per_ray,
@@ -367,6 +392,16 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                  alpha below 1, so they say where nothing is (--random-background off keeps \
                  --background)",
                 alpha.linear
+            );
+        }
+    }
+    if args.refine_density_exponent == Exponent::Auto {
+        knobs.refine_density_exponent = knobs.auto_refine_exponent();
+        if knobs.refine_density_exponent > 0.0 && knobs.stages > 1 {
+            eprintln!(
+                "each density × 2^{} as the grid doubles, behind the random background \
+                 (--refine-density-exponent 0 carries it unchanged)",
+                knobs.refine_density_exponent
             );
         }
     }
@@ -641,7 +676,7 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
 
 #[cfg(test)]
 mod tests {
-    use super::{parse_sky, percent_of, SkyChoice};
+    use super::{parse_exponent, parse_sky, percent_of, Exponent, SkyChoice};
 
     /// A view whose every pixel holds a surface has no "others" to float
     /// among: that is said, not printed as NaN.
@@ -658,5 +693,13 @@ mod tests {
         assert_eq!(parse_sky("0"), Ok(SkyChoice::Texels(0)));
         assert_eq!(parse_sky("32"), Ok(SkyChoice::Texels(32)));
         assert!(parse_sky("big").unwrap_err().contains("or auto"));
+    }
+
+    /// `--refine-density-exponent` reads `auto` or a number.
+    #[test]
+    fn the_refine_exponent_reads_auto_or_a_number() {
+        assert_eq!(parse_exponent("auto"), Ok(Exponent::Auto));
+        assert_eq!(parse_exponent("0.25"), Ok(Exponent::Value(0.25)));
+        assert!(parse_exponent("steep").unwrap_err().contains("or auto"));
     }
 }
