@@ -388,6 +388,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         ("--sh-degree", "3", "--sh-degree: 3 must be in 0..=2"),
         ("--sky", "2000", "--sky: 2000 must be in 0..=1024"),
         ("--prune", "nan", "--prune: NaN must be non-negative"),
+        ("--sparsity", "nan", "--sparsity: NaN must be non-negative"),
         ("--scale", "0", "--scale: 0 must be a positive radiance"),
         ("--out", "x.exr", ".inlayfield"),
         (

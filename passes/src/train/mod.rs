@@ -27,7 +27,9 @@ pub use adam::{adam_step, AdamKnobs};
 pub use behind::Behind;
 pub use geometry::{geometry_score, GeometryScore, KnownSurface, HAZE_MARGIN};
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
-pub use knobs::{default_iterations, TrainKnobs, REFINE_EXPONENT_BEHIND_RANDOM};
+pub use knobs::{
+    default_iterations, TrainKnobs, REFINE_EXPONENT_BEHIND_RANDOM, SPARSITY_BEHIND_RANDOM,
+};
 pub use loss::{pixel_loss, PixelTarget};
 pub use render::{render_ray_with_gradient, RayGradient};
 pub use step_times::StepTimes;

@@ -44,8 +44,8 @@ pub struct TrainArgs {
     /// carries the field unchanged, 1 keeps each node's optical depth per
     /// spacing (surfaces as steep per node as on the coarser grid).
     /// `auto` (the default): 0.5 behind a random background, else 0.
-    #[arg(long, value_parser = parse_exponent, default_value = "auto")]
-    pub refine_density_exponent: Exponent,
+    #[arg(long, value_parser = parse_auto_number, default_value = "auto")]
+    pub refine_density_exponent: AutoNumber,
     /// Optimiser steps. Default: 3000 up to 128 nodes along the longest
     /// axis, 2000 × (nodes / 128)² above where that is more (256: 8000),
     /// for the `--resume` field's resolution when resuming.
@@ -95,12 +95,14 @@ pub struct TrainArgs {
     pub tv_edge: f64,
     /// Weight of the density's sparsity prior, taken with total variation:
     /// pulls a density below the edge (a haze) toward zero and leaves an
-    /// opaque surface be (0: none); 2e-3 clears more haze, and can put
-    /// plain surfaces behind where they are and costs foliage and other
-    /// faint matter. Stated for 128 nodes: a grid of
-    /// r > 128 nodes applies it × (128 / r)², as its steps grow by (r / 128)².
-    #[arg(long, default_value_t = TrainKnobs::default().sparsity)]
-    pub sparsity: f64,
+    /// opaque surface be (0: none). `auto` (the default): 2e-3 behind a
+    /// random background, which clears the haze the steeper refinement
+    /// leaves in front of the surfaces, else 1e-3; more clears more haze,
+    /// and can put plain surfaces behind where they are and costs foliage
+    /// and other faint matter. Stated for 128 nodes: a grid of r > 128
+    /// nodes applies it × (128 / r)², as its steps grow by (r / 128)².
+    #[arg(long, value_parser = parse_auto_number, default_value = "auto")]
+    pub sparsity: AutoNumber,
     /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
     /// weight into one short stretch (0: none). With the other defaults it
     /// can thicken a faint haze in front of the surfaces into them
@@ -230,24 +232,35 @@ pub fn parse_sky(s: &str) -> Result<SkyChoice, String> {
         .map_err(|e| format!("{s}: {e} (a count of texels, or auto)"))
 }
 
-/// `--refine-density-exponent`: a number, or the one the background asks
-/// for.
+/// A knob given as a number, or `auto`: the one the background asks for
+/// (`--refine-density-exponent`, `--sparsity`; the knobs' own check holds
+/// the number's range).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Exponent {
-    /// [`TrainKnobs::auto_refine_exponent`].
+pub enum AutoNumber {
+    /// [`TrainKnobs::auto_refine_exponent`], [`TrainKnobs::auto_sparsity`].
     Auto,
-    /// This exponent.
+    /// This number.
     Value(f64),
 }
 
-/// Parses `--refine-density-exponent`: `auto` or a number.
-pub fn parse_exponent(s: &str) -> Result<Exponent, String> {
+impl AutoNumber {
+    /// The number given, or `auto` where it was not.
+    fn or(self, auto: f64) -> f64 {
+        match self {
+            AutoNumber::Auto => auto,
+            AutoNumber::Value(v) => v,
+        }
+    }
+}
+
+/// Parses a knob that takes `auto` or a number.
+pub fn parse_auto_number(s: &str) -> Result<AutoNumber, String> {
     if s == "auto" {
-        return Ok(Exponent::Auto);
+        return Ok(AutoNumber::Auto);
     }
     s.parse::<f64>()
-        .map(Exponent::Value)
-        .map_err(|e| format!("{s}: {e} (a number between 0 and 1, or auto)"))
+        .map(AutoNumber::Value)
+        .map_err(|e| format!("{s}: {e} (a number, or auto)"))
 }
 
 /// Runs `inlay train`.
@@ -277,10 +290,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         stages: args.stages,
         first_stage_share: args.first_stage_share,
         // Set below from the background where auto.
-        refine_density_exponent: match args.refine_density_exponent {
-            Exponent::Auto => 0.0,
-            Exponent::Value(p) => p,
-        },
+        refine_density_exponent: args.refine_density_exponent.or(0.0),
         iterations: args.iterations.unwrap_or_else(|| default_iterations(nodes)),
         batch: args.batch,
         samples_per_ray: args.samples_per_ray,
@@ -292,7 +302,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         tv_colour: args.tv_colour,
         tv_density: args.tv_density,
         tv_edge: args.tv_edge,
-        sparsity: args.sparsity,
+        // Set below from the background where auto.
+        sparsity: args.sparsity.or(TrainKnobs::default().sparsity),
         distortion: args.distortion,
         // Set below from the photographs' alpha where auto.
         random_background: args.random_background == Switch::On,
@@ -395,13 +406,24 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             );
         }
     }
-    if args.refine_density_exponent == Exponent::Auto {
+    if args.refine_density_exponent == AutoNumber::Auto {
         knobs.refine_density_exponent = knobs.auto_refine_exponent();
         if knobs.refine_density_exponent > 0.0 && knobs.stages > 1 {
             eprintln!(
                 "each density × 2^{} as the grid doubles, behind the random background \
                  (--refine-density-exponent 0 carries it unchanged)",
                 knobs.refine_density_exponent
+            );
+        }
+    }
+    if args.sparsity == AutoNumber::Auto {
+        knobs.sparsity = knobs.auto_sparsity();
+        if knobs.sparsity != TrainKnobs::default().sparsity {
+            eprintln!(
+                "sparsity prior {:e} behind the random background (--sparsity {:e} is the fixed \
+                 background's)",
+                knobs.sparsity,
+                TrainKnobs::default().sparsity
             );
         }
     }
@@ -676,7 +698,7 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
 
 #[cfg(test)]
 mod tests {
-    use super::{parse_exponent, parse_sky, percent_of, Exponent, SkyChoice};
+    use super::{parse_auto_number, parse_sky, percent_of, AutoNumber, SkyChoice};
 
     /// A view whose every pixel holds a surface has no "others" to float
     /// among: that is said, not printed as NaN.
@@ -695,11 +717,15 @@ mod tests {
         assert!(parse_sky("big").unwrap_err().contains("or auto"));
     }
 
-    /// `--refine-density-exponent` reads `auto` or a number.
+    /// `--refine-density-exponent` and `--sparsity` read `auto` or a
+    /// number, and take the number given over the one `auto` would.
     #[test]
-    fn the_refine_exponent_reads_auto_or_a_number() {
-        assert_eq!(parse_exponent("auto"), Ok(Exponent::Auto));
-        assert_eq!(parse_exponent("0.25"), Ok(Exponent::Value(0.25)));
-        assert!(parse_exponent("steep").unwrap_err().contains("or auto"));
+    fn a_knob_reads_auto_or_a_number() {
+        assert_eq!(parse_auto_number("auto"), Ok(AutoNumber::Auto));
+        assert_eq!(parse_auto_number("0.25"), Ok(AutoNumber::Value(0.25)));
+        assert_eq!(parse_auto_number("2e-3"), Ok(AutoNumber::Value(2e-3)));
+        assert!(parse_auto_number("steep").unwrap_err().contains("or auto"));
+        assert_eq!(AutoNumber::Auto.or(0.5), 0.5);
+        assert_eq!(AutoNumber::Value(0.0).or(0.5), 0.0);
     }
 }
