@@ -1087,12 +1087,13 @@ fn brackets_train_the_hdr_field_their_linear_views_do() {
     );
 }
 
-/// The total variation the GPU's step is checked with: an edge inside the
-/// test field's density differences (up to 4), so both sides are read,
-/// and the sparsity prior, whose pull on the densities (0–4) peaks at the
-/// edge.
+/// The total variation the GPU's step is checked with: edges inside the
+/// test field's colour and density differences (up to 4), so both sides
+/// of each are read, and the sparsity prior, whose pull on the densities
+/// (0–4) peaks at the edge.
 const TV: inlay_passes::train::tv::TvWeights = inlay_passes::train::tv::TvWeights {
     colour: 0.03,
+    colour_edge: 0.4,
     density: 0.07,
     density_edge: 0.5,
     sparsity: 0.05,

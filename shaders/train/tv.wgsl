@@ -1,8 +1,8 @@
 // Total variation: each node's gradient of the squared differences to its
 // six neighbours, Σ_nb (v − v_nb) per channel, weighted per channel group
-// (colour, density), a density difference d pulled by d / √(1 + (d·inv)²)
-// (a Charbonnier penalty: squared below 1/inv, its size beyond; inv 0:
-// squared everywhere), and the density's sparsity prior (σ₊ / (1 +
+// (colour, density), a difference d pulled by d / √(1 + (d·inv)²) with the
+// group's own inv (a Charbonnier penalty: squared below 1/inv, its size
+// beyond; inv 0: squared everywhere), and the density's sparsity prior (σ₊ / (1 +
 // (σ₊·inv)²), weighted), into the gradient buffer Adam's step left empty;
 // train/descend.wgsl then takes one plain step along it. A sparse grid's
 // nodes are its pool's, a dropped brick's neighbours zero (held so).
@@ -18,7 +18,9 @@ struct TvPush {
     sparsity: f32,
     // Bricks per axis of a sparse grid (0: dense; field/bricks.wgsl).
     brick_dims: vec3<u32>,
-    pad1: u32,
+    // 1 / the colour difference beyond which its penalty grows as its
+    // size (0: squared everywhere; tv.rs TvWeights::colour_edge).
+    colour_edge_inverse: f32,
 }
 
 var<immediate> pc: TvPush;
@@ -44,11 +46,13 @@ fn neighbour(m: vec3<u32>) -> vec4<f32> {
     return params[brick_pool_index(slot, m)];
 }
 
-// Half the penalty's derivative for a difference d: d for colour, the
-// density's d / √(1 + (d·inv)²) (passes/src/train/tv.rs edge_pull).
+// Half the penalty's derivative for a difference d: d / √(1 + (d·inv)²)
+// with the colour's inv for r, g, b and the density's for σ
+// (passes/src/train/tv.rs edge_pull).
 fn pull(d: vec4<f32>) -> vec4<f32> {
-    let s = d.w * pc.density_edge_inverse;
-    return vec4<f32>(d.xyz, d.w / sqrt(1.0 + s * s));
+    let inv = vec4<f32>(vec3<f32>(pc.colour_edge_inverse), pc.density_edge_inverse);
+    let s = d * inv;
+    return d / sqrt(vec4<f32>(1.0) + s * s);
 }
 
 // Half the sparsity prior's derivative over its weight for a density σ:

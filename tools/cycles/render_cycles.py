@@ -44,6 +44,10 @@ mean over each pixel's area; no clamping, no denoising):
 - training: `training/` with `transforms.json` (nerfstudio/instant-ngp
   convention, OpenGL camera axes, inlay's world axes, the field's `aabb`)
   and one linear HDR EXR per view (half floats), full bounces, no objects.
+  `--only-views 8,24 --seeds 2 --out DIR` renders those views again with
+  another seed: the PSNR between the two renders of a view bounds what any
+  field can score against it (docs/benchmarks.md, "The Cycles sets' own
+  noise").
 - `render.json`: Blender's version, the command, samples, seeds and the
   wall time of each image.
 """
@@ -87,6 +91,12 @@ def parse_args():
     p.add_argument("--views", type=int, default=32, help="training views")
     p.add_argument("--view-size", type=int, default=96)
     p.add_argument("--view-samples", type=int, default=256)
+    p.add_argument(
+        "--only-views",
+        default="",
+        help="only these training views (comma-separated indices), e.g. the held-out ones again with "
+        "another seed (--seeds 2) into another --out, to read the views' own noise",
+    )
     p.add_argument(
         "--object-diffuse",
         default="burley",
@@ -851,7 +861,10 @@ def main():
         sc.cycles.seed = seeds[0]
         fov = math.radians(40.0)
         frames = []
+        only = {int(v) for v in args.only_views.split(",") if v}
         for k, (pos, tgt) in enumerate(training_views(spec, args.views)):
+            if only and k not in only:
+                continue
             cam = add_camera(f"view-{k:03d}", pos, tgt, [0, 1, 0], math.degrees(fov))
             sc.camera = cam
             fname = f"view-{k:03d}.exr"

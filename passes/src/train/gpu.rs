@@ -132,8 +132,9 @@ inlay_engine::gpu_struct! {
         pub sparsity: f32,
         /// Bricks per axis of a sparse grid (0: dense).
         pub brick_dims: [u32; 3],
-        /// Padding.
-        pub pad1: u32,
+        /// 1 / the colour difference beyond which its penalty grows as
+        /// its size (0: squared everywhere; [`TvWeights::colour_edge`]).
+        pub colour_edge_inverse: f32,
     }
 }
 
@@ -836,7 +837,7 @@ impl GpuTrainer {
             density_edge_inverse: self.tv_weights.density_edge_inverse() as f32,
             sparsity: self.tv_weights.sparsity as f32,
             brick_dims: self.brick_dims(),
-            pad1: 0,
+            colour_edge_inverse: self.tv_weights.colour_edge_inverse() as f32,
         };
         let groups = nodes.div_ceil(64);
         let mut pass = graph.compute_pass(TRAIN_TV);

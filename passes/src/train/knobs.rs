@@ -75,8 +75,18 @@ pub struct TrainKnobs {
     pub scale: Option<f64>,
     /// Total variation's step on colour after each Adam step: each value
     /// moves by 2 × this × its differences to its six neighbours (at most
-    /// [`super::tv::MAX_TV_WEIGHT`]).
+    /// [`super::tv::MAX_TV_WEIGHT`]; bounded beyond
+    /// [`Self::tv_colour_edge`]). 0 by default: 1e-3 raised every Cycles
+    /// set's held-out views and cost DOG's 48 views of 160 × 120 0.3 dB
+    /// (`docs/benchmarks.md`, issue 25's twenty-seventh pass).
     pub tv_colour: f64,
+    /// The colour difference between neighbouring nodes, as a fraction of
+    /// the radiance scale ([`Self::scale`]), beyond which the colour's
+    /// total variation pulls it by a bounded amount rather than in
+    /// proportion ([`super::tv::TvWeights::colour_edge`]): a speckle
+    /// below it is smoothed, a lamp's radiance above it is kept. 0:
+    /// squared differences everywhere.
+    pub tv_colour_edge: f64,
     /// The same for density. 3e-3 by default: DOG trained at 128 nodes
     /// from 48 views of 160 × 120 left its surfaces painted on a haze 11–16
     /// node spacings in front of the recipe's without it (held-out views
@@ -196,6 +206,7 @@ impl Default for TrainKnobs {
             epsilon: 4.0,
             scale: None,
             tv_colour: 0.0,
+            tv_colour_edge: 1.0,
             tv_density: 3e-3,
             tv_edge: 0.1,
             sparsity: 1e-3,
@@ -268,11 +279,17 @@ pub const FEW_STEPS_RESOLUTION: u32 = 128;
 impl TrainKnobs {
     /// The total variation's weights on a grid of node spacing `h`: the
     /// edge [`Self::tv_edge`] (an optical depth per spacing) as a density
-    /// difference, τ/h; the sparsity prior as a grid of `nodes` along its
-    /// longest axis applies it ([`Self::sparsity_at`]).
-    pub fn tv_weights(&self, h: f64, nodes: u32) -> super::tv::TvWeights {
+    /// difference, τ/h; the colour's edge [`Self::tv_colour_edge`] times
+    /// the radiance `scale`; the sparsity prior as a grid of `nodes` along
+    /// its longest axis applies it ([`Self::sparsity_at`]).
+    pub fn tv_weights(&self, h: f64, nodes: u32, scale: f64) -> super::tv::TvWeights {
         super::tv::TvWeights {
             colour: self.tv_colour,
+            colour_edge: if self.tv_colour_edge > 0.0 {
+                self.tv_colour_edge * scale
+            } else {
+                f64::INFINITY
+            },
             density: self.tv_density,
             density_edge: if self.tv_edge > 0.0 {
                 self.tv_edge / h
@@ -426,6 +443,7 @@ impl TrainKnobs {
         }
         for (k, v) in [
             ("tv_colour", self.tv_colour),
+            ("tv_colour_edge", self.tv_colour_edge),
             ("tv_density", self.tv_density),
             ("tv_edge", self.tv_edge),
             ("sparsity", self.sparsity),
@@ -479,21 +497,40 @@ mod tests {
             tv_edge: 0.02,
             ..TrainKnobs::default()
         };
-        let tv = knobs.tv_weights(0.01, 128);
+        let tv = knobs.tv_weights(0.01, 128, 0.5);
         assert!((tv.density_edge - 2.0).abs() < 1e-12);
         assert_eq!(tv.density, knobs.tv_density);
-        assert!((knobs.tv_weights(0.005, 128).density_edge - 4.0).abs() < 1e-12);
+        assert!((knobs.tv_weights(0.005, 128, 0.5).density_edge - 4.0).abs() < 1e-12);
         let off = TrainKnobs {
             tv_edge: 0.0,
             ..TrainKnobs::default()
         }
-        .tv_weights(0.01, 128);
+        .tv_weights(0.01, 128, 0.5);
         assert_eq!(off.density_edge_inverse(), 0.0);
         let bad = TrainKnobs {
             tv_edge: -1.0,
             ..TrainKnobs::default()
         };
         assert_eq!(bad.check().unwrap_err().0, "tv_edge");
+        // The colour's edge is a share of the radiance scale.
+        let colour = TrainKnobs {
+            tv_colour_edge: 0.5,
+            ..TrainKnobs::default()
+        };
+        assert!((colour.tv_weights(0.01, 128, 0.2).colour_edge - 0.1).abs() < 1e-12);
+        let squared = TrainKnobs {
+            tv_colour_edge: 0.0,
+            ..TrainKnobs::default()
+        };
+        assert_eq!(
+            squared.tv_weights(0.01, 128, 0.2).colour_edge_inverse(),
+            0.0
+        );
+        let bad = TrainKnobs {
+            tv_colour_edge: f64::NAN,
+            ..TrainKnobs::default()
+        };
+        assert_eq!(bad.check().unwrap_err().0, "tv_colour_edge");
     }
 
     /// The sparsity prior reaches total variation's weights (as it is up
@@ -507,15 +544,15 @@ mod tests {
             sparsity: 2e-3,
             ..TrainKnobs::default()
         };
-        let tv = knobs.tv_weights(0.01, 128);
+        let tv = knobs.tv_weights(0.01, 128, 0.5);
         assert_eq!(tv.sparsity, 2e-3);
         assert!(!tv.is_none());
         // Stated for 128 nodes: as it is below, a quarter at 256.
         for (nodes, applied) in [(24, 2e-3), (128, 2e-3), (256, 5e-4), (512, 1.25e-4)] {
-            assert!((knobs.tv_weights(0.01, nodes).sparsity - applied).abs() < 1e-15);
+            assert!((knobs.tv_weights(0.01, nodes, 0.5).sparsity - applied).abs() < 1e-15);
             assert_eq!(
                 knobs.sparsity_at(nodes),
-                knobs.tv_weights(0.01, nodes).sparsity
+                knobs.tv_weights(0.01, nodes, 0.5).sparsity
             );
         }
         for v in [-1e-3, f64::INFINITY] {

@@ -456,7 +456,11 @@ pub fn train(
         let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, stage_march, layout)?;
         // The sparsity prior's weight follows the grid trained: a resumed
         // field's own nodes, not `knobs.resolution`.
-        gpu.tv_weights = knobs.tv_weights(field.spacing().min_element(), final_res.max_element());
+        gpu.tv_weights = knobs.tv_weights(
+            field.spacing().min_element(),
+            final_res.max_element(),
+            scale,
+        );
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         gpu.set_sky(ctx, sky.as_ref())?;

@@ -1,6 +1,7 @@
 //! The field commands of `inlay`: `bake-scene`, `bake-ssdf`, `estimate-env`, `render`,
 //! `reference`, `probe`, `profile`, `dataset`, `render-views`, `train` and the benchmarks.
 
+pub mod auto_value;
 pub mod bake_scene;
 pub mod bake_ssdf;
 pub mod bench_march;

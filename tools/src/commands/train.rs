@@ -18,6 +18,7 @@ use inlay_passes::field::{field_bytes, sky_path};
 use inlay_passes::geometry::Aabb;
 use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
 
+use crate::commands::auto_value::{parse_auto, Auto};
 use crate::commands::dataset::{parse_bounds, parse_rgb};
 use crate::field_source::progress_bar;
 use crate::outputs::{check_image_output, check_output, Outputs};
@@ -44,8 +45,8 @@ pub struct TrainArgs {
     /// carries the field unchanged, 1 keeps each node's optical depth per
     /// spacing (surfaces as steep per node as on the coarser grid).
     /// `auto` (the default): 0.5 behind a random background, else 0.
-    #[arg(long, value_parser = parse_auto_number, default_value = "auto")]
-    pub refine_density_exponent: AutoNumber,
+    #[arg(long, value_parser = parse_auto::<f64>, default_value = "auto")]
+    pub refine_density_exponent: Auto<f64>,
     /// Optimiser steps. Default: 3000 up to 128 nodes along the longest
     /// axis, 2000 × (nodes / 128)² above where that is more (256: 8000),
     /// for the `--resume` field's resolution when resuming.
@@ -84,6 +85,13 @@ pub struct TrainArgs {
     /// Total variation's weight on neighbouring nodes' colour differences.
     #[arg(long, default_value_t = TrainKnobs::default().tv_colour)]
     pub tv_colour: f64,
+    /// The colour difference between neighbouring nodes, as a share of
+    /// the radiance scale, from which the colour's total variation pulls
+    /// by a bounded amount rather than in proportion: a speckle below it
+    /// is smoothed, a lamp above it keeps its radiance (0: squared
+    /// differences everywhere).
+    #[arg(long, default_value_t = TrainKnobs::default().tv_colour_edge)]
+    pub tv_colour_edge: f64,
     /// Total variation's weight on neighbouring nodes' density differences.
     #[arg(long, default_value_t = TrainKnobs::default().tv_density)]
     pub tv_density: f64,
@@ -101,8 +109,8 @@ pub struct TrainArgs {
     /// and can put plain surfaces behind where they are and costs foliage
     /// and other faint matter. Stated for 128 nodes: a grid of r > 128
     /// nodes applies it × (128 / r)², as its steps grow by (r / 128)².
-    #[arg(long, value_parser = parse_auto_number, default_value = "auto")]
-    pub sparsity: AutoNumber,
+    #[arg(long, value_parser = parse_auto::<f64>, default_value = "auto")]
+    pub sparsity: Auto<f64>,
     /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
     /// weight into one short stretch (0: none). With the other defaults it
     /// can thicken a faint haze in front of the surfaces into them
@@ -125,8 +133,8 @@ pub struct TrainArgs {
     /// (the default): the `--resume` field's sky where it has one, else
     /// N = 8 where at least 1 % of the views' light lies past the
     /// bounds, none otherwise.
-    #[arg(long, value_parser = parse_sky, default_value = "auto")]
-    pub sky: SkyChoice,
+    #[arg(long, value_parser = parse_auto::<u32>, default_value = "auto")]
+    pub sky: Auto<u32>,
     /// Degree of view-dependent colour (spherical harmonics, 0..=2; 0 is
     /// one colour per node). Degree 1 adds 3 RGB coefficients a node,
     /// degree 2 8, to the file and to the device's memory. Default: the
@@ -191,16 +199,6 @@ pub struct TrainArgs {
     pub scene: Option<PathBuf>,
 }
 
-/// `--sky`: a sky of a given size, or the one the dataset asks for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SkyChoice {
-    /// The `--resume` field's sky where it has one, else
-    /// [`inlay_passes::train::past_bounds::LightPastBounds::auto_sky`]'s.
-    Auto,
-    /// A sky of 2N × N texels, N this (0: none).
-    Texels(u32),
-}
-
 /// A knob that is on, off, or chosen from the dataset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Switch {
@@ -222,47 +220,6 @@ pub fn parse_switch(s: &str) -> Result<Switch, String> {
     }
 }
 
-/// Parses `--sky`: `auto` or a count of texels.
-pub fn parse_sky(s: &str) -> Result<SkyChoice, String> {
-    if s == "auto" {
-        return Ok(SkyChoice::Auto);
-    }
-    s.parse::<u32>()
-        .map(SkyChoice::Texels)
-        .map_err(|e| format!("{s}: {e} (a count of texels, or auto)"))
-}
-
-/// A knob given as a number, or `auto`: the one the background asks for
-/// (`--refine-density-exponent`, `--sparsity`; the knobs' own check holds
-/// the number's range).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum AutoNumber {
-    /// [`TrainKnobs::auto_refine_exponent`], [`TrainKnobs::auto_sparsity`].
-    Auto,
-    /// This number.
-    Value(f64),
-}
-
-impl AutoNumber {
-    /// The number given, or `auto` where it was not.
-    fn or(self, auto: f64) -> f64 {
-        match self {
-            AutoNumber::Auto => auto,
-            AutoNumber::Value(v) => v,
-        }
-    }
-}
-
-/// Parses a knob that takes `auto` or a number.
-pub fn parse_auto_number(s: &str) -> Result<AutoNumber, String> {
-    if s == "auto" {
-        return Ok(AutoNumber::Auto);
-    }
-    s.parse::<f64>()
-        .map(AutoNumber::Value)
-        .map_err(|e| format!("{s}: {e} (a number, or auto)"))
-}
-
 /// Runs `inlay train`.
 pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     check_output("--out", &args.out, &["inlayfield"])?;
@@ -276,7 +233,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     // The sky learnt with the `--resume` field, where there is one and a
     // sky is asked for (or may be).
     let resume_sky = match &args.resume {
-        Some(p) if args.sky != SkyChoice::Texels(0) && sky_path(p).exists() => {
+        Some(p) if args.sky != Auto::Value(0) && sky_path(p).exists() => {
             Some(inlay_passes::field::Sky::load(&sky_path(p))?)
         }
         _ => None,
@@ -300,6 +257,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         epsilon: args.epsilon,
         scale: args.scale,
         tv_colour: args.tv_colour,
+        tv_colour_edge: args.tv_colour_edge,
         tv_density: args.tv_density,
         tv_edge: args.tv_edge,
         // Set below from the background where auto.
@@ -308,10 +266,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         // Set below from the photographs' alpha where auto.
         random_background: args.random_background == Switch::On,
         // Set below from the dataset's light past the bounds where auto.
-        sky: match args.sky {
-            SkyChoice::Texels(n) => n,
-            SkyChoice::Auto => 0,
-        },
+        sky: args.sky.or(0),
         sh_degree: args.sh_degree.unwrap_or(
             resume
                 .as_ref()
@@ -395,7 +350,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     }
     if args.random_background == Switch::Auto {
         let alpha = inlay_passes::train::transparent_pixels(&dataset);
-        let sky_asked = resume_sky.is_some() || matches!(args.sky, SkyChoice::Texels(n) if n > 0);
+        let sky_asked = resume_sky.is_some() || args.sky.or(0) > 0;
         knobs.random_background = alpha.takes_random_background() && !sky_asked;
         if knobs.random_background {
             eprintln!(
@@ -406,7 +361,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             );
         }
     }
-    if args.refine_density_exponent == AutoNumber::Auto {
+    if args.refine_density_exponent.is_auto() {
         knobs.refine_density_exponent = knobs.auto_refine_exponent();
         if knobs.refine_density_exponent > 0.0 && knobs.stages > 1 {
             eprintln!(
@@ -416,7 +371,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             );
         }
     }
-    if args.sparsity == AutoNumber::Auto {
+    if args.sparsity.is_auto() {
         knobs.sparsity = knobs.auto_sparsity();
         if knobs.sparsity != TrainKnobs::default().sparsity {
             eprintln!(
@@ -427,7 +382,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             );
         }
     }
-    if args.sky == SkyChoice::Auto {
+    if args.sky.is_auto() {
         knobs.sky = match &resume_sky {
             Some(sky) => sky.height,
             None => past.auto_sky(knobs.random_background),
@@ -698,7 +653,7 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
 
 #[cfg(test)]
 mod tests {
-    use super::{parse_auto_number, parse_sky, percent_of, AutoNumber, SkyChoice};
+    use super::percent_of;
 
     /// A view whose every pixel holds a surface has no "others" to float
     /// among: that is said, not printed as NaN.
@@ -706,26 +661,5 @@ mod tests {
     fn a_share_of_nothing_is_said_not_printed_as_nan() {
         assert_eq!(percent_of(0.0123), "1.2 %");
         assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
-    }
-
-    /// `--sky` reads `auto` or a count, and names what it wants otherwise.
-    #[test]
-    fn sky_reads_auto_or_a_count() {
-        assert_eq!(parse_sky("auto"), Ok(SkyChoice::Auto));
-        assert_eq!(parse_sky("0"), Ok(SkyChoice::Texels(0)));
-        assert_eq!(parse_sky("32"), Ok(SkyChoice::Texels(32)));
-        assert!(parse_sky("big").unwrap_err().contains("or auto"));
-    }
-
-    /// `--refine-density-exponent` and `--sparsity` read `auto` or a
-    /// number, and take the number given over the one `auto` would.
-    #[test]
-    fn a_knob_reads_auto_or_a_number() {
-        assert_eq!(parse_auto_number("auto"), Ok(AutoNumber::Auto));
-        assert_eq!(parse_auto_number("0.25"), Ok(AutoNumber::Value(0.25)));
-        assert_eq!(parse_auto_number("2e-3"), Ok(AutoNumber::Value(2e-3)));
-        assert!(parse_auto_number("steep").unwrap_err().contains("or auto"));
-        assert_eq!(AutoNumber::Auto.or(0.5), 0.5);
-        assert_eq!(AutoNumber::Value(0.0).or(0.5), 0.0);
     }
 }
