@@ -394,7 +394,12 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         (
             "--scene",
             concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cups.toml"),
-            "are not the dataset's",
+            "are not within the dataset's",
+        ),
+        (
+            "--held-out-samples",
+            "0",
+            "--held-out-samples: 0 must be in 1..=16",
         ),
     ] {
         let mut args = vec![

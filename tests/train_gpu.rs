@@ -769,6 +769,7 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
             &MarchKnobs::default(),
             DVec3::ZERO,
             false,
+            1,
         );
         eprintln!(
             "held-out {}: PSNR {:.2} dB (empty field {:.2}), relative error {:.3}, brightness {:.3}",
@@ -1069,6 +1070,7 @@ fn brackets_train_the_hdr_field_their_linear_views_do() {
                 &MarchKnobs::default(),
                 DVec3::ZERO,
                 false,
+                1,
             )
             .brightness
         });
@@ -1226,6 +1228,7 @@ fn exposure_gains_are_learnt_for_photographs_of_unknown_exposure() {
             &Default::default(),
             DVec3::ZERO,
             true,
+            inlay_passes::train::TrainKnobs::default().held_out_samples,
         );
         eprintln!(
             "held-out {}: PSNR {:.2} dB learnt, {:.2} dB equal exposures (both at the best gain)",

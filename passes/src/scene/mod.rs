@@ -119,6 +119,25 @@ impl Primitive {
 }
 
 impl Recipe {
+    /// The surfaces and media (not lights) that cross the field's bounds,
+    /// each with how far it reaches past them: the baked or trained field
+    /// holds only the part inside, while a renderer of the primitives
+    /// themselves (Cycles, `render_cycles.py`) draws all of it, so its
+    /// pictures show what no field in these bounds can.
+    pub fn crossing_bounds(&self) -> Vec<(&Primitive, f64)> {
+        let b = self.bounds;
+        self.primitives
+            .iter()
+            .filter(|p| !p.is_emitter())
+            .filter_map(|p| {
+                let e = p.shape.bounds()?;
+                let past = (b.min - e.min).max(e.max - b.max).max_element();
+                let inside = (e.min.cmplt(b.max) & e.max.cmpgt(b.min)).all();
+                (inside && past > 1e-9 * b.diagonal()).then_some((p, past))
+            })
+            .collect()
+    }
+
     /// Emitters inside the field's bounds, and those outside it.
     pub fn lights(&self) -> (Vec<&Primitive>, Vec<&Primitive>) {
         self.primitives
@@ -715,4 +734,33 @@ fn recipe(
         ));
     }
     Ok(Recipe { bounds, primitives })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bundled recipes whose surfaces reach past their bounds are
+    /// found, by how far: CUPS' back wall 0.1 above the top, PLANTS' wall
+    /// 0.05; DOG's and BOOKS' lie inside, and ROOM's emitting softbox is a
+    /// light, not a surface.
+    #[test]
+    fn surfaces_crossing_the_bounds_are_found() {
+        let crossing = |name: &str| {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.toml"));
+            let scene = load_scene(&path).unwrap();
+            scene
+                .recipe()
+                .unwrap()
+                .crossing_bounds()
+                .iter()
+                .map(|(p, d)| (p.name.clone(), (d * 1e6).round() / 1e6))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(crossing("cups"), [("back-wall".to_string(), 0.1)]);
+        assert_eq!(crossing("plants"), [("wall".to_string(), 0.05)]);
+        for inside in ["dog", "books", "room"] {
+            assert_eq!(crossing(inside), [], "{inside}");
+        }
+    }
 }

@@ -76,9 +76,11 @@ pub struct TrainKnobs {
     /// Total variation's step on colour after each Adam step: each value
     /// moves by 2 × this × its differences to its six neighbours (at most
     /// [`super::tv::MAX_TV_WEIGHT`]; bounded beyond
-    /// [`Self::tv_colour_edge`]). 0 by default: 1e-3 raised every Cycles
-    /// set's held-out views and cost DOG's 48 views of 160 × 120 0.3 dB
-    /// (`docs/benchmarks.md`, issue 25's twenty-seventh pass).
+    /// [`Self::tv_colour_edge`]). 0 by default: 1e-3 raised the Cycles
+    /// sets' held-out views by up to 1.1 dB, but, scored over the pixels'
+    /// area, lowered the means of DOG's, CUPS', BOOKS' and ROOM's 48 views
+    /// of 160 × 120 by 0.3–1.3 dB (`docs/benchmarks.md`, issue 25's
+    /// twenty-seventh and twenty-eighth passes).
     pub tv_colour: f64,
     /// The colour difference between neighbouring nodes, as a fraction of
     /// the radiance scale ([`Self::scale`]), beyond which the colour's
@@ -185,6 +187,21 @@ pub struct TrainKnobs {
     /// held-out views scored within 0.1 dB of the dense grid's
     /// (`docs/benchmarks.md`).
     pub sparse: bool,
+    /// Each training ray passes through a point drawn uniformly over its
+    /// pixel rather than through its centre, as a photograph's pixel
+    /// gathered its light. Off by default: one such ray a pixel asks each
+    /// point for the pixel's mean, which blurs a field whose nodes are
+    /// finer than the pixels. On DOG's and PLANTS' Cycles sets (a pixel
+    /// 2.3 node spacings across) the held-out views, scored over the
+    /// pixels' area, read 32.1/31.6 and 29.6/29.7 dB with it against
+    /// 33.9/34.0 and 30.1/29.9 without, and PLANTS' lamp lost an eighth of
+    /// its light; CUPS moved by 0.05 dB (`docs/benchmarks.md`, issue 25's
+    /// twenty-eighth pass).
+    pub jitter: bool,
+    /// Held-out views are rendered with n × n rays a pixel (stratified over
+    /// its area) and averaged, as their photographs gathered the pixel's
+    /// light; 1 renders the ray through each pixel's centre.
+    pub held_out_samples: u32,
     /// Seed of every random choice.
     pub seed: u64,
 }
@@ -217,10 +234,23 @@ impl Default for TrainKnobs {
             learn_exposure: false,
             prune: 0.01,
             sparse: true,
+            jitter: false,
+            held_out_samples: DEFAULT_HELD_OUT_SAMPLES,
             seed: 1,
         }
     }
 }
+
+/// Rays a pixel a held-out view is scored with, per axis
+/// ([`TrainKnobs::held_out_samples`]). DOG's Cycles views of one field
+/// read 31.59/30.73 dB at 1 (the centre ray), 33.54/33.77 at 2,
+/// 33.85/33.99 at 4 and 33.88/33.97 at 8 (`docs/benchmarks.md`, issue
+/// 25's twenty-eighth pass).
+pub const DEFAULT_HELD_OUT_SAMPLES: u32 = 4;
+
+/// The most rays a pixel per axis [`TrainKnobs::held_out_samples`] takes
+/// (a 160 × 120 view at 16 × 16 a pixel marches 5 M rays on the CPU).
+pub const MAX_HELD_OUT_SAMPLES: u32 = 16;
 
 /// The fewest march samples along the diagonal a coarse stage takes
 /// ([`TrainKnobs::stage_samples`]).
@@ -431,6 +461,15 @@ impl TrainKnobs {
                     .into(),
             );
         }
+        if !(1..=MAX_HELD_OUT_SAMPLES).contains(&self.held_out_samples) {
+            return bad(
+                "held_out_samples",
+                format!(
+                    "{} must be in 1..={MAX_HELD_OUT_SAMPLES} (rays a pixel per axis)",
+                    self.held_out_samples
+                ),
+            );
+        }
         if self.sh_degree > crate::field::MAX_SH_DEGREE {
             return bad(
                 "sh_degree",
@@ -486,6 +525,21 @@ mod tests {
         assert_eq!(sky(32, true).check().unwrap_err().0, "sky");
         let big = crate::field::sky::MAX_SKY_HEIGHT + 1;
         assert_eq!(sky(big, false).check().unwrap_err().0, "sky");
+    }
+
+    /// Held-out rays a pixel outside 1..=16 per axis are refused, naming
+    /// the knob.
+    #[test]
+    fn held_out_samples_outside_their_range_are_refused() {
+        let n = |held_out_samples| TrainKnobs {
+            held_out_samples,
+            ..TrainKnobs::default()
+        };
+        assert!(n(1).check().is_ok());
+        assert!(n(MAX_HELD_OUT_SAMPLES).check().is_ok());
+        for bad in [0, MAX_HELD_OUT_SAMPLES + 1] {
+            assert_eq!(n(bad).check().unwrap_err().0, "held_out_samples");
+        }
     }
 
     /// The edge is an optical depth per node spacing: on a grid twice as

@@ -43,8 +43,17 @@ pub fn recorded_exposure(frame: &Frame) -> f64 {
 /// The ray through pixel `pixel` of `frame` (through its centre), or None
 /// where the lens model cannot be inverted.
 pub fn pixel_ray(frame: &Frame, pixel: u32) -> Option<Ray> {
+    pixel_ray_at(frame, pixel, (0.5, 0.5))
+}
+
+/// The ray through the point `offset` of pixel `pixel` of `frame`, in
+/// pixels from its top-left corner (each in [0, 1]; (0.5, 0.5) its
+/// centre), or None where the lens model cannot be inverted. A pixel of a
+/// photograph (or of a Cycles or `render-views` image) records the light
+/// over its whole area, not along the ray through its centre.
+pub fn pixel_ray_at(frame: &Frame, pixel: u32, offset: (f64, f64)) -> Option<Ray> {
     let w = frame.intrinsics.width;
-    let (u, v) = ((pixel % w) as f64 + 0.5, (pixel / w) as f64 + 0.5);
+    let (u, v) = ((pixel % w) as f64 + offset.0, (pixel / w) as f64 + offset.1);
     let d = frame.intrinsics.direction(u, v)?;
     Some(Ray {
         origin: frame.pose.origin(),
@@ -246,7 +255,10 @@ impl PixelPool {
     /// each one's ray, what it says (with `shift` behind its transparent
     /// part: [`pixel_target`]), and its frame, in the order of their
     /// frames and pixels (neighbouring rays of a view then march side by
-    /// side on the device, over the same nodes and about as far).
+    /// side on the device, over the same nodes and about as far). With
+    /// `jitter` each ray passes through a point drawn uniformly over its
+    /// pixel, as the pixel's light was gathered
+    /// ([`super::TrainKnobs::jitter`]); without, through its centre.
     pub fn batch(
         &self,
         dataset: &Dataset,
@@ -254,6 +266,7 @@ impl PixelPool {
         seed: u64,
         step: u64,
         shift: DVec3,
+        jitter: bool,
     ) -> Vec<(Ray, PixelTarget, u32)> {
         let mut rng = Pcg32::new(seed, 0x7EA1_0000_0000 ^ step);
         let mut out = Vec::with_capacity(count);
@@ -262,8 +275,13 @@ impl PixelPool {
             tries += 1;
             let r = self.pixels[rng.next_u32() as usize % self.pixels.len()];
             let frame = &dataset.frames[r.frame as usize];
+            let offset = if jitter {
+                (rng.next_f64(), rng.next_f64())
+            } else {
+                (0.5, 0.5)
+            };
             if let (Some(ray), Some(t)) = (
-                pixel_ray(frame, r.pixel),
+                pixel_ray_at(frame, r.pixel, offset),
                 pixel_target(frame, r.pixel, shift),
             ) {
                 out.push((r, ray, t));

@@ -17,7 +17,7 @@ use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::past_bounds::{pixel_sees_bounds, pose_light};
-use super::pixels::{bracket_sets, is_bracket, pixel_ray, PixelPool};
+use super::pixels::{bracket_sets, is_bracket, pixel_ray_at, PixelPool};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
@@ -483,6 +483,7 @@ pub fn train(
                 knobs.seed,
                 step as u64,
                 behind - background,
+                knobs.jitter,
             );
             let records: Vec<TrainRay> = batch
                 .iter()
@@ -557,6 +558,7 @@ pub fn train(
                 &view_march,
                 behind,
                 knobs.learn_exposure,
+                knobs.held_out_samples,
             )
         })
         .collect();
@@ -694,7 +696,9 @@ pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
 /// Renders frame `f` of `dataset` from `field` over `background` (a
 /// colour or a learnt sky) and scores it; with
 /// `fit_exposure`, at the RGB gain that fits the photograph best (least
-/// squares over its usable pixels: a frame of unknown exposure).
+/// squares over its usable pixels: a frame of unknown exposure). Each
+/// pixel is the mean of `samples` × `samples` rays spread evenly over it
+/// (1: the ray through its centre), as its photograph gathered it.
 pub fn score_view<'a>(
     dataset: &Dataset,
     f: u32,
@@ -702,6 +706,7 @@ pub fn score_view<'a>(
     march: &MarchKnobs,
     background: impl Into<Behind<'a>>,
     fit_exposure: bool,
+    samples: u32,
 ) -> HeldOutView {
     let behind = background.into();
     let frame = &dataset.frames[f as usize];
@@ -713,14 +718,28 @@ pub fn score_view<'a>(
     };
     // What the sensor records of radiance c, before clipping.
     let recorded = |c: DVec3| c * exposure.unwrap_or(1.0);
+    let n = samples.max(1);
+    let offsets: Vec<(f64, f64)> = (0..n * n)
+        .map(|i| {
+            let at = |k: u32| (k as f64 + 0.5) / n as f64;
+            (at(i % n), at(i / n))
+        })
+        .collect();
     let radiance: Vec<DVec3> = (0..w * h)
         .into_par_iter()
-        .map(|p| match pixel_ray(frame, p) {
-            Some(ray) => {
-                let r = march_ray(field, &ray, f64::INFINITY, march);
-                recorded(r.colour + (1.0 - r.opacity) * behind.eval(ray.dir))
-            }
-            None => DVec3::ZERO,
+        .map(|p| {
+            // The mean over the rays the lens model can invert (none: black).
+            let (sum, count) = offsets
+                .iter()
+                .filter_map(|&o| pixel_ray_at(frame, p, o))
+                .fold((DVec3::ZERO, 0u32), |(sum, count), ray| {
+                    let r = march_ray(field, &ray, f64::INFINITY, march);
+                    (
+                        sum + r.colour + (1.0 - r.opacity) * behind.eval(ray.dir),
+                        count + 1,
+                    )
+                });
+            recorded(sum / count.max(1) as f64)
         })
         .collect();
     let gain = if fit_exposure {
@@ -951,14 +970,105 @@ mod tests {
             ..dataset_with(0)
         };
         let pool = PixelPool::new(&dataset, 0);
-        let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO);
+        let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, false);
         assert_eq!(batch.len(), 64);
         let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f)| (*f, r.dir.x)).collect();
         assert!(keys.windows(2).all(|w| w[0].0 <= w[1].0), "{keys:?}");
         assert!(keys.iter().any(|k| k.0 == 0) && keys.iter().any(|k| k.0 == 2));
         // The same draw for the same seed and step, another for the next step.
-        assert_eq!(pool.batch(&dataset, 64, 1, 5, DVec3::ZERO), batch);
-        assert_ne!(pool.batch(&dataset, 64, 1, 6, DVec3::ZERO), batch);
+        assert_eq!(pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, false), batch);
+        assert_ne!(pool.batch(&dataset, 64, 1, 6, DVec3::ZERO, false), batch);
+    }
+
+    /// A jittered ray passes through a point of the pixel whose value it
+    /// carries, spread over the pixel's width; unjittered, through its
+    /// centre.
+    #[test]
+    fn a_jittered_ray_stays_inside_the_pixel_it_is_scored_on() {
+        let radiance: Vec<f32> = (0..200).map(|i| i as f32 / 200.0).collect();
+        let dataset = Dataset {
+            frames: vec![frame_of(&radiance, None)],
+            ..dataset_with(0)
+        };
+        let frame = &dataset.frames[0];
+        let to_camera = frame.pose.matrix.inverse();
+        let pool = PixelPool::new(&dataset, 0);
+        for jitter in [false, true] {
+            let batch = pool.batch(&dataset, 256, 1, 5, DVec3::ZERO, jitter);
+            let mut offsets = Vec::new();
+            for (ray, target, _) in &batch {
+                let (u, v) = frame
+                    .intrinsics
+                    .project(to_camera.transform_vector3(ray.dir))
+                    .unwrap();
+                let pixel = u.floor() as usize;
+                assert!((0.0..=1.0).contains(&v), "{v}");
+                assert_eq!(
+                    *target,
+                    crate::train::PixelTarget::Value(DVec3::splat(radiance[pixel] as f64)),
+                    "u {u}"
+                );
+                offsets.push(u - u.floor());
+            }
+            let (lo, hi) = offsets
+                .iter()
+                .fold((1.0f64, 0.0f64), |(lo, hi), o| (lo.min(*o), hi.max(*o)));
+            if jitter {
+                assert!(lo < 0.05 && hi > 0.95, "{lo} {hi}");
+            } else {
+                assert!(
+                    (lo - 0.5).abs() < 1e-6 && (hi - 0.5).abs() < 1e-6,
+                    "{lo} {hi}"
+                );
+            }
+        }
+    }
+
+    /// A held-out pixel is the mean of its rays: where a sharp edge of the
+    /// sky crosses a pixel a quarter of the way in, as its photograph
+    /// averaged it, 4 × 4 rays read the blend and the centre ray one side.
+    #[test]
+    fn a_held_out_pixel_is_the_mean_over_its_area() {
+        // 8 × 1 pixels looking along −z, 0.087 rad a pixel; the direction
+        // x = 0 (where the sky turns from 0 to 1) through u = 3.25.
+        let truth = [0.0, 0.0, 0.0, 0.75, 1.0, 1.0, 1.0, 1.0];
+        let mut frame = frame_of(&truth, None);
+        frame.intrinsics = crate::dataset::Intrinsics::centred(8, 1, 5.0);
+        frame.intrinsics.cx = 3.25;
+        let dataset = Dataset {
+            frames: vec![frame],
+            ..dataset_with(0)
+        };
+        // 2048 × 1024 texels, a texel 0.035 pixels: x < 0 reads 0, x > 0
+        // reads 1 (φ = atan2(z, x)), blended over a texel at the edge.
+        let (w, h) = (2048u32, 1024u32);
+        let texels = (0..w * h)
+            .map(|i| {
+                let phi = ((i % w) as f64 + 0.5) / w as f64 * std::f64::consts::TAU;
+                DVec3::splat(if phi.cos() < 0.0 { 0.0 } else { 1.0 })
+            })
+            .collect();
+        let sky = Sky::new(w, h, texels).unwrap();
+        let empty = GridField::new(UVec3::splat(2), dataset.bounds, vec![[0.0; 4]; 8], 8);
+        let knobs = MarchKnobs::default();
+        let view = |n| score_view(&dataset, 0, &empty, &knobs, &sky, false, n);
+        let (centre, area) = (view(1), view(4));
+        let read = |v: &HeldOutView| v.rendered.iter().map(|c| c[0]).collect::<Vec<f32>>();
+        for (p, t) in truth.iter().enumerate() {
+            assert!((read(&area)[p] - t).abs() < 1e-3, "{:?}", read(&area));
+            let side = if p < 3 { 0.0 } else { 1.0 };
+            assert!(
+                (read(&centre)[p] - side).abs() < 1e-3,
+                "{:?}",
+                read(&centre)
+            );
+        }
+        assert!(
+            area.psnr > centre.psnr + 20.0,
+            "{} {}",
+            area.psnr,
+            centre.psnr
+        );
     }
 
     /// A lamp past the shortest bracket's white is counted once for its

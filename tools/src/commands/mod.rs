@@ -7,6 +7,7 @@ pub mod bake_ssdf;
 pub mod bench_march;
 pub mod bench_sg;
 pub mod bench_shade;
+pub mod crossing_bounds;
 pub mod dataset;
 pub mod estimate_env;
 pub mod fidelity;
