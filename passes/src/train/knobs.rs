@@ -241,6 +241,16 @@ impl Default for TrainKnobs {
     }
 }
 
+/// A total variation edge knob in its unit: `knob × unit` where the knob
+/// is positive, else infinite (no edge: squared differences everywhere).
+fn edge(knob: f64, unit: f64) -> f64 {
+    if knob > 0.0 {
+        knob * unit
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Rays a pixel a held-out view is scored with, per axis
 /// ([`TrainKnobs::held_out_samples`]). DOG's Cycles views of one field
 /// read 31.59/30.73 dB at 1 (the centre ray), 33.54/33.77 at 2,
@@ -315,17 +325,9 @@ impl TrainKnobs {
     pub fn tv_weights(&self, h: f64, nodes: u32, scale: f64) -> super::tv::TvWeights {
         super::tv::TvWeights {
             colour: self.tv_colour,
-            colour_edge: if self.tv_colour_edge > 0.0 {
-                self.tv_colour_edge * scale
-            } else {
-                f64::INFINITY
-            },
+            colour_edge: edge(self.tv_colour_edge, scale),
             density: self.tv_density,
-            density_edge: if self.tv_edge > 0.0 {
-                self.tv_edge / h
-            } else {
-                f64::INFINITY
-            },
+            density_edge: edge(self.tv_edge, 1.0 / h),
             sparsity: self.sparsity_at(nodes),
         }
     }
