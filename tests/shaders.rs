@@ -29,6 +29,10 @@ fn knob_defines() -> Vec<Define> {
             inlay_passes::train::gpu::VALUES_PER_INVOCATION,
         ),
         Define::U32(
+            "MAX_RAYS_PER_PIXEL",
+            inlay_passes::train::gpu::MAX_RAYS_PER_PIXEL,
+        ),
+        Define::U32(
             "NF_RAYS_PER_INVOCATION",
             inlay_passes::envest::near_field::RAYS_PER_INVOCATION,
         ),

@@ -12,8 +12,8 @@ use inlay_passes::march::MarchKnobs;
 use inlay_passes::rng::Pcg32;
 use inlay_passes::sgfit::model::luminance;
 use inlay_passes::train::{
-    adam_step, pixel_loss, render_ray_with_gradient, AdamKnobs, GpuTrainer, GradientScatter,
-    PixelTarget, Sky, TrainRay,
+    adam_step, pixel_loss, render_pixel_with_gradient, render_ray_with_gradient, AdamKnobs,
+    GpuTrainer, GradientScatter, PixelTarget, Sky, TrainRay,
 };
 
 /// A trainer starting from `field`.
@@ -336,6 +336,140 @@ fn gradient_and_adam_match(degree: u32, distortion: f64, scatter: GradientScatte
     common::assert_no_validation_errors(&ctx);
 }
 
+/// Pixels of 4 rays each (the loss on their mean), at degree 1 with the
+/// distortion loss, three frames of learnt exposure gains and a learnt sky
+/// behind (some rays miss the field): each pixel, its loss, and the
+/// gradients of the values, the gains and the sky against the CPU's
+/// `render_pixel_with_gradient`; one ray a pixel is the test above.
+#[test]
+fn a_pixel_of_several_rays_matches_the_cpu_reference() {
+    const RAYS: usize = 4;
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let field = sh_field(1);
+    let knobs = MarchKnobs {
+        samples_per_ray: 40,
+        termination: 1e-4,
+        skip_empty: false,
+    };
+    let sky = random_sky(Pcg32::new(5, 7));
+    let mut batch = rays(&field, 30 * RAYS);
+    // One ray in five looks away from the field: it reads the sky alone.
+    for (ray, _, _) in batch.iter_mut().step_by(5) {
+        ray.dir = (ray.origin - field.bounds.center()).normalize();
+    }
+    let (distortion, eps) = (0.4, 0.05);
+    let gains = [
+        DVec3::ONE,
+        DVec3::new(0.7, 1.2, 0.9),
+        DVec3::new(1.5, 0.8, 1.1),
+    ];
+    // Pixel p: rays RAYS·p.., the first one's target and weight, frame p mod 3.
+    let pixels: Vec<(Vec<Ray>, PixelTarget, f64, usize)> = batch
+        .chunks_exact(RAYS)
+        .enumerate()
+        .map(|(p, c)| (c.iter().map(|r| r.0).collect(), c[0].1, c[0].2, p % 3))
+        .collect();
+    let records: Vec<TrainRay> = pixels
+        .iter()
+        .flat_map(|(rays, t, w, f)| {
+            rays.iter()
+                .map(move |r| TrainRay::new(r.origin, r.dir, *t, *w).in_frame(*f as u32))
+        })
+        .collect();
+    let mut trainer = trainer_of(&ctx, &lib, &field, knobs)
+        .with_rays_per_pixel(&ctx, RAYS as u32)
+        .unwrap();
+    assert_eq!(trainer.rays_per_pixel(), RAYS as u32);
+    trainer.distortion = distortion;
+    trainer.set_gains(&ctx, &gains).unwrap();
+    trainer.gain_rate = Some(0.05);
+    trainer.set_sky(&ctx, Some(&sky)).unwrap();
+    let mut renderer = Renderer::new(&ctx, 1).unwrap();
+    let out = trainer
+        .run_batch(&mut renderer, &records, DVec3::ONE, eps, None)
+        .unwrap();
+    assert_eq!(out.len(), pixels.len());
+    let values = inlay_passes::field::device_values(&field);
+    let mut cpu_grad = vec![0.0f64; 4 * values.len()];
+    let mut cpu_sky = vec![0.0f64; 4 * sky.texels.len()];
+    let mut cpu_gain_grad = [DVec3::ZERO; 3];
+    for ((rays, target, w, f), gpu) in pixels.iter().zip(&out) {
+        let g = gains[*f];
+        let r = render_pixel_with_gradient(&field, rays, &knobs, &sky, *w * distortion, |c| {
+            *w * g * pixel_loss(g * c, *target, eps).1
+        });
+        let (loss, d_pixel) = pixel_loss(g * r.colour, *target, eps);
+        if *f != 0 {
+            cpu_gain_grad[*f] += *w * d_pixel * r.colour;
+        }
+        let pixel = DVec3::new(gpu[0] as f64, gpu[1] as f64, gpu[2] as f64);
+        assert!(
+            (pixel - g * r.colour).abs().max_element() < 1e-4 * (1.0 + r.colour.length()),
+            "{pixel} vs {}",
+            g * r.colour
+        );
+        let loss = w * loss + r.distortion;
+        assert!(
+            (gpu[3] as f64 - loss).abs() < 2e-3 * (1.0 + loss),
+            "loss {} vs {loss}",
+            gpu[3]
+        );
+        for (n, d) in &r.values {
+            for c in 0..4 {
+                cpu_grad[4 * n + c] += d[c];
+            }
+        }
+        for (i, d) in &r.sky {
+            for c in 0..3 {
+                cpu_sky[4 * i + c] += d[c];
+            }
+        }
+    }
+    // f32 sums over ~120 rays × 40 samples: 1e-3 of the largest value, as
+    // one ray a pixel.
+    let worst = |gpu: &[f32], cpu: &[f64]| {
+        let scale = cpu.iter().fold(0.0f64, |a, g| a.max(g.abs()));
+        assert!(scale > 0.0);
+        gpu.iter()
+            .zip(cpu)
+            .fold(0.0f64, |a, (g, c)| a.max((*g as f64 - c).abs() / scale))
+    };
+    let values_off = worst(&trainer.gradient(&mut renderer).unwrap(), &cpu_grad);
+    assert!(
+        values_off < 1e-3,
+        "values' gradient differs by {values_off}"
+    );
+    let sky_off = worst(&trainer.sky_gradient(&mut renderer).unwrap(), &cpu_sky);
+    assert!(sky_off < 1e-3, "sky's gradient differs by {sky_off}");
+    assert!(cpu_sky.iter().filter(|g| **g != 0.0).count() > 20);
+    let gpu_gain_grad = trainer.gain_gradient(&mut renderer).unwrap();
+    for (f, cpu) in cpu_gain_grad.iter().enumerate().skip(1) {
+        let gpu = frame_rgb(&gpu_gain_grad, f);
+        assert!(
+            (gpu - *cpu).abs().max_element() <= 1e-3 * cpu.abs().max_element().max(1e-6),
+            "frame {f}: gain gradient {gpu} vs {cpu}"
+        );
+    }
+    // A batch that is not whole pixels is refused.
+    assert!(trainer
+        .run_batch(&mut renderer, &records[..RAYS + 1], DVec3::ONE, eps, None)
+        .is_err());
+    common::assert_no_validation_errors(&ctx);
+}
+
+/// A 16 × 8 sky of random texels, blue brightest.
+fn random_sky(mut rng: Pcg32) -> Sky {
+    Sky::new(
+        16,
+        8,
+        (0..128)
+            .map(|_| DVec3::new(rng.next_f64(), 0.5 * rng.next_f64(), 3.0 * rng.next_f64()))
+            .collect(),
+    )
+    .unwrap()
+}
+
 /// Behind a learnt sky (16 × 8 texels), rays through the field and rays
 /// that miss it: the pixels, the sky texels' gradient and an Adam step of
 /// the sky against the CPU, both ways of scattering.
@@ -349,15 +483,7 @@ fn the_gpu_sky_gradient_and_step_match_the_cpu_reference() {
         termination: 1e-4,
         skip_empty: false,
     };
-    let mut rng = Pcg32::new(21, 3);
-    let sky = Sky::new(
-        16,
-        8,
-        (0..128)
-            .map(|_| DVec3::new(rng.next_f64(), 0.5 * rng.next_f64(), 3.0 * rng.next_f64()))
-            .collect(),
-    )
-    .unwrap();
+    let sky = random_sky(Pcg32::new(21, 3));
     let mut batch = rays(&field, 90);
     // A third look away from the field: their pixels are the sky alone.
     for (ray, _, _) in batch.iter_mut().step_by(3) {

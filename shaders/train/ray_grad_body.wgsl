@@ -1,8 +1,9 @@
-// The body of the training kernel: one training ray per invocation, the
-// march's quadrature over the trained grid (no empty-space skipping but
+// The body of the training kernel: one training pixel per invocation
+// (pc.rays_per_pixel rays through points of its area, the pixel their
+// mean), the march's quadrature over the trained grid (no empty-space skipping but
 // a sparse grid's dropped bricks: past_dropped_brick), the
-// pixel's loss, and the loss's gradient with respect to every value the
-// ray read. The trained nodes are laid out as a field's on the device (a
+// pixel's loss, and the loss's gradient with respect to every value its
+// rays read. The trained nodes are laid out as a field's on the device (a
 // sparse grid's pool of bricks, field/bricks.wgsl), the view-dependent
 // colour's coefficients in pages of their own (train/sh_pages.wgsl). A
 // photograph records its frame's exposure gain
@@ -12,7 +13,7 @@
 // weights is added, and its gradient with respect to the densities.
 // Behind the field is pc.background, or where pc.sky_width is not 0 a learnt sky
 // (field/sky.wgsl) whose gradient is scattered too.
-// Mirrors passes/src/train/render.rs render_ray_with_gradient.
+// Mirrors passes/src/train/render.rs render_pixel_with_gradient.
 // Needs from the includer: the bindings `grad` (2), `gain_grad` (5),
 // `sky_grad` (24) and the gradient's pages `sh_grad_j` (15..22), and
 // `add_float(i, v)`, `add_gain_float(i, v)`, `add_sky_float(i, v)`,
@@ -45,6 +46,13 @@ struct TrainPush {
     brick_dims: vec3<u32>,
     // A learnt sky's texels down.
     sky_height: u32,
+    // Rays a pixel (1..=MAX_RAYS_PER_PIXEL, a u32 define:
+    // passes/src/train/gpu.rs MAX_RAYS_PER_PIXEL): a pixel's rays lie
+    // consecutively in `rays`, ray_count of them in all.
+    rays_per_pixel: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -182,80 +190,72 @@ fn add_sky_grad(d: vec3<f32>, e: vec3<f32>) {
     add_sky_texel(c.index.w, e * c.weight.w);
 }
 
-// Renders ray `index` of the batch, its loss and gradient.
-fn train_ray(index: u32) {
-    if index >= pc.ray_count {
-        return;
-    }
-    let ray = rays[index];
+// What the forward march of one ray leaves for its backward walk.
+struct RayForward {
+    // Σ T_i α_i c_i (the background not included).
+    colour: vec3<f32>,
+    // T_N: the transmittance past the last sample.
+    transmittance: f32,
+    // The distortion loss's sums: Σw, Σw·t, the ordered pairs
+    // Σ_{j<i} w_i w_j (t_i − t_j), and Σ w²Δ.
+    w_all: f32,
+    wt_all: f32,
+    pairs: f32,
+    own: f32,
+    // The samples marched (dropped bricks' skipped ones included).
+    used: u32,
+    // Where the ray enters and leaves the bounds.
+    t0: f32,
+    t1: f32,
+}
+
+// The forward march of `ray` over the trained grid, with the sums the
+// distortion loss needs where pc.distortion > 0.
+fn march_forward(ray: TrainRay, y: array<f32, 8>) -> RayForward {
     let tb = ray_box(ray.origin, ray.dir, pc.bounds_min, pc.bounds_max);
-    let t0 = tb.x;
-    let t1 = tb.y;
-    var y = sh_basis(ray.dir);
-    // Forward.
-    var colour = vec3<f32>(0.0);
-    var transmittance = 1.0;
-    var used = 0u;
+    var f = RayForward(vec3<f32>(0.0), 1.0, 0.0, 0.0, 0.0, 0.0, 0u, tb.x, tb.y);
     let distort = pc.distortion > 0.0;
-    // The weights' sums the distortion loss needs: Σw, Σw·t, the ordered
-    // pairs Σ_{j<i} w_i w_j (t_i − t_j), and Σ w²Δ.
-    var w_all = 0.0;
-    var wt_all = 0.0;
-    var pairs = 0.0;
-    var own = 0.0;
-    if t1 > t0 {
-        loop {
-            let a = t0 + f32(used) * pc.step;
-            if a >= t1 {
-                break;
-            }
-            let b = min(a + pc.step, t1);
-            let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
-            let past = past_dropped_brick(ray.origin, ray.dir, t0, used, cell);
-            if past != used {
-                used = past;
-                continue;
-            }
-            let v = sample_at(cell);
-            let alpha = 1.0 - exp(-density_at(v.w) * (b - a));
-            let w = transmittance * alpha;
-            colour += w * seen_colour(unclamped_colour(cell, v.xyz, y));
-            if distort {
-                let t = 0.5 * (a + b);
-                pairs += w * (t * w_all - wt_all);
-                own += w * w * (b - a);
-                w_all += w;
-                wt_all += w * t;
-            }
-            transmittance *= 1.0 - alpha;
-            used += 1u;
-            if transmittance < pc.termination {
-                break;
-            }
+    if f.t1 <= f.t0 {
+        return f;
+    }
+    loop {
+        let a = f.t0 + f32(f.used) * pc.step;
+        if a >= f.t1 {
+            break;
+        }
+        let b = min(a + pc.step, f.t1);
+        let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
+        let past = past_dropped_brick(ray.origin, ray.dir, f.t0, f.used, cell);
+        if past != f.used {
+            f.used = past;
+            continue;
+        }
+        let v = sample_at(cell);
+        let alpha = 1.0 - exp(-density_at(v.w) * (b - a));
+        let w = f.transmittance * alpha;
+        f.colour += w * seen_colour(unclamped_colour(cell, v.xyz, y));
+        if distort {
+            let t = 0.5 * (a + b);
+            f.pairs += w * (t * f.w_all - f.wt_all);
+            f.own += w * w * (b - a);
+            f.w_all += w;
+            f.wt_all += w * t;
+        }
+        f.transmittance *= 1.0 - alpha;
+        f.used += 1u;
+        if f.transmittance < pc.termination {
+            break;
         }
     }
-    let background = background_along(ray.dir);
-    let total = colour + transmittance * background;
-    let gain = gains[ray.frame].xyz;
-    let l = pixel_loss(gain * total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
-    // The distortion loss, weighted as the pixel's (λ/D folded in).
-    let lambda = ray.weight * pc.distortion;
-    let distortion = lambda * (2.0 * pairs + own / 3.0);
-    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss + distortion);
-    if pc.learn_gains != 0u && ray.frame != 0u {
-        let gg = ray.weight * l.grad * total;
-        add_gain_float(4u * ray.frame, gg.x);
-        add_gain_float(4u * ray.frame + 1u, gg.y);
-        add_gain_float(4u * ray.frame + 2u, gg.z);
-    }
-    let g = ray.weight * l.grad * gain;
-    if all(g == vec3<f32>(0.0)) && distortion == 0.0 {
-        return;
-    }
-    if pc.sky_width != 0u && transmittance > 0.0 {
-        add_sky_grad(ray.dir, g * transmittance);
-    }
-    // Backward, with the running sum.
+    return f;
+}
+
+// The backward walk of `ray` (its forward march `f`, the radiance behind
+// it `background`) with the running sum: scatters the gradient of a loss
+// whose gradient with respect to the ray's colour is `g`, plus the
+// distortion loss `distortion` of weight `lambda` (λ/D, the ray's share).
+fn march_backward(ray: TrainRay, y: array<f32, 8>, f: RayForward, background: vec3<f32>, g: vec3<f32>, lambda: f32, distortion: f32) {
+    let distort = pc.distortion > 0.0;
     let count = select(0u, sh_count(pc.sh_degree), pc.sh_degree > 0u);
     var t_i = 1.0;
     var so_far = vec3<f32>(0.0);
@@ -265,20 +265,20 @@ fn train_ray(index: u32) {
     var next = 0u;
     loop {
         let s = next;
-        if s >= used {
+        if s >= f.used {
             break;
         }
         next = s + 1u;
-        let a = t0 + f32(s) * pc.step;
-        if a >= t1 {
+        let a = f.t0 + f32(s) * pc.step;
+        if a >= f.t1 {
             break;
         }
-        let b = min(a + pc.step, t1);
+        let b = min(a + pc.step, f.t1);
         let cell = trilinear_cell(ray.origin + 0.5 * (a + b) * ray.dir, pc.bounds_min, pc.bounds_max, pc.resolution);
         if !cell.inside {
             continue;
         }
-        let past = past_dropped_brick(ray.origin, ray.dir, t0, s, cell);
+        let past = past_dropped_brick(ray.origin, ray.dir, f.t0, s, cell);
         if past != s {
             next = past;
             continue;
@@ -297,12 +297,12 @@ fn train_ray(index: u32) {
         // The clamp at zero after interpolation passes no gradient where
         // it holds (density_at).
         let open_sigma = select(0.0, 1.0, v.w > 0.0);
-        var d_sigma = dt * dot(g, t_next * c - (colour - so_far) - transmittance * background);
+        var d_sigma = dt * dot(g, t_next * c - (f.colour - so_far) - f.transmittance * background);
         if distort {
             // e = ∂L_d/∂w of this sample, from the sums before and after it.
             let t = 0.5 * (a + b);
-            let w_after = w_all - w_before - w;
-            let wt_after = wt_all - wt_before - w * t;
+            let w_after = f.w_all - w_before - w;
+            let wt_after = f.wt_all - wt_before - w * t;
             let spread = t * w_before - wt_before + wt_after - t * w_after;
             let e = lambda * (2.0 * spread + 2.0 / 3.0 * w * dt);
             e_so_far += w * e;
@@ -352,5 +352,62 @@ fn train_ray(index: u32) {
             }
         }
         t_i = t_next;
+    }
+}
+
+// The distortion loss of a ray's forward march, at weight `lambda`.
+fn distortion_of(f: RayForward, lambda: f32) -> f32 {
+    return lambda * (2.0 * f.pairs + f.own / 3.0);
+}
+
+// Renders pixel `index` of the batch (its pc.rays_per_pixel rays,
+// consecutive in `rays`, all carrying the pixel's target, weight and
+// frame), its loss on the mean of its rays' colours (the pixel's light
+// over its area) and the gradient: each ray takes 1/n of the pixel's, and
+// its own distortion loss at 1/n of the pixel's weight.
+fn train_pixel(index: u32) {
+    let n = pc.rays_per_pixel;
+    if index >= pc.ray_count / n {
+        return;
+    }
+    let first = index * n;
+    let ray = rays[first];
+    // Forward, each ray; the pixel is their mean.
+    var forward: array<RayForward, MAX_RAYS_PER_PIXEL>;
+    var total = vec3<f32>(0.0);
+    for (var s = 0u; s < n; s++) {
+        let r = rays[first + s];
+        forward[s] = march_forward(r, sh_basis(r.dir));
+        total += forward[s].colour + forward[s].transmittance * background_along(r.dir);
+    }
+    total /= f32(n);
+    let gain = gains[ray.frame].xyz;
+    let l = pixel_loss(gain * total, ray.kind, ray.target_value, ray.exposure, pc.epsilon);
+    // The distortion loss, weighted as the pixel's (λ/D folded in),
+    // shared among its rays.
+    let lambda = ray.weight * pc.distortion / f32(n);
+    var distortion = 0.0;
+    for (var s = 0u; s < n; s++) {
+        distortion += distortion_of(forward[s], lambda);
+    }
+    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss + distortion);
+    if pc.learn_gains != 0u && ray.frame != 0u {
+        let gg = ray.weight * l.grad * total;
+        add_gain_float(4u * ray.frame, gg.x);
+        add_gain_float(4u * ray.frame + 1u, gg.y);
+        add_gain_float(4u * ray.frame + 2u, gg.z);
+    }
+    let g = ray.weight * l.grad * gain / f32(n);
+    if all(g == vec3<f32>(0.0)) && distortion == 0.0 {
+        return;
+    }
+    // Backward, each ray with the running sum.
+    for (var s = 0u; s < n; s++) {
+        let r = rays[first + s];
+        let f = forward[s];
+        if pc.sky_width != 0u && f.transmittance > 0.0 {
+            add_sky_grad(r.dir, g * f.transmittance);
+        }
+        march_backward(r, sh_basis(r.dir), f, background_along(r.dir), g, lambda, distortion_of(f, lambda));
     }
 }

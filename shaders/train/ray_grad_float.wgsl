@@ -73,5 +73,5 @@ fn add_sh_float(j: u32, i: u32, value: f32) {
 
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    train_ray(id.x);
+    train_pixel(id.x);
 }

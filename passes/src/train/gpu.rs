@@ -51,6 +51,15 @@ inlay_engine::gpu_struct! {
         pub brick_dims: [u32; 3],
         /// A learnt sky's texels down.
         pub sky_height: u32,
+        /// Rays a pixel ([`MAX_RAYS_PER_PIXEL`] at most), consecutive in
+        /// the batch.
+        pub rays_per_pixel: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
@@ -245,9 +254,18 @@ fn value_groups(count: u32) -> [u32; 3] {
     [groups.min(65535), groups.div_ceil(65535), 1]
 }
 
-/// The ray kernel's defines: one ray an invocation, it takes a
+/// The ray kernel's defines: one pixel an invocation (its rays in an array
+/// of at most MAX_RAYS_PER_PIXEL), it takes a
 /// view-dependent sample's corners in a loop (faster, counted below).
-const RAY_GRAD_DEFINES: [Define; 1] = [Define::Bool(crate::march::SH_CORNER_LOOP_DEFINE, true)];
+const RAY_GRAD_DEFINES: [Define; 2] = [
+    Define::Bool(crate::march::SH_CORNER_LOOP_DEFINE, true),
+    Define::U32("MAX_RAYS_PER_PIXEL", MAX_RAYS_PER_PIXEL),
+];
+
+/// The most rays `train-rays` averages into one pixel (a u32 define of
+/// `train/ray_grad_body.wgsl`, the size of its per-pixel array of forward
+/// marches): 4 × 4 ([`super::TrainKnobs::area_rays`]).
+pub const MAX_RAYS_PER_PIXEL: u32 = super::knobs::MAX_AREA_RAYS * super::knobs::MAX_AREA_RAYS;
 
 /// The most loop iterations one invocation of the trainer's ray kernel
 /// runs ([`crate::march::loop_budget`]), per sample of a ray across the
@@ -259,8 +277,15 @@ const RAY_GRAD_DEFINES: [Define; 1] = [Define::Bool(crate::march::SH_CORNER_LOOP
 /// exposure gain's 3 words and a learnt sky's 12. Measured on lavapipe
 /// against the f64 gradient: at degree 0, 4096 samples per ray match and
 /// 8192 do not; at degree 2, 2048 and 4096; compare-and-swap at degree 0
-/// fails from 2048.
-fn ray_loop_iterations(march: &MarchKnobs, sh_degree: u32, scatter: GradientScatter) -> u64 {
+/// fails from 2048. An invocation marches every ray of its pixel forward
+/// and back (`rays_per_pixel` times the ray's count), and loops over them
+/// three times.
+fn ray_loop_iterations(
+    march: &MarchKnobs,
+    sh_degree: u32,
+    scatter: GradientScatter,
+    rays_per_pixel: u32,
+) -> u64 {
     let count = crate::field::sh_extra_coefficients(sh_degree) as u64;
     let mut per_sample = 2 + 8;
     if count > 0 {
@@ -272,18 +297,31 @@ fn ray_loop_iterations(march: &MarchKnobs, sh_degree: u32, scatter: GradientScat
         per_sample += 8 * (4 + 3 * count);
         per_ray += 15;
     }
-    (march.samples_per_ray as u64 + 1) * per_sample + per_ray
+    let n = rays_per_pixel.max(1) as u64;
+    n * ((march.samples_per_ray as u64 + 1) * per_sample + per_ray + 3)
 }
 
-/// Refuses training at `samples_per_ray` and `sh_degree` on `ctx`'s device
-/// when its rays would loop past the device's limit (checked by the
-/// command before the dataset is read, and by every trainer built).
-pub fn check_train_rays(ctx: &Context, samples_per_ray: u32, sh_degree: u32) -> anyhow::Result<()> {
+/// Refuses training at `samples_per_ray`, `sh_degree` and
+/// `rays_per_pixel` on `ctx`'s device when its rays would loop past the
+/// device's limit (checked by the command before the dataset is read, and
+/// by every trainer built).
+pub fn check_train_rays(
+    ctx: &Context,
+    samples_per_ray: u32,
+    sh_degree: u32,
+    rays_per_pixel: u32,
+) -> anyhow::Result<()> {
     let march = MarchKnobs {
         samples_per_ray,
         ..MarchKnobs::default()
     };
-    check_ray_loops(ctx, &march, sh_degree, GradientScatter::best(ctx.info()))
+    check_ray_loops(
+        ctx,
+        &march,
+        sh_degree,
+        GradientScatter::best(ctx.info()),
+        rays_per_pixel,
+    )
 }
 
 /// Refuses a trainer whose rays would loop past the device's limit,
@@ -293,14 +331,20 @@ fn check_ray_loops(
     march: &MarchKnobs,
     sh_degree: u32,
     scatter: GradientScatter,
+    rays_per_pixel: u32,
 ) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (1..=MAX_RAYS_PER_PIXEL).contains(&rays_per_pixel),
+        "train-rays: {rays_per_pixel} rays a pixel, where it takes 1 to {MAX_RAYS_PER_PIXEL}"
+    );
     crate::march::loop_budget::check_loop_budget(
         ctx,
         "train-rays",
-        ray_loop_iterations(march, sh_degree, scatter),
+        ray_loop_iterations(march, sh_degree, scatter, rays_per_pixel),
         || {
             format!(
-                "`--samples-per-ray` {} at `--sh-degree` {sh_degree}, gradients scattered by {}",
+                "`--samples-per-ray` {} at `--sh-degree` {sh_degree} and {rays_per_pixel} rays a \
+                 pixel (`--area-rays`), gradients scattered by {}",
                 march.samples_per_ray,
                 match scatter {
                     GradientScatter::CompareAndSwap => "compare-and-swap",
@@ -396,6 +440,8 @@ pub struct GpuTrainer {
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`];
     /// 0 leaves it out).
     pub distortion: f64,
+    scatter: GradientScatter,
+    rays_per_pixel: u32,
 }
 
 impl GpuTrainer {
@@ -427,12 +473,8 @@ impl GpuTrainer {
         march: MarchKnobs,
         layout: Option<BrickLayout>,
     ) -> anyhow::Result<Self> {
-        check_ray_loops(
-            ctx,
-            &march,
-            field.sh_degree,
-            GradientScatter::best(ctx.info()),
-        )?;
+        let scatter = GradientScatter::best(ctx.info());
+        check_ray_loops(ctx, &march, field.sh_degree, scatter, 1)?;
         let resolution = field.resolution;
         let (mut values, sh) = match &layout {
             Some(l) => l.pool_values(field),
@@ -540,6 +582,8 @@ impl GpuTrainer {
             tv_weights: TvWeights::NONE,
             gain_rate: None,
             distortion: 0.0,
+            scatter,
+            rays_per_pixel: 1,
         })
     }
 
@@ -556,9 +600,31 @@ impl GpuTrainer {
             "{} cannot add floats atomically (VK_EXT_shader_atomic_float)",
             ctx.info().name
         );
-        check_ray_loops(ctx, &self.march, self.sh_degree, scatter)?;
+        check_ray_loops(
+            ctx,
+            &self.march,
+            self.sh_degree,
+            scatter,
+            self.rays_per_pixel,
+        )?;
         self.ray_grad = lib.compute_pipeline(ctx, scatter.file(), "main", &RAY_GRAD_DEFINES)?;
+        self.scatter = scatter;
         Ok(self)
+    }
+
+    /// The same trainer taking each pixel of a batch as the mean of `n`
+    /// consecutive rays ([`Self::run_batch`]; 1 by default). Fails
+    /// outside 1..=[`MAX_RAYS_PER_PIXEL`], or where a pixel's rays would
+    /// loop past the device's limit.
+    pub fn with_rays_per_pixel(mut self, ctx: &Context, n: u32) -> anyhow::Result<Self> {
+        check_ray_loops(ctx, &self.march, self.sh_degree, self.scatter, n)?;
+        self.rays_per_pixel = n;
+        Ok(self)
+    }
+
+    /// Rays a pixel of a batch ([`Self::with_rays_per_pixel`]).
+    pub fn rays_per_pixel(&self) -> u32 {
+        self.rays_per_pixel
     }
 
     /// Sets each frame's exposure gain (a ray of frame f records gain f
@@ -644,6 +710,10 @@ impl GpuTrainer {
             sky_width: self.sky_size.map_or(0, |s| s.0),
             brick_dims: self.brick_dims(),
             sky_height: self.sky_size.map_or(0, |s| s.1),
+            rays_per_pixel: self.rays_per_pixel,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         }
     }
 
@@ -676,8 +746,11 @@ impl GpuTrainer {
     /// gradient and, with `adam` given, takes an Adam step with the
     /// gradient scaled by `grad_scale` (clearing it), then a
     /// total-variation step ([`Self::tv_weights`] not zero), then the
-    /// sky's and the gains' steps where they are learnt.
-    /// Returns each ray's pixel and weighted loss.
+    /// sky's and the gains' steps where they are learnt. Each
+    /// [`Self::rays_per_pixel`] consecutive rays are one pixel's (the same
+    /// target, weight and frame; through points of its area): the pixel is
+    /// their mean, and the loss is taken on it.
+    /// Returns each pixel's value and weighted loss.
     pub fn run_batch(
         &mut self,
         renderer: &mut Renderer,
@@ -687,8 +760,15 @@ impl GpuTrainer {
         adam: Option<(&AdamKnobs, f32)>,
     ) -> anyhow::Result<Vec<[f32; 4]>> {
         anyhow::ensure!(!rays.is_empty(), "an empty batch");
+        let n = self.rays_per_pixel as usize;
+        anyhow::ensure!(
+            rays.len() % n == 0,
+            "a batch of {} rays is not whole pixels of {n} rays",
+            rays.len()
+        );
+        let pixels = (rays.len() / n) as u32;
         let ctx = renderer.context().clone();
-        let out_bytes = rays.len() as u64 * 16;
+        let out_bytes = pixels as u64 * 16;
         let readback = BufferReadback::new(&ctx, "train-ray-out (readback)", out_bytes)?;
         renderer.begin_frame()?;
         let mut graph = FrameGraph::new();
@@ -725,7 +805,7 @@ impl GpuTrainer {
         pages.bind_to_batch(&mut pass);
         pass.dispatch(&self.ray_grad)
             .push(&push)
-            .groups([(rays.len() as u32).div_ceil(64), 1, 1]);
+            .groups([pixels.div_ceil(64), 1, 1]);
         pass.finish();
         if let Some((knobs, grad_scale)) = adam {
             self.steps += 1;

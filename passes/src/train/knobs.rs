@@ -39,7 +39,8 @@ pub struct TrainKnobs {
     pub refine_density_exponent: f64,
     /// Adam steps.
     pub iterations: u32,
-    /// Rays per step.
+    /// Rays per step: [`Self::pixels_per_step`] pixels of
+    /// [`Self::rays_per_pixel`] rays each.
     pub batch: u32,
     /// The march's samples along the field's diagonal, on the final grid;
     /// a coarser stage takes [`Self::coarse_samples`] × as many per node
@@ -198,6 +199,19 @@ pub struct TrainKnobs {
     /// its light; CUPS moved by 0.05 dB (`docs/benchmarks.md`, issue 25's
     /// twenty-eighth pass).
     pub jitter: bool,
+    /// Each training pixel is the mean of n × n rays through the centres
+    /// of an even split of its area, and the loss is taken on that mean,
+    /// as its photograph gathered the pixel's light (one ray a pixel asks
+    /// the field for the pixel's mean along a line). A step keeps
+    /// [`Self::batch`] rays, so it takes 1/n² as many pixels. 1..=
+    /// [`MAX_AREA_RAYS`]; 1 by default. At 2, in the same time, the Cycles
+    /// sets' held-out views read up to 1.8 dB higher (DOG 33.8/34.0 →
+    /// 35.1/35.7 dB), but a haze gathers in front of the surfaces: on
+    /// DOG's `render-views` set it hides 20 % of a view's surface light
+    /// against 5 %, and the surfaces lie 1.4–2.2 node spacings off against
+    /// 0.6–0.8. A pixel's rays share one gradient, and none is held to what
+    /// it sees alone (`docs/benchmarks.md`, issue 25's twenty-ninth pass).
+    pub area_rays: u32,
     /// Held-out views are rendered with n × n rays a pixel (stratified over
     /// its area) and averaged, as their photographs gathered the pixel's
     /// light; 1 renders the ray through each pixel's centre.
@@ -235,6 +249,7 @@ impl Default for TrainKnobs {
             prune: 0.01,
             sparse: true,
             jitter: false,
+            area_rays: 1,
             held_out_samples: DEFAULT_HELD_OUT_SAMPLES,
             seed: 1,
         }
@@ -257,6 +272,11 @@ fn edge(knob: f64, unit: f64) -> f64 {
 /// 33.85/33.99 at 4 and 33.88/33.97 at 8 (`docs/benchmarks.md`, issue
 /// 25's twenty-eighth pass).
 pub const DEFAULT_HELD_OUT_SAMPLES: u32 = 4;
+
+/// The most rays a training pixel per axis [`TrainKnobs::area_rays`]
+/// takes: its square is the trainer's most rays a pixel
+/// ([`super::gpu::MAX_RAYS_PER_PIXEL`]).
+pub const MAX_AREA_RAYS: u32 = 4;
 
 /// The most rays a pixel per axis [`TrainKnobs::held_out_samples`] takes
 /// (a 160 × 120 view at 16 × 16 a pixel marches 5 M rays on the CPU).
@@ -398,6 +418,26 @@ impl TrainKnobs {
         (first + (n - first) * stage as u64 / (stages as u64 - 1)) as u32
     }
 
+    /// Rays a training pixel is the mean of ([`Self::area_rays`] squared).
+    pub fn rays_per_pixel(&self) -> u32 {
+        self.area_rays.saturating_mul(self.area_rays)
+    }
+
+    /// How a training pixel's rays are drawn ([`Self::area_rays`],
+    /// [`Self::jitter`]).
+    pub fn pixel_rays(&self) -> super::pixels::PixelRays {
+        super::pixels::PixelRays {
+            area: self.area_rays,
+            jitter: self.jitter,
+        }
+    }
+
+    /// Pixels a step trains on: [`Self::batch`] rays, whole pixels of
+    /// [`Self::rays_per_pixel`] rays.
+    pub fn pixels_per_step(&self) -> u32 {
+        self.batch / self.rays_per_pixel().max(1)
+    }
+
     /// Why the knobs cannot be used: (knob, message).
     pub fn check(&self) -> Result<(), (String, String)> {
         let bad = |k: &str, m: String| Err((k.to_string(), m));
@@ -461,6 +501,18 @@ impl TrainKnobs {
                 "a learnt sky and a random background both say what is behind the field: \
                  choose one"
                     .into(),
+            );
+        }
+        if !(1..=MAX_AREA_RAYS).contains(&self.area_rays) || self.batch < self.rays_per_pixel() {
+            return bad(
+                "area_rays",
+                format!(
+                    "{} must be in 1..={MAX_AREA_RAYS} (rays a pixel per axis), and a step's {} \
+                     rays must hold one pixel's {}",
+                    self.area_rays,
+                    self.batch,
+                    self.rays_per_pixel()
+                ),
             );
         }
         if !(1..=MAX_HELD_OUT_SAMPLES).contains(&self.held_out_samples) {
@@ -527,6 +579,30 @@ mod tests {
         assert_eq!(sky(32, true).check().unwrap_err().0, "sky");
         let big = crate::field::sky::MAX_SKY_HEIGHT + 1;
         assert_eq!(sky(big, false).check().unwrap_err().0, "sky");
+    }
+
+    /// Training rays a pixel outside 1..=4 per axis, or more than a step
+    /// holds, are refused, naming the knob; a step keeps its rays and
+    /// takes whole pixels of them.
+    #[test]
+    fn area_rays_outside_their_range_are_refused() {
+        let knobs = |area_rays, batch| TrainKnobs {
+            area_rays,
+            batch,
+            ..TrainKnobs::default()
+        };
+        assert_eq!(knobs(1, 4096).pixels_per_step(), 4096);
+        assert_eq!(knobs(2, 4096).pixels_per_step(), 1024);
+        assert_eq!(knobs(3, 4096).pixels_per_step(), 455);
+        assert_eq!(knobs(3, 4096).rays_per_pixel(), 9);
+        assert!(knobs(MAX_AREA_RAYS, 4096).check().is_ok());
+        assert_eq!(
+            MAX_AREA_RAYS * MAX_AREA_RAYS,
+            crate::train::gpu::MAX_RAYS_PER_PIXEL
+        );
+        for (area, batch) in [(0, 4096), (MAX_AREA_RAYS + 1, 4096), (3, 8)] {
+            assert_eq!(knobs(area, batch).check().unwrap_err().0, "area_rays");
+        }
     }
 
     /// Held-out rays a pixel outside 1..=16 per axis are refused, naming

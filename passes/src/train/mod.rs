@@ -31,7 +31,7 @@ pub use knobs::{
     default_iterations, TrainKnobs, REFINE_EXPONENT_BEHIND_RANDOM, SPARSITY_BEHIND_RANDOM,
 };
 pub use loss::{pixel_loss, PixelTarget};
-pub use render::{render_ray_with_gradient, RayGradient};
+pub use render::{render_pixel_with_gradient, render_ray_with_gradient, RayGradient};
 pub use step_times::StepTimes;
 pub use trainer::{
     resample, train, transparent_pixels, view_march, with_sh_degree, HeldOutView, TrainControl,

@@ -61,6 +61,26 @@ pub fn pixel_ray_at(frame: &Frame, pixel: u32, offset: (f64, f64)) -> Option<Ray
     })
 }
 
+/// The n × n points, in pixels from a pixel's top-left corner, at the
+/// centres of an even n × n split of the pixel: row by row (n = 1: its
+/// centre).
+pub fn area_offsets(n: u32) -> Vec<(f64, f64)> {
+    let n = n.max(1);
+    let at = |k: u32| (k as f64 + 0.5) / n as f64;
+    (0..n * n).map(|i| (at(i % n), at(i / n))).collect()
+}
+
+/// How a training pixel's rays are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelRays {
+    /// n: the pixel's n × n rays pass through the centres of an even split
+    /// of its area ([`area_offsets`]; 1: its centre).
+    pub area: u32,
+    /// Each ray through a point drawn uniformly over its part of the
+    /// pixel instead of its centre.
+    pub jitter: bool,
+}
+
 /// What pixel `pixel` of `frame` says, with `shift` added behind it: a
 /// transparent pixel (alpha a) read over one background and trained over
 /// another says its radiance plus (1 − a)·`shift`, `shift` the second
@@ -252,13 +272,13 @@ impl PixelPool {
     }
 
     /// `count` pixels drawn at random (with replacement) for step `step`:
-    /// each one's ray, what it says (with `shift` behind its transparent
-    /// part: [`pixel_target`]), and its frame, in the order of their
-    /// frames and pixels (neighbouring rays of a view then march side by
-    /// side on the device, over the same nodes and about as far). With
-    /// `jitter` each ray passes through a point drawn uniformly over its
-    /// pixel, as the pixel's light was gathered
-    /// ([`super::TrainKnobs::jitter`]); without, through its centre.
+    /// each one's rays drawn as `rays` says (n × n through the centres of
+    /// an even split of its area: [`area_offsets`]), what it
+    /// says (with `shift` behind its transparent part: [`pixel_target`]),
+    /// and its frame, in the order of their frames and pixels
+    /// (neighbouring rays of a view then march side by side on the device,
+    /// over the same nodes and about as far). A pixel whose rays the lens model
+    /// cannot all invert is not drawn.
     pub fn batch(
         &self,
         dataset: &Dataset,
@@ -266,8 +286,10 @@ impl PixelPool {
         seed: u64,
         step: u64,
         shift: DVec3,
-        jitter: bool,
-    ) -> Vec<(Ray, PixelTarget, u32)> {
+        rays: PixelRays,
+    ) -> Vec<(Vec<Ray>, PixelTarget, u32)> {
+        let (area, jitter) = (rays.area.max(1), rays.jitter);
+        let centres = area_offsets(area);
         let mut rng = Pcg32::new(seed, 0x7EA1_0000_0000 ^ step);
         let mut out = Vec::with_capacity(count);
         let mut tries = 0;
@@ -275,16 +297,23 @@ impl PixelPool {
             tries += 1;
             let r = self.pixels[rng.next_u32() as usize % self.pixels.len()];
             let frame = &dataset.frames[r.frame as usize];
-            let offset = if jitter {
-                (rng.next_f64(), rng.next_f64())
-            } else {
-                (0.5, 0.5)
-            };
-            if let (Some(ray), Some(t)) = (
-                pixel_ray_at(frame, r.pixel, offset),
-                pixel_target(frame, r.pixel, shift),
-            ) {
-                out.push((r, ray, t));
+            let rays: Option<Vec<Ray>> = centres
+                .iter()
+                .map(|&(u, v)| {
+                    let offset = if jitter {
+                        let half = 0.5 / area as f64;
+                        (
+                            u + half * (2.0 * rng.next_f64() - 1.0),
+                            v + half * (2.0 * rng.next_f64() - 1.0),
+                        )
+                    } else {
+                        (u, v)
+                    };
+                    pixel_ray_at(frame, r.pixel, offset)
+                })
+                .collect();
+            if let (Some(rays), Some(t)) = (rays, pixel_target(frame, r.pixel, shift)) {
+                out.push((r, rays, t));
             }
         }
         out.sort_by_key(|(r, _, _)| (r.frame, r.pixel));

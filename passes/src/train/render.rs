@@ -54,7 +54,8 @@ pub struct RayGradient {
     /// ∂loss/∂value for each value the ray read, indexed as the device
     /// holds the field (`crate::field::device_values`): a node n as
     /// (n, [r, g, b, σ]), its further colour coefficient k as
-    /// (N + n·K + k, [r, g, b, 0]).
+    /// (N + n·K + k, [r, g, b, 0]); of a pixel of several rays, each
+    /// ray's entries (a value read by several appears once for each).
     pub values: Vec<(usize, [f64; 4])>,
     /// ∂loss/∂texel (r, g, b) for each texel of a learnt sky the ray read
     /// (empty behind a fixed colour).
@@ -199,6 +200,46 @@ pub fn render_ray_with_gradient<'a>(
     }
 }
 
+/// Renders one pixel as the mean of `rays` through points of its area
+/// (a photograph's pixel gathers the light over its area) over
+/// `background` and, given the loss's gradient with respect to the pixel
+/// as `d_colour(C)`, returns the pixel and the gradient of that loss plus
+/// each ray's distortion loss at weight `distortion` / n (the pixel's
+/// weight shared among its n rays): each ray's own gradient at
+/// `d_colour(C)` / n, summed. One ray is [`render_ray_with_gradient`].
+pub fn render_pixel_with_gradient<'a>(
+    field: &GridField,
+    rays: &[Ray],
+    knobs: &MarchKnobs,
+    background: impl Into<Behind<'a>>,
+    distortion: f64,
+    d_colour: impl Fn(DVec3) -> DVec3,
+) -> RayGradient {
+    let behind = background.into();
+    let n = rays.len().max(1) as f64;
+    let colour = rays
+        .iter()
+        .map(|r| render_ray_with_gradient(field, r, knobs, behind, 0.0, |_| DVec3::ZERO).colour)
+        .sum::<DVec3>()
+        / n;
+    let g = d_colour(colour) / n;
+    let mut out = RayGradient {
+        colour,
+        distortion: 0.0,
+        opacity: 0.0,
+        values: Vec::new(),
+        sky: Vec::new(),
+    };
+    for ray in rays {
+        let r = render_ray_with_gradient(field, ray, knobs, behind, distortion / n, |_| g);
+        out.distortion += r.distortion;
+        out.opacity += r.opacity / n;
+        out.values.extend(r.values);
+        out.sky.extend(r.sky);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -285,17 +326,7 @@ mod tests {
                             assert_eq!(analytic, 0.0);
                             continue;
                         }
-                        let h = 1e-4;
-                        let eval = |delta: f32| {
-                            let mut f = field.clone();
-                            if n < first {
-                                f.nodes[n][ch] += delta;
-                            } else {
-                                f.sh[n - first][ch] += delta;
-                            }
-                            loss(&f)
-                        };
-                        let numeric = (eval(h as f32) - eval(-h as f32)) / (2.0 * h);
+                        let numeric = central_difference(&field, n, ch, &loss);
                         // f32 values: the perturbation is exact only to ~1e-7.
                         assert!(
                             (numeric - analytic).abs() < 2e-3 * (1.0 + analytic.abs()),
@@ -307,6 +338,90 @@ mod tests {
             }
             assert!(checked > 100 * (1 + degree as usize), "{checked}");
         }
+    }
+
+    /// The central difference of `loss` in channel `ch` of value `n`: a
+    /// node's below `field.nodes.len()`, a node's SH coefficients above.
+    fn central_difference(
+        field: &GridField,
+        n: usize,
+        ch: usize,
+        loss: &dyn Fn(&GridField) -> f64,
+    ) -> f64 {
+        let h = 1e-4;
+        let first = field.nodes.len();
+        let eval = |delta: f32| {
+            let mut f = field.clone();
+            if n < first {
+                f.nodes[n][ch] += delta;
+            } else {
+                f.sh[n - first][ch] += delta;
+            }
+            loss(&f)
+        };
+        (eval(h as f32) - eval(-h as f32)) / (2.0 * h)
+    }
+
+    /// A pixel of three rays is their mean (its distortion loss the mean
+    /// of theirs), and the gradient of a squared loss on that mean (not
+    /// the mean of the rays' losses) plus the distortion loss matches
+    /// central differences in every value the rays read.
+    #[test]
+    fn a_pixels_gradient_over_its_rays_matches_finite_differences() {
+        let knobs = MarchKnobs {
+            samples_per_ray: 24,
+            termination: 1e-4,
+            skip_empty: false,
+        };
+        let (bg, lambda) = (DVec3::new(0.3, 0.6, 0.9), 0.6);
+        let target = DVec3::new(0.4, 1.5, 0.2);
+        let field = small_sh_field(2, 1);
+        let first = field.nodes.len();
+        let rays: Vec<Ray> = [0.0, 0.04, 0.09]
+            .iter()
+            .map(|&k| Ray {
+                origin: DVec3::new(-2.0, 0.1 + k, -1.5),
+                dir: DVec3::new(1.0, 0.05 - k, 0.8).normalize(),
+            })
+            .collect();
+        let d_colour = |c: DVec3| 2.0 * (c - target);
+        let r = render_pixel_with_gradient(&field, &rays, &knobs, bg, lambda, d_colour);
+        let each: Vec<RayGradient> = rays
+            .iter()
+            .map(|ray| render_ray_with_gradient(&field, ray, &knobs, bg, lambda, |_| DVec3::ZERO))
+            .collect();
+        let mean = each.iter().map(|e| e.colour).sum::<DVec3>() / 3.0;
+        assert!((r.colour - mean).length() < 1e-12);
+        let distortion = each.iter().map(|e| e.distortion).sum::<f64>() / 3.0;
+        assert!(distortion > 0.0 && (r.distortion - distortion).abs() < 1e-12);
+        assert!((each[0].colour - each[2].colour).length() > 1e-3);
+        let loss = |f: &GridField| {
+            let r = render_pixel_with_gradient(f, &rays, &knobs, bg, lambda, |_| DVec3::ZERO);
+            (r.colour - target).length_squared() + r.distortion
+        };
+        let mut summed: Vec<(usize, [f64; 4])> = Vec::new();
+        for (n, g) in &r.values {
+            match summed.iter_mut().find(|(m, _)| m == n) {
+                Some((_, acc)) => acc.iter_mut().zip(g).for_each(|(a, b)| *a += b),
+                None => summed.push((*n, *g)),
+            }
+        }
+        let mut checked = 0;
+        for &(n, grad) in &summed {
+            for (ch, &analytic) in grad
+                .iter()
+                .enumerate()
+                .filter(|(ch, _)| n < first || *ch < 3)
+            {
+                let numeric = central_difference(&field, n, ch, &loss);
+                assert!(
+                    (numeric - analytic).abs() < 2e-3 * (1.0 + analytic.abs()),
+                    "value {n} channel {ch}: {numeric} vs {analytic}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 100, "{checked}");
     }
 
     /// Behind a learnt sky the pixel's gradient with respect to each texel

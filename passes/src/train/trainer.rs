@@ -17,7 +17,7 @@ use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::past_bounds::{pixel_sees_bounds, pose_light};
-use super::pixels::{bracket_sets, is_bracket, pixel_ray_at, PixelPool};
+use super::pixels::{area_offsets, bracket_sets, is_bracket, pixel_ray_at, PixelPool};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
@@ -453,7 +453,8 @@ pub fn train(
             samples_per_ray: knobs.stage_samples(res.max_element(), final_res.max_element()),
             ..march
         };
-        let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, stage_march, layout)?;
+        let mut gpu = GpuTrainer::with_layout(ctx, lib, &field, stage_march, layout)?
+            .with_rays_per_pixel(ctx, knobs.rays_per_pixel())?;
         // The sparsity prior's weight follows the grid trained: a resumed
         // field's own nodes, not `knobs.resolution`.
         gpu.tv_weights = knobs.tv_weights(
@@ -479,15 +480,18 @@ pub fn train(
             let behind = step_background(knobs, background, scale, step);
             let batch = pool.batch(
                 dataset,
-                knobs.batch as usize,
+                knobs.pixels_per_step() as usize,
                 knobs.seed,
                 step as u64,
                 behind - background,
-                knobs.jitter,
+                knobs.pixel_rays(),
             );
             let records: Vec<TrainRay> = batch
                 .iter()
-                .map(|(r, t, f)| TrainRay::new(r.origin, r.dir, *t, 1.0).in_frame(*f))
+                .flat_map(|(rays, t, f)| {
+                    rays.iter()
+                        .map(|r| TrainRay::new(r.origin, r.dir, *t, 1.0).in_frame(*f))
+                })
                 .collect();
             let decay = knobs.rate_decay.powf(step as f64 / knobs.iterations as f64);
             gpu.gain_rate = knobs.learn_exposure.then_some((GAIN_RATE * decay) as f32);
@@ -504,7 +508,7 @@ pub fn train(
                 &records,
                 behind,
                 knobs.epsilon * scale,
-                Some((&adam, 1.0 / records.len() as f32)),
+                Some((&adam, 1.0 / batch.len() as f32)),
             )?;
             step_times.add(
                 renderer.latest_timings(),
@@ -594,7 +598,7 @@ pub const GAIN_RATE: f64 = 0.03;
 /// are scored: a bracket at its exposure, a lower bound only where the
 /// pixel falls below it.
 pub fn batch_psnr(
-    batch: &[(crate::geometry::Ray, super::PixelTarget, u32)],
+    batch: &[(Vec<crate::geometry::Ray>, super::PixelTarget, u32)],
     out: &[[f32; 4]],
 ) -> f64 {
     use super::PixelTarget;
@@ -718,13 +722,7 @@ pub fn score_view<'a>(
     };
     // What the sensor records of radiance c, before clipping.
     let recorded = |c: DVec3| c * exposure.unwrap_or(1.0);
-    let n = samples.max(1);
-    let offsets: Vec<(f64, f64)> = (0..n * n)
-        .map(|i| {
-            let at = |k: u32| (k as f64 + 0.5) / n as f64;
-            (at(i % n), at(i / n))
-        })
-        .collect();
+    let offsets = area_offsets(samples);
     let radiance: Vec<DVec3> = (0..w * h)
         .into_par_iter()
         .map(|p| {
@@ -793,6 +791,13 @@ pub fn score_view<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::train::pixels::PixelRays;
+
+    /// One ray through each pixel's centre.
+    const CENTRE: PixelRays = PixelRays {
+        area: 1,
+        jitter: false,
+    };
 
     /// Refining a surface to the next stage's grid leaves it where it was
     /// (the interpolated density crosses zero at the same place) and, at
@@ -970,21 +975,21 @@ mod tests {
             ..dataset_with(0)
         };
         let pool = PixelPool::new(&dataset, 0);
-        let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, false);
+        let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, CENTRE);
         assert_eq!(batch.len(), 64);
-        let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f)| (*f, r.dir.x)).collect();
+        let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f)| (*f, r[0].dir.x)).collect();
         assert!(keys.windows(2).all(|w| w[0].0 <= w[1].0), "{keys:?}");
         assert!(keys.iter().any(|k| k.0 == 0) && keys.iter().any(|k| k.0 == 2));
         // The same draw for the same seed and step, another for the next step.
-        assert_eq!(pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, false), batch);
-        assert_ne!(pool.batch(&dataset, 64, 1, 6, DVec3::ZERO, false), batch);
+        assert_eq!(pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, CENTRE), batch);
+        assert_ne!(pool.batch(&dataset, 64, 1, 6, DVec3::ZERO, CENTRE), batch);
     }
 
-    /// A jittered ray passes through a point of the pixel whose value it
-    /// carries, spread over the pixel's width; unjittered, through its
-    /// centre.
+    /// A pixel's n × n rays pass through its own area (each through its
+    /// part of an even split: at its centre, or jittered over it) and carry
+    /// the pixel's value.
     #[test]
-    fn a_jittered_ray_stays_inside_the_pixel_it_is_scored_on() {
+    fn a_pixels_rays_stay_inside_the_pixel_they_are_scored_on() {
         let radiance: Vec<f32> = (0..200).map(|i| i as f32 / 200.0).collect();
         let dataset = Dataset {
             frames: vec![frame_of(&radiance, None)],
@@ -993,33 +998,47 @@ mod tests {
         let frame = &dataset.frames[0];
         let to_camera = frame.pose.matrix.inverse();
         let pool = PixelPool::new(&dataset, 0);
-        for jitter in [false, true] {
-            let batch = pool.batch(&dataset, 256, 1, 5, DVec3::ZERO, jitter);
-            let mut offsets = Vec::new();
-            for (ray, target, _) in &batch {
-                let (u, v) = frame
-                    .intrinsics
-                    .project(to_camera.transform_vector3(ray.dir))
-                    .unwrap();
-                let pixel = u.floor() as usize;
-                assert!((0.0..=1.0).contains(&v), "{v}");
-                assert_eq!(
-                    *target,
-                    crate::train::PixelTarget::Value(DVec3::splat(radiance[pixel] as f64)),
-                    "u {u}"
-                );
-                offsets.push(u - u.floor());
-            }
-            let (lo, hi) = offsets
-                .iter()
-                .fold((1.0f64, 0.0f64), |(lo, hi), o| (lo.min(*o), hi.max(*o)));
-            if jitter {
-                assert!(lo < 0.05 && hi > 0.95, "{lo} {hi}");
-            } else {
-                assert!(
-                    (lo - 0.5).abs() < 1e-6 && (hi - 0.5).abs() < 1e-6,
-                    "{lo} {hi}"
-                );
+        for area in [1u32, 2, 3] {
+            for jitter in [false, true] {
+                let rays = PixelRays { area, jitter };
+                let batch = pool.batch(&dataset, 256, 1, 5, DVec3::ZERO, rays);
+                let mut offsets = Vec::new();
+                for (pixel_rays, target, _) in &batch {
+                    assert_eq!(pixel_rays.len() as u32, area * area);
+                    for (k, ray) in pixel_rays.iter().enumerate() {
+                        let (u, v) = frame
+                            .intrinsics
+                            .project(to_camera.transform_vector3(ray.dir))
+                            .unwrap();
+                        let pixel = u.floor() as usize;
+                        assert!((0.0..=1.0).contains(&v), "{v}");
+                        assert_eq!(
+                            *target,
+                            crate::train::PixelTarget::Value(DVec3::splat(radiance[pixel] as f64)),
+                            "u {u}"
+                        );
+                        // Ray k lies in column k mod n of the split.
+                        let part = (k as u32 % area) as f64 / area as f64;
+                        let o = u - u.floor();
+                        assert!(
+                            o >= part - 1e-9 && o <= part + 1.0 / area as f64 + 1e-9,
+                            "area {area}: ray {k} at {o}"
+                        );
+                        offsets.push(o);
+                    }
+                }
+                let (lo, hi) = offsets
+                    .iter()
+                    .fold((1.0f64, 0.0f64), |(lo, hi), o| (lo.min(*o), hi.max(*o)));
+                if jitter {
+                    assert!(lo < 0.05 && hi > 0.95, "{lo} {hi}");
+                } else {
+                    let first = 0.5 / area as f64;
+                    assert!(
+                        (lo - first).abs() < 1e-6 && (hi - (1.0 - first)).abs() < 1e-6,
+                        "{lo} {hi}"
+                    );
+                }
             }
         }
     }
