@@ -25,7 +25,10 @@ pub mod visibility;
 pub use crate::field::Sky;
 pub use adam::{adam_step, AdamKnobs};
 pub use behind::Behind;
-pub use geometry::{geometry_score, GeometryScore, KnownSurface, HAZE_MARGIN};
+pub use geometry::{
+    geometry_score, known_depth, recipe_along, GeometryScore, KnownAlong, KnownContent, KnownDepth,
+    MediumSpan, HAZE_MARGIN,
+};
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{
     default_iterations, TrainKnobs, REFINE_EXPONENT_BEHIND_RANDOM, SPARSITY_BEHIND_RANDOM,

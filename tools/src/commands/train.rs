@@ -587,8 +587,8 @@ fn luminance_range(colours: &[DVec3]) -> (f64, f64) {
         .fold((f64::INFINITY, 0.0), |(lo, hi), l| (lo.min(l), hi.max(l)))
 }
 
-/// Prints each held-out view's geometry against `scene`'s recipe
-/// ([`inlay_passes::train::geometry_score`]).
+/// Prints each held-out view's geometry against `scene`'s recipe, its
+/// media included ([`inlay_passes::train::geometry_score`]).
 fn print_geometry(
     scene: &inlay_passes::scene::Scene,
     dataset: &inlay_passes::dataset::Dataset,
@@ -600,15 +600,13 @@ fn print_geometry(
     };
     // Its nearest_surface alone is used: no bounces.
     let tracer = inlay_passes::bake::PathTracer::new(recipe, &scene.environment, 0);
-    let surface = |ray: &inlay_passes::geometry::Ray, t0: f64, t1: f64| {
-        tracer
-            .nearest_surface(ray, t0, t1)
-            .map(|(t, i)| (t, recipe.primitives[i].shape.normal(ray.at(t))))
+    let content = |ray: &inlay_passes::geometry::Ray, t0: f64, t1: f64| {
+        inlay_passes::train::recipe_along(recipe, &tracer, ray, t0, t1)
     };
     let march = inlay_passes::train::view_march(knobs);
     for v in &trained.held_out {
         let frame = &dataset.frames[v.frame as usize];
-        let g = inlay_passes::train::geometry_score(frame, &trained.field, &march, &surface);
+        let g = inlay_passes::train::geometry_score(frame, &trained.field, &march, &content);
         let depth = if g.compared == 0 {
             "no pixel's depth compared (none both on a surface and opaque)".to_string()
         } else {
