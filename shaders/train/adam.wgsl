@@ -4,7 +4,9 @@
 // node's colour kept non-negative, its density and the coefficients free
 // (a density is clamped after interpolation: density_at); a node's colour
 // steps by the larger of `rate` and `relative_rate` × its value once above
-// `relative_floor` (an HDR field's lamp is 10^4 × its walls).
+// `relative_floor` (an HDR field's lamp is 10^4 × its walls); every value
+// but a density stays within `limit`, either sign (the radiance limit a
+// field file holds).
 // Mirrors passes/src/train/adam.rs adam_step.
 
 struct AdamPush {
@@ -19,7 +21,7 @@ struct AdamPush {
     base_values: u32,
     relative_rate: f32,
     relative_floor: f32,
-    pad2: u32,
+    limit: f32,
 }
 
 #include "train/every_value.wgsl"
@@ -52,9 +54,12 @@ fn step_value(i: u32) {
     let rate = select(colour_rate, pc.density_rate, base && (i & 3u) == 3u);
     let step = rate * (m.x / pc.correction1) / (sqrt(m.y / pc.correction2) + ADAM_EPSILON);
     // A node's density is free (the clamp at zero is after interpolation:
-    // density_at); its colour is kept non-negative.
-    let colour = base && (i & 3u) != 3u;
-    params[i] = select(params[i] - step, max(params[i] - step, 0.0), colour);
+    // density_at); its colour is kept non-negative; every other value
+    // stays within the limit, either sign.
+    let density = base && (i & 3u) == 3u;
+    let moved = params[i] - step;
+    let bounded = clamp(moved, select(-pc.limit, 0.0, base), pc.limit);
+    params[i] = select(bounded, moved, density);
 }
 
 @compute @workgroup_size(64, 1, 1)

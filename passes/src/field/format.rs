@@ -417,6 +417,26 @@ fn parse_table(
     Ok(BrickLayout::from_kept(header.resolution, &keep))
 }
 
+/// Fails, naming the first node and channel [`load_field`] would refuse,
+/// unless every node and coefficient of `field` is one it reads: a field is
+/// never written that no command can load.
+fn check_values(path: &Path, field: &GridField) -> Result<(), FieldFormatError> {
+    let r = field.resolution;
+    let per_node = field.sh_count();
+    for (n, v) in field.nodes.iter().enumerate() {
+        let n32 = n as u32;
+        let i = UVec3::new(n32 % r.x, (n32 / r.x) % r.y, n32 / (r.x * r.y));
+        check_node(path, i, v)?;
+        for (j, c) in field.sh[n * per_node..(n + 1) * per_node]
+            .iter()
+            .enumerate()
+        {
+            check_coefficient(path, i, j, c)?;
+        }
+    }
+    Ok(())
+}
+
 /// Fails, naming node `i` and the channel, unless `v` is a valid node.
 fn check_node(path: &Path, i: UVec3, v: &[f32; 4]) -> Result<(), FieldFormatError> {
     for (c, name) in ["r", "g", "b", "density"].iter().enumerate() {
@@ -525,6 +545,7 @@ pub fn field_bytes(field: &GridField) -> Vec<u8> {
 
 /// Writes `field` to `path` (through a temporary file renamed into place).
 pub fn save_field(path: &Path, field: &GridField) -> Result<(), FieldFormatError> {
+    check_values(path, field)?;
     inlay_engine::output::write_atomically(path, &field_bytes(field))
         .map_err(|e| err(path, "file", e.detail()))
 }
@@ -533,7 +554,7 @@ pub fn save_field(path: &Path, field: &GridField) -> Result<(), FieldFormatError
 mod tests {
     use super::*;
 
-    fn small() -> GridField {
+    pub(super) fn small() -> GridField {
         let nodes = (0..8)
             .map(|i| [i as f32, 1.0, 2.0, 0.5 * i as f32])
             .collect();
@@ -779,5 +800,32 @@ mod radiance_tests {
         );
         assert!(parse_field(path, &field_bytes(&field([1.0, 1.0, 1.0, 1e20]))).is_ok());
         assert!(parse_field(path, &field_bytes(&field([1e6, 1.0, 1.0, 1.0]))).is_ok());
+    }
+
+    /// A field the loader would refuse is not written, and the file it
+    /// would have replaced is left as it was; a valid one is written.
+    #[test]
+    fn a_field_no_command_could_load_is_not_written() {
+        let dir = std::env::temp_dir().join(format!("inlay-save-check-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("f.inlayfield");
+        let good = tests::small();
+        save_field(&path, &good).unwrap();
+        let before = std::fs::read(&path).unwrap();
+        let mut bright = tests::small();
+        bright.nodes[5][2] = 4.8e6;
+        let e = save_field(&path, &bright).unwrap_err().to_string();
+        assert!(
+            e.contains("node (1, 0, 1).b") && e.contains("radiance limit"),
+            "{e}"
+        );
+        let sh = vec![[0.0, f32::NAN, 0.0]; 8 * 3];
+        let e = save_field(&path, &tests::small().with_sh(1, sh))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("node (0, 0, 0).sh[1].g"), "{e}");
+        assert_eq!(std::fs::read(&path).unwrap(), before);
+        assert_eq!(load_field(&path).unwrap().nodes, good.nodes);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -1,7 +1,13 @@
 //! Adam over the trained values with a separate step size for density, each
 //! node's colour kept non-negative, its density (clamped after
 //! interpolation: [`crate::field::density_at`]) and the view-dependent
-//! colour's coefficients free (`shaders/train/adam.wgsl` mirrors it).
+//! colour's coefficients free of sign (`shaders/train/adam.wgsl` mirrors
+//! it). Every value but a density stays within the radiance limit a field
+//! file holds ([`crate::scene::RADIANCE_LIMIT`], either sign for the
+//! coefficients, the sky's and the gains' too): a step size too large
+//! for the photographs can drive a colour up step after step (at
+//! `--rate 1` a 32-node PLANTS field reached 4.8·10⁶), and a trainer that
+//! ends on such a value would write a field no command loads.
 //!
 //! A colour's step is the larger of an absolute size and, above a level no
 //! surface reaches, a fraction of the colour itself: an HDR field
@@ -48,6 +54,7 @@ pub fn adam_step(
     let c1 = (1.0 - knobs.beta1.powi(t as i32)) as f32;
     let c2 = (1.0 - knobs.beta2.powi(t as i32)) as f32;
     let (b1, b2) = (knobs.beta1 as f32, knobs.beta2 as f32);
+    let limit = crate::scene::RADIANCE_LIMIT as f32;
     for i in 0..params.len() {
         let g = grad[i] * grad_scale;
         grad[i] = 0.0;
@@ -68,10 +75,47 @@ pub fn adam_step(
             knobs.rate as f32
         };
         let step = rate * (m[0] / c1) / ((m[1] / c2).sqrt() + ADAM_EPSILON as f32);
-        params[i] = if base && i % 4 != 3 {
-            (params[i] - step).max(0.0)
-        } else {
+        params[i] = if base && i % 4 == 3 {
             params[i] - step
+        } else {
+            let floor = if base { 0.0 } else { -limit };
+            (params[i] - step).clamp(floor, limit)
         };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::RADIANCE_LIMIT;
+
+    /// A colour and the coefficients driven past the radiance limit stop at
+    /// it (either sign for a coefficient); a density steps on.
+    #[test]
+    fn no_value_but_a_density_steps_past_the_radiance_limit() {
+        let near = 0.99 * RADIANCE_LIMIT as f32;
+        // One node (r, g, b, σ), then three coefficients.
+        let mut params = vec![near, 5.0, 0.0, near, near, -near, 1.0];
+        // Each pushed outward: up, up, down (held at zero), up; up, down,
+        // up (well inside).
+        let mut grad = vec![-1.0, -1.0, 1.0, -1.0, -1.0, 1.0, -1.0];
+        let mut moments = vec![[0.0f32; 2]; params.len()];
+        let knobs = AdamKnobs {
+            rate: 5e4,
+            relative_rate: 0.5,
+            relative_floor: 1.0,
+            density_rate: 5e4,
+            beta1: 0.9,
+            beta2: 0.99,
+        };
+        adam_step(&mut params, &mut grad, &mut moments, &knobs, (1.0, 4), 1);
+        let limit = RADIANCE_LIMIT as f32;
+        assert_eq!(params[0], limit, "a colour stops at the limit");
+        assert!((params[1] - 5e4 - 5.0).abs() < 1.0, "{}", params[1]);
+        assert_eq!(params[2], 0.0, "a colour stays non-negative");
+        assert!(params[3] > limit, "a density steps on: {}", params[3]);
+        assert_eq!(params[4], limit);
+        assert_eq!(params[5], -limit, "a coefficient stops at −limit");
+        assert!((params[6] - 5e4 - 1.0).abs() < 1.0, "{}", params[6]);
     }
 }

@@ -117,8 +117,9 @@ inlay_engine::gpu_struct! {
         pub relative_rate: f32,
         /// The colour above which steps grow with the colour.
         pub relative_floor: f32,
-        /// Padding.
-        pub pad2: u32,
+        /// The largest magnitude a value other than a density may step to
+        /// ([`crate::scene::RADIANCE_LIMIT`]).
+        pub limit: f32,
     }
 }
 
@@ -822,7 +823,7 @@ impl GpuTrainer {
                 base_values: 4 * self.node_count(),
                 relative_rate: knobs.relative_rate as f32,
                 relative_floor: knobs.relative_floor as f32,
-                pad2: 0,
+                limit: crate::scene::RADIANCE_LIMIT as f32,
             };
             let groups = value_groups(4 * self.node_count());
             let mut pass = graph.compute_pass(TRAIN_ADAM);
