@@ -305,6 +305,31 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "{t}"
     );
     inlay_passes::field::load_field(&stopped).unwrap();
+    // A run whose arithmetic leaves f32's range stops with an error at
+    // the step it did, and the field it would replace is left as it was.
+    let before = std::fs::read(&stopped).unwrap();
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        stopped.to_str().unwrap(),
+        "--resolution",
+        "8",
+        "--iterations",
+        "20",
+        "--batch",
+        "256",
+        "--hold-out",
+        "0",
+        "--scale",
+        "1e-30",
+    ]);
+    let t = text(&o);
+    assert!(
+        !o.status.success() && t.contains("training diverged: the batch's loss is NaN at step"),
+        "{t}"
+    );
+    assert_eq!(std::fs::read(&stopped).unwrap(), before);
     let o = inlay(&[
         "train",
         out.to_str().unwrap(),

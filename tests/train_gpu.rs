@@ -128,6 +128,29 @@ fn rays(field: &GridField, n: usize) -> Vec<(Ray, PixelTarget, f64)> {
         .collect()
 }
 
+/// The CPU's first Adam step from `values`, with the GPU's gradient of one
+/// batch, `before`, doubled (the GPU steps after a second run of the same
+/// batch) and zero moments.
+fn first_adam_step(
+    values: &[f32],
+    before: &[f32],
+    adam: &AdamKnobs,
+    (grad_scale, base_values): (f32, usize),
+) -> Vec<f32> {
+    let mut params = values.to_vec();
+    let mut grad: Vec<f32> = before.iter().map(|g| 2.0 * g).collect();
+    let mut moments = vec![[0.0f32; 2]; params.len()];
+    adam_step(
+        &mut params,
+        &mut grad,
+        &mut moments,
+        adam,
+        (grad_scale, base_values),
+        1,
+    );
+    params
+}
+
 /// For a field without view-dependent colour and one of degree 2 (every
 /// coefficient's path), rays from three frames of different exposure
 /// gains, learnt: the batch's pixels, losses, the gradient of the values
@@ -252,17 +275,7 @@ fn gradient_and_adam_match(degree: u32, distortion: f64, scatter: GradientScatte
         .unwrap();
     let after = trainer.values(&mut renderer).unwrap();
     let original: Vec<f32> = values.iter().flatten().copied().collect();
-    let mut params = original.clone();
-    let mut grad: Vec<f32> = before.iter().map(|g| 2.0 * g).collect();
-    let mut moments = vec![[0.0f32; 2]; params.len()];
-    adam_step(
-        &mut params,
-        &mut grad,
-        &mut moments,
-        &adam,
-        (scale_g, base_values),
-        1,
-    );
+    let params = first_adam_step(&original, &before, &adam, (scale_g, base_values));
     let mut moved = 0;
     for (i, (a, b)) in after.iter().zip(&params).enumerate() {
         let orig = original[i];
@@ -390,17 +403,8 @@ fn the_gpu_adam_step_keeps_values_within_the_radiance_limit() {
         .run_batch(&mut renderer, &records, bg, eps, Some((&adam, scale_g)))
         .unwrap();
     let after = trainer.values(&mut renderer).unwrap();
-    let mut params: Vec<f32> = values.iter().flatten().copied().collect();
-    let mut grad: Vec<f32> = before.iter().map(|g| 2.0 * g).collect();
-    let mut moments = vec![[0.0f32; 2]; params.len()];
-    adam_step(
-        &mut params,
-        &mut grad,
-        &mut moments,
-        &adam,
-        (scale_g, base_values),
-        1,
-    );
+    let original: Vec<f32> = values.iter().flatten().copied().collect();
+    let params = first_adam_step(&original, &before, &adam, (scale_g, base_values));
     let limit = inlay_passes::scene::RADIANCE_LIMIT as f32;
     let largest = before.iter().fold(0.0f32, |a, g| a.max(g.abs()));
     let (mut colours, mut up, mut down) = (0, 0, 0);

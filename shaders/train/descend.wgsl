@@ -1,12 +1,13 @@
-// A plain gradient step: value −= gradient, a colour kept non-negative (a
-// density is free: density_at), the gradient cleared (total variation's
+// A plain gradient step: value −= gradient, a colour kept within 0 and
+// `limit` (the radiance limit a field file holds; a density is free:
+// density_at), the gradient cleared (total variation's
 // step after Adam's: its size is its weight, not Adam's normalised step),
 // several values an invocation (train/every_value.wgsl).
 // Mirrors passes/src/train/tv.rs tv_step.
 
 struct DescendPush {
     count: u32,
-    pad0: u32,
+    limit: f32,
     pad1: u32,
     pad2: u32,
 }
@@ -23,8 +24,8 @@ fn step_value(i: u32) {
         return;
     }
     let v = params[i] - grad[i];
-    // Colours kept non-negative; a density is free (density_at).
-    params[i] = select(max(v, 0.0), v, (i & 3u) == 3u);
+    // Colours kept within [0, limit]; a density is free (density_at).
+    params[i] = select(clamp(v, 0.0, pc.limit), v, (i & 3u) == 3u);
     grad[i] = 0.0;
 }
 

@@ -543,10 +543,18 @@ pub fn field_bytes(field: &GridField) -> Vec<u8> {
     out
 }
 
-/// Writes `field` to `path` (through a temporary file renamed into place).
-pub fn save_field(path: &Path, field: &GridField) -> Result<(), FieldFormatError> {
+/// The bytes of `field` to be written to `path`, or, naming the first node
+/// and channel, why [`load_field`] would refuse them: a field no command
+/// can load is never written.
+pub fn checked_field_bytes(path: &Path, field: &GridField) -> Result<Vec<u8>, FieldFormatError> {
     check_values(path, field)?;
-    inlay_engine::output::write_atomically(path, &field_bytes(field))
+    Ok(field_bytes(field))
+}
+
+/// Writes `field` to `path` (through a temporary file renamed into place),
+/// refused as [`checked_field_bytes`] refuses it.
+pub fn save_field(path: &Path, field: &GridField) -> Result<(), FieldFormatError> {
+    inlay_engine::output::write_atomically(path, &checked_field_bytes(path, field)?)
         .map_err(|e| err(path, "file", e.detail()))
 }
 

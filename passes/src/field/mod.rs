@@ -19,8 +19,8 @@ pub mod sky;
 
 pub use emitters::{find_emitters, FieldEmitter, MAX_FIELD_EMITTERS, MIN_EMITTER_RATIO};
 pub use format::{
-    field_bytes, load_field, parse_field, read_field_header, save_field, FieldFormatError,
-    FieldHeader, FIELD_MAGIC, FIELD_VERSION,
+    checked_field_bytes, field_bytes, load_field, parse_field, read_field_header, save_field,
+    FieldFormatError, FieldHeader, FIELD_MAGIC, FIELD_VERSION,
 };
 pub use gpu_grid::{
     check_field_fits, check_field_may_fit, check_sparse_field_fits, device_values,

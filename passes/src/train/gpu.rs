@@ -153,8 +153,8 @@ inlay_engine::gpu_struct! {
     pub struct DescendPush = "train/descend.wgsl" : "DescendPush" {
         /// Values (4 per node; the nodes only).
         pub count: u32,
-        /// Padding.
-        pub pad0: u32,
+        /// The largest colour ([`crate::scene::RADIANCE_LIMIT`]).
+        pub limit: f32,
         /// Padding.
         pub pad1: u32,
         /// Padding.
@@ -932,7 +932,7 @@ impl GpuTrainer {
         pass.finish();
         let d = DescendPush {
             count: 4 * nodes,
-            pad0: 0,
+            limit: crate::scene::RADIANCE_LIMIT as f32,
             pad1: 0,
             pad2: 0,
         };

@@ -547,6 +547,23 @@ impl TrainKnobs {
                 return bad(k, format!("{v} must be non-negative and finite"));
             }
         }
+        // Total variation's plain step moves a node by up to 12 × its
+        // weight × its differences: above 1/12 it overshoots and grows.
+        for (k, v) in [
+            ("tv_colour", self.tv_colour),
+            ("tv_density", self.tv_density),
+        ] {
+            if v > super::tv::MAX_TV_WEIGHT {
+                return bad(
+                    k,
+                    format!(
+                        "{v} must be at most 1/12 ({:.4}): a larger step overshoots, and \
+                         the values it smooths grow step after step",
+                        super::tv::MAX_TV_WEIGHT
+                    ),
+                );
+            }
+        }
         for (k, v) in [
             ("rate", self.rate),
             ("density_rate", self.density_rate),
@@ -623,6 +640,53 @@ mod tests {
     /// The edge is an optical depth per node spacing: on a grid twice as
     /// fine it is twice the density difference; 0 leaves the differences
     /// squared everywhere, and a negative edge is refused.
+    /// Total variation above 1/12 is refused, and that is where its plain
+    /// step turns unstable: a checkerboard of colour grows step after step
+    /// just above it and fades just below.
+    #[test]
+    fn total_variation_beyond_its_stable_step_is_refused() {
+        use super::super::tv::{tv_step, MAX_TV_WEIGHT};
+        let res = glam::UVec3::splat(6);
+        let amplitude = |w: f64| {
+            let knobs = TrainKnobs {
+                tv_colour: w,
+                tv_colour_edge: 0.0,
+                tv_density: 0.0,
+                sparsity: 0.0,
+                ..TrainKnobs::default()
+            };
+            let mut nodes: Vec<[f32; 4]> = (0..216)
+                .map(|n| {
+                    let (x, y, z) = (n % 6, (n / 6) % 6, n / 36);
+                    let c = if (x + y + z) % 2 == 0 { 11.0 } else { 9.0 };
+                    [c, c, c, 0.0]
+                })
+                .collect();
+            for _ in 0..8 {
+                tv_step(&mut nodes, res, knobs.tv_weights(0.1, 128, 1.0));
+            }
+            // An interior node and its neighbour.
+            let (a, b) = (2 + 6 * (2 + 6 * 2), 3 + 6 * (2 + 6 * 2));
+            (nodes[a][0] - nodes[b][0]).abs() / 2.0
+        };
+        assert!(amplitude(1.1 * MAX_TV_WEIGHT) > 2.0);
+        assert!(amplitude(0.9 * MAX_TV_WEIGHT) < 1.0);
+        for (k, w) in [("tv_colour", 0), ("tv_density", 1)] {
+            let mut knobs = TrainKnobs::default();
+            let set = |knobs: &mut TrainKnobs, v: f64| {
+                if w == 0 {
+                    knobs.tv_colour = v
+                } else {
+                    knobs.tv_density = v
+                }
+            };
+            set(&mut knobs, MAX_TV_WEIGHT);
+            assert!(knobs.check().is_ok());
+            set(&mut knobs, 1e6);
+            assert_eq!(knobs.check().unwrap_err().0, k);
+        }
+    }
+
     #[test]
     fn the_tv_edge_is_an_optical_depth_per_spacing() {
         let knobs = TrainKnobs {

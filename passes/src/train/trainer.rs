@@ -517,6 +517,19 @@ pub fn train(
             rays_done += records.len() as u64;
             step += 1;
             let loss = out.iter().map(|o| o[3] as f64).sum::<f64>() / out.len() as f64;
+            // A loss that is no longer a number trains nothing further:
+            // stop before the field is written.
+            if !loss.is_finite() {
+                anyhow::bail!(
+                    "training diverged: the batch's loss is {loss} at step {step} of {}; \
+                     the knobs left f32's range (radiance scale {scale:.3e}, step sizes \
+                     --rate {} and --density-rate {}, --epsilon {})",
+                    knobs.iterations,
+                    knobs.rate,
+                    knobs.density_rate,
+                    knobs.epsilon
+                );
+            }
             if step % 10 == 0 || step == knobs.iterations {
                 history.push((step, loss));
                 progress(&TrainProgress {

@@ -189,13 +189,15 @@ pub fn tv_gradient(nodes: &[[f32; 4]], res: UVec3, tv: TvWeights) -> Vec<[f64; 4
 pub const MAX_TV_WEIGHT: f64 = 1.0 / 12.0;
 
 /// One total-variation step over `nodes`: each value minus the gradient of
-/// [`tv_loss`], the colours kept non-negative (a density may be negative:
+/// [`tv_loss`], the colours kept within 0 and the radiance limit
+/// ([`crate::scene::RADIANCE_LIMIT`]; a density may be negative:
 /// [`crate::field::density_at`]).
 pub fn tv_step(nodes: &mut [[f32; 4]], res: UVec3, tv: TvWeights) {
     let g = tv_gradient(nodes, res, tv);
+    let limit = crate::scene::RADIANCE_LIMIT as f32;
     for (n, g) in nodes.iter_mut().zip(g) {
         for c in 0..3 {
-            n[c] = (n[c] - g[c] as f32).max(0.0);
+            n[c] = (n[c] - g[c] as f32).clamp(0.0, limit);
         }
         n[3] -= g[3] as f32;
     }

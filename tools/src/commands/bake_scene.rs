@@ -7,7 +7,7 @@ use clap::Args;
 use glam::DVec3;
 use inlay_engine::DeviceInfo;
 use inlay_passes::bake::grid_resolution;
-use inlay_passes::field::{check_field_may_fit, field_bytes, NodeStorage};
+use inlay_passes::field::{check_field_may_fit, checked_field_bytes, NodeStorage};
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::bake_with_progress;
@@ -60,7 +60,7 @@ pub fn run(device: &DeviceInfo, args: &BakeSceneArgs) -> anyhow::Result<()> {
     }
     let field = bake_with_progress(&scene, &knobs)?;
     let mut outputs = Outputs::new();
-    outputs.bytes(&out, &field_bytes(&field))?;
+    outputs.bytes(&out, &checked_field_bytes(&out, &field)?)?;
     outputs.commit(None)?;
     let recipe = scene.recipe().expect("baked from a recipe");
     let (inside, outside) = recipe.lights();

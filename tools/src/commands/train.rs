@@ -14,7 +14,7 @@ use clap::Args;
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::dataset::{load_dataset, LoadOptions};
-use inlay_passes::field::{field_bytes, sky_path};
+use inlay_passes::field::{checked_field_bytes, sky_path};
 use inlay_passes::geometry::Aabb;
 use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
 
@@ -559,7 +559,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         print_geometry(scene, &dataset, &trained, &knobs);
     }
     let mut outputs = Outputs::new();
-    outputs.bytes(&args.out, &field_bytes(f))?;
+    outputs.bytes(&args.out, &checked_field_bytes(&args.out, f)?)?;
     if let Some(sky) = &trained.sky {
         let (low, high) = luminance_range(&sky.texels);
         eprintln!(
