@@ -34,6 +34,7 @@ pub use knobs::{
     default_iterations, TrainKnobs, REFINE_EXPONENT_BEHIND_RANDOM, SPARSITY_BEHIND_RANDOM,
 };
 pub use loss::{pixel_loss, PixelTarget};
+pub use pixels::held_out_frames;
 pub use render::{render_pixel_with_gradient, render_ray_with_gradient, RayGradient};
 pub use step_times::StepTimes;
 pub use trainer::{

@@ -238,6 +238,13 @@ pub fn saturated_in_every_bracket(dataset: &Dataset) -> SaturatedInEveryBracket 
     out
 }
 
+/// The frames of `frames` that `hold_out` asks to hold out, spread evenly
+/// over the list: never all of them (one always trains).
+pub fn held_out_frames(frames: u32, hold_out: u32) -> Vec<u32> {
+    let k = hold_out.min(frames.saturating_sub(1));
+    (0..k).map(|i| (2 * i + 1) * frames / (2 * k)).collect()
+}
+
 /// The training pixels: every usable pixel of the frames not held out.
 #[derive(Debug, Clone)]
 pub struct PixelPool {
@@ -251,9 +258,7 @@ impl PixelPool {
     /// The pool of `dataset`, holding out `hold_out` frames spread evenly
     /// over the list (never all of them).
     pub fn new(dataset: &Dataset, hold_out: u32) -> Self {
-        let n = dataset.frames.len() as u32;
-        let k = hold_out.min(n.saturating_sub(1));
-        let held_out: Vec<u32> = (0..k).map(|i| (2 * i + 1) * n / (2 * k)).collect();
+        let held_out = held_out_frames(dataset.frames.len() as u32, hold_out);
         let mut pixels = Vec::new();
         for (f, frame) in dataset.frames.iter().enumerate() {
             if held_out.contains(&(f as u32)) {
@@ -320,5 +325,21 @@ impl PixelPool {
         out.into_iter()
             .map(|(r, ray, t)| (ray, t, r.frame))
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::held_out_frames;
+
+    /// Held-out frames are spread evenly over the list, and one frame is
+    /// always left to train.
+    #[test]
+    fn held_out_frames_spread_evenly_and_leave_one_to_train() {
+        assert_eq!(held_out_frames(48, 4), vec![6, 18, 30, 42]);
+        assert_eq!(held_out_frames(3, 5), vec![0, 2]);
+        assert_eq!(held_out_frames(1, 2), Vec::<u32>::new());
+        assert_eq!(held_out_frames(0, 2), Vec::<u32>::new());
+        assert_eq!(held_out_frames(10, 0), Vec::<u32>::new());
     }
 }

@@ -464,6 +464,14 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             knobs.sparsity
         );
     }
+    let frames = dataset.frames.len() as u32;
+    let held = inlay_passes::train::held_out_frames(frames, args.hold_out).len() as u32;
+    if held < args.hold_out {
+        eprintln!(
+            "--hold-out {}: the dataset has {frames} frames and one must train, so {held} are held out",
+            args.hold_out
+        );
+    }
     let started = Instant::now();
     let bar = progress_bar("training", knobs.iterations as u64);
     let background = DVec3::from_array(args.background.map(|v| v as f64));
