@@ -1,12 +1,11 @@
 // One Adam step over every trained value (4 per node: r, g, b, σ, then the
 // view-dependent colour's coefficients), several an invocation
-// (train/every_value.wgsl), the gradient read and cleared; a
-// node's colour kept non-negative, its density and the coefficients free
-// (a density is clamped after interpolation: density_at); a node's colour
-// steps by the larger of `rate` and `relative_rate` × its value once above
-// `relative_floor` (an HDR field's lamp is 10^4 × its walls); every value
-// but a density stays within `limit`, either sign (the radiance limit a
-// field file holds).
+// (train/every_value.wgsl), the gradient read and cleared. A node's
+// colour is kept within 0 and `limit` (the radiance limit a field file
+// holds), the coefficients within ±`limit`, its density free (clamped
+// after interpolation: density_at). A node's colour steps by the larger
+// of `rate` and `relative_rate` × its value once above `relative_floor`
+// (an HDR field's lamp is 10^4 × its walls).
 // Mirrors passes/src/train/adam.rs adam_step.
 
 struct AdamPush {
