@@ -271,6 +271,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     assert!(t.contains("a step took") && t.contains("train-rays"), "{t}");
     // And the radiance the knobs were fractions of.
     assert!(t.contains("knobs' scale: radiance"), "{t}");
+    // Its first stage's view-dependent start, said (2 of 20 steps).
+    assert!(
+        t.contains("the first 2 steps at degree 1, then degree 0"),
+        "{t}"
+    );
     // The sky learnt behind it, beside it.
     let sky = dir.join("views.sky.exr");
     assert!(t.contains("learnt a sky of 8x4 texels"), "{t}");
@@ -304,7 +309,12 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         o.status.success() && t.contains("stopped at step 0 (time budget)"),
         "{t}"
     );
-    inlay_passes::field::load_field(&stopped).unwrap();
+    // Stopped in the first stage's view-dependent start (degree 1), it
+    // still writes the degree asked for (0).
+    assert_eq!(
+        inlay_passes::field::load_field(&stopped).unwrap().sh_degree,
+        0
+    );
     // A run whose arithmetic leaves f32's range stops with an error at
     // the step it did, and the field it would replace is left as it was.
     let before = std::fs::read(&stopped).unwrap();

@@ -167,6 +167,22 @@ pub struct TrainKnobs {
     /// Degree of the view-dependent colour trained (spherical harmonics,
     /// 0..=2; 0: one colour per node, as a bake's).
     pub sh_degree: u32,
+    /// Share of all the steps, at the start of the first of several
+    /// stages, trained at degree 1 where [`Self::sh_degree`] is 0; the
+    /// coefficients are then dropped and the stage goes on at degree 0
+    /// ([`Self::view_dependent_end`]). A wall lit on one face and dark on
+    /// the other needs its nodes to show both faces from the first steps:
+    /// at degree 0 the views from behind pull every node their rays reach
+    /// dark, and the lit face forms in front of them (PLANTS' back wall,
+    /// a dome up to 0.29 in front of its face). 0.1 by default (300 of
+    /// 3000 steps): on the bundled scenes' `render-views` sets at 128
+    /// nodes it raised every held-out view but one (by up to 1.7 dB on
+    /// PLANTS, whose haze fell from 13–17 % of three views' light to 3–8
+    /// %), at no cost in time; degree 1 through the whole first stage
+    /// cost DOG and CUPS 0.5–1.8 dB (`docs/benchmarks.md`, issue 25's
+    /// thirty-second pass). It ends with the first stage at the latest;
+    /// 0: none.
+    pub view_dependent_start: f64,
     /// Learn an RGB exposure gain per frame (the first frame's fixed at
     /// 1): for photographs whose exposure is not known. Held-out frames
     /// are scored at the gain that fits them best.
@@ -245,6 +261,7 @@ impl Default for TrainKnobs {
             random_background: false,
             sky: 0,
             sh_degree: 0,
+            view_dependent_start: 0.1,
             learn_exposure: false,
             prune: 0.01,
             sparse: true,
@@ -272,6 +289,10 @@ fn edge(knob: f64, unit: f64) -> f64 {
 /// 33.85/33.99 at 4 and 33.88/33.97 at 8 (`docs/benchmarks.md`, issue
 /// 25's twenty-eighth pass).
 pub const DEFAULT_HELD_OUT_SAMPLES: u32 = 4;
+
+/// The degree of the first stage's view-dependent start
+/// ([`TrainKnobs::view_dependent_start`]).
+pub const VIEW_DEPENDENT_START_DEGREE: u32 = 1;
 
 /// The most rays a training pixel per axis [`TrainKnobs::area_rays`]
 /// takes: its square is the trainer's most rays a pixel
@@ -418,6 +439,36 @@ impl TrainKnobs {
         (first + (n - first) * stage as u64 / (stages as u64 - 1)) as u32
     }
 
+    /// The stages a run takes: [`Self::stages`], one when it resumes a
+    /// field (at the field's own resolution).
+    pub fn stages_run(&self, resumed: bool) -> u32 {
+        if resumed {
+            1
+        } else {
+            self.stages
+        }
+    }
+
+    /// The step at which the first stage's view-dependent start
+    /// ([`Self::view_dependent_start`]) ends, of a run of `stages` stages
+    /// (1 when resuming a field): None where there is none (one stage, a
+    /// degree above 0, a share of 0 or one that rounds to no step).
+    pub fn view_dependent_end(&self, stages: u32) -> Option<u32> {
+        let steps = (self.view_dependent_start * self.iterations as f64).round() as u32;
+        (stages > 1 && self.sh_degree == 0 && steps > 0)
+            .then(|| steps.min(self.stage_end(stages, 0)))
+    }
+
+    /// The highest degree of view-dependent colour the run trains: 1 for
+    /// the first stage's view-dependent start, else [`Self::sh_degree`].
+    pub fn highest_sh_degree(&self, stages: u32) -> u32 {
+        if self.view_dependent_end(stages).is_some() {
+            VIEW_DEPENDENT_START_DEGREE
+        } else {
+            self.sh_degree
+        }
+    }
+
     /// Rays a training pixel is the mean of ([`Self::area_rays`] squared).
     pub fn rays_per_pixel(&self) -> u32 {
         self.area_rays.saturating_mul(self.area_rays)
@@ -478,6 +529,15 @@ impl TrainKnobs {
             return bad(
                 "first_stage_share",
                 format!("{} must lie between 0 and 1", self.first_stage_share),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.view_dependent_start) {
+            return bad(
+                "view_dependent_start",
+                format!(
+                    "{} must lie between 0 and 1 (a share of the steps)",
+                    self.view_dependent_start
+                ),
             );
         }
         if let Some(scale) = self.scale {
@@ -757,6 +817,49 @@ mod tests {
                 ..TrainKnobs::default()
             };
             assert_eq!(bad.check().unwrap_err().0, "sparsity");
+        }
+    }
+
+    /// The view-dependent start takes its share of the steps at the
+    /// start of the first of several stages, at most that stage, and only
+    /// where the degree trained is 0; a share outside [0, 1] is refused.
+    #[test]
+    fn the_view_dependent_start_ends_within_the_first_stage() {
+        let knobs = TrainKnobs {
+            iterations: 3000,
+            ..TrainKnobs::default()
+        };
+        assert_eq!(knobs.view_dependent_end(3), Some(300));
+        assert_eq!(knobs.highest_sh_degree(3), VIEW_DEPENDENT_START_DEGREE);
+        // A resumed field trains one stage: none.
+        assert_eq!(knobs.stages_run(true), 1);
+        assert_eq!(knobs.view_dependent_end(knobs.stages_run(true)), None);
+        assert_eq!(knobs.highest_sh_degree(1), 0);
+        let long = TrainKnobs {
+            view_dependent_start: 0.9,
+            ..knobs
+        };
+        assert_eq!(long.view_dependent_end(3), Some(1500));
+        let dependent = TrainKnobs {
+            sh_degree: 2,
+            ..knobs
+        };
+        assert_eq!(dependent.view_dependent_end(3), None);
+        assert_eq!(dependent.highest_sh_degree(3), 2);
+        for share in [0.0, 1e-5] {
+            let none = TrainKnobs {
+                view_dependent_start: share,
+                ..knobs
+            };
+            assert_eq!(none.view_dependent_end(3), None, "{share}");
+            assert!(none.check().is_ok());
+        }
+        for share in [-0.1, 1.5, f64::NAN] {
+            let bad = TrainKnobs {
+                view_dependent_start: share,
+                ..knobs
+            };
+            assert_eq!(bad.check().unwrap_err().0, "view_dependent_start");
         }
     }
 

@@ -32,6 +32,7 @@ pub use geometry::{
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{
     default_iterations, TrainKnobs, REFINE_EXPONENT_BEHIND_RANDOM, SPARSITY_BEHIND_RANDOM,
+    VIEW_DEPENDENT_START_DEGREE,
 };
 pub use loss::{pixel_loss, PixelTarget};
 pub use pixels::held_out_frames;

@@ -368,17 +368,7 @@ pub fn train(
     let final_res = control
         .resume
         .map_or(grid_size(bounds.size(), knobs.resolution), |f| f.resolution);
-    let stages = if control.resume.is_some() {
-        1
-    } else {
-        knobs.stages
-    };
-    crate::field::check_field_may_fit(
-        ctx.info(),
-        final_res,
-        knobs.sh_degree,
-        crate::field::NodeStorage::Training,
-    )?;
+    let stages = knobs.stages_run(control.resume.is_some());
     let stage_res = |s: u32| {
         let shift = stages - 1 - s;
         (final_res.as_dvec3() / (1u32 << shift) as f64)
@@ -386,6 +376,18 @@ pub fn train(
             .as_uvec3()
             .max(UVec3::splat(2))
     };
+    // The final grid at the knobs' degree, the first at the start's.
+    for (res, degree) in [
+        (final_res, knobs.sh_degree),
+        (stage_res(0), knobs.highest_sh_degree(stages)),
+    ] {
+        crate::field::check_field_may_fit(
+            ctx.info(),
+            res,
+            degree,
+            crate::field::NodeStorage::Training,
+        )?;
+    }
     // Start grey at the mean radiance, half transparent across the box.
     let first = stage_res(0);
     let grey = scale as f32;
@@ -398,7 +400,16 @@ pub fn train(
             DEFAULT_OCCUPANCY_BLOCK,
         ),
     };
-    let mut field = with_sh_degree(start, knobs.sh_degree);
+    // The first stage's view-dependent start, where there is one, trains
+    // at degree 1 until its end step, then the stage goes on at the
+    // knobs' degree: each is a phase, as is every later stage.
+    let dependent_end = knobs.view_dependent_end(stages);
+    let mut field = with_sh_degree(start, knobs.highest_sh_degree(stages));
+    let phases: Vec<(u32, u32)> = dependent_end
+        .map(|end| (0, end))
+        .into_iter()
+        .chain((0..stages).map(|s| (s, knobs.stage_end(stages, s))))
+        .collect();
     let mut gains = vec![DVec3::ONE; dataset.frames.len().max(1)];
     // A resumed sky of the knobs' size goes on as it was saved: every
     // texel holds what its own run learnt or filled in.
@@ -415,7 +426,11 @@ pub fn train(
     let mut bricks = None;
     let mut step_times = super::StepTimes::default();
     let view_march = view_march(knobs);
-    'stages: for s in 0..stages {
+    'stages: for (phase, &(s, end)) in phases.iter().enumerate() {
+        // A phase that ends where the one before it did has no step.
+        if phase > 0 && end <= phases[phase - 1].1 {
+            continue;
+        }
         let target = stage_res(s);
         // A resumed field trains sparsely from its first stage where its
         // dense grid would not fit one binding (a 256-node field).
@@ -438,6 +453,16 @@ pub fn train(
         };
         if target != field.resolution {
             field = refine(&field, target, knobs.refine_density_exponent);
+        }
+        // The view-dependent start's coefficients dropped after it (the
+        // moments of Adam start afresh, as at each stage).
+        let start_phase = phase == 0 && dependent_end.is_some();
+        if !start_phase && field.sh_degree != knobs.sh_degree {
+            log::info!(
+                "step {step}: the first stage goes on at degree {}",
+                knobs.sh_degree
+            );
+            field = with_sh_degree(field, knobs.sh_degree);
         }
         let res = field.resolution;
         bricks = layout.as_ref().map(|l| (l.slots, l.table.len() as u32));
@@ -465,7 +490,6 @@ pub fn train(
         gpu.distortion = knobs.distortion;
         gpu.set_gains(ctx, &gains)?;
         gpu.set_sky(ctx, sky.as_ref())?;
-        let end = knobs.stage_end(stages, s);
         while step < end {
             if control.budget.is_some_and(|b| started.elapsed() >= b) || (control.stop)() {
                 field = gpu.field(&mut renderer)?;
@@ -546,6 +570,11 @@ pub fn train(
         gains = gpu.gains(&mut renderer)?;
         sky = gpu.sky(&mut renderer)?;
         sky_seen = gpu.sky_seen(&mut renderer)?;
+    }
+    // A run stopped in the view-dependent start still ends at the knobs'
+    // degree.
+    if field.sh_degree != knobs.sh_degree {
+        field = with_sh_degree(field, knobs.sh_degree);
     }
     // Only a new sky is filled: a resumed one's texels that this run's
     // rays missed keep their values (filled from this run's few texels,

@@ -141,6 +141,14 @@ pub struct TrainArgs {
     /// `--resume` field's degree, else 0.
     #[arg(long)]
     pub sh_degree: Option<u32>,
+    /// Share of all the steps, at the start of the first of several
+    /// stages, trained at degree 1 where --sh-degree is 0, the
+    /// coefficients dropped after it: a wall lit on one face and dark on
+    /// the other forms in place rather than in front of its nodes the
+    /// views from behind pull dark (0: none; it ends with the first stage at
+    /// the latest).
+    #[arg(long, default_value_t = TrainKnobs::default().view_dependent_start)]
+    pub view_dependent_start: f64,
     /// Learn an RGB exposure gain per frame (the first frame's fixed):
     /// for photographs whose exposure is unknown. Held-out views are
     /// scored at the gain that fits them best.
@@ -297,6 +305,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                 .as_ref()
                 .map_or(TrainKnobs::default().sh_degree, |f| f.sh_degree),
         ),
+        view_dependent_start: args.view_dependent_start,
         prune: args.prune,
         sparse: args.sparse,
         learn_exposure: args.learn_exposure,
@@ -312,7 +321,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     inlay_passes::train::check_train_rays(
         ctx,
         knobs.samples_per_ray,
-        knobs.sh_degree,
+        knobs.highest_sh_degree(knobs.stages_run(resume.is_some())),
         knobs.rays_per_pixel(),
     )?;
     let budget = match args.time_budget {
@@ -462,6 +471,13 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             "sparsity prior {:.3e} at {nodes} nodes (--sparsity {:e} is stated for 128 nodes)",
             knobs.sparsity_at(nodes),
             knobs.sparsity
+        );
+    }
+    if let Some(end) = knobs.view_dependent_end(knobs.stages_run(resume.is_some())) {
+        eprintln!(
+            "the first {end} steps at degree 1, then degree {} (--view-dependent-start 0 trains \
+             at {0} throughout)",
+            knobs.sh_degree
         );
     }
     let frames = dataset.frames.len() as u32;
