@@ -176,9 +176,9 @@ pub struct TrainKnobs {
     /// dark, and the lit face forms in front of them (PLANTS' back wall,
     /// a dome up to 0.29 in front of its face). 0.1 by default (300 of
     /// 3000 steps): on the bundled scenes' `render-views` sets at 128
-    /// nodes it raised every held-out view but one (by up to 1.7 dB on
-    /// PLANTS, whose haze fell from 13–17 % of three views' light to 3–8
-    /// %), at no cost in time; degree 1 through the whole first stage
+    /// nodes it raised 18 of the 20 held-out views and lowered one by
+    /// 0.04 dB (PLANTS by up to 1.7 dB, its haze from 13–17 % of three
+    /// views' light to 3–8 %), at no cost in time; degree 1 through the whole first stage
     /// cost DOG and CUPS 0.5–1.8 dB (`docs/benchmarks.md`, issue 25's
     /// thirty-second pass). It ends with the first stage at the latest;
     /// 0: none.
