@@ -424,6 +424,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         ("--sky", "2000", "--sky: 2000 must be in 0..=1024"),
         ("--prune", "nan", "--prune: NaN must be non-negative"),
         ("--sparsity", "nan", "--sparsity: NaN must be non-negative"),
+        (
+            "--sparsity-edge",
+            "inf",
+            "--sparsity-edge: inf must be non-negative",
+        ),
         ("--scale", "0", "--scale: 0 must be a positive radiance"),
         ("--out", "x.exr", ".inlayfield"),
         (

@@ -3,7 +3,7 @@
 // (colour, density), a difference d pulled by d / √(1 + (d·inv)²) with the
 // group's own inv (a Charbonnier penalty: squared below 1/inv, its size
 // beyond; inv 0: squared everywhere), and the density's sparsity prior (σ₊ / (1 +
-// (σ₊·inv)²), weighted), into the gradient buffer Adam's step left empty;
+// (σ₊·inv)²) with its own edge's inv, weighted), into the gradient buffer Adam's step left empty;
 // train/descend.wgsl then takes one plain step along it. A sparse grid's
 // nodes are its pool's, a dropped brick's neighbours zero (held so).
 // Mirrors passes/src/train/tv.rs tv_gradient.
@@ -21,6 +21,12 @@ struct TvPush {
     // 1 / the colour difference beyond which its penalty grows as its
     // size (0: squared everywhere; tv.rs TvWeights::colour_edge).
     colour_edge_inverse: f32,
+    // 1 / the sparsity prior's edge, the density its pull is strongest
+    // at (0: σ₊² everywhere; tv.rs TvWeights::sparsity_edge).
+    sparsity_edge_inverse: f32,
+    pad1: u32,
+    pad2: u32,
+    pad3: u32,
 }
 
 var<immediate> pc: TvPush;
@@ -59,7 +65,7 @@ fn pull(d: vec4<f32>) -> vec4<f32> {
 // σ₊ / (1 + (σ₊·inv)²) (passes/src/train/tv.rs sparsity_pull).
 fn sparsity_pull(sigma: f32) -> f32 {
     let s = max(sigma, 0.0);
-    let q = s * pc.density_edge_inverse;
+    let q = s * pc.sparsity_edge_inverse;
     return s / (1.0 + q * q);
 }
 

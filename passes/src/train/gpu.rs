@@ -145,6 +145,15 @@ inlay_engine::gpu_struct! {
         /// 1 / the colour difference beyond which its penalty grows as
         /// its size (0: squared everywhere; [`TvWeights::colour_edge`]).
         pub colour_edge_inverse: f32,
+        /// 1 / the sparsity prior's edge (0: σ₊² everywhere;
+        /// [`TvWeights::sparsity_edge`]).
+        pub sparsity_edge_inverse: f32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
+        /// Padding.
+        pub pad3: u32,
     }
 }
 
@@ -919,6 +928,10 @@ impl GpuTrainer {
             sparsity: self.tv_weights.sparsity as f32,
             brick_dims: self.brick_dims(),
             colour_edge_inverse: self.tv_weights.colour_edge_inverse() as f32,
+            sparsity_edge_inverse: self.tv_weights.sparsity_edge_inverse() as f32,
+            pad1: 0,
+            pad2: 0,
+            pad3: 0,
         };
         let groups = nodes.div_ceil(64);
         let mut pass = graph.compute_pass(TRAIN_TV);
