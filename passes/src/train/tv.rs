@@ -135,13 +135,14 @@ pub fn tv_loss(nodes: &[[f32; 4]], res: UVec3, tv: TvWeights) -> f64 {
     let w = [tv.colour, tv.colour, tv.colour, tv.density];
     let inv = tv.density_edge_inverse();
     let colour_inv = tv.colour_edge_inverse();
+    let sparsity_inv = tv.sparsity_edge_inverse();
     let idx = |i: u32, j: u32, k: u32| (i + res.x * (j + res.y * k)) as usize;
     let mut sum = 0.0;
     for k in 0..res.z {
         for j in 0..res.y {
             for i in 0..res.x {
                 let v = nodes[idx(i, j, k)];
-                sum += tv.sparsity * sparsity_penalty(v[3] as f64, tv.sparsity_edge_inverse());
+                sum += tv.sparsity * sparsity_penalty(v[3] as f64, sparsity_inv);
                 let next = [
                     (i + 1 < res.x).then(|| idx(i + 1, j, k)),
                     (j + 1 < res.y).then(|| idx(i, j + 1, k)),
@@ -164,6 +165,7 @@ pub fn tv_gradient(nodes: &[[f32; 4]], res: UVec3, tv: TvWeights) -> Vec<[f64; 4
     let w = [tv.colour, tv.colour, tv.colour, tv.density];
     let inv = tv.density_edge_inverse();
     let colour_inv = tv.colour_edge_inverse();
+    let sparsity_inv = tv.sparsity_edge_inverse();
     let idx = |i: u32, j: u32, k: u32| (i + res.x * (j + res.y * k)) as usize;
     let mut out = vec![[0.0; 4]; nodes.len()];
     for k in 0..res.z {
@@ -171,8 +173,7 @@ pub fn tv_gradient(nodes: &[[f32; 4]], res: UVec3, tv: TvWeights) -> Vec<[f64; 4
             for i in 0..res.x {
                 let n = idx(i, j, k);
                 let v = nodes[n];
-                out[n][3] +=
-                    2.0 * tv.sparsity * sparsity_pull(v[3] as f64, tv.sparsity_edge_inverse());
+                out[n][3] += 2.0 * tv.sparsity * sparsity_pull(v[3] as f64, sparsity_inv);
                 let c = [i, j, k];
                 for a in 0..3 {
                     for d in [-1i64, 1] {
