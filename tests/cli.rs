@@ -241,6 +241,27 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     // `inlay train` takes it: a tiny grid, a few steps, the field written
     // and readable by `render`.
     let field = dir.join("views.inlayfield");
+    let depth_picture = dir.join("depth.exr");
+    // A picture of held-out views with none held out is refused before
+    // any work, naming the flag.
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        field.to_str().unwrap(),
+        "--hold-out",
+        "0",
+        "--scene",
+        scene,
+        "--depth-picture",
+        depth_picture.to_str().unwrap(),
+    ]);
+    assert!(
+        !o.status.success() && text(&o).contains("--depth-picture: draws the held-out views"),
+        "{}",
+        text(&o)
+    );
+    assert!(!field.exists() && !depth_picture.exists());
     let o = inlay(&[
         "train",
         out.to_str().unwrap(),
@@ -260,6 +281,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         scene,
         "--sky",
         "4",
+        "--depth-picture",
+        depth_picture.to_str().unwrap(),
     ]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
@@ -267,6 +290,12 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         t.contains("held-out frame 1: PSNR") && field.is_file(),
         "{t}"
     );
+    // The held-out view's depth error drawn pixel by pixel, at its size,
+    // something of the recipe in it (no pixel is black everywhere).
+    let drawn = inlay_engine::HdrImage::load_exr(&depth_picture).unwrap();
+    let view = inlay_engine::HdrImage::load_exr(&out.join("view-001.exr")).unwrap();
+    assert_eq!((drawn.width, drawn.height), (view.width, view.height));
+    assert!(drawn.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0));
     // Where a step's time went, the training rays' pass among the rest.
     assert!(t.contains("a step took") && t.contains("train-rays"), "{t}");
     // And the radiance the knobs were fractions of.

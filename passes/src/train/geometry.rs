@@ -207,24 +207,44 @@ pub fn known_depth(known: &KnownAlong, t_min: f64, t_max: f64) -> KnownDepth {
     }
 }
 
-/// Scores `field`'s geometry in `frame`'s usable pixels against the known
-/// scene `content(ray, t_min, t_max)` holds along each pixel's ray inside
-/// the field's bounds.
-pub fn geometry_score(
+/// One pixel's geometry against the known scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelDepth {
+    /// The known scene is opaque along the pixel's ray inside the bounds
+    /// (opacity at least [`SURFACE_OPACITY`]).
+    pub known: bool,
+    /// The field is opaque along it.
+    pub opaque: bool,
+    /// D̂/Ô − D/O in node spacings where both are opaque (negative: the
+    /// field's surface in front), else NaN.
+    pub error: f64,
+    /// The opacity the field gathers before [`HAZE_MARGIN`] spacings in
+    /// front of the first thing the known scene holds (NaN where the scene
+    /// is not opaque).
+    pub haze: f64,
+    /// |d·n| at the known surface where it carries at least half the known
+    /// weight, else 1.
+    pub facing: f64,
+}
+
+/// Each of `frame`'s pixels' geometry against the known scene
+/// `content(ray, t_min, t_max)` holds inside the field's bounds, row by
+/// row: None where the pixel is masked or its ray misses the bounds.
+pub fn depth_pixels(
     frame: &Frame,
     field: &GridField,
     march: &MarchKnobs,
     content: &KnownContent<'_>,
-) -> GeometryScore {
+) -> Vec<Option<PixelDepth>> {
     use rayon::prelude::*;
     let spacing = field.spacing().min_element();
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
-    // Per pixel: (the known scene opaque, the field opaque, signed depth
-    // error, the opacity in front of the known scene, |d·n| there).
-    let pixels: Vec<(bool, bool, f64, f64, f64)> = (0..w * h)
+    (0..w * h)
         .into_par_iter()
-        .filter(|&p| frame.image.state[p as usize] != PixelState::Masked)
-        .filter_map(|p| {
+        .map(|p| {
+            if frame.image.state[p as usize] == PixelState::Masked {
+                return None;
+            }
             let ray = pixel_ray(frame, p)?;
             let (t0, t1) = ray_box(&ray, &field.bounds)?;
             let t0 = t0.max(0.0);
@@ -255,21 +275,77 @@ pub fn geometry_score(
                 }
                 _ => f64::NAN,
             };
-            Some((known, opaque, error, haze, facing))
+            Some(PixelDepth {
+                known,
+                opaque,
+                error,
+                haze,
+                facing,
+            })
         })
+        .collect()
+}
+
+/// The node spacings of depth error at which [`depth_error_colour`] is
+/// fully blue (in front) or red (behind).
+pub const DEPTH_ERROR_FULL: f64 = 4.0;
+
+/// A pixel's geometry as a colour (linear RGB in [0, 1]): white where the
+/// field's depth matches the known scene's, fading to blue as the field's
+/// surface lies further in front and to red as it lies further behind
+/// (fully at [`DEPTH_ERROR_FULL`] spacings), magenta where the camera
+/// sees through a known surface, green where the field is opaque over
+/// nothing known, black where neither holds anything or there is no
+/// pixel (None).
+pub fn depth_error_colour(p: Option<&PixelDepth>) -> [f32; 3] {
+    let Some(p) = p else {
+        return [0.0; 3];
+    };
+    match (p.known, p.opaque) {
+        (false, false) => [0.0; 3],
+        (true, false) => [1.0, 0.0, 1.0],
+        (false, true) => [0.0, 1.0, 0.0],
+        (true, true) => {
+            let fade = 1.0 - (p.error.abs() / DEPTH_ERROR_FULL).min(1.0) as f32;
+            if p.error < 0.0 {
+                [fade, fade, 1.0]
+            } else {
+                [1.0, fade, fade]
+            }
+        }
+    }
+}
+
+/// Scores `field`'s geometry in `frame`'s usable pixels against the known
+/// scene `content(ray, t_min, t_max)` holds along each pixel's ray inside
+/// the field's bounds ([`depth_pixels`], [`score_pixels`]).
+pub fn geometry_score(
+    frame: &Frame,
+    field: &GridField,
+    march: &MarchKnobs,
+    content: &KnownContent<'_>,
+) -> GeometryScore {
+    score_pixels(&depth_pixels(frame, field, march, content))
+}
+
+/// The score of a view's pixels ([`depth_pixels`]).
+pub fn score_pixels(pixels: &[Option<PixelDepth>]) -> GeometryScore {
+    let pixels: Vec<&PixelDepth> = pixels.iter().flatten().collect();
+    let mut signed: Vec<f64> = pixels
+        .iter()
+        .map(|p| p.error)
+        .filter(|e| !e.is_nan())
         .collect();
-    let mut signed: Vec<f64> = pixels.iter().map(|p| p.2).filter(|e| !e.is_nan()).collect();
     let mut errors: Vec<f64> = signed.iter().map(|e| e.abs()).collect();
     let mut offsets: Vec<f64> = pixels
         .iter()
-        .filter(|p| !p.2.is_nan())
-        .map(|p| (p.2 * p.4).abs())
+        .filter(|p| !p.error.is_nan())
+        .map(|p| (p.error * p.facing).abs())
         .collect();
     errors.sort_by(f64::total_cmp);
     signed.sort_by(f64::total_cmp);
     offsets.sort_by(f64::total_cmp);
-    type Pixel = (bool, bool, f64, f64, f64);
-    let share = |of: &dyn Fn(&Pixel) -> bool, among: &dyn Fn(&Pixel) -> bool| {
+    let share = |of: &dyn Fn(&PixelDepth) -> bool, among: &dyn Fn(&PixelDepth) -> bool| {
         let n = pixels.iter().filter(|p| among(p)).count();
         let k = pixels.iter().filter(|p| among(p) && of(p)).count();
         if n == 0 {
@@ -283,9 +359,9 @@ pub fn geometry_score(
         median_error: median(&errors),
         median_signed_error: median(&signed),
         median_normal_offset: median(&offsets),
-        see_through: share(&|p| !p.1, &|p| p.0),
-        floating: share(&|p| p.1, &|p| !p.0),
-        haze: mean(pixels.iter().map(|p| p.3).filter(|o| !o.is_nan())),
+        see_through: share(&|p| !p.opaque, &|p| p.known),
+        floating: share(&|p| p.opaque, &|p| !p.known),
+        haze: mean(pixels.iter().map(|p| p.haze).filter(|o| !o.is_nan())),
     }
 }
 

@@ -26,8 +26,8 @@ pub use crate::field::Sky;
 pub use adam::{adam_step, AdamKnobs};
 pub use behind::Behind;
 pub use geometry::{
-    geometry_score, known_depth, recipe_along, GeometryScore, KnownAlong, KnownContent, KnownDepth,
-    MediumSpan, HAZE_MARGIN,
+    depth_error_colour, depth_pixels, geometry_score, known_depth, recipe_along, score_pixels,
+    GeometryScore, KnownAlong, KnownContent, KnownDepth, MediumSpan, PixelDepth, HAZE_MARGIN,
 };
 pub use gpu::{check_train_rays, GpuTrainer, GradientScatter, TrainRay};
 pub use knobs::{

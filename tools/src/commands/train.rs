@@ -17,6 +17,7 @@ use inlay_passes::dataset::{load_dataset, LoadOptions};
 use inlay_passes::field::{checked_field_bytes, sky_path};
 use inlay_passes::geometry::Aabb;
 use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
+use inlay_passes::train::{depth_error_colour, PixelDepth};
 
 use crate::commands::auto_value::{parse_auto, Auto};
 use crate::commands::dataset::{parse_bounds, parse_rgb};
@@ -242,6 +243,14 @@ pub struct TrainArgs {
     /// spoils occlusion, probes and shadows at any PSNR).
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// Picture of each held-out view's depth error against `--scene`'s
+    /// surfaces, one view a row: white within a node spacing, bluer the
+    /// further the field's surface lies in front (full at 4 spacings),
+    /// redder behind; magenta where the camera sees through a surface,
+    /// green where the field floats over nothing, black where neither
+    /// holds anything.
+    #[arg(long, requires = "scene")]
+    pub depth_picture: Option<PathBuf>,
 }
 
 /// A knob that is on, off, or chosen from the dataset.
@@ -270,6 +279,17 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     check_output("--out", &args.out, &["inlayfield"])?;
     if let Some(p) = &args.picture {
         check_image_output("--picture", p)?;
+    }
+    if let Some(p) = &args.depth_picture {
+        check_image_output("--depth-picture", p)?;
+    }
+    for (flag, asked) in [
+        ("--picture", args.picture.is_some()),
+        ("--depth-picture", args.depth_picture.is_some()),
+    ] {
+        if asked && args.hold_out == 0 {
+            anyhow::bail!("{flag}: draws the held-out views, and --hold-out 0 holds none out");
+        }
     }
     let resume = match &args.resume {
         Some(p) => Some(inlay_passes::field::load_field(p)?),
@@ -603,9 +623,10 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             v.frame, v.psnr, v.relative_error, v.brightness
         );
     }
-    if let Some(scene) = &scene {
-        print_geometry(scene, &dataset, &trained, &knobs);
-    }
+    let depths = match &scene {
+        Some(scene) => print_geometry(scene, &dataset, &trained, &knobs),
+        None => Vec::new(),
+    };
     let mut outputs = Outputs::new();
     outputs.bytes(&args.out, &checked_field_bytes(&args.out, f)?)?;
     if let Some(sky) = &trained.sky {
@@ -623,6 +644,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     if let (Some(path), false) = (&args.picture, trained.held_out.is_empty()) {
         outputs.image(path, &held_out_picture(&trained.held_out), 1.0)?;
     }
+    if let (Some(path), false) = (&args.depth_picture, depths.is_empty()) {
+        outputs.image(path, &depth_picture(&depths), 1.0)?;
+    }
     outputs.commit(Some(ctx))?;
     Ok(())
 }
@@ -635,17 +659,23 @@ fn luminance_range(colours: &[DVec3]) -> (f64, f64) {
         .fold((f64::INFINITY, 0.0), |(lo, hi), l| (lo.min(l), hi.max(l)))
 }
 
+/// One held-out view's pixels' geometry: its size and each pixel's
+/// ([`inlay_passes::train::depth_pixels`]).
+type ViewDepths = ((u32, u32), Vec<Option<PixelDepth>>);
+
 /// Prints each held-out view's geometry against `scene`'s recipe, its
-/// media included ([`inlay_passes::train::geometry_score`]).
+/// media included ([`inlay_passes::train::geometry_score`]), and returns
+/// each view's pixels.
 fn print_geometry(
     scene: &inlay_passes::scene::Scene,
     dataset: &inlay_passes::dataset::Dataset,
     trained: &inlay_passes::train::Trained,
     knobs: &TrainKnobs,
-) {
+) -> Vec<ViewDepths> {
     let Some(recipe) = scene.recipe() else {
-        return;
+        return Vec::new();
     };
+    let mut views = Vec::new();
     // Its nearest_surface alone is used: no bounces.
     let tracer = inlay_passes::bake::PathTracer::new(recipe, &scene.environment, 0);
     let content = |ray: &inlay_passes::geometry::Ray, t0: f64, t1: f64| {
@@ -654,7 +684,9 @@ fn print_geometry(
     let march = inlay_passes::train::view_march(knobs);
     for v in &trained.held_out {
         let frame = &dataset.frames[v.frame as usize];
-        let g = inlay_passes::train::geometry_score(frame, &trained.field, &march, &content);
+        let pixels = inlay_passes::train::depth_pixels(frame, &trained.field, &march, &content);
+        let g = inlay_passes::train::score_pixels(&pixels);
+        views.push((v.size, pixels));
         let depth = if g.compared == 0 {
             "no pixel's depth compared (none both on a surface and opaque)".to_string()
         } else {
@@ -675,6 +707,29 @@ fn print_geometry(
             percent_of(g.haze),
             inlay_passes::train::HAZE_MARGIN
         );
+    }
+    views
+}
+
+/// The held-out views' depth errors ([`depth_error_colour`]), one view a
+/// row.
+fn depth_picture(views: &[ViewDepths]) -> HdrImage {
+    let w = views.iter().map(|v| v.0 .0).max().unwrap_or(1);
+    let h: u32 = views.iter().map(|v| v.0 .1).sum();
+    let mut pixels = vec![[0.0f32, 0.0, 0.0, 1.0]; (w * h) as usize];
+    let mut y0 = 0;
+    for ((vw, vh), depths) in views {
+        for (i, p) in depths.iter().enumerate() {
+            let (x, y) = (i as u32 % vw, i as u32 / vw);
+            let c = depth_error_colour(p.as_ref());
+            pixels[((y0 + y) * w + x) as usize] = [c[0], c[1], c[2], 1.0];
+        }
+        y0 += vh;
+    }
+    HdrImage {
+        width: w,
+        height: h,
+        pixels,
     }
 }
 
@@ -736,7 +791,7 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
 
 #[cfg(test)]
 mod tests {
-    use super::percent_of;
+    use super::{depth_error_colour, percent_of, PixelDepth};
 
     /// A view whose every pixel holds a surface has no "others" to float
     /// among: that is said, not printed as NaN.
@@ -744,5 +799,40 @@ mod tests {
     fn a_share_of_nothing_is_said_not_printed_as_nan() {
         assert_eq!(percent_of(0.0123), "1.2 %");
         assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
+    }
+
+    /// Each kind of pixel reads as its own colour, and the error's sign and
+    /// size as blue or red of growing strength.
+    #[test]
+    fn a_depth_error_reads_as_its_colour() {
+        let p = |known, opaque, error| PixelDepth {
+            known,
+            opaque,
+            error,
+            haze: f64::NAN,
+            facing: 1.0,
+        };
+        assert_eq!(depth_error_colour(None), [0.0; 3]);
+        assert_eq!(
+            depth_error_colour(Some(&p(false, false, f64::NAN))),
+            [0.0; 3]
+        );
+        assert_eq!(
+            depth_error_colour(Some(&p(true, false, f64::NAN))),
+            [1.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            depth_error_colour(Some(&p(false, true, f64::NAN))),
+            [0.0, 1.0, 0.0]
+        );
+        assert_eq!(depth_error_colour(Some(&p(true, true, 0.0))), [1.0; 3]);
+        assert_eq!(
+            depth_error_colour(Some(&p(true, true, -2.0))),
+            [0.5, 0.5, 1.0]
+        );
+        assert_eq!(
+            depth_error_colour(Some(&p(true, true, 9.0))),
+            [1.0, 0.0, 0.0]
+        );
     }
 }
