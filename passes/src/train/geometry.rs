@@ -712,4 +712,39 @@ mod tests {
         assert!(full.compared == 0 && full.floating == 1.0 && full.see_through.is_nan());
         assert!(full.haze.is_nan(), "{full:?}");
     }
+
+    /// Each kind of pixel reads as its own colour, and the error's sign and
+    /// size as blue or red of growing strength.
+    #[test]
+    fn a_depth_error_reads_as_its_colour() {
+        let p = |known, opaque, error| PixelDepth {
+            known,
+            opaque,
+            error,
+            haze: f64::NAN,
+            facing: 1.0,
+        };
+        assert_eq!(depth_error_colour(None), [0.0; 3]);
+        assert_eq!(
+            depth_error_colour(Some(&p(false, false, f64::NAN))),
+            [0.0; 3]
+        );
+        assert_eq!(
+            depth_error_colour(Some(&p(true, false, f64::NAN))),
+            [1.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            depth_error_colour(Some(&p(false, true, f64::NAN))),
+            [0.0, 1.0, 0.0]
+        );
+        assert_eq!(depth_error_colour(Some(&p(true, true, 0.0))), [1.0; 3]);
+        assert_eq!(
+            depth_error_colour(Some(&p(true, true, -2.0))),
+            [0.5, 0.5, 1.0]
+        );
+        assert_eq!(
+            depth_error_colour(Some(&p(true, true, 9.0))),
+            [1.0, 0.0, 0.0]
+        );
+    }
 }

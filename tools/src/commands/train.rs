@@ -791,7 +791,7 @@ fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
 
 #[cfg(test)]
 mod tests {
-    use super::{depth_error_colour, percent_of, PixelDepth};
+    use super::percent_of;
 
     /// A view whose every pixel holds a surface has no "others" to float
     /// among: that is said, not printed as NaN.
@@ -799,40 +799,5 @@ mod tests {
     fn a_share_of_nothing_is_said_not_printed_as_nan() {
         assert_eq!(percent_of(0.0123), "1.2 %");
         assert_eq!(percent_of(f64::NAN), "— (no such pixel)");
-    }
-
-    /// Each kind of pixel reads as its own colour, and the error's sign and
-    /// size as blue or red of growing strength.
-    #[test]
-    fn a_depth_error_reads_as_its_colour() {
-        let p = |known, opaque, error| PixelDepth {
-            known,
-            opaque,
-            error,
-            haze: f64::NAN,
-            facing: 1.0,
-        };
-        assert_eq!(depth_error_colour(None), [0.0; 3]);
-        assert_eq!(
-            depth_error_colour(Some(&p(false, false, f64::NAN))),
-            [0.0; 3]
-        );
-        assert_eq!(
-            depth_error_colour(Some(&p(true, false, f64::NAN))),
-            [1.0, 0.0, 1.0]
-        );
-        assert_eq!(
-            depth_error_colour(Some(&p(false, true, f64::NAN))),
-            [0.0, 1.0, 0.0]
-        );
-        assert_eq!(depth_error_colour(Some(&p(true, true, 0.0))), [1.0; 3]);
-        assert_eq!(
-            depth_error_colour(Some(&p(true, true, -2.0))),
-            [0.5, 0.5, 1.0]
-        );
-        assert_eq!(
-            depth_error_colour(Some(&p(true, true, 9.0))),
-            [1.0, 0.0, 0.0]
-        );
     }
 }
