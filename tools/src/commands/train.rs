@@ -714,23 +714,10 @@ fn print_geometry(
 /// The held-out views' depth errors ([`depth_error_colour`]), one view a
 /// row.
 fn depth_picture(views: &[ViewDepths]) -> HdrImage {
-    let w = views.iter().map(|v| v.0 .0).max().unwrap_or(1);
-    let h: u32 = views.iter().map(|v| v.0 .1).sum();
-    let mut pixels = vec![[0.0f32, 0.0, 0.0, 1.0]; (w * h) as usize];
-    let mut y0 = 0;
-    for ((vw, vh), depths) in views {
-        for (i, p) in depths.iter().enumerate() {
-            let (x, y) = (i as u32 % vw, i as u32 / vw);
-            let c = depth_error_colour(p.as_ref());
-            pixels[((y0 + y) * w + x) as usize] = [c[0], c[1], c[2], 1.0];
-        }
-        y0 += vh;
-    }
-    HdrImage {
-        width: w,
-        height: h,
-        pixels,
-    }
+    let sizes: Vec<(u32, u32)> = views.iter().map(|v| v.0).collect();
+    stacked_views(&sizes, 1, |v, i, _| {
+        depth_error_colour(views[v].1[i].as_ref())
+    })
 }
 
 /// A share as a percentage, or "— (no such pixel)" where there was nothing
@@ -763,27 +750,42 @@ fn print_step_times(times: &inlay_passes::train::StepTimes) {
 
 /// The held-out views one under another: photograph | field | |difference|.
 fn held_out_picture(views: &[inlay_passes::train::HeldOutView]) -> HdrImage {
-    let w = views.iter().map(|v| v.size.0).max().unwrap_or(1);
-    let h: u32 = views.iter().map(|v| v.size.1).sum();
-    let mut pixels = vec![[0.0f32, 0.0, 0.0, 1.0]; (3 * w * h) as usize];
+    let sizes: Vec<(u32, u32)> = views.iter().map(|v| v.size).collect();
+    stacked_views(&sizes, 3, |v, i, panel| {
+        let (a, b) = (views[v].truth[i], views[v].rendered[i]);
+        match panel {
+            0 => a,
+            1 => b,
+            _ => [0, 1, 2].map(|k| (a[k] - b[k]).abs()),
+        }
+    })
+}
+
+/// Views of `sizes` one under another, each row `panels` panels across
+/// as wide as the widest view: `colour(view, pixel, panel)` colours each
+/// pixel (row by row within its view); black where a view is narrower.
+fn stacked_views(
+    sizes: &[(u32, u32)],
+    panels: u32,
+    colour: impl Fn(usize, usize, u32) -> [f32; 3],
+) -> HdrImage {
+    let w = sizes.iter().map(|s| s.0).max().unwrap_or(1);
+    let h: u32 = sizes.iter().map(|s| s.1).sum();
+    let mut pixels = vec![[0.0f32, 0.0, 0.0, 1.0]; (panels * w * h) as usize];
     let mut y0 = 0;
-    for v in views {
-        let (vw, vh) = v.size;
-        for y in 0..vh {
-            for x in 0..vw {
-                let i = (y * vw + x) as usize;
-                let (a, b) = (v.truth[i], v.rendered[i]);
-                let d = [0, 1, 2].map(|k| (a[k] - b[k]).abs());
-                for (panel, c) in [a, b, d].into_iter().enumerate() {
-                    let o = ((y0 + y) * 3 * w + panel as u32 * w + x) as usize;
-                    pixels[o] = [c[0], c[1], c[2], 1.0];
-                }
+    for (v, &(vw, vh)) in sizes.iter().enumerate() {
+        for i in 0..(vw * vh) as usize {
+            let (x, y) = (i as u32 % vw, i as u32 / vw);
+            for panel in 0..panels {
+                let c = colour(v, i, panel);
+                let o = ((y0 + y) * panels * w + panel * w + x) as usize;
+                pixels[o] = [c[0], c[1], c[2], 1.0];
             }
         }
         y0 += vh;
     }
     HdrImage {
-        width: 3 * w,
+        width: panels * w,
         height: h,
         pixels,
     }
