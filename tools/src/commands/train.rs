@@ -127,7 +127,9 @@ pub struct TrainArgs {
     /// Weight of the distortion loss (Mip-NeRF 360's): pulls each ray's
     /// weight into one short stretch (0: none). With the other defaults it
     /// can thicken a faint haze in front of the surfaces into them
-    /// rather than clear it: measure before relying on it.
+    /// rather than clear it: measure before relying on it. As a second
+    /// step (--resume, with --tv-edge 0.02) it thins plain opaque
+    /// surfaces and costs media such as foliage.
     #[arg(long, default_value_t = TrainKnobs::default().distortion)]
     pub distortion: f64,
     /// Each step's rays end on a random colour behind the field instead of
