@@ -151,9 +151,9 @@ pub struct TrainKnobs {
     /// 160 × 120 further off, the haze in front of them thicker (issue
     /// 25's twenty-third pass). Off by default. From a field the defaults
     /// cleared (`--resume`), 0.5 with [`Self::tv_edge`] at 0.02 thinned
-    /// DOG's Cycles floor (2.46 → 1.72–1.76 node spacings) and cost PLANTS,
-    /// whose foliage is a medium, 1.0–2.2 dB (issue 25's thirty-fifth
-    /// pass).
+    /// DOG's Cycles floor (2.46 → 1.72–1.76 node spacings); as a phase
+    /// after the stages it cost PLANTS, whose foliage is a medium,
+    /// 1.0–2.2 dB (issue 25's thirty-fifth pass).
     pub distortion: f64,
     /// Each step's rays end on a random colour behind the field (each
     /// channel uniform over 0 to twice the photographs' mean radiance)
