@@ -40,7 +40,10 @@ fn bvh_enter(i: u32, o: vec3<f32>, inv: vec3<f32>) -> f32 {
 }
 
 // Whether the ray from `o` along unit `d` hits any triangle (t > 0). The
-// children of a node are visited nearer first.
+// children of a node are visited nearer first: the walk goes straight on
+// into the nearer child the ray enters and keeps the farther one on the
+// stack, so a step down touches the stack only where the ray enters both
+// (on llvmpipe each lane's stack entry is a scattered store and load).
 fn bvh_occluded(o: vec3<f32>, d: vec3<f32>) -> bool {
     if arrayLength(&bvh_triangles) < 3u {
         return false;
@@ -51,35 +54,38 @@ fn bvh_occluded(o: vec3<f32>, d: vec3<f32>) -> bool {
         return false;
     }
     var stack: array<u32, BVH_STACK>;
-    var sp = 1u;
-    stack[0] = 0u;
-    while sp > 0u {
-        sp -= 1u;
-        let i = stack[sp];
+    var sp = 0u;
+    var i = 0u;
+    loop {
         let first = bitcast<u32>(bvh_nodes[2u * i].w);
         let count = bitcast<u32>(bvh_nodes[2u * i + 1u].w);
         if count == 0u {
             let tl = bvh_enter(first, o, inv);
             let tr = bvh_enter(first + 1u, o, inv);
-            // The farther child goes on the stack first, so the nearer is
-            // taken next; a child the ray misses is not pushed.
             let left_nearer = tl >= 0.0 && (tr < 0.0 || tl <= tr);
-            let near = select(first + 1u, first, left_nearer);
-            if tl >= 0.0 && tr >= 0.0 && sp + 2u <= BVH_STACK {
-                stack[sp] = select(first, first + 1u, left_nearer);
-                stack[sp + 1u] = near;
-                sp += 2u;
-            } else if (tl >= 0.0 || tr >= 0.0) && sp + 1u <= BVH_STACK {
-                stack[sp] = near;
-                sp += 1u;
+            if tl >= 0.0 || tr >= 0.0 {
+                // The farther child waits on the stack where the ray enters
+                // both (and the stack has room: past it, that child is
+                // skipped, as a full stack always did).
+                if tl >= 0.0 && tr >= 0.0 && sp < BVH_STACK {
+                    stack[sp] = select(first, first + 1u, left_nearer);
+                    sp += 1u;
+                }
+                i = select(first + 1u, first, left_nearer);
+                continue;
             }
-            continue;
-        }
-        for (var k = first; k < first + count; k++) {
-            if bvh_hits_triangle(o, d, k) {
-                return true;
+        } else {
+            for (var k = first; k < first + count; k++) {
+                if bvh_hits_triangle(o, d, k) {
+                    return true;
+                }
             }
         }
+        if sp == 0u {
+            break;
+        }
+        sp -= 1u;
+        i = stack[sp];
     }
     return false;
 }
