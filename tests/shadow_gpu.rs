@@ -54,6 +54,9 @@ fn bake_kernel_matches_cpu_mirror() {
 use glam::DVec3;
 use inlay_engine::{vk, Buffer, ImageDesc, Readback};
 use inlay_passes::camera::{CameraFrame, CameraSpec};
+use inlay_passes::composite::{
+    composite_over, composite_shade_field, CompositePass, Layering, COMPOSITE_FORMAT,
+};
 use inlay_passes::field::GpuGridField;
 use inlay_passes::geometry::MeshScene;
 use inlay_passes::geometry::Ray;
@@ -484,13 +487,18 @@ fn compare_cast_shadow(
 /// `test_lobes` at `w` × `h`, read back: the march's colour and depth, ρ at full
 /// resolution (`reference`), and `pass`'s ρ at its scale (`low`) and
 /// after its `finish` (`fine`), as the cast-shadow tests at a scale
-/// compare them.
+/// compare them; and the frame as `pass` composites it with its last
+/// level blended in `composite` (`CastShadowPass::composite`): the
+/// shadowed field alone (`field_only`), and over an object layer, for
+/// which the march's own colour stands in (`layered`).
 struct ScaledCast {
     colour: Vec<[f32; 4]>,
     depth: Vec<[f32; 4]>,
     reference: Vec<[f32; 4]>,
     low: Vec<[f32; 4]>,
     fine: Vec<[f32; 4]>,
+    field_only: Vec<[f32; 4]>,
+    layered: Vec<[f32; 4]>,
 }
 
 fn run_scaled_cast(
@@ -527,7 +535,10 @@ fn run_scaled_cast(
         Readback::new(ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
         Readback::new(ctx, desc(lw, lh, SHADOW_FORMAT)).unwrap(),
         Readback::new(ctx, desc(w, h, SHADOW_FORMAT)).unwrap(),
+        Readback::new(ctx, desc(w, h, COMPOSITE_FORMAT)).unwrap(),
+        Readback::new(ctx, desc(w, h, COMPOSITE_FORMAT)).unwrap(),
     ];
+    let composite = CompositePass::new(ctx, &lib).unwrap();
     common::run_frame(ctx, |graph| {
         let m = march.add(graph, gpu_field, &cam, None);
         let light = LightLobes {
@@ -547,20 +558,41 @@ fn run_scaled_cast(
             ssdf: s,
         };
         let fine = pass.finish(graph, gpu_field, &cam, &m, low, &[inputs]);
+        let mut composited = |object| {
+            let layers = (object, Layering::FieldOverObject);
+            pass.composite(
+                graph,
+                gpu_field,
+                &cam,
+                &m,
+                (low, &[inputs]),
+                &composite,
+                layers,
+            )
+        };
+        let field_only = composited(None);
+        let layered = composited(Some(m.colour_opacity));
         rb[0].add_to_graph(graph, m.colour_opacity);
         rb[1].add_to_graph(graph, m.depth);
         rb[2].add_to_graph(graph, reference);
         rb[3].add_to_graph(graph, low);
         rb[4].add_to_graph(graph, fine);
+        rb[5].add_to_graph(graph, field_only);
+        rb[6].add_to_graph(graph, layered);
     });
-    let [colour, depth, reference, low, fine] = rb.map(|r| r.read().unwrap().pixels);
-    ScaledCast {
+    let [colour, depth, reference, low, fine, field_only, layered] =
+        rb.map(|r| r.read().unwrap().pixels);
+    let c = ScaledCast {
         colour,
         depth,
         reference,
         low,
         fine,
-    }
+        field_only,
+        layered,
+    };
+    c.assert_composited_as_finished();
+    c
 }
 
 /// ρ of a read-back pixel.
@@ -569,6 +601,29 @@ fn rgb(p: &[f32; 4]) -> DVec3 {
 }
 
 impl ScaledCast {
+    /// The frame composited with the last level blended in `composite`
+    /// (and the flagged pixels refined and composited again) is the frame
+    /// composited with `finish`'s full-resolution ρ: the same f32 blend
+    /// and flags in another shader, so the same values (1e-6 relative).
+    fn assert_composited_as_finished(&self) {
+        let mut shadowed = 0;
+        for (i, (field, rho)) in self.colour.iter().zip(&self.fine).enumerate() {
+            let shaded = composite_shade_field(*field, [rho[0], rho[1], rho[2]]);
+            let layered = composite_over(shaded, *field);
+            for (got, want) in [(self.field_only[i], shaded), (self.layered[i], layered)] {
+                for c in 0..4 {
+                    let tol = 1e-6 * want[c].abs().max(1e-3);
+                    assert!(
+                        (got[c] - want[c]).abs() <= tol,
+                        "pixel {i}: composited {got:?}, finished {want:?}"
+                    );
+                }
+            }
+            shadowed += (rho[1] < 0.9) as usize;
+        }
+        assert!(shadowed > 0, "no shadowed pixel to composite");
+    }
+
     /// Each pixel's depth along its ray (None where the field is empty),
     /// as the upsampling weighs blocks by.
     fn depths(&self) -> Vec<Option<f64>> {

@@ -17,13 +17,25 @@ use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 inlay_engine::gpu_struct! {
     /// `CompositePush` of `shaders/composite/composite.wgsl`.
-    pub struct CompositePush = "composite/composite.wgsl" : "CompositePush" {
+    pub struct CompositePush = "composite/push.wgsl" : "CompositePush" {
         /// Image width.
         pub width: u32,
         /// Image height.
         pub height: u32,
         /// 1: the object over the unclipped field (occlusion off).
         pub object_front: u32,
+        /// The scale of the cast shadow's blocks blended as the image is
+        /// composited ([`ShadowBlocks`]; 0 otherwise).
+        pub scale: u32,
+        /// Largest spread of the blocks' ρ a pixel blends before it is
+        /// refined (≥ 1: none).
+        pub refine_spread: f32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
@@ -37,6 +49,15 @@ pub const COMPOSITE_INFO: PassInfo = PassInfo {
 /// The compositing pass's name in the frame graph (and in timings and
 /// traces).
 pub const COMPOSITE: &str = COMPOSITE_INFO.name;
+
+/// The pass compositing again the pixels `shadow-refine` took exactly
+/// after [`CompositePass::add_blended`]: its name, Table 1 module and
+/// effect switch.
+pub const COMPOSITE_REFINED_INFO: PassInfo = PassInfo {
+    name: "composite-refined",
+    module: Table1Module::Compositing,
+    switch: Some(crate::shadow::CAST_SHADOW_SWITCH),
+};
 
 /// Format of the composited image.
 pub const COMPOSITE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -71,11 +92,48 @@ fn output_image(graph: &mut FrameGraph, field: ImageHandle) -> (ImageHandle, u32
 }
 
 /// The compositing pipelines (without and with a cast shadow, and the
-/// shadowed field alone).
+/// shadowed field alone; the shadow at full resolution or blended from
+/// its last level's blocks, and the refined pixels composited again).
 pub struct CompositePass {
     pipeline: Arc<ComputePipeline>,
     shadowed: Arc<ComputePipeline>,
     field_shadowed: Arc<ComputePipeline>,
+    /// Blending the last level: [with an object, the field alone] ×
+    /// [without, with a refinement list].
+    upsampled: [[Arc<ComputePipeline>; 2]; 2],
+    refined: Arc<ComputePipeline>,
+    field_refined: Arc<ComputePipeline>,
+}
+
+/// The cast shadow's last level as [`CompositePass::add_blended`] takes
+/// it: ρ at one pixel of each `scale` × `scale` block (its source pixel's
+/// depth in alpha, as `shadow-upsample` writes it), blended at each pixel
+/// as `shadow-upsample` would bring it to full resolution
+/// ([`crate::shadow::upsample::upsample_level`]), with the march's depth
+/// to weigh the blocks by.
+#[derive(Debug, Clone, Copy)]
+pub struct ShadowBlocks {
+    /// ρ at the blocks.
+    pub image: ImageHandle,
+    /// The blocks' size in pixels (> 1).
+    pub scale: u32,
+    /// The march's depth image (D̂).
+    pub field_depth: ImageHandle,
+    /// Largest spread of the blocks' ρ a pixel blends before it is listed
+    /// for refinement (≥ 1: none).
+    pub refine_spread: f32,
+}
+
+/// The pixels [`CompositePass::add_blended`] flagged for refinement: the
+/// list it appended them to (`shadow-refine`'s) and the full-resolution
+/// image holding, at those pixels only, their blended ρ, which the
+/// refinement replaces before [`CompositePass::add_refined`].
+#[derive(Debug, Clone, Copy)]
+pub struct FlaggedPixels {
+    /// The list (count, indices y · width + x, indirect arguments).
+    pub list: crate::shadow::cast::PixelList,
+    /// ρ at the listed pixels.
+    pub rho: ImageHandle,
 }
 
 /// Which layer is in front when the object is composited.
@@ -98,6 +156,20 @@ impl CompositePass {
             pipeline: build("main")?,
             shadowed: build("main_shadowed")?,
             field_shadowed: build("main_field_shadowed")?,
+            upsampled: [
+                [build("main_upsampled")?, build("main_upsampled_listed")?],
+                [
+                    build("main_field_upsampled")?,
+                    build("main_field_upsampled_listed")?,
+                ],
+            ],
+            refined: lib.compute_pipeline(ctx, "composite/refined.wgsl", "main", &[])?,
+            field_refined: lib.compute_pipeline(
+                ctx,
+                "composite/refined.wgsl",
+                "main_field",
+                &[],
+            )?,
         })
     }
 
@@ -124,11 +196,7 @@ impl CompositePass {
         layering: Layering,
     ) -> ImageHandle {
         let (mut out, width, height) = output_image(graph, field);
-        let push = CompositePush {
-            width,
-            height,
-            object_front: (layering == Layering::ObjectOverField) as u32,
-        };
+        let push = CompositePush::new(width, height, layering);
         let pipeline = match shadow {
             Some(_) => &self.shadowed,
             None => &self.pipeline,
@@ -159,12 +227,118 @@ impl CompositePass {
             .read("field_colour", field)
             .read("shadow", shadow)
             .write("out_colour", &mut out)
-            .push(&CompositePush {
+            .push(&CompositePush::new(
                 width,
                 height,
-                object_front: 0,
-            })
+                Layering::FieldOverObject,
+            ))
             .threads([width, height, 1]);
         out
+    }
+
+    /// Adds `composite` with the cast shadow taken from its last level's
+    /// blocks (`shadow`), blended at each pixel as it is composited, over
+    /// `object` when given (layered as `layering` says) or the shadowed
+    /// field alone. Where the blocks' spread asks for refinement
+    /// (`shadow.refine_spread` < 1), the pixels the blend flags are
+    /// returned: refine them, then composite them again with
+    /// [`Self::add_refined`].
+    pub fn add_blended(
+        &self,
+        graph: &mut FrameGraph,
+        field: ImageHandle,
+        object: Option<ImageHandle>,
+        shadow: ShadowBlocks,
+        layering: Layering,
+    ) -> (ImageHandle, Option<FlaggedPixels>) {
+        let (mut out, width, height) = output_image(graph, field);
+        let push = CompositePush {
+            scale: shadow.scale,
+            refine_spread: shadow.refine_spread.min(1.0),
+            ..CompositePush::new(width, height, layering)
+        };
+        let refines = shadow.refine_spread < 1.0;
+        let mut flagged = refines.then(|| FlaggedPixels {
+            list: crate::shadow::cast::PixelList::new(
+                graph,
+                "shadow-refine",
+                width as u64 * height as u64,
+            ),
+            rho: graph.create_image(
+                "shadow-refined",
+                ImageDesc {
+                    width,
+                    height,
+                    format: crate::shadow::SHADOW_FORMAT,
+                },
+            ),
+        });
+        let pipeline = &self.upsampled[object.is_none() as usize][refines as usize];
+        let mut pass = graph
+            .compute(COMPOSITE, pipeline)
+            .read("field_colour", field)
+            .read("field_depth", shadow.field_depth)
+            .read("low_shadow", shadow.image)
+            .read_opt("object_colour", object)
+            .write("out_colour", &mut out)
+            .push(&push);
+        if let Some(f) = flagged.as_mut() {
+            pass = pass
+                .read_write("refine_count", &mut f.list.count)
+                .write("refine_list", &mut f.list.pixels)
+                .read_write("refine_args", &mut f.list.args)
+                .write("refined", &mut f.rho);
+        }
+        pass.threads([width, height, 1]);
+        (out, flagged)
+    }
+
+    /// Adds `composite-refined`: the pixels of `flagged` composited again
+    /// into `out` (what [`Self::add_blended`] returned, with the same
+    /// `field`, `object` and `layering`), with the ρ the refinement took
+    /// there.
+    pub fn add_refined(
+        &self,
+        graph: &mut FrameGraph,
+        out: &mut ImageHandle,
+        field: ImageHandle,
+        object: Option<ImageHandle>,
+        flagged: FlaggedPixels,
+        layering: Layering,
+    ) {
+        let (width, height) = graph
+            .image_desc(field)
+            .map_or((1, 1), |d| (d.width, d.height));
+        let pipeline = match object {
+            Some(_) => &self.refined,
+            None => &self.field_refined,
+        };
+        graph
+            .compute(COMPOSITE_REFINED_INFO.name, pipeline)
+            .read("field_colour", field)
+            .read_opt("object_colour", object)
+            .read("refined", flagged.rho)
+            .read("refine_count", flagged.list.count)
+            .read("refine_list", flagged.list.pixels)
+            .read_write("recomposited", out)
+            .push(&CompositePush::new(width, height, layering))
+            .indirect(flagged.list.args, 0);
+    }
+}
+
+impl CompositePush {
+    /// The push block of a `width` × `height` composite layered as
+    /// `layering` says, with no blocks to blend.
+    pub fn new(width: u32, height: u32, layering: Layering) -> Self {
+        Self {
+            width,
+            height,
+            object_front: (layering == Layering::ObjectOverField) as u32,
+            scale: 0,
+            refine_spread: 1.0,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        }
     }
 }

@@ -97,7 +97,7 @@ pub struct PassInfo {
 }
 
 /// The frame's passes, in the order a frame runs them.
-pub const FRAME_PASSES: [PassInfo; 13] = [
+pub const FRAME_PASSES: [PassInfo; 14] = [
     probe::PROBE_TRACE_INFO,
     sgfit::SG_FIT_INFO,
     lighting::DIRECT_LIGHT_INFO,
@@ -109,6 +109,7 @@ pub const FRAME_PASSES: [PassInfo; 13] = [
     shadow::SHADOW_UPSAMPLE_INFO,
     shadow::SHADOW_REFINE_INFO,
     composite::COMPOSITE_INFO,
+    composite::COMPOSITE_REFINED_INFO,
     edge_aa::OBJECT_EDGE_AA_INFO,
     sky_behind::SKY_BEHIND_INFO,
 ];

@@ -462,11 +462,15 @@ impl InsertionFrame {
             graph.note_skipped(OBJECT_SHADE, "objects off screen");
             graph.note_skipped(OBJECT_EDGE_AA, "objects off screen");
             let field = self.march_field(graph, frame, MarchClip::None)?;
-            let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
-            return Ok(match shadow {
-                Some(s) => self
-                    .composite
-                    .add_field_shadowed(graph, field.colour_opacity, s),
+            let shadowed = self.cast_shadows(
+                graph,
+                frame,
+                &field,
+                (&casts, &ssdf, &lobes, fh),
+                (None, Layering::FieldOverObject),
+            );
+            return Ok(match shadowed {
+                Some(composited) => composited,
                 None => {
                     graph.note_skipped(COMPOSITE, "no object and no shadow on screen");
                     field.colour_opacity
@@ -514,15 +518,22 @@ impl InsertionFrame {
         let object = self
             .shade
             .add(graph, frame, &g, &self.field, &shown_lobes, &self_shadow);
-        let shadow = self.cast_shadows(graph, frame, &field, &casts, &ssdf, &lobes, fh);
         let layering = if effects.occlusion {
             Layering::FieldOverObject
         } else {
             Layering::ObjectOverField
         };
-        let composite =
+        let shadowed = self.cast_shadows(
+            graph,
+            frame,
+            &field,
+            (&casts, &ssdf, &lobes, fh),
+            (Some(object), layering),
+        );
+        let composite = shadowed.unwrap_or_else(|| {
             self.composite
-                .add_layered(graph, field.colour_opacity, object, shadow, layering);
+                .add_layered(graph, field.colour_opacity, object, None, layering)
+        });
         if !effects.edge_aa {
             graph.note_skipped(OBJECT_EDGE_AA, "edge anti-aliasing off");
             return Ok(composite);
@@ -562,18 +573,17 @@ fn objects_region(
 }
 
 impl InsertionFrame {
-    /// Chains one `cast-shadow` pass per object that `casts`; returns the
-    /// product ρ image, or None when no object casts.
-    #[allow(clippy::too_many_arguments)]
+    /// Chains one `cast-shadow` pass per object that `casts` and
+    /// composites the frame with the product ρ ([`CastShadowPass::composite`]):
+    /// `field` over `object` as `layering` says, or the shadowed field
+    /// alone. None (nothing added) when no object casts.
     fn cast_shadows(
         &self,
         graph: &mut FrameGraph,
         frame: &CameraFrame,
         field: &crate::march::MarchOutputs,
-        casts: &[bool],
-        ssdf: &[Option<crate::shadow::SsdfBindings>],
-        lobes: &[Option<crate::lighting::LightLobes>],
-        fh: Option<inlay_engine::graph::BufferHandle>,
+        (casts, ssdf, lobes, fh): ShadowSources<'_>,
+        (object, layering): (Option<ImageHandle>, Layering),
     ) -> Option<ImageHandle> {
         let (cast, fh_table) = (self.cast.as_ref()?, fh?);
         let inputs: Vec<CastInputs> = (0..casts.len())
@@ -599,6 +609,25 @@ impl InsertionFrame {
                 shadow,
             ));
         }
-        shadow.map(|low| cast.finish(graph, &self.field, frame, field, low, &inputs))
+        shadow.map(|low| {
+            cast.composite(
+                graph,
+                &self.field,
+                frame,
+                field,
+                (low, &inputs),
+                &self.composite,
+                (object, layering),
+            )
+        })
     }
 }
+
+/// What [`InsertionFrame::cast_shadows`] needs per object: whether it
+/// casts, its SSDF bindings and its light this frame; and the f_h table.
+type ShadowSources<'a> = (
+    &'a [bool],
+    &'a [Option<crate::shadow::SsdfBindings>],
+    &'a [Option<crate::lighting::LightLobes>],
+    Option<inlay_engine::graph::BufferHandle>,
+);

@@ -22,6 +22,7 @@ use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::gpu::{shadow_defines, SsdfBindings};
 use crate::camera::{CameraFrame, CameraRays};
+use crate::composite::{CompositePass, Layering, ShadowBlocks};
 use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::{MarchKnobs, MarchOutputs};
@@ -171,20 +172,23 @@ pub struct CastShadowPass {
 }
 
 /// A list of pixels ρ is taken at in full (those `main_classify` listed,
-/// or those `shadow-upsample` flagged for `shadow-refine`): their count,
-/// their indices (y · width + x of the image they index), and the indirect
-/// dispatch's arguments (one workgroup per 64 of them).
+/// or those `shadow-upsample` or `composite` flagged for `shadow-refine`):
+/// their count, their indices (y · width + x of the image they index), and
+/// the indirect dispatch's arguments (one workgroup per 64 of them).
 #[derive(Debug, Clone, Copy)]
-struct PixelList {
-    count: BufferHandle,
-    pixels: BufferHandle,
-    args: BufferHandle,
+pub struct PixelList {
+    /// The number of pixels listed (one u32).
+    pub count: BufferHandle,
+    /// Their indices.
+    pub pixels: BufferHandle,
+    /// The indirect dispatch's workgroup counts (three u32).
+    pub args: BufferHandle,
 }
 
 impl PixelList {
     /// An empty list of up to `capacity` pixels, `name` its buffers'
     /// prefix.
-    fn new(graph: &mut FrameGraph, name: &str, capacity: u64) -> Self {
+    pub fn new(graph: &mut FrameGraph, name: &str, capacity: u64) -> Self {
         Self {
             count: graph.upload_buffer(&format!("{name}-count"), vec![0; 4]),
             pixels: graph.create_buffer(&format!("{name}-list"), 4 * capacity),
@@ -269,14 +273,98 @@ impl CastShadowPass {
         low: ImageHandle,
         objects: &[CastInputs],
     ) -> ImageHandle {
+        let levels = Levels { low, objects };
+        self.levels_down_to(graph, field, camera, march, levels, 1)
+            .0
+    }
+
+    /// The frame composited with the ρ of the last [`Self::add`]'s `low`
+    /// image, as [`Self::finish`] would bring it to full resolution but
+    /// for its last level: that level's blocks are blended as the image
+    /// is composited ([`CompositePass::add_blended`]), and the pixels the
+    /// blend flags refined (one `shadow-refine` per object of `objects`)
+    /// and composited again ([`CompositePass::add_refined`]), so ρ at full
+    /// resolution is never written out. The march's `field` over `object`
+    /// (as `layering` says), or the shadowed field alone without one.
+    #[allow(clippy::too_many_arguments)]
+    pub fn composite(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        camera: &CameraFrame,
+        march: &MarchOutputs,
+        (low, objects): (ImageHandle, &[CastInputs]),
+        composite: &CompositePass,
+        (object, layering): (Option<ImageHandle>, Layering),
+    ) -> ImageHandle {
+        let levels = Levels { low, objects };
+        let (image, scale) = self.levels_down_to(graph, field, camera, march, levels, 2);
+        if scale == 1 {
+            return match object {
+                Some(o) => {
+                    composite.add_layered(graph, march.colour_opacity, o, Some(image), layering)
+                }
+                None => composite.add_field_shadowed(graph, march.colour_opacity, image),
+            };
+        }
+        let blocks = ShadowBlocks {
+            image,
+            scale,
+            field_depth: march.depth,
+            refine_spread: if self.refines() {
+                self.refine_spread.min(1.0) as f32
+            } else {
+                1.0
+            },
+        };
+        let (mut out, flagged) =
+            composite.add_blended(graph, march.colour_opacity, object, blocks, layering);
+        if let Some(mut flagged) = flagged {
+            for (i, o) in objects.iter().enumerate() {
+                let mut target = Target::Listed {
+                    image: flagged.rho,
+                    list: flagged.list,
+                    chained: i > 0,
+                    scale: 1,
+                };
+                flagged.rho = self.dispatch(graph, field, camera, march, *o, &mut target);
+            }
+            composite.add_refined(
+                graph,
+                &mut out,
+                march.colour_opacity,
+                object,
+                flagged,
+                layering,
+            );
+        }
+        out
+    }
+
+    /// `levels.low` brought down a level at a time ([`Self::finish`]) as
+    /// long as the next level's scale is at least `last`: the image
+    /// reached and its scale (1 at full resolution; the scale `low` was
+    /// taken at, when the next level lies below `last`).
+    fn levels_down_to(
+        &self,
+        graph: &mut FrameGraph,
+        field: &GpuGridField,
+        camera: &CameraFrame,
+        march: &MarchOutputs,
+        levels: Levels<'_>,
+        last: u32,
+    ) -> (ImageHandle, u32) {
         let (width, height) = (camera.width, camera.height);
         let mut scale = self.scale_at(width, height);
-        let mut image = low;
+        let mut image = levels.low;
         while scale > 1 {
             // With refinement, each image is brought to one of half its
             // scale and refined there, so that the next's blends span
             // fewer pixels; without, to full resolution at once.
             let out_scale = super::upsample::next_level(scale, self.refines());
+            if out_scale < last {
+                break;
+            }
             image = self.upsample_level(
                 graph,
                 field,
@@ -284,11 +372,11 @@ impl CastShadowPass {
                 march,
                 (image, scale),
                 out_scale,
-                objects,
+                levels.objects,
             );
             scale = out_scale;
         }
-        image
+        (image, scale)
     }
 
     /// One level of [`Self::finish`]: `low` (ρ at its scale) brought to
@@ -504,6 +592,14 @@ impl CastShadowPass {
             }
         }
     }
+}
+
+/// A cast shadow to bring to full resolution: its image at the frame's
+/// cast scale and the objects chained into it.
+#[derive(Clone, Copy)]
+struct Levels<'a> {
+    low: ImageHandle,
+    objects: &'a [CastInputs],
 }
 
 /// What [`CastShadowPass::dispatch`] writes.

@@ -1,0 +1,17 @@
+// The compositing passes' push block (composite/composite.wgsl and
+// composite/refined.wgsl; mirrored by CompositePush in
+// passes/src/composite/mod.rs).
+struct CompositePush {
+    width: u32,
+    height: u32,
+    object_front: u32,
+    // The scale of the cast shadow's blocks `main_upsampled` blends (the
+    // last level of its upsampling; unused by the other entry points).
+    scale: u32,
+    // Largest spread of the blocks' ρ a pixel blends before it is refined
+    // (≥ 1: refine none).
+    refine_spread: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
