@@ -289,7 +289,7 @@ fn shading_kernel_matches_its_f64_mirror() {
                 direct: None,
             })
             .collect();
-        let c = shade.add(graph, &cam, &g, &empty, &lobes, &[]);
+        let c = shade.add(graph, &cam, &g, &empty, &lobes, &[], None).image;
         (g, c)
     });
     let mut counted = [0; 3];
@@ -420,7 +420,9 @@ fn sg_shading_matches_brute_force_against_the_probe() {
                     records,
                 )
                 .unwrap();
-            let c = shade.add(graph, &cam, &g, &gpu_field, &[lobes], &[]);
+            let c = shade
+                .add(graph, &cam, &g, &gpu_field, &[lobes], &[], None)
+                .image;
             (g, c)
         });
         if class == 0 {
@@ -506,7 +508,9 @@ use inlay_passes::march::{MarchPass, MARCH_COLOUR_FORMAT};
 /// (clipped opacity no larger than the unclipped one). The same frame
 /// checks the two other layerings exactly: the object over the unclipped
 /// field (occlusion off) and the shadowed field alone (any image serves as
-/// ρ for the arithmetic).
+/// ρ for the arithmetic). Shaded and composited over the object's
+/// bounding sphere's pixels alone (`CameraFrame::sphere_pixels`, as the
+/// frame does), the frame is the same, bit for bit.
 #[test]
 fn composite_hides_the_object_partly_behind_foliage() {
     let ctx = common::gpu();
@@ -543,8 +547,16 @@ fn composite_hides_the_object_partly_behind_foliage() {
         COMPOSITE_FORMAT,
         COMPOSITE_FORMAT,
         COMPOSITE_FORMAT,
+        COMPOSITE_FORMAT,
     ]
     .map(|f| readback(&ctx, w, h, f));
+    let (c, r) = placed.sphere();
+    let region = cam.sphere_pixels(c, r);
+    let [x0, y0, x1, y1] = region.expect("the object lies in front of the camera");
+    assert!(
+        x0 > 0 || y0 > 0 || x1 < w || y1 < h,
+        "the object's region is the whole image: {region:?}"
+    );
     common::run_frame(&ctx, |graph| {
         let work = light.plan(centre, 0);
         let lobes = light.add(graph, &gpu_field, centre, work).unwrap();
@@ -557,8 +569,10 @@ fn composite_hides_the_object_partly_behind_foliage() {
         let g = gbuffer.add(graph, &cam, &[draw], records).unwrap();
         let bare = march.add(graph, &gpu_field, &cam, None);
         let clipped = march.add(graph, &gpu_field, &cam, Some(g.distance_id));
-        let object = shade.add(graph, &cam, &g, &gpu_field, &[lobes], &[]);
+        let object = shade.add(graph, &cam, &g, &gpu_field, &[lobes], &[], None);
         let out = composite.add(graph, clipped.colour_opacity, object, None);
+        let in_region = shade.add(graph, &cam, &g, &gpu_field, &[lobes], &[], region);
+        let out_region = composite.add(graph, clipped.colour_opacity, in_region, None);
         let front = composite.add_layered(
             graph,
             bare.colour_opacity,
@@ -566,15 +580,17 @@ fn composite_hides_the_object_partly_behind_foliage() {
             None,
             Layering::ObjectOverField,
         );
-        let shadowed = composite.add_field_shadowed(graph, bare.colour_opacity, object);
+        let shadowed = composite.add_field_shadowed(graph, bare.colour_opacity, object.image);
         rb[0].add_to_graph(graph, bare.colour_opacity);
         rb[1].add_to_graph(graph, clipped.colour_opacity);
-        rb[2].add_to_graph(graph, object);
+        rb[2].add_to_graph(graph, object.image);
         rb[3].add_to_graph(graph, out);
         rb[4].add_to_graph(graph, front);
         rb[5].add_to_graph(graph, shadowed);
+        rb[6].add_to_graph(graph, out_region);
     });
-    let [bare, clipped, object, out, front, shadowed] = rb.map(|r| r.read().unwrap());
+    let [bare, clipped, object, out, front, shadowed, out_region] = rb.map(|r| r.read().unwrap());
+    assert_eq!(out.pixels, out_region.pixels, "composited over {region:?}");
     for i in 0..(w * h) as usize {
         let o = object.pixels[i];
         let expect = [

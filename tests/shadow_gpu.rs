@@ -55,7 +55,7 @@ use glam::DVec3;
 use inlay_engine::{vk, Buffer, ImageDesc, Readback};
 use inlay_passes::camera::{CameraFrame, CameraSpec};
 use inlay_passes::composite::{
-    composite_over, composite_shade_field, CompositePass, Layering, COMPOSITE_FORMAT,
+    composite_over, composite_shade_field, CompositePass, Layering, ObjectLayer, COMPOSITE_FORMAT,
 };
 use inlay_passes::field::GpuGridField;
 use inlay_passes::geometry::MeshScene;
@@ -490,7 +490,8 @@ fn compare_cast_shadow(
 /// compare them; and the frame as `pass` composites it with its last
 /// level blended in `composite` (`CastShadowPass::composite`): the
 /// shadowed field alone (`field_only`), and over an object layer, for
-/// which the march's own colour stands in (`layered`).
+/// which the march's own colour stands in over the middle of the image
+/// (`region`; transparent beyond it: `layered`).
 struct ScaledCast {
     colour: Vec<[f32; 4]>,
     depth: Vec<[f32; 4]>,
@@ -499,6 +500,8 @@ struct ScaledCast {
     fine: Vec<[f32; 4]>,
     field_only: Vec<[f32; 4]>,
     layered: Vec<[f32; 4]>,
+    width: u32,
+    region: [u32; 4],
 }
 
 fn run_scaled_cast(
@@ -539,6 +542,7 @@ fn run_scaled_cast(
         Readback::new(ctx, desc(w, h, COMPOSITE_FORMAT)).unwrap(),
     ];
     let composite = CompositePass::new(ctx, &lib).unwrap();
+    let region = [w / 4, h / 4, 3 * w / 4, 3 * h / 4];
     common::run_frame(ctx, |graph| {
         let m = march.add(graph, gpu_field, &cam, None);
         let light = LightLobes {
@@ -571,7 +575,10 @@ fn run_scaled_cast(
             )
         };
         let field_only = composited(None);
-        let layered = composited(Some(m.colour_opacity));
+        let layered = composited(Some(ObjectLayer {
+            image: m.colour_opacity,
+            region: Some(region),
+        }));
         rb[0].add_to_graph(graph, m.colour_opacity);
         rb[1].add_to_graph(graph, m.depth);
         rb[2].add_to_graph(graph, reference);
@@ -590,6 +597,8 @@ fn run_scaled_cast(
         fine,
         field_only,
         layered,
+        width: w,
+        region,
     };
     c.assert_composited_as_finished();
     c
@@ -604,12 +613,17 @@ impl ScaledCast {
     /// The frame composited with the last level blended in `composite`
     /// (and the flagged pixels refined and composited again) is the frame
     /// composited with `finish`'s full-resolution ρ: the same f32 blend
-    /// and flags in another shader, so the same values (1e-6 relative).
+    /// and flags in another shader, so the same values (1e-6 relative);
+    /// the object layer only inside its region.
     fn assert_composited_as_finished(&self) {
         let mut shadowed = 0;
+        let [x0, y0, x1, y1] = self.region;
         for (i, (field, rho)) in self.colour.iter().zip(&self.fine).enumerate() {
+            let (x, y) = (i as u32 % self.width, i as u32 / self.width);
+            let inside = (x0..x1).contains(&x) && (y0..y1).contains(&y);
+            let object = if inside { *field } else { [0.0; 4] };
             let shaded = composite_shade_field(*field, [rho[0], rho[1], rho[2]]);
-            let layered = composite_over(shaded, *field);
+            let layered = composite_over(shaded, object);
             for (got, want) in [(self.field_only[i], shaded), (self.layered[i], layered)] {
                 for c in 0..4 {
                     let tol = 1e-6 * want[c].abs().max(1e-3);
@@ -1164,7 +1178,17 @@ impl ToyView {
                     self.cam.sphere_pixels(c, r)
                 },
             };
-            let out = shade.add(graph, &self.cam, &g, field, &[light], &[Some(self_shadow)]);
+            let out = shade
+                .add(
+                    graph,
+                    &self.cam,
+                    &g,
+                    field,
+                    &[light],
+                    &[Some(self_shadow)],
+                    None,
+                )
+                .image;
             rb[0].add_to_graph(graph, g.normal_roughness);
             rb[1].add_to_graph(graph, g.albedo_metallic);
             rb[2].add_to_graph(graph, g.distance_id);

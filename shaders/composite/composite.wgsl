@@ -27,6 +27,8 @@ var<immediate> pc: CompositePush;
 @group(0) @binding(8) var<storage, read_write> refine_args: array<atomic<u32>, 3>;
 @group(0) @binding(9) var refined: texture_storage_2d<rgba32float, write>;
 
+#include "composite/object_layer.wgsl"
+
 #include "shadow/upsample_blend.wgsl"
 #include "shadow/refine_append.wgsl"
 
@@ -61,7 +63,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let p = vec2<i32>(id.xy);
-    textureStore(out_colour, p, layer(textureLoad(field_colour, p, 0), textureLoad(object_colour, p, 0)));
+    textureStore(out_colour, p, layer(textureLoad(field_colour, p, 0), composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -71,7 +73,7 @@ fn main_shadowed(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let p = vec2<i32>(id.xy);
     let field = composite_shade_field(textureLoad(field_colour, p, 0), textureLoad(shadow, p, 0).rgb);
-    textureStore(out_colour, p, layer(field, textureLoad(object_colour, p, 0)));
+    textureStore(out_colour, p, layer(field, composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -93,7 +95,7 @@ fn main_upsampled(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = vec2<i32>(id.xy);
     let field = textureLoad(field_colour, p, 0);
     let shaded = composite_shade_field(field, composite_blended(id.xy, field).rho);
-    textureStore(out_colour, p, layer(shaded, textureLoad(object_colour, p, 0)));
+    textureStore(out_colour, p, layer(shaded, composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -104,7 +106,7 @@ fn main_upsampled_listed(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = vec2<i32>(id.xy);
     let field = textureLoad(field_colour, p, 0);
     let shaded = composite_shade_field(field, composite_listed(id.xy, composite_blended(id.xy, field)));
-    textureStore(out_colour, p, layer(shaded, textureLoad(object_colour, p, 0)));
+    textureStore(out_colour, p, layer(shaded, composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)

@@ -11,7 +11,11 @@ struct CompositePush {
     // Largest spread of the blocks' ρ a pixel blends before it is refined
     // (≥ 1: refine none).
     refine_spread: f32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    // The pixels the object layer covers at most (x0, y0, x1, y1, the ends
+    // exclusive): object-shade clears and shades them alone, and the
+    // layer is transparent beyond them (composite/object_layer.wgsl).
+    object_x0: u32,
+    object_y0: u32,
+    object_x1: u32,
+    object_y1: u32,
 }

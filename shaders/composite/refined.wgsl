@@ -15,6 +15,8 @@ var<immediate> pc: CompositePush;
 @group(0) @binding(4) var<storage, read> refine_list: array<u32>;
 @group(0) @binding(5) var recomposited: texture_storage_2d<rgba32float, read_write>;
 
+#include "composite/object_layer.wgsl"
+
 // The listed pixel of invocation `i`, or (−1, −1) past the list.
 fn refined_pixel(i: u32) -> vec2<i32> {
     if i >= refine_count {
@@ -31,7 +33,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let field = composite_shade_field(textureLoad(field_colour, p, 0), textureLoad(refined, p, 0).rgb);
-    textureStore(recomposited, p, composite_layer(field, textureLoad(object_colour, p, 0), pc.object_front != 0u));
+    textureStore(recomposited, p, composite_layer(field, composite_object(p), pc.object_front != 0u));
 }
 
 @compute @workgroup_size(REFINE_WORKGROUP, 1, 1)

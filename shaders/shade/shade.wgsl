@@ -28,12 +28,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     shade_pixel(shade_dispatched_pixel(id));
 }
 
-// Zero over the whole image: the pass's first dispatch, before each
-// object's over the tiles it can cover.
+// Zero over the tiles the objects can cover (from pc.tile_origin): the
+// pass's first dispatch, before each object's over the tiles it can
+// cover.
 @compute @workgroup_size(8, 8, 1)
 fn clear(@builtin(global_invocation_id) id: vec3<u32>) {
-    if camera_outside(pc.camera, id.xy) {
+    let p = shade_dispatched_pixel(id);
+    if camera_outside(pc.camera, p.xy) {
         return;
     }
-    textureStore(out_object, vec2<i32>(id.xy), vec4<f32>(0.0));
+    textureStore(out_object, vec2<i32>(p.xy), vec4<f32>(0.0));
 }

@@ -30,12 +30,15 @@ inlay_engine::gpu_struct! {
         /// Largest spread of the blocks' ρ a pixel blends before it is
         /// refined (≥ 1: none).
         pub refine_spread: f32,
-        /// Padding.
-        pub pad0: u32,
-        /// Padding.
-        pub pad1: u32,
-        /// Padding.
-        pub pad2: u32,
+        /// The object layer's pixels ([`ObjectLayer::region`]): first
+        /// column.
+        pub object_x0: u32,
+        /// First row.
+        pub object_y0: u32,
+        /// Column past the last.
+        pub object_x1: u32,
+        /// Row past the last.
+        pub object_y1: u32,
     }
 }
 
@@ -136,6 +139,19 @@ pub struct FlaggedPixels {
     pub rho: ImageHandle,
 }
 
+/// The objects' radiance and coverage as `object-shade` leaves it
+/// ([`crate::shade::ShadePass::add`]): defined over `region` alone (x0,
+/// y0, x1, y1, the ends exclusive; None: the whole image), the union of
+/// the shown objects' bounding spheres' pixels, and transparent beyond
+/// it.
+#[derive(Debug, Clone, Copy)]
+pub struct ObjectLayer {
+    /// The objects' colour (premultiplied) and coverage.
+    pub image: ImageHandle,
+    /// The pixels it can cover.
+    pub region: Option<[u32; 4]>,
+}
+
 /// Which layer is in front when the object is composited.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Layering {
@@ -180,7 +196,7 @@ impl CompositePass {
         &self,
         graph: &mut FrameGraph,
         field: ImageHandle,
-        object: ImageHandle,
+        object: ObjectLayer,
         shadow: Option<ImageHandle>,
     ) -> ImageHandle {
         self.add_layered(graph, field, object, shadow, Layering::FieldOverObject)
@@ -191,12 +207,12 @@ impl CompositePass {
         &self,
         graph: &mut FrameGraph,
         field: ImageHandle,
-        object: ImageHandle,
+        object: ObjectLayer,
         shadow: Option<ImageHandle>,
         layering: Layering,
     ) -> ImageHandle {
         let (mut out, width, height) = output_image(graph, field);
-        let push = CompositePush::new(width, height, layering);
+        let push = CompositePush::new(width, height, layering, Some(object));
         let pipeline = match shadow {
             Some(_) => &self.shadowed,
             None => &self.pipeline,
@@ -204,7 +220,7 @@ impl CompositePass {
         graph
             .compute(COMPOSITE, pipeline)
             .read("field_colour", field)
-            .read("object_colour", object)
+            .read("object_colour", object.image)
             .read_opt("shadow", shadow)
             .write("out_colour", &mut out)
             .push(&push)
@@ -231,6 +247,7 @@ impl CompositePass {
                 width,
                 height,
                 Layering::FieldOverObject,
+                None,
             ))
             .threads([width, height, 1]);
         out
@@ -247,7 +264,7 @@ impl CompositePass {
         &self,
         graph: &mut FrameGraph,
         field: ImageHandle,
-        object: Option<ImageHandle>,
+        object: Option<ObjectLayer>,
         shadow: ShadowBlocks,
         layering: Layering,
     ) -> (ImageHandle, Option<FlaggedPixels>) {
@@ -255,7 +272,7 @@ impl CompositePass {
         let push = CompositePush {
             scale: shadow.scale,
             refine_spread: shadow.refine_spread.min(1.0),
-            ..CompositePush::new(width, height, layering)
+            ..CompositePush::new(width, height, layering, object)
         };
         let refines = shadow.refine_spread < 1.0;
         let mut flagged = refines.then(|| FlaggedPixels {
@@ -279,7 +296,7 @@ impl CompositePass {
             .read("field_colour", field)
             .read("field_depth", shadow.field_depth)
             .read("low_shadow", shadow.image)
-            .read_opt("object_colour", object)
+            .read_opt("object_colour", object.map(|o| o.image))
             .write("out_colour", &mut out)
             .push(&push);
         if let Some(f) = flagged.as_mut() {
@@ -302,7 +319,7 @@ impl CompositePass {
         graph: &mut FrameGraph,
         out: &mut ImageHandle,
         field: ImageHandle,
-        object: Option<ImageHandle>,
+        object: Option<ObjectLayer>,
         flagged: FlaggedPixels,
         layering: Layering,
     ) {
@@ -316,29 +333,33 @@ impl CompositePass {
         graph
             .compute(COMPOSITE_REFINED_INFO.name, pipeline)
             .read("field_colour", field)
-            .read_opt("object_colour", object)
+            .read_opt("object_colour", object.map(|o| o.image))
             .read("refined", flagged.rho)
             .read("refine_count", flagged.list.count)
             .read("refine_list", flagged.list.pixels)
             .read_write("recomposited", out)
-            .push(&CompositePush::new(width, height, layering))
+            .push(&CompositePush::new(width, height, layering, object))
             .indirect(flagged.list.args, 0);
     }
 }
 
 impl CompositePush {
     /// The push block of a `width` × `height` composite layered as
-    /// `layering` says, with no blocks to blend.
-    pub fn new(width: u32, height: u32, layering: Layering) -> Self {
+    /// `layering` says, over `object` if any, with no blocks to blend.
+    pub fn new(width: u32, height: u32, layering: Layering, object: Option<ObjectLayer>) -> Self {
+        let region = object
+            .and_then(|o| o.region)
+            .unwrap_or([0, 0, width, height]);
         Self {
             width,
             height,
             object_front: (layering == Layering::ObjectOverField) as u32,
             scale: 0,
             refine_spread: 1.0,
-            pad0: 0,
-            pad1: 0,
-            pad2: 0,
+            object_x0: region[0],
+            object_y0: region[1],
+            object_x1: region[2],
+            object_y1: region[3],
         }
     }
 }

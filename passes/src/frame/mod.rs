@@ -515,9 +515,15 @@ impl InsertionFrame {
         if !effects.self_shadow {
             graph.note_skipped("self-shadow", "self-shadows off");
         }
-        let object = self
-            .shade
-            .add(graph, frame, &g, &self.field, &shown_lobes, &self_shadow);
+        let object = self.shade.add(
+            graph,
+            frame,
+            &g,
+            &self.field,
+            &shown_lobes,
+            &self_shadow,
+            region,
+        );
         let layering = if effects.occlusion {
             Layering::FieldOverObject
         } else {
@@ -583,7 +589,7 @@ impl InsertionFrame {
         frame: &CameraFrame,
         field: &crate::march::MarchOutputs,
         (casts, ssdf, lobes, fh): ShadowSources<'_>,
-        (object, layering): (Option<ImageHandle>, Layering),
+        (object, layering): (Option<crate::composite::ObjectLayer>, Layering),
     ) -> Option<ImageHandle> {
         let (cast, fh_table) = (self.cast.as_ref()?, fh?);
         let inputs: Vec<CastInputs> = (0..casts.len())

@@ -14,12 +14,13 @@ pub use reference::{shade_probe_reference, shade_reference_with};
 use crate::frame::meta::{Effect, EffectSwitch, PassInfo, Table1Module};
 use std::sync::Arc;
 
-use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph, ImageHandle};
+use inlay_engine::graph::{BufferHandle, Dispatch, FrameGraph};
 use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
 use crate::brdf::NdfLobes;
 use crate::camera::{CameraFrame, CameraRays};
+use crate::composite::ObjectLayer;
 use crate::field::GpuGridField;
 use crate::gbuffer::GBuffer;
 use crate::lighting::LightLobes;
@@ -223,7 +224,12 @@ impl ShadePass {
     /// comes first, writing each self-shadowed object's gain over the
     /// tiles of its [`SelfShadow::pixels`] into an image the shading reads
     /// (a pass of its own: its workgroup barriers would make lavapipe run
-    /// the whole shading as coroutines).
+    /// the whole shading as coroutines). The image is cleared and shaded
+    /// over `region` alone (the pixels the objects can cover, x0, y0, x1,
+    /// y1; None: the whole image), and left undefined beyond it: the
+    /// returned layer says so, and the compositing takes it as
+    /// transparent there.
+    #[allow(clippy::too_many_arguments)]
     pub fn add(
         &self,
         graph: &mut FrameGraph,
@@ -232,7 +238,8 @@ impl ShadePass {
         field: &GpuGridField,
         lobes: &[LightLobes],
         self_shadow: &[Option<SelfShadow>],
-    ) -> ImageHandle {
+        region: Option<[u32; 4]>,
+    ) -> ObjectLayer {
         let (width, height) = (camera.width, camera.height);
         let out = graph.create_image(
             "object-colour",
@@ -313,23 +320,28 @@ impl ShadePass {
             gain
         });
         if let Some(gain) = gain.filter(|_| self.gain_only) {
-            return gain;
+            return ObjectLayer {
+                image: gain,
+                region: None,
+            };
         }
-        // The image cleared, then each object shaded: a self-shadowed one
-        // over the tiles its bounding sphere can cover alone. Lavapipe
-        // gives every invocation of the self-shadowed shaders a fixed cost
-        // (their size), even one that returns at once: over the whole
-        // image that was most of the pass (docs/benchmarks.md, issue 26's
-        // fifth pass).
+        // The region's tiles cleared, then each object shaded: a
+        // self-shadowed one over the tiles its bounding sphere can cover
+        // alone. Lavapipe gives every invocation of the self-shadowed
+        // shaders a fixed cost (their size), even one that returns at
+        // once: over the whole image that was most of the pass
+        // (docs/benchmarks.md, issue 26's fifth pass).
         let mut pass = graph.compute_pass(OBJECT_SHADE);
+        let (origin, threads) = object_tiles(region, width, height);
         let clear = ShadePush {
             camera: camera.rays(),
+            tile_origin: origin,
             ..bytemuck::Zeroable::zeroed()
         };
         pass.dispatch(&self.clear)
             .write("out_object", &mut out)
             .push(&clear)
-            .threads([width, height, 1]);
+            .threads(threads);
         for o in &setups {
             let rays = o.light.direct.is_some() || o.field_light;
             let pipeline = match (o.shadow, rays) {
@@ -350,7 +362,7 @@ impl ShadePass {
                 .threads(o.threads);
         }
         pass.finish();
-        out
+        ObjectLayer { image: out, region }
     }
 }
 

@@ -22,7 +22,7 @@ use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 use super::gpu::{shadow_defines, SsdfBindings};
 use crate::camera::{CameraFrame, CameraRays};
-use crate::composite::{CompositePass, Layering, ShadowBlocks};
+use crate::composite::{CompositePass, Layering, ObjectLayer, ShadowBlocks};
 use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::{MarchKnobs, MarchOutputs};
@@ -295,7 +295,7 @@ impl CastShadowPass {
         march: &MarchOutputs,
         (low, objects): (ImageHandle, &[CastInputs]),
         composite: &CompositePass,
-        (object, layering): (Option<ImageHandle>, Layering),
+        (object, layering): (Option<ObjectLayer>, Layering),
     ) -> ImageHandle {
         let levels = Levels { low, objects };
         let (image, scale) = self.levels_down_to(graph, field, camera, march, levels, 2);
