@@ -4,7 +4,10 @@
 //! hides the object fully or partly, the field's colour first darkened by
 //! the cast shadow ρ when there is one. With occlusion off the object goes
 //! over the unclipped field; with no object on screen only the shadow is
-//! applied. [`composite_over`] and
+//! applied. The cast shadow's last level may be blended here as the
+//! image is composited ([`CompositePass::add_blended`], the pixels it
+//! flags composited again by `composite-refined`), and the object layer is
+//! read over its own pixels alone ([`ObjectLayer`]). [`composite_over`] and
 //! [`composite_shade_field`] are the CPU mirrors of
 //! `shaders/composite/over.wgsl`.
 
@@ -16,7 +19,8 @@ use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, ComputePipeline, Context, ImageDesc};
 
 inlay_engine::gpu_struct! {
-    /// `CompositePush` of `shaders/composite/composite.wgsl`.
+    /// `CompositePush` of `shaders/composite/push.wgsl` (the push block of
+    /// `composite.wgsl` and `refined.wgsl`).
     pub struct CompositePush = "composite/push.wgsl" : "CompositePush" {
         /// Image width.
         pub width: u32,
