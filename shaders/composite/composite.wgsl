@@ -57,74 +57,79 @@ fn composite_listed(p: vec2<u32>, u: Upsampled) -> vec3<f32> {
     return u.rho;
 }
 
+// The field's colour at invocation `id`'s pixel.
+fn composite_field(id: vec3<u32>) -> vec4<f32> {
+    return textureLoad(field_colour, vec2<i32>(id.xy), 0);
+}
+
+// Writes invocation `id`'s pixel: `field` darkened by ρ, over the object
+// layer (as `layer` orders them).
+fn composite_store(id: vec3<u32>, field: vec4<f32>, rho: vec3<f32>) {
+    let p = vec2<i32>(id.xy);
+    textureStore(out_colour, p, layer(composite_shade_field(field, rho), composite_object(p)));
+}
+
+// Writes invocation `id`'s pixel: `field` darkened by ρ, no object layer.
+fn composite_store_field(id: vec3<u32>, field: vec4<f32>, rho: vec3<f32>) {
+    textureStore(out_colour, vec2<i32>(id.xy), composite_shade_field(field, rho));
+}
+
+// ρ at invocation `id`'s pixel from the full-resolution `shadow`.
+fn composite_shadow(id: vec3<u32>) -> vec3<f32> {
+    return textureLoad(shadow, vec2<i32>(id.xy), 0).rgb;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        composite_store(id, composite_field(id), vec3<f32>(1.0));
     }
-    let p = vec2<i32>(id.xy);
-    textureStore(out_colour, p, layer(textureLoad(field_colour, p, 0), composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_shadowed(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        composite_store(id, composite_field(id), composite_shadow(id));
     }
-    let p = vec2<i32>(id.xy);
-    let field = composite_shade_field(textureLoad(field_colour, p, 0), textureLoad(shadow, p, 0).rgb);
-    textureStore(out_colour, p, layer(field, composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_field_shadowed(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        composite_store_field(id, composite_field(id), composite_shadow(id));
     }
-    let p = vec2<i32>(id.xy);
-    textureStore(out_colour, p, composite_shade_field(textureLoad(field_colour, p, 0), textureLoad(shadow, p, 0).rgb));
 }
 
 // The four entry points blending the last level: with an object layer
 // or the field alone, and without or with a refinement list (`_listed`).
 @compute @workgroup_size(8, 8, 1)
 fn main_upsampled(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        let field = composite_field(id);
+        composite_store(id, field, composite_blended(id.xy, field).rho);
     }
-    let p = vec2<i32>(id.xy);
-    let field = textureLoad(field_colour, p, 0);
-    let shaded = composite_shade_field(field, composite_blended(id.xy, field).rho);
-    textureStore(out_colour, p, layer(shaded, composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_upsampled_listed(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        let field = composite_field(id);
+        composite_store(id, field, composite_listed(id.xy, composite_blended(id.xy, field)));
     }
-    let p = vec2<i32>(id.xy);
-    let field = textureLoad(field_colour, p, 0);
-    let shaded = composite_shade_field(field, composite_listed(id.xy, composite_blended(id.xy, field)));
-    textureStore(out_colour, p, layer(shaded, composite_object(p)));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_field_upsampled(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        let field = composite_field(id);
+        composite_store_field(id, field, composite_blended(id.xy, field).rho);
     }
-    let p = vec2<i32>(id.xy);
-    let field = textureLoad(field_colour, p, 0);
-    textureStore(out_colour, p, composite_shade_field(field, composite_blended(id.xy, field).rho));
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main_field_upsampled_listed(@builtin(global_invocation_id) id: vec3<u32>) {
-    if composite_outside(id) {
-        return;
+    if !composite_outside(id) {
+        let field = composite_field(id);
+        composite_store_field(id, field, composite_listed(id.xy, composite_blended(id.xy, field)));
     }
-    let p = vec2<i32>(id.xy);
-    let field = textureLoad(field_colour, p, 0);
-    textureStore(out_colour, p, composite_shade_field(field, composite_listed(id.xy, composite_blended(id.xy, field))));
 }
