@@ -252,6 +252,18 @@ fn bad_scene_files_name_the_key() {
             "shading.field_light",
         ),
         (
+            format!("{base}\n[shading]\nfield_light_scale = 0\n"),
+            "shading.field_light_scale",
+        ),
+        (
+            format!("{base}\n[shading]\nfield_light_scale = 5\n"),
+            "shading.field_light_scale",
+        ),
+        (
+            format!("{base}\n[shading]\nfield_light_scale = \"big\"\n"),
+            "shading.field_light_scale",
+        ),
+        (
             format!("{base}\n[shadows]\ncast_scale = 0\n"),
             "shadows.cast_scale",
         ),

@@ -1542,11 +1542,18 @@ fn local_light_shading_matches_its_mirror() {
 /// way (the slab's own glow and the lamp's just past its sphere add a
 /// little), less where it is (measured 0.299–0.526). Tolerance:
 /// the march in f32 (3·10⁻⁴ of the transmittance, as above) and the lobes'
-/// sums in f32, 2·10⁻³ of the gain plus 10⁻⁴.
+/// sums in f32, 2·10⁻³ of the gain plus 10⁻⁴. At scale 2 (tiles of 16
+/// pixels, each invocation taking four) the picks and rays are the
+/// mirror's at that size.
 #[test]
 fn field_light_gain_matches_its_mirror() {
+    field_light_gain_at_scale(1);
+    field_light_gain_at_scale(2);
+}
+
+fn field_light_gain_at_scale(scale: u32) {
     use inlay_passes::shade::field_light::{
-        diffuse_gain, ray_origin, tile_pick, tile_rays, RayLight, TILE,
+        diffuse_gain, ray_origin, tile_pick, tile_rays, RayLight, TileScale, TILE,
     };
     use std::collections::HashMap;
     let view = ToyView::new();
@@ -1556,7 +1563,10 @@ fn field_light_gain_matches_its_mirror() {
         ..MarchKnobs::default()
     };
     let side = 6u32;
-    let shade = ShadePass::new_field_gain(ctx, &view.lib, march, side).unwrap();
+    let shade = ShadePass::new_field_gain(ctx, &view.lib, march, side)
+        .unwrap()
+        .with_field_light_scale(TileScale::Fixed(scale));
+    let tile_side = TILE * scale;
     let lamp = LampLights::new(&view);
     let (field, light, lobes) = (&lamp.field, lamp.light, &lamp.lobes);
     let (pixels, _) = view.shade(&shade, &lamp.gpu_field, |graph| lamp.bind(graph, 3));
@@ -1567,7 +1577,7 @@ fn field_light_gain_matches_its_mirror() {
     let mut tiles: HashMap<(u32, u32), Vec<&ShadedPixel>> = HashMap::new();
     for p in &pixels {
         tiles
-            .entry((p.pixel.0 / TILE, p.pixel.1 / TILE))
+            .entry((p.pixel.0 / tile_side, p.pixel.1 / tile_side))
             .or_default()
             .push(p);
     }
@@ -1579,7 +1589,7 @@ fn field_light_gain_matches_its_mirror() {
     };
     for (tile, members) in &tiles {
         // A tile without diffuse pixels casts no rays; its gain stays 1.
-        let rays = tile_pick(*tile, w, h, diffuse).map(|pick| {
+        let rays = tile_pick(*tile, tile_side, w, h, diffuse).map(|pick| {
             let source = at[&pick];
             let origin = ray_origin(source.point, source.normal, radius);
             let light_in = RayLight {
@@ -1603,12 +1613,12 @@ fn field_light_gain_matches_its_mirror() {
         }
     }
     eprintln!(
-        "field light gain: {} pixels in {} tiles, gains {low:.3}..{high:.3}, {off} off the mirror, worst {worst:.3} of the tolerance",
+        "field light gain at scale {scale}: {} pixels in {} tiles, gains {low:.3}..{high:.3}, {off} off the mirror, worst {worst:.3} of the tolerance",
         pixels.len(),
         tiles.len()
     );
     assert!(
-        pixels.len() > 300 && tiles.len() > 8,
+        pixels.len() > 300 && tiles.len() > 8 / scale as usize,
         "{} {}",
         pixels.len(),
         tiles.len()

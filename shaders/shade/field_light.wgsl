@@ -1,11 +1,12 @@
 // The field's light at the object's surface (`[shading] field_light`): the
 // fitted lobes are the light at the object's centre, and a point of the
 // object that the field hides from part of it (a toy among foliage, the
-// underside near a floor) would be lit as if it stood there. Each 8 × 8
-// workgroup of the shading pass is split into tiles of FIELD_LIGHT_TILE²
-// pixels (one tile, as built); each tile picks one of its object pixels
-// with diffuse light (the one nearest the tile's centre), casts
-// pc.field_side² rays from that point (lifted off the surface) along fixed
+// underside near a floor) would be lit as if it stood there. Each
+// workgroup of the gain pass covers one tile of 8 · pc.field_scale pixels a
+// side (each of its 8 × 8 invocations a square of pc.field_scale² of
+// them: the tiles grow with the image, field_light.rs TileScale); the tile
+// picks one of its object pixels with diffuse light (the one nearest the
+// tile's centre), casts pc.field_side² rays from that point (lifted off the surface) along fixed
 // directions spread evenly over the sphere, and keeps per ray the field's
 // light, Ĉ + (1 − Ô)·L_env(d) (the broad lobes of L_env beyond the field,
 // as the probe adds them; the colour gathered inside a local light's
@@ -22,12 +23,7 @@
 // (DIRECT_RAY_OFFSET), the binding `local_lights`.
 #include "common/fibonacci.wgsl"
 
-// field_light.rs TILE: the pixels a side of the square whose rays one
-// pick casts (a workgroup holds FIELD_LIGHT_SPLIT² of them).
-const FIELD_LIGHT_TILE: u32 = 8u;
-const FIELD_LIGHT_SPLIT: u32 = 8u / FIELD_LIGHT_TILE;
-const FIELD_LIGHT_TILES: u32 = FIELD_LIGHT_SPLIT * FIELD_LIGHT_SPLIT;
-// field_light.rs MAX_SIDE² · FIELD_LIGHT_TILES: the workgroup's rays.
+// field_light.rs MAX_SIDE²: the tile's rays.
 const FIELD_LIGHT_MAX_RAYS: u32 = 256u;
 // field_light.rs GAIN_MAX: a bound, not a model (a field that sends more
 // than this many times the lobes' light onto a plane is not their error).
@@ -36,20 +32,29 @@ const FIELD_LIGHT_NO_PICK: u32 = 0xffffffffu;
 // "No object along the ray": the rays see the whole field.
 const FIELD_LIGHT_NO_OBJECT: f32 = 3.0e38;
 
-var<workgroup> field_light_pick: array<atomic<u32>, FIELD_LIGHT_TILES>;
+// The pick: its squared doubled offset from the tile's centre above its
+// index in the tile (row-major), so that the least is field_light.rs
+// tile_pick's.
+var<workgroup> field_light_pick: atomic<u32>;
 var<workgroup> field_light_rays: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
 var<workgroup> field_light_lobes: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
 var<workgroup> field_light_dirs: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
 
 // Rays per tile.
 fn field_light_ray_count() -> u32 {
-    return min(pc.field_side * pc.field_side, FIELD_LIGHT_MAX_RAYS / FIELD_LIGHT_TILES);
+    return min(pc.field_side * pc.field_side, FIELD_LIGHT_MAX_RAYS);
 }
 
-// The tile of the workgroup's pixel `local` (its position in the group).
-fn field_light_tile(local: vec2<u32>) -> u32 {
-    let t = local / FIELD_LIGHT_TILE;
-    return t.x + FIELD_LIGHT_SPLIT * t.y;
+// Pixels a side of a tile.
+fn field_light_side() -> u32 {
+    return 8u * pc.field_scale;
+}
+
+// The i-th of the pc.field_scale² pixels invocation `local` of tile
+// `group` takes (a square of them, row by row).
+fn field_light_pixel(group: vec2<u32>, local: vec2<u32>, i: u32) -> vec2<u32> {
+    let s = pc.field_scale;
+    return group * field_light_side() + local * s + vec2<u32>(i % s, i / s);
 }
 
 // The fitted lobes' radiance along d (the direct lobes at the end left out).
@@ -98,59 +103,58 @@ fn field_light_wants(p: vec2<u32>) -> bool {
     return any(brdf_diffuse(clamp(am.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), clamp(am.a, 0.0, 1.0)) > vec3<f32>(0.0));
 }
 
-// The tiles' rays, into workgroup memory; every invocation of the
-// workgroup calls it (it holds barriers), before any returns.
-fn field_light_gather(id: vec3<u32>, local_index: u32, group: vec3<u32>) {
+// The tile's rays, into workgroup memory; every invocation of the
+// workgroup (`local`, `local_index`, of tile `group`) calls it (it holds
+// barriers), before any returns.
+fn field_light_gather(local: vec2<u32>, local_index: u32, group: vec3<u32>) {
     if pc.field_side == 0u {
         return;
     }
-    if local_index < FIELD_LIGHT_TILES {
-        atomicStore(&field_light_pick[local_index], FIELD_LIGHT_NO_PICK);
+    if local_index == 0u {
+        atomicStore(&field_light_pick, FIELD_LIGHT_NO_PICK);
     }
     workgroupBarrier();
-    let local = id.xy % vec2<u32>(8u);
-    if field_light_wants(id.xy) {
-        // Twice the offset from the tile's centre, so it is a whole number.
-        let o = vec2<i32>(local % FIELD_LIGHT_TILE) * 2 - vec2<i32>(i32(FIELD_LIGHT_TILE) - 1);
-        atomicMin(&field_light_pick[field_light_tile(local)], (u32(o.x * o.x + o.y * o.y) << 8u) | local_index);
+    let side = field_light_side();
+    for (var i = 0u; i < pc.field_scale * pc.field_scale; i++) {
+        let p = field_light_pixel(group.xy, local, i);
+        if field_light_wants(p) {
+            // Twice the offset from the tile's centre, so it is a whole
+            // number.
+            let q = p - group.xy * side;
+            let o = vec2<i32>(q) * 2 - vec2<i32>(i32(side) - 1);
+            atomicMin(&field_light_pick, (u32(o.x * o.x + o.y * o.y) << 12u) | (q.y * side + q.x));
+        }
     }
     workgroupBarrier();
     let count = field_light_ray_count();
-    for (var k = local_index; k < count * FIELD_LIGHT_TILES; k += 64u) {
-        let tile = k / count;
-        let pick = atomicLoad(&field_light_pick[tile]);
-        if pick == FIELD_LIGHT_NO_PICK {
-            continue;
-        }
-        let source = pick & 0xffu;
-        let pixel = group.xy * 8u + vec2<u32>(source % 8u, source / 8u);
+    let pick = atomicLoad(&field_light_pick);
+    if pick != FIELD_LIGHT_NO_PICK {
+        let source = pick & 0xfffu;
+        let pixel = group.xy * side + vec2<u32>(source % side, source / side);
         let hit = textureLoad(distance_id, vec2<i32>(pixel), 0);
         let n = normalize(textureLoad(normal_roughness, vec2<i32>(pixel), 0).xyz);
         let x = pc.camera.origin + camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5)) * hit.r;
         let origin = x + n * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
-        let d = fibonacci_axis(k % count, count);
-        field_light_rays[k] = vec4<f32>(field_light_along(origin, d), 0.0);
-        field_light_lobes[k] = vec4<f32>(field_light_fitted(d), 0.0);
-        field_light_dirs[k] = vec4<f32>(d, 0.0);
+        for (var k = local_index; k < count; k += 64u) {
+            let d = fibonacci_axis(k, count);
+            field_light_rays[k] = vec4<f32>(field_light_along(origin, d), 0.0);
+            field_light_lobes[k] = vec4<f32>(field_light_fitted(d), 0.0);
+            field_light_dirs[k] = vec4<f32>(d, 0.0);
+        }
     }
     workgroupBarrier();
 }
 
-// The gain on the fitted lobes' diffuse light at the pixel `id` of normal
-// n (1 where the feature is off).
-fn field_light_gain(id: vec2<u32>, n: vec3<f32>) -> vec3<f32> {
-    if pc.field_side == 0u {
-        return vec3<f32>(1.0);
-    }
-    let tile = field_light_tile(id % vec2<u32>(8u));
-    if atomicLoad(&field_light_pick[tile]) == FIELD_LIGHT_NO_PICK {
+// The gain on the fitted lobes' diffuse light at a pixel of the tile of
+// normal n (1 where the feature is off or the tile picked no pixel).
+fn field_light_gain(n: vec3<f32>) -> vec3<f32> {
+    if pc.field_side == 0u || atomicLoad(&field_light_pick) == FIELD_LIGHT_NO_PICK {
         return vec3<f32>(1.0);
     }
     let count = field_light_ray_count();
-    let first = tile * count;
     var field = vec3<f32>(0.0);
     var lobes = vec3<f32>(0.0);
-    for (var r = first; r < first + count; r++) {
+    for (var r = 0u; r < count; r++) {
         let w = max(dot(n, field_light_dirs[r].xyz), 0.0);
         field += w * field_light_rays[r].xyz;
         lobes += w * field_light_lobes[r].xyz;

@@ -40,8 +40,17 @@ struct ShadePush {
     env_count: u32,
     // The first 8 × 8 tile a dispatch covers, x | y << 16: a self-shadowed
     // object's dispatches (and its field light's gain) cover the tiles its
-    // bounding sphere can cover; 0 where a dispatch covers the image.
+    // bounding sphere can cover; 0 where a dispatch covers the image. The
+    // field light's gain pass counts it in its own tiles of 8 ·
+    // field_scale pixels.
     tile_origin: u32,
+    // The field light's tiles are this many times 8 pixels a side, each
+    // invocation of the gain pass taking its square of pixels (read by
+    // shade/field_light.wgsl).
+    field_scale: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 var<immediate> pc: ShadePush;

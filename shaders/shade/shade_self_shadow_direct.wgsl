@@ -119,21 +119,24 @@ fn main(@builtin(global_invocation_id) dispatched: vec3<u32>) {
 }
 
 // The gain alone, (g, 1) at the object's pixels and 0 where no object is,
-// over the tiles from pc.tile_origin on.
+// over the tiles of 8 · pc.field_scale pixels from pc.tile_origin (in
+// those tiles) on, each invocation taking pc.field_scale² pixels.
 @compute @workgroup_size(8, 8, 1)
 fn field_gain_only(
-    @builtin(global_invocation_id) dispatched: vec3<u32>,
+    @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
     @builtin(workgroup_id) dispatched_group: vec3<u32>,
 ) {
     let first = vec3<u32>(pc.tile_origin & 0xffffu, pc.tile_origin >> 16u, 0u);
     let group = dispatched_group + first;
-    let id = shade_dispatched_pixel(dispatched);
-    field_light_gather(id, local_index, group);
-    if !shade_owns(id) {
-        return;
+    field_light_gather(local.xy, local_index, group);
+    for (var i = 0u; i < pc.field_scale * pc.field_scale; i++) {
+        let id = vec3<u32>(field_light_pixel(group.xy, local.xy, i), 0u);
+        if !shade_owns(id) {
+            continue;
+        }
+        let pixel = vec2<i32>(id.xy);
+        let n = normalize(textureLoad(normal_roughness, pixel, 0).xyz);
+        textureStore(out_object, pixel, vec4<f32>(field_light_gain(n), 1.0));
     }
-    let pixel = vec2<i32>(id.xy);
-    let n = normalize(textureLoad(normal_roughness, pixel, 0).xyz);
-    textureStore(out_object, pixel, vec4<f32>(field_light_gain(id.xy, n), 1.0));
 }

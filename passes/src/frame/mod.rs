@@ -265,7 +265,8 @@ impl InsertionFrame {
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, lib)?,
             shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes, *march.knobs())?
-                .with_field_light(scene.shading.field_light),
+                .with_field_light(scene.shading.field_light)
+                .with_field_light_scale(scene.shading.field_light_scale),
             composite: CompositePass::new(ctx, lib)?,
             edge_aa: EdgeAaPass::new(ctx, lib, EdgeAaKnobs::default())?,
             cast: if shadows {

@@ -20,7 +20,9 @@ const SHADE_GROUP: u64 = 64;
 /// the mesh, each local light's rays through the mesh and along the field
 /// to it, and the pixel's share of the field light's `field_side`² rays
 /// (each a march, two more per local light inside whose sphere it
-/// starts, and the `fitted` and `env_lobes` lobes along it).
+/// starts, and the `fitted` and `env_lobes` lobes along it), with the gain
+/// pass's pick and sums over the rays at each of the pixels an invocation
+/// takes (at most [`MAX_TILE_SCALE`](crate::shade::field_light::MAX_TILE_SCALE)²).
 pub fn shade_loop_iterations(
     rays: &DirectRayCounts,
     march: &MarchKnobs,
@@ -34,7 +36,13 @@ pub fn shade_loop_iterations(
     let side = field_side.min(crate::shade::field_light::MAX_SIDE) as u64;
     let field_rays = (side * side).div_ceil(SHADE_GROUP);
     let per_field_ray = m * (1 + 2 * rays.local as u64) + (rays.local + fitted + env_lobes) as u64;
-    sharp + local + field_rays * per_field_ray
+    let tile_pixels = (crate::shade::field_light::MAX_TILE_SCALE as u64).pow(2);
+    let gain_sums = if side > 0 {
+        tile_pixels * (side * side + 1)
+    } else {
+        0
+    };
+    sharp + local + field_rays * per_field_ray + gain_sums
 }
 
 /// Loops per pixel of the cast shadow for the direct lobes: each sharp

@@ -270,6 +270,10 @@ pub struct ShadingKnobs {
     /// paper's shading, every point lit by the lobes at the centre). Drawn
     /// with the self-shadows: without them the lobes alone light the object.
     pub field_light: u32,
+    /// How many times 8 pixels a side the tiles are whose one point casts
+    /// those rays (`"auto"`: 1 up to 639 × 359, growing with the image to 4
+    /// at 1280 × 720; [`crate::shade::field_light::TileScale`]).
+    pub field_light_scale: crate::shade::field_light::TileScale,
 }
 
 /// The default NDF lobe count: the most the shading accepts. One lobe (the
@@ -295,6 +299,7 @@ impl Default for ShadingKnobs {
         Self {
             ndf_lobes: DEFAULT_NDF_LOBES,
             field_light: DEFAULT_FIELD_LIGHT,
+            field_light_scale: crate::shade::field_light::TileScale::Auto,
         }
     }
 }
@@ -541,6 +546,29 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             .as_ref()
             .and_then(|s| s.field_light)
             .unwrap_or(ShadingKnobs::default().field_light),
+        field_light_scale: {
+            use crate::shade::field_light::{TileScale, MAX_TILE_SCALE};
+            match spec
+                .shading
+                .as_ref()
+                .and_then(|s| s.field_light_scale.as_ref())
+            {
+                None => ShadingKnobs::default().field_light_scale,
+                Some(spec::ScaleSpec::Word(w)) if w == "auto" => TileScale::Auto,
+                Some(spec::ScaleSpec::Number(n)) if (1..=MAX_TILE_SCALE as i64).contains(n) => {
+                    TileScale::Fixed(*n as u32)
+                }
+                Some(other) => {
+                    return Err(e(
+                        "shading.field_light_scale",
+                        format!(
+                            "{}must be \"auto\" or a whole number in 1..={MAX_TILE_SCALE}",
+                            other.shown()
+                        ),
+                    ));
+                }
+            }
+        },
     };
     crate::brdf::NdfLobes::new(shading.ndf_lobes).map_err(|m| e("shading.ndf_lobes", m))?;
     if shading.field_light > crate::shade::field_light::MAX_SIDE {
@@ -567,8 +595,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         let max = crate::shadow::MAX_CAST_SCALE;
         let cast_scale = match sp.and_then(|s| s.cast_scale.as_ref()) {
             None => d.cast_scale,
-            Some(spec::CastScaleSpec::Word(w)) if w == "auto" => CastScale::Auto,
-            Some(spec::CastScaleSpec::Number(n)) if (1..=max as i64).contains(n) => {
+            Some(spec::ScaleSpec::Word(w)) if w == "auto" => CastScale::Auto,
+            Some(spec::ScaleSpec::Number(n)) if (1..=max as i64).contains(n) => {
                 CastScale::Fixed(*n as u32)
             }
             Some(other) => {

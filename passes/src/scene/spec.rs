@@ -61,28 +61,29 @@ pub(crate) struct ShadowsSpec {
     pub grid: Option<u32>,
     pub directions: Option<u32>,
     pub components: Option<u32>,
-    pub cast_scale: Option<CastScaleSpec>,
+    pub cast_scale: Option<ScaleSpec>,
     pub cast_refine: Option<f64>,
 }
 
-/// `[shadows] cast_scale`: a number of pixels, or a word (`"auto"`);
-/// anything else is kept to be refused by name.
+/// A scale knob (`[shadows] cast_scale`, `[shading] field_light_scale`): a
+/// whole number, or a word (`"auto"`); anything else is kept to be refused
+/// by name.
 #[derive(Debug, Deserialize)]
 #[serde(untagged)]
-pub(crate) enum CastScaleSpec {
+pub(crate) enum ScaleSpec {
     Number(i64),
     Word(String),
     Other(serde::de::IgnoredAny),
 }
 
-impl CastScaleSpec {
+impl ScaleSpec {
     /// The value as an error message starts with it (`3 `, `"half" `), or
     /// nothing for a value of another type.
     pub(crate) fn shown(&self) -> String {
         match self {
-            CastScaleSpec::Number(n) => format!("{n} "),
-            CastScaleSpec::Word(w) => format!("\"{w}\" "),
-            CastScaleSpec::Other(_) => String::new(),
+            ScaleSpec::Number(n) => format!("{n} "),
+            ScaleSpec::Word(w) => format!("\"{w}\" "),
+            ScaleSpec::Other(_) => String::new(),
         }
     }
 }
@@ -92,6 +93,7 @@ impl CastScaleSpec {
 pub(crate) struct ShadingSpec {
     pub ndf_lobes: Option<u32>,
     pub field_light: Option<u32>,
+    pub field_light_scale: Option<ScaleSpec>,
 }
 
 #[derive(Debug, Deserialize)]

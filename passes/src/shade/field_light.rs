@@ -7,7 +7,8 @@
 //!
 //! The correction scales each point's diffuse light from the fitted lobes
 //! by what the field sends it over what the lobes say it gets, on the same
-//! rays: per tile of [`TILE`]² pixels of the shading pass, one of the
+//! rays: per tile of ([`TILE`] · k)² pixels (k the [`TileScale`], which
+//! grows with the image: 1 up to 639 × 359, 4 at 1280 × 720), one of the
 //! tile's object pixels that have diffuse light (the nearest to the tile's
 //! centre, [`tile_pick`]) casts `side`² rays from its point, lifted off
 //! the surface ([`ray_origin`]), along fixed directions spread evenly over
@@ -49,12 +50,49 @@ pub const MAX_SIDE: u32 = 16;
 /// brightness once they took L_env: `docs/fidelity.md`, sixteenth pass.)
 pub const GAIN_MAX: f64 = 16.0;
 
-/// Pixels a side of a tile: the shading pass's 8 × 8 workgroup. At the
+/// Pixels a side of a tile at scale 1: the shading pass's 8 × 8
+/// workgroup (at scale k each invocation takes k² pixels). At the
 /// same rays per workgroup, one tile of 16² rays did better against
 /// Cycles than four 4 × 4 tiles of 8² each (PLANTS' toy 0.121 and 0.170
 /// against 0.127 and 0.203; `docs/fidelity.md`, sixteenth pass): the
 /// rays' count matters more than their origins' spacing.
 pub const TILE: u32 = 8;
+
+/// The most pixels a side of a tile, as a multiple of [`TILE`]: a
+/// workgroup's 8 × 8 invocations take up to this many squared pixels each.
+pub const MAX_TILE_SCALE: u32 = 4;
+
+/// The image at which [`TileScale::Auto`] keeps the tiles of [`TILE`]
+/// pixels: there they were measured against Cycles (`inlay fidelity` runs
+/// at 320 × 180), and a larger image takes tiles as many times larger as
+/// it is, so that the picks stand as far apart on the object.
+pub const AUTO_TILE_IMAGE: (u32, u32) = (320, 180);
+
+/// How large the field light's tiles are (`[shading] field_light_scale`):
+/// their side is [`TILE`] times the scale.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TileScale {
+    /// Tiles of [`TILE`] times this many pixels a side, at any image size.
+    Fixed(u32),
+    /// The scale grows with the image ([`Self::at`]): the field's light
+    /// varies over the object's surface, not over its pixels, and one
+    /// pick's rays cost the same at any image size.
+    Auto,
+}
+
+impl TileScale {
+    /// The scale at a `width` × `height` image: the fixed one, or how many
+    /// times [`AUTO_TILE_IMAGE`] fits into the image along both axes, from
+    /// 1 to [`MAX_TILE_SCALE`].
+    pub fn at(self, width: u32, height: u32) -> u32 {
+        match self {
+            TileScale::Fixed(k) => k,
+            TileScale::Auto => (width / AUTO_TILE_IMAGE.0)
+                .min(height / AUTO_TILE_IMAGE.1)
+                .clamp(1, MAX_TILE_SCALE),
+        }
+    }
+}
 
 /// One ray of a tile.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,25 +105,26 @@ pub struct TileRay {
     pub lobes: DVec3,
 }
 
-/// The pixel of tile `tile` (in tiles) whose point casts the tile's rays:
-/// of the tile's pixels inside the image where `is_object` holds (the
-/// shading takes the object's pixels with a diffuse colour: a metal's
-/// tiles cast none), the nearest to the tile's centre, the first in
-/// row-major order among equals.
+/// The pixel of tile `tile` (in tiles of `side` pixels a side) whose
+/// point casts the tile's rays: of the tile's pixels inside the image
+/// where `is_object` holds (the shading takes the object's pixels with a
+/// diffuse colour: a metal's tiles cast none), the nearest to the tile's
+/// centre, the first in row-major order among equals.
 pub fn tile_pick(
     tile: (u32, u32),
+    side: u32,
     width: u32,
     height: u32,
     is_object: impl Fn(u32, u32) -> bool,
 ) -> Option<(u32, u32)> {
     let mut best: Option<(u32, (u32, u32))> = None;
-    for j in 0..TILE {
-        for i in 0..TILE {
-            let (x, y) = (tile.0 * TILE + i, tile.1 * TILE + j);
+    for j in 0..side {
+        for i in 0..side {
+            let (x, y) = (tile.0 * side + i, tile.1 * side + j);
             if x >= width || y >= height || !is_object(x, y) {
                 continue;
             }
-            let c = TILE as i32 - 1;
+            let c = side as i32 - 1;
             let (ox, oy) = (2 * i as i32 - c, 2 * j as i32 - c);
             let key = (ox * ox + oy * oy) as u32;
             if best.is_none_or(|(k, _)| key < k) {
@@ -311,11 +350,30 @@ mod tests {
     #[test]
     fn the_pick_is_the_object_pixel_nearest_the_centre() {
         let all = |_, _| true;
-        assert_eq!(tile_pick((0, 0), 64, 64, all), Some((3, 3)));
-        assert_eq!(tile_pick((2, 1), 64, 64, all), Some((19, 11)));
-        assert_eq!(tile_pick((0, 0), 64, 64, |x, _| x == 7), Some((7, 3)));
-        assert_eq!(tile_pick((0, 0), 64, 64, |_, _| false), None);
+        assert_eq!(tile_pick((0, 0), TILE, 64, 64, all), Some((3, 3)));
+        assert_eq!(tile_pick((2, 1), TILE, 64, 64, all), Some((19, 11)));
+        assert_eq!(tile_pick((0, 0), TILE, 64, 64, |x, _| x == 7), Some((7, 3)));
+        assert_eq!(tile_pick((0, 0), TILE, 64, 64, |_, _| false), None);
         // Pixels past the image's edge are never picked.
-        assert_eq!(tile_pick((0, 0), 2, 2, all), Some((1, 1)));
+        assert_eq!(tile_pick((0, 0), TILE, 2, 2, all), Some((1, 1)));
+        // Tiles of 16: the centre's four pixels tie, the first in rows wins.
+        assert_eq!(tile_pick((1, 1), 16, 64, 64, all), Some((23, 23)));
+        assert_eq!(
+            tile_pick((1, 1), 16, 64, 64, |x, y| x > 23 && y > 23),
+            Some((24, 24))
+        );
+    }
+
+    #[test]
+    fn the_automatic_tiles_grow_with_the_image() {
+        let auto = TileScale::Auto;
+        assert_eq!(auto.at(160, 90), 1);
+        assert_eq!(auto.at(320, 180), 1);
+        assert_eq!(auto.at(480, 270), 1);
+        assert_eq!(auto.at(640, 360), 2);
+        assert_eq!(auto.at(1280, 720), 4);
+        assert_eq!(auto.at(1280, 200), 1);
+        assert_eq!(auto.at(3840, 2160), MAX_TILE_SCALE);
+        assert_eq!(TileScale::Fixed(3).at(160, 90), 3);
     }
 }

@@ -61,8 +61,19 @@ inlay_engine::gpu_struct! {
         /// The first 8 × 8 tile the dispatch covers, x | y << 16: a
         /// self-shadowed object's shading and field light cover the tiles
         /// its bounding sphere can cover; 0 where a dispatch covers the
-        /// image.
+        /// image. The field light's gain pass counts it in its own tiles,
+        /// of 8 · `field_scale` pixels.
         pub tile_origin: u32,
+        /// The field light's tiles are this many times 8 pixels a side,
+        /// each invocation of the gain pass taking its square of pixels
+        /// ([`field_light::TileScale`]).
+        pub field_scale: u32,
+        /// Padding.
+        pub pad0: u32,
+        /// Padding.
+        pub pad1: u32,
+        /// Padding.
+        pub pad2: u32,
     }
 }
 
@@ -131,6 +142,8 @@ pub struct ShadePass {
     march: MarchKnobs,
     /// Side of the field-light rays per tile (0: the paper's shading).
     field_side: u32,
+    /// The field light's tiles (8 pixels a side times the scale).
+    field_scale: field_light::TileScale,
     /// Bound as the direct lobes' rays, local lights and environment lobes
     /// where an object's light has none but the rays' variant runs.
     no_direct: Arc<Buffer>,
@@ -176,6 +189,18 @@ impl ShadePass {
         self
     }
 
+    /// The field light's tiles at `scale` (8 pixels a side until this is
+    /// called; a fixed scale is kept within 1..=[`field_light::MAX_TILE_SCALE`]).
+    pub fn with_field_light_scale(mut self, scale: field_light::TileScale) -> Self {
+        self.field_scale = match scale {
+            field_light::TileScale::Fixed(k) => {
+                field_light::TileScale::Fixed(k.clamp(1, field_light::MAX_TILE_SCALE))
+            }
+            auto => auto,
+        };
+        self
+    }
+
     fn build(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
@@ -203,6 +228,7 @@ impl ShadePass {
             ndf_lobes: ndf,
             march,
             field_side: 0,
+            field_scale: field_light::TileScale::Fixed(1),
             no_direct: Arc::new(Buffer::with_data(
                 ctx,
                 "no direct lobes",
@@ -260,7 +286,8 @@ impl ShadePass {
                 let shadow = self_shadow.get(i).copied().flatten();
                 let field_light = self.field_side > 0 && shadow.is_some();
                 let local = l.direct.map(|d| d.local);
-                let (origin, threads) = object_tiles(shadow.and_then(|s| s.pixels), width, height);
+                let (origin, threads) =
+                    object_tiles(shadow.and_then(|s| s.pixels), width, height, 8);
                 ObjectSetup {
                     light: *l,
                     shadow,
@@ -280,6 +307,10 @@ impl ShadePass {
                         field_side: if field_light { self.field_side } else { 0 },
                         env_count: l.environment.filter(|_| field_light).map_or(0, |e| e.count),
                         tile_origin: origin,
+                        field_scale: 1,
+                        pad0: 0,
+                        pad1: 0,
+                        pad2: 0,
                     },
                 }
             })
@@ -302,19 +333,27 @@ impl ShadePass {
                 },
             );
             let mut pass = graph.compute_pass(OBJECT_FIELD_LIGHT);
+            let scale = self.field_scale.at(width, height);
             for (k, o) in setups.iter().filter(|o| o.field_light).enumerate() {
                 if o.off_screen() {
                     continue;
                 }
+                // Tiles of 8 · scale pixels over the object's, each
+                // invocation taking scale² pixels.
+                let pixels = o.shadow.and_then(|s| s.pixels);
+                let (origin, threads) =
+                    object_tiles(pixels, width, height, field_light::TILE * scale);
                 let push = ShadePush {
                     write_empty: (k == 0) as u32,
+                    tile_origin: origin,
+                    field_scale: scale,
                     ..o.push
                 };
                 common
                     .bind(pass.dispatch(&self.field_gain), o)
                     .write("out_object", &mut gain)
                     .push(&push)
-                    .threads(o.threads);
+                    .threads(threads);
             }
             pass.finish();
             gain
@@ -332,7 +371,7 @@ impl ShadePass {
         // once: over the whole image that was most of the pass
         // (docs/benchmarks.md, issue 26's fifth pass).
         let mut pass = graph.compute_pass(OBJECT_SHADE);
-        let (origin, threads) = object_tiles(region, width, height);
+        let (origin, threads) = object_tiles(region, width, height, 8);
         let clear = ShadePush {
             camera: camera.rays(),
             tile_origin: origin,
@@ -366,14 +405,14 @@ impl ShadePass {
     }
 }
 
-/// A dispatch over the 8 × 8 tiles holding `pixels` (x0, y0, x1, y1;
-/// None: the whole `width` × `height`): its first tile (x | y << 16) and
-/// its invocations.
-fn object_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32) -> (u32, [u32; 3]) {
+/// A dispatch over the `tile` × `tile` tiles holding `pixels` (x0, y0,
+/// x1, y1; None: the whole `width` × `height`), 8 × 8 invocations a tile:
+/// its first tile (x | y << 16) and its invocations.
+fn object_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32, tile: u32) -> (u32, [u32; 3]) {
     let [x0, y0, x1, y1] = pixels.unwrap_or([0, 0, width, height]);
     let (x1, y1) = (x1.min(width), y1.min(height));
-    let (tx0, ty0) = (x0 / 8, y0 / 8);
-    let (tx1, ty1) = (x1.div_ceil(8), y1.div_ceil(8));
+    let (tx0, ty0) = (x0 / tile, y0 / tile);
+    let (tx1, ty1) = (x1.div_ceil(tile), y1.div_ceil(tile));
     (
         tx0 | (ty0 << 16),
         [tx1.saturating_sub(tx0) * 8, ty1.saturating_sub(ty0) * 8, 1],
