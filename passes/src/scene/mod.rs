@@ -548,26 +548,19 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             .unwrap_or(ShadingKnobs::default().field_light),
         field_light_scale: {
             use crate::shade::field_light::{TileScale, MAX_TILE_SCALE};
-            match spec
+            let value = spec
                 .shading
                 .as_ref()
-                .and_then(|s| s.field_light_scale.as_ref())
-            {
-                None => ShadingKnobs::default().field_light_scale,
-                Some(spec::ScaleSpec::Word(w)) if w == "auto" => TileScale::Auto,
-                Some(spec::ScaleSpec::Number(n)) if (1..=MAX_TILE_SCALE as i64).contains(n) => {
-                    TileScale::Fixed(*n as u32)
-                }
-                Some(other) => {
-                    return Err(e(
-                        "shading.field_light_scale",
-                        format!(
-                            "{}must be \"auto\" or a whole number in 1..={MAX_TILE_SCALE}",
-                            other.shown()
-                        ),
-                    ));
-                }
-            }
+                .and_then(|s| s.field_light_scale.as_ref());
+            let default = ShadingKnobs::default().field_light_scale;
+            spec::scale_knob(
+                value,
+                default,
+                MAX_TILE_SCALE,
+                TileScale::Auto,
+                TileScale::Fixed,
+            )
+            .map_err(|m| e("shading.field_light_scale", m))?
         },
     };
     crate::brdf::NdfLobes::new(shading.ndf_lobes).map_err(|m| e("shading.ndf_lobes", m))?;
@@ -593,22 +586,10 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             return Err(e(&format!("shadows.{k}"), m));
         }
         let max = crate::shadow::MAX_CAST_SCALE;
-        let cast_scale = match sp.and_then(|s| s.cast_scale.as_ref()) {
-            None => d.cast_scale,
-            Some(spec::ScaleSpec::Word(w)) if w == "auto" => CastScale::Auto,
-            Some(spec::ScaleSpec::Number(n)) if (1..=max as i64).contains(n) => {
-                CastScale::Fixed(*n as u32)
-            }
-            Some(other) => {
-                return Err(e(
-                    "shadows.cast_scale",
-                    format!(
-                        "{}must be \"auto\" or a whole number in 1..={max}",
-                        other.shown()
-                    ),
-                ));
-            }
-        };
+        let value = sp.and_then(|s| s.cast_scale.as_ref());
+        let cast_scale =
+            spec::scale_knob(value, d.cast_scale, max, CastScale::Auto, CastScale::Fixed)
+                .map_err(|m| e("shadows.cast_scale", m))?;
         let cast_refine = sp.and_then(|s| s.cast_refine).unwrap_or(d.cast_refine);
         if !(cast_refine.is_finite() && cast_refine >= 0.0) {
             return Err(e(

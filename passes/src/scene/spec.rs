@@ -88,6 +88,26 @@ impl ScaleSpec {
     }
 }
 
+/// The scale knob `value`: `default` where it is absent, `auto` for
+/// `"auto"`, `fixed(k)` for a whole number k in 1..=`max`; else why not.
+pub(crate) fn scale_knob<T>(
+    value: Option<&ScaleSpec>,
+    default: T,
+    max: u32,
+    auto: T,
+    fixed: impl Fn(u32) -> T,
+) -> Result<T, String> {
+    match value {
+        None => Ok(default),
+        Some(ScaleSpec::Word(w)) if w == "auto" => Ok(auto),
+        Some(ScaleSpec::Number(n)) if (1..=max as i64).contains(n) => Ok(fixed(*n as u32)),
+        Some(other) => Err(format!(
+            "{}must be \"auto\" or a whole number in 1..={max}",
+            other.shown()
+        )),
+    }
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct ShadingSpec {
