@@ -2,17 +2,17 @@
 // fitted lobes are the light at the object's centre, and a point of the
 // object that the field hides from part of it (a toy among foliage, the
 // underside near a floor) would be lit as if it stood there. Each
-// workgroup of the gain pass covers one tile of 8 · pc.field_scale pixels a
-// side (each of its 8 × 8 invocations a square of pc.field_scale² of
-// them: the tiles grow with the image, field_light.rs TileScale); the tile
-// picks one of its object pixels with diffuse light (the one nearest the
-// tile's centre), casts pc.field_side² rays from that point (lifted off the surface) along fixed
-// directions spread evenly over the sphere, and keeps per ray the field's
-// light, Ĉ + (1 − Ô)·L_env(d) (the broad lobes of L_env beyond the field,
-// as the probe adds them; the colour gathered inside a local light's
-// sphere taken off, as the probe does, since that light is shaded on its
-// own), and the fitted lobes' L_fit(d). Each pixel of the tile then scales
-// its fitted lobes' diffuse light by
+// workgroup of the gain pass covers one tile of 8 · pc.field_scale pixels
+// a side (each of its 8 × 8 invocations a square of pc.field_scale² of
+// them: the tiles grow with the image, field_light.rs TileScale); the
+// tile picks one of its object pixels with diffuse light (the one nearest
+// the tile's centre), casts pc.field_side² rays from that point (lifted
+// off the surface) along fixed directions spread evenly over the sphere,
+// and keeps per ray the field's light, Ĉ + (1 − Ô)·L_env(d) (the broad
+// lobes of L_env beyond the field, as the probe adds them; the colour
+// gathered inside a local light's sphere taken off, as the probe does,
+// since that light is shaded on its own), and the fitted lobes' L_fit(d).
+// Each pixel of the tile then scales its fitted lobes' diffuse light by
 //   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
 // per colour channel, with its own normal n: the same rays in numerator
 // and denominator, so where the field sends what the lobes say the gain is
@@ -33,8 +33,9 @@ const FIELD_LIGHT_NO_PICK: u32 = 0xffffffffu;
 const FIELD_LIGHT_NO_OBJECT: f32 = 3.0e38;
 
 // The pick: its squared doubled offset from the tile's centre above its
-// index in the tile (row-major), so that the least is field_light.rs
-// tile_pick's.
+// index in the tile (row-major, 12 bits: tiles of up to 64 pixels a side,
+// field_light.rs MAX_TILE_SCALE 4 takes 32), so that the least is
+// field_light.rs tile_pick's.
 var<workgroup> field_light_pick: atomic<u32>;
 var<workgroup> field_light_rays: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
 var<workgroup> field_light_lobes: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
