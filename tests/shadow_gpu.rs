@@ -1532,15 +1532,18 @@ fn local_light_shading_matches_its_mirror() {
 }
 
 /// The field's light at the object's surface (`shade/field_light.wgsl`,
-/// entry `field_gain_only`) against its f64 mirror (`shade::field_light`):
-/// each 8 × 8 tile's pick, its rays through the lamp field (the lamp's own
-/// light taken off, the slab of medium dimming some of them) from the
-/// G-buffer's point, and each pixel's gain with its own normal. The field
+/// entries `field_light_tables` and `field_gain_only`) against its f64
+/// mirror (`shade::field_light`): each 8 × 8 tile's pick, its rays through
+/// the lamp field (the lamp's own light taken off, the slab of medium
+/// dimming some of them) from the G-buffer's point, their sums at the
+/// table's normals, and each pixel's gain blended from the tables of the
+/// tiles around it, read at its own normal (most pixels blend several
+/// tiles: a table read at the wrong tile or normal fails it). The field
 /// sends no light but the lamp's, which is taken off, and past it L_env is
 /// half the fitted lobes, so the gains are about half the share of the
 /// lobes' light the slab lets through: near 0.5 where it is not in the
 /// way (the slab's own glow and the lamp's just past its sphere add a
-/// little), less where it is (measured 0.299–0.526). Tolerance:
+/// little), less where it is (measured 0.323–0.511, blended). Tolerance:
 /// the march in f32 (3·10⁻⁴ of the transmittance, as above) and the lobes'
 /// sums in f32, 2·10⁻³ of the gain plus 10⁻⁴. At scale 2 (tiles of 16
 /// pixels, each invocation taking four) the picks and rays are the
@@ -1553,7 +1556,8 @@ fn field_light_gain_matches_its_mirror() {
 
 fn field_light_gain_at_scale(scale: u32) {
     use inlay_passes::shade::field_light::{
-        diffuse_gain, ray_origin, tile_pick, tile_rays, RayLight, TileScale, TILE,
+        blend_tiles, blended_gain, ray_origin, tile_footprint, tile_pick, tile_rays, tile_table,
+        RayLight, TileScale, TILE,
     };
     use std::collections::HashMap;
     let view = ToyView::new();
@@ -1587,31 +1591,52 @@ fn field_light_gain_at_scale(scale: u32) {
         at.get(&(x, y))
             .is_some_and(|p: &&ShadedPixel| p.material.clamped().diffuse() != DVec3::ZERO)
     };
-    for (tile, members) in &tiles {
-        // A tile without diffuse pixels casts no rays; its gain stays 1.
-        let rays = tile_pick(*tile, tile_side, w, h, diffuse).map(|pick| {
+    // Each tile's table: a tile without diffuse pixels casts no rays.
+    let tables: HashMap<(u32, u32), _> = tiles
+        .keys()
+        .filter_map(|&tile| {
+            let pick = tile_pick(tile, tile_side, w, h, diffuse)?;
             let source = at[&pick];
             let origin = ray_origin(source.point, source.normal, radius);
             let light_in = RayLight {
                 fitted,
                 environment: &lamp.environment,
             };
-            tile_rays(field, &march, origin, light_in, &[light], side)
+            let rays = tile_rays(field, &march, origin, light_in, &[light], side);
+            Some((tile, tile_table(source.point, &rays)))
+        })
+        .collect();
+    let mut blended_tiles = 0;
+    for p in &pixels {
+        let around: Vec<_> = blend_tiles(p.pixel, tile_side)
+            .into_iter()
+            .filter_map(|((x, y), weight)| {
+                let tile = (u32::try_from(x).ok()?, u32::try_from(y).ok()?);
+                tables.get(&tile).map(|t| (t, weight))
+            })
+            .collect();
+        if around.len() > 1 {
+            blended_tiles += 1;
+        }
+        let centre = (p.pixel.0 as f64 + 0.5, p.pixel.1 as f64 + 0.5);
+        let footprint = tile_footprint(view.cam.origin, p.point, centre, tile_side, |x, y| {
+            view.cam.ray(x, y).dir
         });
-        for p in members {
-            let cpu = rays
-                .as_ref()
-                .map_or(DVec3::ONE, |r| diffuse_gain(p.normal, r));
-            low = low.min(cpu.min_element());
-            high = high.max(cpu.max_element());
-            let err = ((p.gpu - cpu).abs() / (cpu.abs() * 2e-3 + 1e-4)).max_element();
-            if err > 1.0 {
-                off += 1;
-            } else {
-                worst = worst.max(err);
-            }
+        let cpu = blended_gain(p.normal, p.point, footprint, around);
+        low = low.min(cpu.min_element());
+        high = high.max(cpu.max_element());
+        let err = ((p.gpu - cpu).abs() / (cpu.abs() * 2e-3 + 1e-4)).max_element();
+        if err > 1.0 {
+            off += 1;
+        } else {
+            worst = worst.max(err);
         }
     }
+    assert!(
+        blended_tiles > pixels.len() / 2,
+        "{blended_tiles} of {} pixels blend tiles",
+        pixels.len()
+    );
     eprintln!(
         "field light gain at scale {scale}: {} pixels in {} tiles, gains {low:.3}..{high:.3}, {off} off the mirror, worst {worst:.3} of the tolerance",
         pixels.len(),

@@ -3,19 +3,9 @@
 // the OCTAHEDRAL bool const, the octahedral map (n × n, (u, v) ∈ [−1, 1]² →
 // (u, 1 − |u| − |v|, v), lower half folded over the corners).
 // Needs: a bool const `OCTAHEDRAL`.
+#include "common/octahedral_map.wgsl"
 
 const DM_PI: f32 = 3.14159265358979;
-
-fn dm_octahedron_point(u: f32, v: f32) -> vec3<f32> {
-    let y = 1.0 - abs(u) - abs(v);
-    if y >= 0.0 {
-        return vec3<f32>(u, y, v);
-    }
-    // sign() of 0 is 0 in WGSL but the fold never sees u or v at exactly 0
-    // (texel centres and sub-sample cell centres of the lower half have
-    // |u| + |v| > 1 and never lie on an axis).
-    return vec3<f32>((1.0 - abs(v)) * sign(u), y, (1.0 - abs(u)) * sign(v));
-}
 
 // Unit direction at map coordinates `uv` ∈ [0, 1]² (xyz) and the solid
 // angle per unit of map area there, dω/(du dv) (w): sin θ · 2π² for

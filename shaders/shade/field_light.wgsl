@@ -12,16 +12,23 @@
 // lobes of L_env beyond the field, as the probe adds them; the colour
 // gathered inside a local light's sphere taken off, as the probe does,
 // since that light is shaded on its own), and the fitted lobes' L_fit(d).
-// Each pixel of the tile then scales its fitted lobes' diffuse light by
+// A point of normal n scales its fitted lobes' diffuse light by
 //   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
-// per colour channel, with its own normal n: the same rays in numerator
-// and denominator, so where the field sends what the lobes say the gain is
-// exactly 1 whatever the rays' count. Mirrors passes/src/shade/field_light.rs.
+// per colour channel: the same rays in numerator and denominator, so where
+// the field sends what the lobes say the gain is exactly 1 whatever the
+// rays' count. The tile keeps both sums at the 16² normals of an
+// octahedral map (`field_light_tiles`, written by the gain pass), and a
+// pixel blends the sums of the four tiles whose centres surround it, read
+// bilinearly at its own normal, each tile weighed bilinearly in the image
+// and down where its pick lies off the pixel's tangent plane
+// (field_light_blended_gain): no steps at the tiles' edges. Mirrors
+// passes/src/shade/field_light.rs.
 // Needs: shade/shade_body.wgsl, shade/self_shadow_ssdf.wgsl, the hook
 // shading_fitted_count() of brdf/sg_shading.wgsl, field/grid.wgsl,
 // march/volume_march.wgsl, lighting/local_light.wgsl, shadow/direct_rays.wgsl
 // (DIRECT_RAY_OFFSET), the binding `local_lights`.
 #include "common/fibonacci.wgsl"
+#include "common/octahedral_map.wgsl"
 
 // field_light.rs MAX_SIDE²: the tile's rays.
 const FIELD_LIGHT_MAX_RAYS: u32 = 256u;
@@ -31,6 +38,18 @@ const FIELD_LIGHT_GAIN_MAX: f32 = 16.0;
 const FIELD_LIGHT_NO_PICK: u32 = 0xffffffffu;
 // "No object along the ray": the rays see the whole field.
 const FIELD_LIGHT_NO_OBJECT: f32 = 3.0e38;
+// field_light.rs TABLE_SIDE (its 256 normals four to each of the gain
+// pass's 64 invocations), TABLE_STRIDE and PLANE_WEIGHT_MIN.
+const FIELD_LIGHT_TABLE_SIDE: u32 = 16u;
+const FIELD_LIGHT_TABLE_STRIDE: u32 = 513u;
+const FIELD_LIGHT_PLANE_WEIGHT_MIN: f32 = 1e-4;
+
+// Each tile's table, field_light.rs TileTable: the pick's point (w 1, or
+// 0 where the tile picked none), then at each normal the field's sum and
+// the lobes' sum: the object's own, row by row over its region of
+// pc.field_tiles (columns | rows << 16) tiles from tile pc.field_origin
+// (x | y << 16).
+@group(0) @binding(25) var<storage, read_write> field_light_tiles: array<vec4<f32>>;
 
 // The pick: its squared doubled offset from the tile's centre above its
 // index in the tile (row-major, 12 bits: tiles of up to 64 pixels a side,
@@ -40,6 +59,8 @@ var<workgroup> field_light_pick: atomic<u32>;
 var<workgroup> field_light_rays: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
 var<workgroup> field_light_lobes: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
 var<workgroup> field_light_dirs: array<vec4<f32>, FIELD_LIGHT_MAX_RAYS>;
+// The pick's surface point.
+var<workgroup> field_light_point: vec3<f32>;
 
 // Rays per tile.
 fn field_light_ray_count() -> u32 {
@@ -136,6 +157,9 @@ fn field_light_gather(local: vec2<u32>, local_index: u32, group: vec3<u32>) {
         let n = normalize(textureLoad(normal_roughness, vec2<i32>(pixel), 0).xyz);
         let x = pc.camera.origin + camera_ray_dir(pc.camera, vec2<f32>(pixel) + vec2<f32>(0.5)) * hit.r;
         let origin = x + n * (DIRECT_RAY_OFFSET * ssdf_world_sphere().w);
+        if local_index == 0u {
+            field_light_point = x;
+        }
         for (var k = local_index; k < count; k += 64u) {
             let d = fibonacci_axis(k, count);
             field_light_rays[k] = vec4<f32>(field_light_along(origin, d), 0.0);
@@ -146,21 +170,128 @@ fn field_light_gather(local: vec2<u32>, local_index: u32, group: vec3<u32>) {
     workgroupBarrier();
 }
 
-// The gain on the fitted lobes' diffuse light at a pixel of the tile of
-// normal n (1 where the feature is off or the tile picked no pixel).
-fn field_light_gain(n: vec3<f32>) -> vec3<f32> {
-    if pc.field_side == 0u || atomicLoad(&field_light_pick) == FIELD_LIGHT_NO_PICK {
-        return vec3<f32>(1.0);
+// The first vec4 of tile `tile`'s table (tile in the field light's tiles
+// of the image, inside the object's region), or none (0xffffffff) beyond
+// the region.
+fn field_light_table(tile: vec2<i32>) -> u32 {
+    let origin = vec2<i32>(i32(pc.field_origin & 0xffffu), i32(pc.field_origin >> 16u));
+    let size = vec2<i32>(i32(pc.field_tiles & 0xffffu), i32(pc.field_tiles >> 16u));
+    let t = tile - origin;
+    if any(t < vec2<i32>(0)) || any(t >= size) {
+        return 0xffffffffu;
     }
+    return u32(t.y * size.x + t.x) * FIELD_LIGHT_TABLE_STRIDE;
+}
+
+// The normal of entry j of a table: the centre of its texel of the
+// octahedral map (field_light.rs table_normal).
+fn field_light_table_normal(j: u32) -> vec3<f32> {
+    let n = FIELD_LIGHT_TABLE_SIDE;
+    let uv = (vec2<f32>(f32(j % n), f32(j / n)) + vec2<f32>(0.5)) / f32(n);
+    return normalize(dm_octahedron_point(2.0 * uv.x - 1.0, 2.0 * uv.y - 1.0));
+}
+
+// Writes tile `group`'s table from the rays `field_light_gather` left in
+// workgroup memory; every invocation of the workgroup calls it.
+fn field_light_write_table(local_index: u32, group: vec3<u32>) {
+    let base = field_light_table(vec2<i32>(group.xy));
+    if pc.field_side == 0u || base == 0xffffffffu {
+        return;
+    }
+    let picked = atomicLoad(&field_light_pick) != FIELD_LIGHT_NO_PICK;
+    if local_index == 0u {
+        field_light_tiles[base] = select(vec4<f32>(0.0), vec4<f32>(field_light_point, 1.0), picked);
+    }
+    if !picked {
+        return;
+    }
+    // Each invocation takes four normals, j = local_index + 64 q, and reads
+    // each ray once for all four: the ray's loads from workgroup memory,
+    // not the products, are what a loop over the rays costs on lavapipe.
     let count = field_light_ray_count();
+    var normals: mat4x3<f32>;
+    for (var q = 0u; q < 4u; q++) {
+        normals[q] = field_light_table_normal(local_index + 64u * q);
+    }
+    var field = mat4x3<f32>();
+    var lobes = mat4x3<f32>();
+    for (var r = 0u; r < count; r++) {
+        let d = field_light_dirs[r].xyz;
+        let f = field_light_rays[r].xyz;
+        let l = field_light_lobes[r].xyz;
+        let w = max(d * normals, vec4<f32>(0.0));
+        field += mat4x3<f32>(w.x * f, w.y * f, w.z * f, w.w * f);
+        lobes += mat4x3<f32>(w.x * l, w.y * l, w.z * l, w.w * l);
+    }
+    for (var q = 0u; q < 4u; q++) {
+        let j = local_index + 64u * q;
+        field_light_tiles[base + 1u + 2u * j] = vec4<f32>(field[q], 0.0);
+        field_light_tiles[base + 2u + 2u * j] = vec4<f32>(lobes[q], 0.0);
+    }
+}
+
+// A table's two sums at unit normal n, bilinear between its four nearest
+// normals (field_light.rs TileTable::sums): field in [0], lobes in [1].
+fn field_light_table_sums(base: u32, n: vec3<f32>) -> array<vec3<f32>, 2> {
+    let side = i32(FIELD_LIGHT_TABLE_SIDE);
+    let p = octahedral_uv(n) * f32(side) - vec2<f32>(0.5);
+    let b = floor(p);
+    let f = p - b;
+    let t = vec2<i32>(b);
     var field = vec3<f32>(0.0);
     var lobes = vec3<f32>(0.0);
-    for (var r = 0u; r < count; r++) {
-        let w = max(dot(n, field_light_dirs[r].xyz), 0.0);
-        field += w * field_light_rays[r].xyz;
-        lobes += w * field_light_lobes[r].xyz;
+    for (var k = 0; k < 4; k++) {
+        let o = vec2<i32>(k & 1, k >> 1u);
+        let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1);
+        let texel = oct_wrap(t + o, side);
+        let j = u32(texel.y * side + texel.x);
+        field += w * field_light_tiles[base + 1u + 2u * j].xyz;
+        lobes += w * field_light_tiles[base + 2u + 2u * j].xyz;
     }
+    return array<vec3<f32>, 2>(field, lobes);
+}
+
+// The gain of a field sum over a lobes' sum (field_light.rs gain_of_sums).
+fn field_light_gain_of_sums(field: vec3<f32>, lobes: vec3<f32>) -> vec3<f32> {
     let ok = lobes > vec3<f32>(0.0);
     let gain = select(vec3<f32>(1.0), field / select(vec3<f32>(1.0), lobes, ok), ok);
     return clamp(gain, vec3<f32>(0.0), vec3<f32>(FIELD_LIGHT_GAIN_MAX));
+}
+
+// The gain on the fitted lobes' diffuse light at pixel `pixel` of surface
+// point x and unit normal n, blended from the tables of the four tiles
+// around it (field_light.rs blended_gain); 1 where the feature is off or
+// no tile around it picked a pixel.
+fn field_light_blended_gain(pixel: vec2<u32>, x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    if pc.field_side == 0u {
+        return vec3<f32>(1.0);
+    }
+    let side = f32(field_light_side());
+    let centre = vec2<f32>(pixel) + vec2<f32>(0.5);
+    // A tile's width on the surface there (field_light.rs tile_footprint).
+    let chord = distance(camera_ray_dir(pc.camera, centre + vec2<f32>(side, 0.0)), camera_ray_dir(pc.camera, centre));
+    let footprint = distance(x, pc.camera.origin) * chord;
+    let u = centre / side - vec2<f32>(0.5);
+    let b = floor(u);
+    let f = u - b;
+    var field = vec3<f32>(0.0);
+    var lobes = vec3<f32>(0.0);
+    for (var k = 0; k < 4; k++) {
+        let o = vec2<i32>(k & 1, k >> 1u);
+        let base = field_light_table(vec2<i32>(b) + o);
+        if base == 0xffffffffu {
+            continue;
+        }
+        let pick = field_light_tiles[base];
+        if pick.w == 0.0 {
+            continue;
+        }
+        let h = dot(n, pick.xyz - x) / footprint;
+        let plane = max(exp(-min(h * h, 80.0)), FIELD_LIGHT_PLANE_WEIGHT_MIN);
+        let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1) * plane;
+        let sums = field_light_table_sums(base, n);
+        field += w * sums[0];
+        lobes += w * sums[1];
+    }
+    return field_light_gain_of_sums(field, lobes);
 }

@@ -48,9 +48,12 @@ struct ShadePush {
     // invocation of the gain pass taking its square of pixels (read by
     // shade/field_light.wgsl).
     field_scale: u32,
+    // The object's field light tiles: the first (x | y << 16, in those
+    // tiles) and how many (columns | rows << 16; read by
+    // shade/field_light.wgsl).
+    field_origin: u32,
+    field_tiles: u32,
     pad0: u32,
-    pad1: u32,
-    pad2: u32,
 }
 
 var<immediate> pc: ShadePush;

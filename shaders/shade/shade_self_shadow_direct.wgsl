@@ -7,14 +7,14 @@
 // (lighting/local_light.wgsl), with Γ from their rays (local_visibility);
 // the other lobes take Γ from the SSDF. With pc.field_side > 0 the fitted
 // lobes' diffuse light is scaled by the field's light at the point
-// (shade/field_light.wgsl): the entry point `field_gain_only` writes that
-// gain (pass `object-field-light`, before this one), and `main` reads it
-// from `field_gain_in`. They are two passes because the gain's rays are
-// shared through workgroup memory, and a shader with workgroup barriers
-// runs every invocation as a coroutine on lavapipe: with the gather in
-// `main`, DOG's shading took 60 ms at 320 × 180, and 20 ms with the gain
-// apart (plus 1.5 ms for it, over the ball's tiles alone; docs/
-// benchmarks.md, issue 26's fourth pass). Mirrors
+// (shade/field_light.wgsl): the entry point `field_light_tables` writes
+// each tile's table (pass `object-field-light`, before this one), and
+// `main` blends the tables around each pixel. They are two passes because
+// the tile's rays are shared through workgroup memory, and a shader with
+// workgroup barriers runs every invocation as a coroutine on lavapipe:
+// with the gather in `main`, DOG's shading took 60 ms at 320 × 180, and
+// 20 ms with the gain apart (plus 1.5 ms for it, over the ball's tiles
+// alone; docs/benchmarks.md, issue 26's fourth pass). Mirrors
 // passes/src/shadow/runtime.rs self_shadow_factors and
 // passes/src/lighting/local.rs.
 #include "common/ray_box.wgsl"
@@ -31,10 +31,6 @@
 // shines from; 0 while inactive), written by the direct-light pass
 // (lighting/direct.wgsl).
 @group(0) @binding(22) var<storage, read> local_lights: array<vec4<f32>>;
-
-// The gain `field_gain_only` wrote at each pixel (rgb), read by `main`
-// when pc.field_side > 0.
-@group(0) @binding(24) var field_gain_in: texture_2d<f32>;
 
 #include "geometry/mesh_bvh.wgsl"
 #include "shadow/direct_rays.wgsl"
@@ -105,10 +101,7 @@ fn shading_direct_attenuation(k: u32) -> f32 {
 var<private> field_pixel: vec2<u32>;
 
 fn shading_diffuse_gain() -> vec3<f32> {
-    if pc.field_side == 0u {
-        return vec3<f32>(1.0);
-    }
-    return textureLoad(field_gain_in, vec2<i32>(field_pixel), 0).rgb;
+    return field_light_blended_gain(field_pixel, shade_point, shade_normal);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -118,11 +111,11 @@ fn main(@builtin(global_invocation_id) dispatched: vec3<u32>) {
     shade_pixel(id);
 }
 
-// The gain alone, (g, 1) at the object's pixels and 0 where no object is,
-// over the tiles of 8 · pc.field_scale pixels from pc.tile_origin (in
-// those tiles) on, each invocation taking pc.field_scale² pixels.
+// Each field light tile's table (pass `object-field-light`), over the
+// tiles of 8 · pc.field_scale pixels from pc.tile_origin (in those tiles)
+// on, each invocation taking pc.field_scale² pixels for the pick.
 @compute @workgroup_size(8, 8, 1)
-fn field_gain_only(
+fn field_light_tables(
     @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
     @builtin(workgroup_id) dispatched_group: vec3<u32>,
@@ -130,13 +123,22 @@ fn field_gain_only(
     let first = vec3<u32>(pc.tile_origin & 0xffffu, pc.tile_origin >> 16u, 0u);
     let group = dispatched_group + first;
     field_light_gather(local.xy, local_index, group);
-    for (var i = 0u; i < pc.field_scale * pc.field_scale; i++) {
-        let id = vec3<u32>(field_light_pixel(group.xy, local.xy, i), 0u);
-        if !shade_owns(id) {
-            continue;
-        }
-        let pixel = vec2<i32>(id.xy);
-        let n = normalize(textureLoad(normal_roughness, pixel, 0).xyz);
-        textureStore(out_object, pixel, vec4<f32>(field_light_gain(n), 1.0));
+    field_light_write_table(local_index, group);
+}
+
+// The gain alone, as `main` takes it from the tables: (g, 1) at the
+// object's pixels and 0 where no object is (with pc.write_empty), over the
+// 8 × 8 tiles from pc.tile_origin on; for the test against the mirror and
+// for inspection (ShadePass::new_field_gain).
+@compute @workgroup_size(8, 8, 1)
+fn field_gain_only(@builtin(global_invocation_id) dispatched: vec3<u32>) {
+    let id = shade_dispatched_pixel(dispatched);
+    if !shade_owns(id) {
+        return;
     }
+    let pixel = vec2<i32>(id.xy);
+    let hit = textureLoad(distance_id, pixel, 0);
+    let n = normalize(textureLoad(normal_roughness, pixel, 0).xyz);
+    let x = pc.camera.origin + camera_ray_dir(pc.camera, vec2<f32>(id.xy) + vec2<f32>(0.5)) * hit.r;
+    textureStore(out_object, pixel, vec4<f32>(field_light_blended_gain(id.xy, x, n), 1.0));
 }

@@ -16,7 +16,7 @@
 // alone and inlining them halves the shader — this one did, ~1.2 MB and a
 // JIT compile per frame.
 #include "ssdf/angles.wgsl"
-#include "common/octahedral_wrap.wgsl"
+#include "common/octahedral_map.wgsl"
 #include "object/record.wgsl"
 
 struct SsdfObject {
@@ -134,28 +134,12 @@ fn ssdf_wrap(t: vec2<i32>, n: i32) -> u32 {
     return u32(w.y * n + w.x);
 }
 
-// Octahedral map coordinates in [0, 1]² of unit d (probe::octahedral_uv).
-fn ssdf_octahedral_uv(d: vec3<f32>) -> vec2<f32> {
-    let p = d / (abs(d.x) + abs(d.y) + abs(d.z));
-    var a = p.x;
-    var b = p.z;
-    if p.y < 0.0 {
-        let sa = select(-1.0, 1.0, a >= 0.0);
-        let sb = select(-1.0, 1.0, b >= 0.0);
-        let fa = (1.0 - abs(b)) * sa;
-        let fb = (1.0 - abs(a)) * sb;
-        a = fa;
-        b = fb;
-    }
-    return vec2<f32>(0.5 * (a + 1.0), 0.5 * (b + 1.0));
-}
-
 // The map's value along d, bilinear over its four nearest texels: their
 // rows blended first, then one dot product with the coefficients.
 fn ssdf_direction_value(d: vec3<f32>) -> f32 {
     let n = i32(ssdf.dims.y);
     let m = ssdf_row_vec4s();
-    let p = ssdf_octahedral_uv(d) * f32(n) - vec2<f32>(0.5);
+    let p = octahedral_uv(d) * f32(n) - vec2<f32>(0.5);
     let b = floor(p);
     let f = p - b;
     let t = vec2<i32>(b);

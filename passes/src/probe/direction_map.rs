@@ -159,8 +159,8 @@ impl DirectionMap {
 }
 
 /// The octahedral map coordinates (u, v) ∈ [0, 1]² of unit direction `d`
-/// (the inverse of the map's direction). Mirrored by `ssdf_octahedral_uv`
-/// in `shaders/ssdf/ssdf.wgsl`.
+/// (the inverse of the map's direction). Mirrored by `octahedral_uv` in
+/// `shaders/common/octahedral_map.wgsl`.
 pub fn octahedral_uv(d: DVec3) -> (f64, f64) {
     let p = d / (d.x.abs() + d.y.abs() + d.z.abs());
     let (mut a, mut b) = (p.x, p.z);

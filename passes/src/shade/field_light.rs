@@ -17,8 +17,8 @@
 //! lobes of L_env beyond the field as the probe adds them and a local
 //! light's own colour taken off as the probe takes it off (it is shaded
 //! per pixel), and the fitted lobes' L_fit(d) ([`tile_rays`]): at the
-//! centre the first is the probe the lobes were fitted to. Every pixel of
-//! the tile weighs the rays by its own clamped cosine ([`diffuse_gain`]):
+//! centre the first is the probe the lobes were fitted to. A point of
+//! normal n weighs the rays by its clamped cosine ([`diffuse_gain`]):
 //!
 //!   g = Σ_r max(0, n·d_r) (field light)_r / Σ_r max(0, n·d_r) L_fit(d_r),
 //!
@@ -27,7 +27,16 @@
 //! rays' count, and their quadrature error largely cancels. The specular
 //! term, the direct lobes (sharp lights outside the field, ray-cast) and
 //! the local lights are left as they are: they already see from the point.
-//! Mirrored by `shaders/shade/field_light.wgsl`.
+//!
+//! The two sums are kept per tile at the [`TABLE_SIDE`]² normals of an
+//! octahedral map ([`tile_table`]), and a pixel blends the sums of the four
+//! tiles whose centres surround it, read at its own normal
+//! ([`blended_gain`]): bilinear in the image, each tile weighed down where
+//! its pick lies off the pixel's tangent plane ([`plane_weight`]). A tile's
+//! pick stands for its whole tile, so without the blend the gain steps at
+//! the tiles' edges, in blocks as large as the tiles (8 pixels at
+//! 320 × 180, 32 at 1280 × 720; `docs/benchmarks.md`, issue 26's fifteenth
+//! pass). Mirrored by `shaders/shade/field_light.wgsl`.
 
 use glam::DVec3;
 
@@ -35,6 +44,7 @@ use crate::field::RadianceField;
 use crate::geometry::Ray;
 use crate::lighting::{local, LocalLight};
 use crate::march::{march_ray, MarchKnobs};
+use crate::probe::{octahedral_bilinear, DirectionMap, MapKind};
 use crate::sg::Sg64;
 use crate::sgfit::model::fibonacci_axis;
 use crate::shadow::DIRECT_RAY_OFFSET;
@@ -103,6 +113,126 @@ pub struct TileRay {
     pub field: DVec3,
     /// The fitted lobes' radiance along it.
     pub lobes: DVec3,
+}
+
+/// Normals a side of a tile's table: the sums are kept at the texel
+/// centres of a `TABLE_SIDE` × `TABLE_SIDE` octahedral map of normals
+/// (one per invocation of the gain pass's 8 × 8 workgroup) and read
+/// bilinearly between them.
+pub const TABLE_SIDE: u32 = 16;
+
+/// The vec4s one tile's table takes in the GPU's buffer: its pick's point
+/// (w 1, or all 0 where the tile picked none), then at each normal the
+/// field's sum and the lobes' sum ([`TileTable`]).
+pub const TABLE_STRIDE: u32 = 1 + 2 * TABLE_SIDE * TABLE_SIDE;
+
+/// The least weight a tile with a pick keeps in the blend, however far its
+/// pick lies off the pixel's tangent plane ([`plane_weight`]): so that a
+/// pixel whose four picks all lie on other parts still takes their light,
+/// bilinearly, rather than none.
+pub const PLANE_WEIGHT_MIN: f64 = 1e-4;
+
+/// One tile's light as a pixel reads it: where its rays start, and their
+/// two sums at each normal of its table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TileTable {
+    /// The picked surface point (before the lift off the surface).
+    pub pick: DVec3,
+    /// Σ_r max(0, n·d_r) (field light)_r at each normal, row by row.
+    pub field: Vec<DVec3>,
+    /// Σ_r max(0, n·d_r) L_fit(d_r) at each normal.
+    pub lobes: Vec<DVec3>,
+}
+
+/// The normal of entry `j` of a tile's table: the centre of texel
+/// (j mod [`TABLE_SIDE`], j div [`TABLE_SIDE`]) of the octahedral map.
+pub fn table_normal(j: u32) -> DVec3 {
+    DirectionMap::new(MapKind::Octahedral, TABLE_SIDE).direction(j % TABLE_SIDE, j / TABLE_SIDE)
+}
+
+/// The table of the tile whose surface point `pick` cast `rays`.
+pub fn tile_table(pick: DVec3, rays: &[TileRay]) -> TileTable {
+    let (field, lobes) = (0..TABLE_SIDE * TABLE_SIDE)
+        .map(|j| ray_sums(table_normal(j), rays))
+        .unzip();
+    TileTable { pick, field, lobes }
+}
+
+impl TileTable {
+    /// The two sums at unit normal `n`, bilinear between the table's four
+    /// nearest normals.
+    pub fn sums(&self, n: DVec3) -> (DVec3, DVec3) {
+        let read = |values: &[DVec3]| {
+            let channel = |c: usize| octahedral_bilinear(TABLE_SIDE, n, |i| values[i][c]);
+            DVec3::new(channel(0), channel(1), channel(2))
+        };
+        (read(&self.field), read(&self.lobes))
+    }
+}
+
+/// A tile's weight in a pixel's blend beside its bilinear one: 1 where its
+/// pick lies on the tangent plane of the pixel's point `x` (unit normal
+/// `n`), falling as exp(−(h / `footprint`)²) with the pick's height h off
+/// it (`footprint`: a tile's width on the surface there), never under
+/// [`PLANE_WEIGHT_MIN`]. A pick on another part of the object (a cap over
+/// a stem, an ear before a head) then lends the pixel little of its light.
+pub fn plane_weight(x: DVec3, n: DVec3, pick: DVec3, footprint: f64) -> f64 {
+    let h = n.dot(pick - x) / footprint;
+    (-h * h).exp().max(PLANE_WEIGHT_MIN)
+}
+
+/// A tile's width at the surface point `x` seen through pixel centre
+/// `centre` from a camera at `eye`: the distance to x times the chord
+/// between the unit rays through `centre` and `tile` pixels to its right
+/// (`ray_dir` gives the unit ray through an image position).
+pub fn tile_footprint(
+    eye: DVec3,
+    x: DVec3,
+    centre: (f64, f64),
+    tile: u32,
+    ray_dir: impl Fn(f64, f64) -> DVec3,
+) -> f64 {
+    let chord = (ray_dir(centre.0 + tile as f64, centre.1) - ray_dir(centre.0, centre.1)).length();
+    (x - eye).length() * chord
+}
+
+/// The four tiles (of `side` pixels) whose centres surround the centre of
+/// pixel `pixel`, with their bilinear weights (which sum to 1); tiles
+/// before the image's first have negative indices.
+pub fn blend_tiles(pixel: (u32, u32), side: u32) -> [((i64, i64), f64); 4] {
+    let at = |p: u32| (p as f64 + 0.5) / side as f64 - 0.5;
+    let (u, v) = (at(pixel.0), at(pixel.1));
+    let (tx, ty) = (u.floor(), v.floor());
+    let (fx, fy) = (u - tx, v - ty);
+    let (tx, ty) = (tx as i64, ty as i64);
+    [
+        ((tx, ty), (1.0 - fx) * (1.0 - fy)),
+        ((tx + 1, ty), fx * (1.0 - fy)),
+        ((tx, ty + 1), (1.0 - fx) * fy),
+        ((tx + 1, ty + 1), fx * fy),
+    ]
+}
+
+/// The gain at a pixel of unit normal `n` and surface point `x` (a tile
+/// `footprint` wide there) from the tables of the tiles around it, each
+/// with its bilinear weight ([`blend_tiles`]; tiles that picked no pixel
+/// left out): both sums blended with the tiles' weights times their
+/// [`plane_weight`], then divided ([`gain_of_sums`]). 1 where no tile
+/// around the pixel picked one.
+pub fn blended_gain<'a>(
+    n: DVec3,
+    x: DVec3,
+    footprint: f64,
+    tiles: impl IntoIterator<Item = (&'a TileTable, f64)>,
+) -> DVec3 {
+    let (mut field, mut lobes) = (DVec3::ZERO, DVec3::ZERO);
+    for (table, bilinear) in tiles {
+        let w = bilinear * plane_weight(x, n, table.pick, footprint);
+        let (f, l) = table.sums(n);
+        field += w * f;
+        lobes += w * l;
+    }
+    gain_of_sums(field, lobes)
 }
 
 /// The pixel of tile `tile` (in tiles of `side` pixels a side) whose
@@ -184,15 +314,29 @@ pub fn tile_rays(
 }
 
 /// The gain on the fitted lobes' diffuse light at a point of unit normal
-/// `n` of the tile whose rays are `rays`, per channel, in [0, GAIN_MAX]
-/// (1 in a channel the lobes leave dark on its plane).
+/// `n` from one tile's `rays` alone, exactly, per channel, in [0, GAIN_MAX]
+/// (1 in a channel the lobes leave dark on its plane): what a tile's table
+/// holds at its normals ([`tile_table`]) and reads between them.
 pub fn diffuse_gain(n: DVec3, rays: &[TileRay]) -> DVec3 {
+    let (field, lobes) = ray_sums(n, rays);
+    gain_of_sums(field, lobes)
+}
+
+/// The rays' field light and lobes' light, each weighed by its clamped
+/// cosine to unit normal `n`.
+pub fn ray_sums(n: DVec3, rays: &[TileRay]) -> (DVec3, DVec3) {
     let (mut field, mut lobes) = (DVec3::ZERO, DVec3::ZERO);
     for r in rays {
         let w = n.dot(r.dir).max(0.0);
         field += w * r.field;
         lobes += w * r.lobes;
     }
+    (field, lobes)
+}
+
+/// The gain of a field sum over a lobes' sum, per channel, in
+/// [0, [`GAIN_MAX`]] (1 in a channel the lobes leave dark).
+pub fn gain_of_sums(field: DVec3, lobes: DVec3) -> DVec3 {
     let gain = |f: f64, l: f64| {
         if l > 0.0 {
             (f / l).clamp(0.0, GAIN_MAX)
@@ -345,6 +489,154 @@ mod tests {
         };
         let dark = tile_rays(&field, &MarchKnobs::default(), DVec3::ZERO, none, &[], 8);
         assert_eq!(diffuse_gain(DVec3::Z, &dark), DVec3::ONE);
+    }
+
+    /// Unit normals spread over the sphere, none on the table's.
+    fn normals() -> Vec<DVec3> {
+        (0..500).map(|i| fibonacci_axis(i, 500)).collect()
+    }
+
+    #[test]
+    fn the_table_holds_the_rays_sums_and_reads_between_them() {
+        // Under the roof the light comes from below the slab and from the
+        // sky's sides: the gain swings from 0.1 to 1 over the normals.
+        let rays = rays_with(
+            &Slab {
+                roof: true,
+                glow: 0.0,
+            },
+            16,
+        );
+        let table = tile_table(DVec3::ZERO, &rays);
+        for j in 0..TABLE_SIDE * TABLE_SIDE {
+            let n = table_normal(j);
+            let (f, l) = table.sums(n);
+            let (rf, rl) = ray_sums(n, &rays);
+            assert!((f - rf).abs().max_element() < 1e-9 * rf.max_element().max(1.0));
+            assert!((l - rl).abs().max_element() < 1e-9 * rl.max_element().max(1.0));
+        }
+        // The gain's error, and the light's (the gain's times the lobes'
+        // light on the plane, over its most on any plane).
+        let all = normals();
+        let brightest = all
+            .iter()
+            .map(|&n| ray_sums(n, &rays).1.max_element())
+            .fold(0.0, f64::max);
+        let (mut worst, mut sum, mut worst_light, mut sum_light) = (0.0f64, 0.0, 0.0f64, 0.0);
+        for &n in &all {
+            let (f, l) = table.sums(n);
+            let exact = diffuse_gain(n, &rays);
+            let err = (gain_of_sums(f, l) - exact).abs();
+            let light = (err * ray_sums(n, &rays).1 / brightest).max_element();
+            worst = worst.max(err.max_element());
+            sum += err.max_element();
+            worst_light = worst_light.max(light);
+            sum_light += light;
+        }
+        let (mean, mean_light) = (sum / all.len() as f64, sum_light / all.len() as f64);
+        eprintln!("table of {TABLE_SIDE}²: gain off the rays' by {mean:.4} on average, {worst:.4} at worst; light {mean_light:.4}, {worst_light:.4}");
+        // Measured: 0.0072 and 0.060 for the gain, 0.0023 and 0.021 for the light.
+        assert!(mean < 0.01 && worst < 0.08, "{mean} {worst}");
+        assert!(
+            mean_light < 0.004 && worst_light < 0.03,
+            "{mean_light} {worst_light}"
+        );
+    }
+
+    #[test]
+    fn a_blend_of_like_tiles_is_their_own_gain() {
+        let rays = rays_with(
+            &Slab {
+                roof: true,
+                glow: 0.0,
+            },
+            8,
+        );
+        let table = tile_table(DVec3::ZERO, &rays);
+        for pixel in [(0, 0), (3, 4), (13, 2), (100, 37)] {
+            let tiles = blend_tiles(pixel, 8);
+            let total: f64 = tiles.iter().map(|t| t.1).sum();
+            assert!((total - 1.0).abs() < 1e-12);
+            for n in [DVec3::Y, DVec3::X, DVec3::new(0.3, -0.5, 0.8).normalize()] {
+                // Picks off the plane move nothing when all four are alike.
+                let blended =
+                    blended_gain(n, DVec3::ZERO, 0.1, tiles.iter().map(|&(_, w)| (&table, w)));
+                let (f, l) = table.sums(n);
+                assert!((blended - gain_of_sums(f, l)).abs().max_element() < 1e-12);
+            }
+        }
+        // A pixel's tiles: the one it lies in and the three towards the
+        // nearest corner between tile centres.
+        let t = blend_tiles((9, 14), 8);
+        assert_eq!(t.map(|x| x.0), [(0, 1), (1, 1), (0, 2), (1, 2)]);
+        assert!((t[0].1 - 0.3125 * 0.6875).abs() < 1e-12);
+        assert!((t[3].1 - 0.6875 * 0.3125).abs() < 1e-12);
+        assert_eq!(blend_tiles((0, 0), 8)[0].0, (-1, -1));
+        // No tile picked a pixel: the gain is 1.
+        assert_eq!(blended_gain(DVec3::Y, DVec3::ZERO, 1.0, []), DVec3::ONE);
+    }
+
+    #[test]
+    fn the_gain_crosses_the_tiles_edges_without_a_step() {
+        // Two tiles side by side, one under the roof and one in the open:
+        // along a row of pixels across their common edge, the blend moves
+        // by at most its share of the difference at each pixel, where each
+        // tile's own gain steps by all of it.
+        let roofed = rays_with(
+            &Slab {
+                roof: true,
+                glow: 0.0,
+            },
+            8,
+        );
+        let open = rays_with(
+            &Slab {
+                roof: false,
+                glow: 0.0,
+            },
+            8,
+        );
+        let (a, b) = (
+            tile_table(DVec3::ZERO, &roofed),
+            tile_table(DVec3::ZERO, &open),
+        );
+        let n = DVec3::Y;
+        let step = (gain_of_sums(b.sums(n).0, b.sums(n).1)
+            - gain_of_sums(a.sums(n).0, a.sums(n).1))
+        .abs()
+        .max_element();
+        assert!(step > 0.8, "{step}");
+        let gain = |x: u32| {
+            let tiles = blend_tiles((x, 4), 8);
+            let pick = |t: (i64, i64)| if t.0 <= 0 { &a } else { &b };
+            blended_gain(
+                n,
+                DVec3::ZERO,
+                1.0,
+                tiles.iter().map(|&(t, w)| (pick(t), w)),
+            )
+        };
+        let mut largest = 0.0f64;
+        for x in 0..15 {
+            largest = largest.max((gain(x + 1) - gain(x)).abs().max_element());
+        }
+        assert!(largest < step / 4.0, "{largest} of {step}");
+        // A pick a few footprints off the plane lends almost nothing.
+        let lifted = TileTable {
+            pick: DVec3::new(0.0, 3.0, 0.0),
+            ..b.clone()
+        };
+        let g = blended_gain(n, DVec3::ZERO, 1.0, [(&a, 0.5), (&lifted, 0.5)]);
+        let own = gain_of_sums(a.sums(n).0, a.sums(n).1);
+        assert!((g - own).abs().max_element() < 1e-3 * step, "{g} {own}");
+        assert_eq!(
+            plane_weight(DVec3::ZERO, n, DVec3::new(5.0, 0.0, 2.0), 0.1),
+            1.0
+        );
+        assert_eq!(
+            plane_weight(DVec3::ZERO, n, DVec3::Y, 0.01),
+            PLANE_WEIGHT_MIN
+        );
     }
 
     #[test]

@@ -68,12 +68,13 @@ inlay_engine::gpu_struct! {
         /// each invocation of the gain pass taking its square of pixels
         /// ([`field_light::TileScale`]).
         pub field_scale: u32,
+        /// The object's field light tiles: the first, x | y << 16 (in
+        /// those tiles of 8 · `field_scale` pixels).
+        pub field_origin: u32,
+        /// How many of them: columns | rows << 16.
+        pub field_tiles: u32,
         /// Padding.
         pub pad0: u32,
-        /// Padding.
-        pub pad1: u32,
-        /// Padding.
-        pub pad2: u32,
     }
 }
 
@@ -87,15 +88,16 @@ pub const OBJECT_SHADE_INFO: PassInfo = PassInfo {
 /// The shading pass's name in the frame graph (and in timings).
 pub const OBJECT_SHADE: &str = OBJECT_SHADE_INFO.name;
 
-/// The field light's gain pass ([`field_light`]), run before `object-shade`
-/// when `[shading] field_light` is on: its name, Table 1 module and switch.
+/// The field light's pass ([`field_light`]), run before `object-shade`
+/// when `[shading] field_light` is on: each tile's rays and its table of
+/// their sums. Its name, Table 1 module and switch.
 pub const OBJECT_FIELD_LIGHT_INFO: PassInfo = PassInfo {
     name: "object-field-light",
     module: Table1Module::Rendering,
     switch: Some(SELF_SHADOW_SWITCH),
 };
 
-/// The field light's gain pass's name in the frame graph.
+/// The field light's pass's name in the frame graph.
 pub const OBJECT_FIELD_LIGHT: &str = OBJECT_FIELD_LIGHT_INFO.name;
 
 /// The switch that leaves the objects' self-shadows out (eq. 9).
@@ -131,8 +133,11 @@ pub struct ShadePass {
     clear: Arc<ComputePipeline>,
     self_shadowed: Arc<ComputePipeline>,
     self_shadowed_direct: Arc<ComputePipeline>,
-    /// The field light's gain alone (`field_gain_only`), run as its own
+    /// The field light's tables (`field_light_tables`), run as their own
     /// pass before the shading when the field light is on.
+    field_tables: Arc<ComputePipeline>,
+    /// The gain the shading takes from the tables, alone
+    /// (`field_gain_only`), for [`Self::new_field_gain`].
     field_gain: Arc<ComputePipeline>,
     /// Whether [`Self::add`] returns the gain pass's image instead of the
     /// shading ([`Self::new_field_gain`]).
@@ -163,10 +168,11 @@ impl ShadePass {
 
     /// A pass whose output, at the pixels of self-shadowed objects, is the
     /// gain [`field_light`] puts on the fitted lobes' diffuse light with
-    /// `side`² rays per tile, in rgb with 1 in alpha, as the frame's
-    /// `object-field-light` pass computes it over the tiles of each
-    /// object's [`SelfShadow::pixels`] (0 at their other pixels, the rest
-    /// unwritten): for its test against the CPU mirror, and for inspection.
+    /// `side`² rays per tile, in rgb with 1 in alpha, as the shading takes
+    /// it from the tables the frame's `object-field-light` pass writes over
+    /// the tiles of each object's [`SelfShadow::pixels`] (0 at their other
+    /// pixels, the rest unwritten): for its test against the CPU mirror,
+    /// and for inspection.
     pub fn new_field_gain(
         ctx: &Arc<Context>,
         lib: &ShaderLibrary,
@@ -217,6 +223,7 @@ impl ShadePass {
             clear: lib.compute_pipeline(ctx, "shade/shade.wgsl", "clear", &[])?,
             self_shadowed: shadowed("shade/shade_self_shadow.wgsl", "main")?,
             self_shadowed_direct: shadowed("shade/shade_self_shadow_direct.wgsl", "main")?,
+            field_tables: shadowed("shade/shade_self_shadow_direct.wgsl", "field_light_tables")?,
             field_gain: shadowed("shade/shade_self_shadow_direct.wgsl", "field_gain_only")?,
             gain_only: false,
             ndf: Arc::new(Buffer::with_data(
@@ -247,8 +254,8 @@ impl ShadePass {
     /// shaded with `lobes[i]` (an SG fit's lobe buffer), self-shadowed
     /// (eq. 9) where `self_shadow[i]` is given; local lights are seen
     /// through `field`. With the field light on, `object-field-light`
-    /// comes first, writing each self-shadowed object's gain over the
-    /// tiles of its [`SelfShadow::pixels`] into an image the shading reads
+    /// comes first, writing each self-shadowed object's tables over the
+    /// tiles of its [`SelfShadow::pixels`] into a buffer the shading reads
     /// (a pass of its own: its workgroup barriers would make lavapipe run
     /// the whole shading as coroutines). The image is cleared and shaded
     /// over `region` alone (the pixels the objects can cover, x0, y0, x1,
@@ -279,6 +286,8 @@ impl ShadePass {
         let mut out = out;
         let grid = field.import(graph);
         let no_direct = graph.import_buffer(&self.no_direct, None);
+        let scale = self.field_scale.at(width, height);
+        let field_tile = field_light::TILE * scale;
         let setups: Vec<ObjectSetup> = lobes
             .iter()
             .enumerate()
@@ -286,13 +295,18 @@ impl ShadePass {
                 let shadow = self_shadow.get(i).copied().flatten();
                 let field_light = self.field_side > 0 && shadow.is_some();
                 let local = l.direct.map(|d| d.local);
-                let (origin, threads) =
-                    object_tiles(shadow.and_then(|s| s.pixels), width, height, 8);
+                let pixels = shadow.and_then(|s| s.pixels);
+                let (origin, threads) = object_tiles(pixels, width, height, 8);
+                // The object's field light tiles.
+                let (field_origin, field_threads) = object_tiles(pixels, width, height, field_tile);
+                let field_tiles = [field_threads[0] / 8, field_threads[1] / 8];
                 ObjectSetup {
+                    index: i,
                     light: *l,
                     shadow,
                     field_light,
                     threads,
+                    field_threads,
                     push: ShadePush {
                         camera: camera.rays(),
                         object_index: i as f32,
@@ -307,10 +321,10 @@ impl ShadePass {
                         field_side: if field_light { self.field_side } else { 0 },
                         env_count: l.environment.filter(|_| field_light).map_or(0, |e| e.count),
                         tile_origin: origin,
-                        field_scale: 1,
+                        field_scale: scale,
+                        field_origin,
+                        field_tiles: field_tiles[0] | (field_tiles[1] << 16),
                         pad0: 0,
-                        pad1: 0,
-                        pad2: 0,
                     },
                 }
             })
@@ -321,9 +335,43 @@ impl ShadePass {
             ndf,
             no_direct,
         };
-        // The field light's gain first, in its own pass (its workgroup
-        // barriers would slow the whole shading on lavapipe).
-        let gain = setups.iter().any(|o| o.field_light).then(|| {
+        // The field light's tables first, in their own pass (its workgroup
+        // barriers would slow the whole shading on lavapipe); a buffer per
+        // object, each at most its image region's tiles (8 KiB a tile: at
+        // most 7.2 MiB at 1280 × 720, 64 MiB at 3840 × 2160, under
+        // lavapipe's 128 MiB storage binding however many objects the
+        // frame holds).
+        let mut field_tables: Vec<Option<BufferHandle>> = setups
+            .iter()
+            .map(|o| {
+                (o.field_light && !o.off_screen()).then(|| {
+                    let [x, y, _] = o.field_threads.map(|t| u64::from(t / 8));
+                    let bytes = x * y * u64::from(field_light::TABLE_STRIDE) * 16;
+                    graph.create_buffer("field-light-tiles", bytes)
+                })
+            })
+            .collect();
+        if field_tables.iter().any(Option::is_some) {
+            let mut pass = graph.compute_pass(OBJECT_FIELD_LIGHT);
+            for (o, buffer) in setups.iter().zip(field_tables.iter_mut()) {
+                let Some(buffer) = buffer else {
+                    continue;
+                };
+                // Tiles of 8 · scale pixels over the object's, each
+                // invocation taking scale² pixels.
+                let push = ShadePush {
+                    tile_origin: o.push.field_origin,
+                    ..o.push
+                };
+                common
+                    .bind(pass.dispatch(&self.field_tables), o)
+                    .write("field_light_tiles", buffer)
+                    .push(&push)
+                    .threads(o.field_threads);
+            }
+            pass.finish();
+        }
+        if self.gain_only {
             let mut gain = graph.create_image(
                 "field-gain",
                 ImageDesc {
@@ -332,33 +380,23 @@ impl ShadePass {
                     format: OBJECT_COLOUR_FORMAT,
                 },
             );
-            let mut pass = graph.compute_pass(OBJECT_FIELD_LIGHT);
-            let scale = self.field_scale.at(width, height);
+            let mut pass = graph.compute_pass("field-light-gain");
             for (k, o) in setups.iter().filter(|o| o.field_light).enumerate() {
                 if o.off_screen() {
                     continue;
                 }
-                // Tiles of 8 · scale pixels over the object's, each
-                // invocation taking scale² pixels.
-                let pixels = o.shadow.and_then(|s| s.pixels);
-                let (origin, threads) =
-                    object_tiles(pixels, width, height, field_light::TILE * scale);
                 let push = ShadePush {
                     write_empty: (k == 0) as u32,
-                    tile_origin: origin,
-                    field_scale: scale,
                     ..o.push
                 };
                 common
                     .bind(pass.dispatch(&self.field_gain), o)
+                    .read_opt("field_light_tiles", field_tables[o.index])
                     .write("out_object", &mut gain)
                     .push(&push)
-                    .threads(threads);
+                    .threads(o.threads);
             }
             pass.finish();
-            gain
-        });
-        if let Some(gain) = gain.filter(|_| self.gain_only) {
             return ObjectLayer {
                 image: gain,
                 region: None,
@@ -383,6 +421,7 @@ impl ShadePass {
             .threads(threads);
         for o in &setups {
             let rays = o.light.direct.is_some() || o.field_light;
+            let tables = field_tables[o.index];
             let pipeline = match (o.shadow, rays) {
                 (Some(_), true) => &self.self_shadowed_direct,
                 (Some(_), false) => &self.self_shadowed,
@@ -391,11 +430,11 @@ impl ShadePass {
             if o.off_screen() {
                 continue;
             }
-            // Where the gain is not used the shader reads nothing there;
-            // the binding takes the G-buffer's normals.
+            // Where the field light is off the shader reads no table; the
+            // binding takes L_env's filler.
             common
                 .bind(pass.dispatch(pipeline), o)
-                .read("field_gain_in", gain.unwrap_or(gbuffer.normal_roughness))
+                .read("field_light_tiles", tables.unwrap_or(no_direct))
                 .write("out_object", &mut out)
                 .push(&o.push)
                 .threads(o.threads);
@@ -421,12 +460,17 @@ fn object_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32, tile: u32) ->
 
 /// One object's shading inputs and push constants for a frame.
 struct ObjectSetup {
+    /// Its index among the frame's objects.
+    index: usize,
     light: LightLobes,
     shadow: Option<SelfShadow>,
     field_light: bool,
     /// The invocations of its dispatches: over the tiles of its
     /// [`SelfShadow::pixels`] (from `push.tile_origin`), or the image.
     threads: [u32; 3],
+    /// The invocations of its field light tables' dispatch: 8 × 8 a tile
+    /// of its field light tiles (from `push.field_origin`).
+    field_threads: [u32; 3],
     push: ShadePush,
 }
 
