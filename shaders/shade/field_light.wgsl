@@ -43,6 +43,8 @@ const FIELD_LIGHT_NO_OBJECT: f32 = 3.0e38;
 const FIELD_LIGHT_TABLE_SIDE: u32 = 16u;
 const FIELD_LIGHT_TABLE_STRIDE: u32 = 513u;
 const FIELD_LIGHT_PLANE_WEIGHT_MIN: f32 = 1e-4;
+// field_light.rs FOOTPRINT_MIN, at f32's least normal number.
+const FIELD_LIGHT_FOOTPRINT_MIN: f32 = 1.2e-38;
 
 // Each tile's table, field_light.rs TileTable: the pick's point (w 1, or
 // 0 where the tile picked none), then at each normal the field's sum and
@@ -286,7 +288,7 @@ fn field_light_blended_gain(pixel: vec2<u32>, x: vec3<f32>, n: vec3<f32>) -> vec
         if pick.w == 0.0 {
             continue;
         }
-        let h = dot(n, pick.xyz - x) / footprint;
+        let h = dot(n, pick.xyz - x) / max(footprint, FIELD_LIGHT_FOOTPRINT_MIN);
         let plane = max(exp(-min(h * h, 80.0)), FIELD_LIGHT_PLANE_WEIGHT_MIN);
         let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1) * plane;
         let sums = field_light_table_sums(base, n);

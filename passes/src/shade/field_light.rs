@@ -132,6 +132,11 @@ pub const TABLE_STRIDE: u32 = 1 + 2 * TABLE_SIDE * TABLE_SIDE;
 /// bilinearly, rather than none.
 pub const PLANE_WEIGHT_MIN: f64 = 1e-4;
 
+/// The least tile footprint [`plane_weight`] divides by, so that its
+/// weight is defined (and at most 1) for any point (the shader takes f32's
+/// least normal number).
+pub const FOOTPRINT_MIN: f64 = 1e-30;
+
 /// One tile's light as a pixel reads it: where its rays start, and their
 /// two sums at each normal of its table.
 #[derive(Debug, Clone, PartialEq)]
@@ -176,8 +181,9 @@ impl TileTable {
 /// it (`footprint`: a tile's width on the surface there), never under
 /// [`PLANE_WEIGHT_MIN`]. A pick on another part of the object (a cap over
 /// a stem, an ear before a head) then lends the pixel little of its light.
+/// A footprint of 0 (a point at the eye) counts as [`FOOTPRINT_MIN`].
 pub fn plane_weight(x: DVec3, n: DVec3, pick: DVec3, footprint: f64) -> f64 {
-    let h = n.dot(pick - x) / footprint;
+    let h = n.dot(pick - x) / footprint.max(FOOTPRINT_MIN);
     (-h * h).exp().max(PLANE_WEIGHT_MIN)
 }
 
@@ -635,6 +641,18 @@ mod tests {
         );
         assert_eq!(
             plane_weight(DVec3::ZERO, n, DVec3::Y, 0.01),
+            PLANE_WEIGHT_MIN
+        );
+        // At the extremes the weight stays defined: a footprint of 0 with
+        // the pick on the plane or off it, an infinite one, a pick far off.
+        assert_eq!(plane_weight(DVec3::ZERO, n, DVec3::X, 0.0), 1.0);
+        assert_eq!(
+            plane_weight(DVec3::ZERO, n, DVec3::Y, 0.0),
+            PLANE_WEIGHT_MIN
+        );
+        assert_eq!(plane_weight(DVec3::ZERO, n, DVec3::Y, f64::INFINITY), 1.0);
+        assert_eq!(
+            plane_weight(DVec3::ZERO, n, DVec3::Y * 1e300, 1e-300),
             PLANE_WEIGHT_MIN
         );
     }
