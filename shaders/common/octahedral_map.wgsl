@@ -1,6 +1,7 @@
 // The octahedral map of directions, mirroring passes/src/probe/direction_map.rs:
 // (u, v) ∈ [−1, 1]² → (u, 1 − |u| − |v|, v), the lower half folded over the
-// corners; its inverse; and its texels' wrap across the map's edges.
+// corners; its inverse; its texels' wrap across the map's edges; and the
+// bilinear read's texels and weights.
 #include "common/octahedral_wrap.wgsl"
 
 // The point of the octahedron |x| + |y| + |z| = 1 at (u, v) ∈ [−1, 1]²
@@ -30,4 +31,27 @@ fn octahedral_uv(d: vec3<f32>) -> vec2<f32> {
         b = fb;
     }
     return vec2<f32>(0.5 * (a + 1.0), 0.5 * (b + 1.0));
+}
+
+// The four texels of an n × n octahedral map around unit d (indices
+// y · n + x, wrapped across the map's edges) and their bilinear weights,
+// in the order (0, 0), (1, 0), (0, 1), (1, 1) from the lower corner
+// (direction_map.rs octahedral_bilinear).
+struct OctBilinear {
+    texels: vec4<u32>,
+    weights: vec4<f32>,
+}
+
+fn octahedral_bilinear(d: vec3<f32>, n: i32) -> OctBilinear {
+    let p = octahedral_uv(d) * f32(n) - vec2<f32>(0.5);
+    let b = floor(p);
+    let f = p - b;
+    let t = vec2<i32>(b);
+    let t00 = oct_wrap(t, n);
+    let t10 = oct_wrap(t + vec2<i32>(1, 0), n);
+    let t01 = oct_wrap(t + vec2<i32>(0, 1), n);
+    let t11 = oct_wrap(t + vec2<i32>(1, 1), n);
+    let texels = vec4<u32>(u32(t00.y * n + t00.x), u32(t10.y * n + t10.x), u32(t01.y * n + t01.x), u32(t11.y * n + t11.x));
+    let weights = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+    return OctBilinear(texels, weights);
 }

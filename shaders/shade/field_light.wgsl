@@ -235,18 +235,12 @@ fn field_light_write_table(local_index: u32, group: vec3<u32>) {
 // A table's two sums at unit normal n, bilinear between its four nearest
 // normals (field_light.rs TileTable::sums): field in [0], lobes in [1].
 fn field_light_table_sums(base: u32, n: vec3<f32>) -> array<vec3<f32>, 2> {
-    let side = i32(FIELD_LIGHT_TABLE_SIDE);
-    let p = octahedral_uv(n) * f32(side) - vec2<f32>(0.5);
-    let b = floor(p);
-    let f = p - b;
-    let t = vec2<i32>(b);
+    let texels = octahedral_bilinear(n, i32(FIELD_LIGHT_TABLE_SIDE));
     var field = vec3<f32>(0.0);
     var lobes = vec3<f32>(0.0);
-    for (var k = 0; k < 4; k++) {
-        let o = vec2<i32>(k & 1, k >> 1u);
-        let w = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1);
-        let texel = oct_wrap(t + o, side);
-        let j = u32(texel.y * side + texel.x);
+    for (var k = 0u; k < 4u; k++) {
+        let w = texels.weights[k];
+        let j = texels.texels[k];
         field += w * field_light_tiles[base + 1u + 2u * j].xyz;
         lobes += w * field_light_tiles[base + 2u + 2u * j].xyz;
     }

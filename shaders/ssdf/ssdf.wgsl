@@ -128,26 +128,18 @@ fn ssdf_prepare(x: vec3<f32>) {
     }
 }
 
-// The octahedral map's edges fold onto themselves (SsdfField's wrap_octahedral).
-fn ssdf_wrap(t: vec2<i32>, n: i32) -> u32 {
-    let w = oct_wrap(t, n);
-    return u32(w.y * n + w.x);
-}
-
 // The map's value along d, bilinear over its four nearest texels: their
 // rows blended first, then one dot product with the coefficients.
 fn ssdf_direction_value(d: vec3<f32>) -> f32 {
     let n = i32(ssdf.dims.y);
     let m = ssdf_row_vec4s();
-    let p = octahedral_uv(d) * f32(n) - vec2<f32>(0.5);
-    let b = floor(p);
-    let f = p - b;
-    let t = vec2<i32>(b);
-    let r00 = ssdf_wrap(t, n) * m;
-    let r10 = ssdf_wrap(t + vec2<i32>(1, 0), n) * m;
-    let r01 = ssdf_wrap(t + vec2<i32>(0, 1), n) * m;
-    let r11 = ssdf_wrap(t + vec2<i32>(1, 1), n) * m;
-    let w = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+    // The map's edges fold onto themselves (SsdfField's wrap_octahedral).
+    let texels = octahedral_bilinear(d, n);
+    let r00 = texels.texels.x * m;
+    let r10 = texels.texels.y * m;
+    let r01 = texels.texels.z * m;
+    let r11 = texels.texels.w * m;
+    let w = texels.weights;
     var s = 0.0;
     for (var j = 0u; j < m; j++) {
         let row = w.x * ssdf_rows[r00 + j] + w.y * ssdf_rows[r10 + j] + w.z * ssdf_rows[r01 + j] + w.w * ssdf_rows[r11 + j];

@@ -195,8 +195,9 @@ pub fn wrap_octahedral(mut x: i64, mut y: i64, n: i64) -> (i64, i64) {
 
 /// The bilinear read along unit `d` of an n × n octahedral map whose texel
 /// `y·n + x` holds `value(y·n + x)`; neighbours across the map's edges
-/// come from [`wrap_octahedral`]. Used for SSDF direction maps and cached
-/// opacity maps.
+/// come from [`wrap_octahedral`]. Used for SSDF direction maps, cached
+/// opacity maps and the field light's tables. Its texels and weights are
+/// mirrored by `octahedral_bilinear` in `shaders/common/octahedral_map.wgsl`.
 pub fn octahedral_bilinear(n: u32, d: DVec3, mut value: impl FnMut(usize) -> f64) -> f64 {
     let n = n as i64;
     let (u, v) = octahedral_uv(d);

@@ -403,6 +403,11 @@ mod tests {
         ]
     }
 
+    /// The field without glow, with the black roof or clear.
+    fn dark(roof: bool) -> Slab {
+        Slab { roof, glow: 0.0 }
+    }
+
     /// The lobes fitted to the probe of a clear field under the sky are the
     /// sky: both terms alike.
     fn rays_with(field: &dyn RadianceField, side: u32) -> Vec<TileRay> {
@@ -416,10 +421,7 @@ mod tests {
 
     #[test]
     fn a_clear_field_leaves_the_lobes_alone() {
-        let field = Slab {
-            roof: false,
-            glow: 0.0,
-        };
+        let field = dark(false);
         for side in [1, 4, 8, 16] {
             let rays = rays_with(&field, side);
             assert_eq!(rays.len(), (side * side) as usize);
@@ -438,13 +440,7 @@ mod tests {
         // Facing the roof the point keeps only what comes in under it (rays
         // below 17–23° of elevation leave the cube's sides first, with a
         // cosine under 0.4); facing away, all of it.
-        let rays = rays_with(
-            &Slab {
-                roof: true,
-                glow: 0.0,
-            },
-            8,
-        );
+        let rays = rays_with(&dark(true), 8);
         let up = diffuse_gain(DVec3::Y, &rays);
         let down = diffuse_gain(-DVec3::Y, &rays);
         assert!(up.max_element() < 0.15, "facing the roof: {up}");
@@ -468,10 +464,7 @@ mod tests {
             fitted: &sky,
             environment: &[],
         };
-        let clear = Slab {
-            roof: false,
-            glow: 0.0,
-        };
+        let clear = dark(false);
         let rays = tile_rays(&clear, &MarchKnobs::default(), DVec3::ZERO, light, &[], 8);
         assert_eq!(diffuse_gain(DVec3::Y, &rays), DVec3::ZERO);
     }
@@ -506,13 +499,7 @@ mod tests {
     fn the_table_holds_the_rays_sums_and_reads_between_them() {
         // Under the roof the light comes from below the slab and from the
         // sky's sides: the gain swings from 0.1 to 1 over the normals.
-        let rays = rays_with(
-            &Slab {
-                roof: true,
-                glow: 0.0,
-            },
-            16,
-        );
+        let rays = rays_with(&dark(true), 16);
         let table = tile_table(DVec3::ZERO, &rays);
         for j in 0..TABLE_SIDE * TABLE_SIDE {
             let n = table_normal(j);
@@ -551,13 +538,7 @@ mod tests {
 
     #[test]
     fn a_blend_of_like_tiles_is_their_own_gain() {
-        let rays = rays_with(
-            &Slab {
-                roof: true,
-                glow: 0.0,
-            },
-            8,
-        );
+        let rays = rays_with(&dark(true), 8);
         let table = tile_table(DVec3::ZERO, &rays);
         for pixel in [(0, 0), (3, 4), (13, 2), (100, 37)] {
             let tiles = blend_tiles(pixel, 8);
@@ -588,20 +569,8 @@ mod tests {
         // along a row of pixels across their common edge, the blend moves
         // by at most its share of the difference at each pixel, where each
         // tile's own gain steps by all of it.
-        let roofed = rays_with(
-            &Slab {
-                roof: true,
-                glow: 0.0,
-            },
-            8,
-        );
-        let open = rays_with(
-            &Slab {
-                roof: false,
-                glow: 0.0,
-            },
-            8,
-        );
+        let roofed = rays_with(&dark(true), 8);
+        let open = rays_with(&dark(false), 8);
         let (a, b) = (
             tile_table(DVec3::ZERO, &roofed),
             tile_table(DVec3::ZERO, &open),

@@ -301,7 +301,6 @@ impl ShadePass {
                 let (field_origin, field_threads) = object_tiles(pixels, width, height, field_tile);
                 let field_tiles = [field_threads[0] / 8, field_threads[1] / 8];
                 ObjectSetup {
-                    index: i,
                     light: *l,
                     shadow,
                     field_light,
@@ -381,7 +380,11 @@ impl ShadePass {
                 },
             );
             let mut pass = graph.compute_pass("field-light-gain");
-            for (k, o) in setups.iter().filter(|o| o.field_light).enumerate() {
+            let lit = setups
+                .iter()
+                .zip(&field_tables)
+                .filter(|(o, _)| o.field_light);
+            for (k, (o, tables)) in lit.enumerate() {
                 if o.off_screen() {
                     continue;
                 }
@@ -391,7 +394,7 @@ impl ShadePass {
                 };
                 common
                     .bind(pass.dispatch(&self.field_gain), o)
-                    .read_opt("field_light_tiles", field_tables[o.index])
+                    .read_opt("field_light_tiles", *tables)
                     .write("out_object", &mut gain)
                     .push(&push)
                     .threads(o.threads);
@@ -419,9 +422,8 @@ impl ShadePass {
             .write("out_object", &mut out)
             .push(&clear)
             .threads(threads);
-        for o in &setups {
+        for (o, tables) in setups.iter().zip(&field_tables) {
             let rays = o.light.direct.is_some() || o.field_light;
-            let tables = field_tables[o.index];
             let pipeline = match (o.shadow, rays) {
                 (Some(_), true) => &self.self_shadowed_direct,
                 (Some(_), false) => &self.self_shadowed,
@@ -460,8 +462,6 @@ fn object_tiles(pixels: Option<[u32; 4]>, width: u32, height: u32, tile: u32) ->
 
 /// One object's shading inputs and push constants for a frame.
 struct ObjectSetup {
-    /// Its index among the frame's objects.
-    index: usize,
     light: LightLobes,
     shadow: Option<SelfShadow>,
     field_light: bool,
