@@ -393,11 +393,16 @@ fn pixel_factor(pixel: vec2<i32>) -> vec3<f32> {
     if all(behind_n == vec3<f32>(0.0)) {
         return vec3<f32>(1.0);
     }
+    let rho = cast_factor(behind_x, behind_n, colour.rgb / opacity);
+    // Unshadowed there, ρ is 1 whatever share of the colour is shadowed,
+    // and the second march is left out.
+    if all(rho == vec3<f32>(1.0)) {
+        return rho;
+    }
     // What lies in front of the surface: up to two normal steps before it
     // (its density rises over about one).
     let front = march_ray(pc.camera.origin, dir, max(half - 2.0 * pc.normal_step, 0.0), pc.march_step, pc.march_termination).colour;
     let share = clamp((colour.rgb - front) / max(colour.rgb, vec3<f32>(1e-30)), vec3<f32>(0.0), vec3<f32>(1.0));
-    let rho = cast_factor(behind_x, behind_n, colour.rgb / opacity);
     return vec3<f32>(1.0) - (vec3<f32>(1.0) - rho) * share;
 }
 

@@ -412,8 +412,10 @@ pub struct ShadowPoint {
 /// D̂/Ô between the two), at the depth where the ray's opacity reached 1/2
 /// ([`crate::march::MarchResult::half_depth`]), darkening only the share
 /// of the pixel's colour gathered from that surface on, two node spacings
-/// before it (the glass's own light is not in the shadow). None: no surface (ρ = 1). Mirrors `pixel_factor`
-/// in `shaders/shadow/cast_body.wgsl`.
+/// before it (the glass's own light is not in the shadow). None: no
+/// surface (ρ = 1). Mirrors `pixel_factor` in
+/// `shaders/shadow/cast_body.wgsl`, which marches for the share only where
+/// ρ at the point is under 1 (the pixel's ρ is 1 whatever the share).
 pub fn shadow_point(
     field: &crate::field::GridField,
     ray: &crate::geometry::Ray,
