@@ -23,7 +23,9 @@
 // direction clears the sphere by a quarter turn, or of which it can block
 // under CAST_SKIP_SHARE, skip the SSDF (q = 1); a direct lobe takes q
 // from its rays instead of the SSDF; the light the object sends back
-// (shadow/bounce.wgsl) offsets the blocked light, never beyond it. Mirrors
+// (shadow/bounce.wgsl) offsets the blocked light, never beyond it, and
+// the least of it (whatever the point's own ratio) is taken off the first
+// test's bound before the SSDF is read. Mirrors
 // passes/src/shadow/runtime.rs cast_shadow_factor. `main_classify` writes
 // 1 where the first test leaves a pixel unshadowed and lists the others;
 // `main_listed` takes ρ in full at the listed pixels, and at the pixels
@@ -257,8 +259,13 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
     // spheres' bounds (an upper one), then again with it.
     let first = cast_first_bound(x, n, view, &cone);
     var den = first.den;
-    let most = first.most;
     let floor = SG_PI * radiance;
+    if cast_within_tolerance(first.most, max(den, floor)) {
+        return vec3<f32>(1.0);
+    }
+    // Less the least light the object sends back (cast_bounce_net).
+    let back = cast_bounce_parts(x, n);
+    let most = cast_bounce_net(back, first.most, max(den, floor));
     if cast_within_tolerance(most, max(den, floor)) {
         return vec3<f32>(1.0);
     }
@@ -311,7 +318,7 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
         // before it (runtime.rs cast_shadow_factor: the field the object's
         // face sees there is shadowed about as deeply as x).
         let ratio = clamp(vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), vec3<f32>(0.0), vec3<f32>(1.0));
-        blocked = max(blocked - cast_bounce(x, n, ratio), vec3<f32>(0.0));
+        blocked = max(blocked - cast_bounce_at(back, ratio), vec3<f32>(0.0));
     }
     return select(vec3<f32>(1.0), vec3<f32>(1.0) - blocked / max(total, vec3<f32>(1e-30)), total > vec3<f32>(0.0));
 }
@@ -339,11 +346,12 @@ fn pixel_point(pixel: vec2<i32>, dir: vec3<f32>, opacity: f32) -> vec3<f32> {
     return pc.camera.origin + dir * (textureLoad(field_depth, pixel, 0).r / opacity);
 }
 
-// Whether pixel_factor(pixel) is 1 by its first test alone: no field
+// Whether pixel_factor(pixel) is 1 by its first tests alone: no field
 // there, or a point on a surface where the object can block under
-// CAST_TOLERANCE of the light without the local lights' (cast_factor's
-// first test). False where the rest of it must decide, the point off any
-// surface (marched again) included.
+// CAST_TOLERANCE of the light without the local lights', or does once the
+// least light it sends back is taken off (cast_factor's first two tests).
+// False where the rest of it must decide, the point off any surface
+// (marched again) included.
 fn pixel_unshadowed(pixel: vec2<i32>) -> bool {
     let colour = textureLoad(field_colour, pixel, 0);
     let opacity = colour.a;
@@ -362,7 +370,11 @@ fn pixel_unshadowed(pixel: vec2<i32>) -> bool {
         cone = cast_cone(view, n);
     }
     let first = cast_first_bound(x, n, view, &cone);
-    return cast_within_tolerance(first.most, max(first.den, SG_PI * colour.rgb / opacity));
+    let total = max(first.den, SG_PI * colour.rgb / opacity);
+    if cast_within_tolerance(first.most, total) {
+        return true;
+    }
+    return cast_within_tolerance(cast_bounce_net(cast_bounce_parts(x, n), first.most, total), total);
 }
 
 // ρ at pixel `pixel` (1 where the field is empty or flat). The shadow is

@@ -116,46 +116,91 @@ pub fn below_share(p: &Sg64, n: DVec3) -> f64 {
             .exp())
 }
 
+/// The light the object sends back to a field point, split by how it
+/// depends on the point's own shadow ratio `below`: `fixed` + `scaled` ×
+/// `below` ([`bounce_parts`]). The lobes' light from above the
+/// point's plane is `fixed`; from below it, `scaled`, since the field
+/// around the point that sends it is shadowed about as deeply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounce {
+    /// The part that does not depend on the point's ratio.
+    pub fixed: DVec3,
+    /// The part counted at the point's ratio.
+    pub scaled: DVec3,
+}
+
+impl Bounce {
+    /// The bounce at shadow ratio `below`.
+    pub fn at(&self, below: DVec3) -> DVec3 {
+        self.fixed + self.scaled * below
+    }
+
+    /// The least the bounce can be at any ratio from `lowest` to 1 (per
+    /// channel), and never below zero: what the blocked light is surely
+    /// offset by before the ratio is known (a negative part counts in
+    /// full). A point that loses at most a share s of its light has a
+    /// ratio of at least 1 − s.
+    pub fn least(&self, lowest: DVec3) -> DVec3 {
+        (self.fixed + (self.scaled * lowest).min(self.scaled)).max(DVec3::ZERO)
+    }
+
+    /// What the object can block at most, `most`, of a point's light
+    /// `total`, less the least it sends back there: the point's ratio is
+    /// at least 1 − `most` / `total`. Mirrored by `cast_bounce_net` in
+    /// `shaders/shadow/bounce.wgsl`.
+    pub fn net(&self, most: DVec3, total: DVec3) -> DVec3 {
+        let lowest =
+            (DVec3::ONE - most / total.max(DVec3::splat(1e-300))).clamp(DVec3::ZERO, DVec3::ONE);
+        (most - self.least(lowest)).max(DVec3::ZERO)
+    }
+}
+
 /// The irradiance at field point `x` (unit normal `n`) from the object in
 /// bounding sphere (`c`, `r`) under `lobes` (the light at the object), for
-/// an object of silhouette reflectance `reflectance` ([`ObjectReflectance::of`]).
+/// an object of silhouette reflectance `reflectance` ([`ObjectReflectance::of`]),
+/// in its two parts ([`Bounce`]; [`Bounce::at`] gives it at a ratio).
 /// The lobes' light from below `x`'s plane is the field around `x`, which
-/// the object shadows too: it counts at `below` (x's own shadow ratio;
-/// one where nothing is blocked) and the rest in full.
-/// Zero at the sphere's centre and where the object lies below `x`'s
-/// horizon.
-pub fn bounce_irradiance(
+/// the object shadows too: it counts at x's own shadow ratio (one where
+/// nothing is blocked) and the rest in full. Zero at the sphere's centre
+/// and where the object lies below `x`'s horizon.
+pub fn bounce_parts(
     lobes: &[Sg64],
     x: DVec3,
     n: DVec3,
     c: DVec3,
     r: f64,
     reflectance: DVec3,
-    below: DVec3,
-) -> DVec3 {
+) -> Bounce {
+    let none = Bounce {
+        fixed: DVec3::ZERO,
+        scaled: DVec3::ZERO,
+    };
     let to = c - x;
     let dist = to.length();
     if dist <= 0.0 {
-        return DVec3::ZERO;
+        return none;
     }
     let u = to / dist;
     // The cap's projected solid angle over π, clipped at x's horizon.
     let projected =
         super::cone::projected_solid_angle(n.dot(u), (r / dist).min(1.0)) / std::f64::consts::PI;
     if projected <= 0.0 {
-        return DVec3::ZERO;
+        return none;
     }
     let facing = Sg64::clamped_cosine(-u);
-    let irradiance: DVec3 = lobes
-        .iter()
-        .map(|g| {
-            let p = g.product(&facing);
-            let share = below_share(&p, n);
-            p.integral() * (DVec3::ONE - share + share * below)
-        })
-        .sum();
+    let (mut fixed, mut scaled) = (DVec3::ZERO, DVec3::ZERO);
+    for g in lobes {
+        let p = g.product(&facing);
+        let share = below_share(&p, n);
+        fixed += p.integral() * (1.0 - share);
+        scaled += p.integral() * share;
+    }
     // (projected solid angle) × albedo × E / π.
-    projected * reflectance * irradiance
+    let scale = projected * reflectance;
+    Bounce {
+        fixed: scale * fixed,
+        scaled: scale * scaled,
+    }
 }
 
 #[cfg(test)]
@@ -217,8 +262,8 @@ mod tests {
         let below = DVec3::splat(0.25);
         for (d, expected) in [(-n, 0.25), (n, 1.0)] {
             let g = [lobe(d, 40.0)];
-            let full = bounce_irradiance(&g, x, n, c, r, DVec3::ONE, DVec3::ONE);
-            let shaded = bounce_irradiance(&g, x, n, c, r, DVec3::ONE, below);
+            let full = bounce_parts(&g, x, n, c, r, DVec3::ONE).at(DVec3::ONE);
+            let shaded = bounce_parts(&g, x, n, c, r, DVec3::ONE).at(below);
             assert!(full.x > 0.0);
             assert!(
                 (shaded.x / full.x - expected).abs() < 2e-3,
@@ -245,7 +290,7 @@ mod tests {
         let u = (c - x).normalize();
         let sin2 = (r / (c - x).length()).powi(2);
         let expected = std::f64::consts::PI * sin2 * n.dot(u) * 2.0;
-        let got = bounce_irradiance(&[sky], x, n, c, r, DVec3::ONE, DVec3::ONE);
+        let got = bounce_parts(&[sky], x, n, c, r, DVec3::ONE).at(DVec3::ONE);
         assert!(
             (got.x / expected - 1.0).abs() < 1e-3,
             "{} vs {}",
@@ -255,11 +300,13 @@ mod tests {
         // Below the horizon: nothing; inside the sphere, the whole
         // hemisphere's projected solid angle π at most.
         assert_eq!(
-            bounce_irradiance(&[sky], x, -n, c, r, DVec3::ONE, DVec3::ONE),
+            bounce_parts(&[sky], x, -n, c, r, DVec3::ONE).at(DVec3::ONE),
             DVec3::ZERO
         );
-        let inside = bounce_irradiance(&[sky], c - DVec3::Y * 0.1, n, c, r, DVec3::ONE, DVec3::ONE);
+        let inside = bounce_parts(&[sky], c - DVec3::Y * 0.1, n, c, r, DVec3::ONE).at(DVec3::ONE);
         assert!((inside.x / (std::f64::consts::PI * 2.0) - 1.0).abs() < 1e-3);
-        assert!(bounce_irradiance(&[sky], c, n, c, r, DVec3::ONE, DVec3::ONE).is_finite());
+        assert!(bounce_parts(&[sky], c, n, c, r, DVec3::ONE)
+            .at(DVec3::ONE)
+            .is_finite());
     }
 }

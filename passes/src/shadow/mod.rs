@@ -16,7 +16,7 @@ pub mod gpu;
 pub mod runtime;
 pub mod upsample;
 
-pub use bounce::{bounce_irradiance, ObjectReflectance};
+pub use bounce::{bounce_parts, Bounce, ObjectReflectance};
 pub use cast::{
     CastShadowPass, CAST_SHADOW, CAST_SHADOW_INFO, CAST_SHADOW_SWITCH, SHADOW_FORMAT,
     SHADOW_REFINE, SHADOW_REFINE_INFO, SHADOW_UPSAMPLE, SHADOW_UPSAMPLE_INFO,
