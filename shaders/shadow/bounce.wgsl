@@ -41,9 +41,10 @@ fn cast_bounce_parts(x: vec3<f32>, n: vec3<f32>) -> CastBounce {
     let facing = sg_clamped_cosine(-u);
     for (var k = 0u; k < pc.light_count; k++) {
         let p = sg_product(sg_unpack(light_lobes[2u * k], light_lobes[2u * k + 1u]), facing);
+        let light = sg_integral(p);
         let share = bounce_below_share(p, n);
-        b.fixed += sg_integral(p) * (1.0 - share);
-        b.scaled += sg_integral(p) * share;
+        b.fixed += light * (1.0 - share);
+        b.scaled += light * share;
     }
     let scale = projected * ssdf.reflectance.rgb;
     return CastBounce(scale * b.fixed, scale * b.scaled);

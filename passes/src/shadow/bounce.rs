@@ -121,7 +121,7 @@ pub fn below_share(p: &Sg64, n: DVec3) -> f64 {
 /// `below` ([`bounce_parts`]). The lobes' light from above the
 /// point's plane is `fixed`; from below it, `scaled`, since the field
 /// around the point that sends it is shadowed about as deeply.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Bounce {
     /// The part that does not depend on the point's ratio.
     pub fixed: DVec3,
@@ -171,29 +171,25 @@ pub fn bounce_parts(
     r: f64,
     reflectance: DVec3,
 ) -> Bounce {
-    let none = Bounce {
-        fixed: DVec3::ZERO,
-        scaled: DVec3::ZERO,
-    };
     let to = c - x;
     let dist = to.length();
     if dist <= 0.0 {
-        return none;
+        return Bounce::default();
     }
     let u = to / dist;
     // The cap's projected solid angle over π, clipped at x's horizon.
     let projected =
         super::cone::projected_solid_angle(n.dot(u), (r / dist).min(1.0)) / std::f64::consts::PI;
     if projected <= 0.0 {
-        return none;
+        return Bounce::default();
     }
     let facing = Sg64::clamped_cosine(-u);
     let (mut fixed, mut scaled) = (DVec3::ZERO, DVec3::ZERO);
     for g in lobes {
         let p = g.product(&facing);
-        let share = below_share(&p, n);
-        fixed += p.integral() * (1.0 - share);
-        scaled += p.integral() * share;
+        let (light, share) = (p.integral(), below_share(&p, n));
+        fixed += light * (1.0 - share);
+        scaled += light * share;
     }
     // (projected solid angle) × albedo × E / π.
     let scale = projected * reflectance;
