@@ -380,17 +380,43 @@ impl MeshScene {
     }
 
     /// The point of the mesh nearest to `p` and the unit normal (by
-    /// winding) of its triangle; brute force over every triangle.
+    /// winding) of its triangle. Of triangles equally near, the first in
+    /// the hierarchy's order, as a search over every triangle in that
+    /// order finds; the hierarchy skips the boxes farther than the nearest
+    /// so far.
     pub fn nearest_point(&self, p: DVec3) -> Option<(DVec3, DVec3)> {
-        self.triangles
-            .iter()
-            .map(|t| {
-                let q = closest_point_on_triangle(p, t.p);
-                let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
-                (q.distance_squared(p), q, n)
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(_, q, n)| (q, n))
+        if self.nodes.is_empty() {
+            return None;
+        }
+        // A box's distance is rounded apart from its triangles': skip only
+        // boxes clearly farther, so no tie is lost.
+        let to = |b: &Aabb| (b.min - p).max(p - b.max).max(DVec3::ZERO).length_squared();
+        let farther = |b: &Aabb, best: f64| to(b) > best * (1.0 + 1e-9);
+        let mut best = (f64::INFINITY, usize::MAX, DVec3::ZERO);
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let node = self.nodes[i];
+            if farther(&node.bounds, best.0) {
+                continue;
+            }
+            if node.count == 0 {
+                // The nearer child next.
+                let (l, r) = (node.first as usize, node.first as usize + 1);
+                let near_left = to(&self.nodes[l].bounds) <= to(&self.nodes[r].bounds);
+                stack.extend(if near_left { [r, l] } else { [l, r] });
+                continue;
+            }
+            for k in node.first as usize..(node.first + node.count) as usize {
+                let q = closest_point_on_triangle(p, self.triangles[k].p);
+                let d = q.distance_squared(p);
+                if d < best.0 || (d == best.0 && k < best.1) {
+                    best = (d, k, q);
+                }
+            }
+        }
+        let t = &self.triangles[best.1];
+        let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
+        Some((best.2, n))
     }
 
     /// The surface at `hit` of `ray`.
@@ -457,19 +483,23 @@ mod tests {
     use super::*;
     use std::sync::Arc;
 
-    /// The BVH finds the same nearest hits as testing every triangle.
-    #[test]
-    fn bvh_hits_match_brute_force() {
+    /// The bundled toy as a scene.
+    fn toy_scene() -> MeshScene {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/objects/toy.glb");
         let mesh = Arc::new(crate::object::load_gltf(&path).unwrap());
-        let placed = PlacedObject {
+        MeshScene::new(&[PlacedObject {
             name: "toy".into(),
             mesh,
             pose: crate::object::Pose::default(),
             material: Default::default(),
-        };
-        let scene = MeshScene::new(&[placed]);
+        }])
+    }
+
+    /// The BVH finds the same nearest hits as testing every triangle.
+    #[test]
+    fn bvh_hits_match_brute_force() {
+        let scene = toy_scene();
         let mut rng = crate::rng::Pcg32::new(3, 0);
         let mut hits = 0;
         for _ in 0..300 {
@@ -495,5 +525,31 @@ mod tests {
             assert_eq!(scene.occluded(&ray, 0.0, f64::INFINITY), slow.is_some());
         }
         assert!(hits > 50, "{hits}");
+    }
+
+    /// The hierarchy's nearest point is the one a search over every
+    /// triangle finds (the first of equally near ones), near the surface
+    /// and far from it.
+    #[test]
+    fn nearest_points_match_brute_force() {
+        let scene = toy_scene();
+        let mut rng = crate::rng::Pcg32::new(5, 0);
+        for k in 0..400 {
+            let spread = if k % 2 == 0 { 1.5 } else { 6.0 };
+            let p = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * spread
+                - DVec3::splat(0.5 * spread)
+                + DVec3::new(0.0, 0.6, 0.0);
+            let slow = scene
+                .triangles
+                .iter()
+                .map(|t| {
+                    let q = closest_point_on_triangle(p, t.p);
+                    let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
+                    (q.distance_squared(p), q, n)
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, q, n)| (q, n));
+            assert_eq!(scene.nearest_point(p), slow, "{p}");
+        }
     }
 }
