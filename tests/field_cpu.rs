@@ -292,6 +292,14 @@ fn bad_scene_files_name_the_key() {
             "shadows.cast_refine",
         ),
         (
+            format!("{base}\n[shadows]\ncoarse_angle = 0.7\n"),
+            "shadows.coarse_angle",
+        ),
+        (
+            format!("{base}\n[shadows]\ncoarse_angle = nan\n"),
+            "shadows.coarse_angle",
+        ),
+        (
             format!("{base}\n[capture]\nazimuth = [90.0, 0.0]\n"),
             "capture.azimuth",
         ),

@@ -87,6 +87,7 @@ fn small_field(
         grid,
         directions,
         components: 16,
+        ..SsdfKnobs::default()
     };
     let samples = SsdfBaker::new(ctx, &lib)
         .unwrap()

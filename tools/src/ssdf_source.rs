@@ -57,7 +57,10 @@ pub fn bake_ssdf_with_progress(
 ) -> anyhow::Result<(SsdfField, SsdfBakeReport)> {
     let baker = SsdfBaker::new(ctx, lib)?;
     let bar = progress_bar("ssdf", knobs.grid.pow(3) as u64);
-    let samples = baker.bake(ctx, mesh, knobs, &|done, _| bar.set_position(done as u64))?;
+    let samples = baker.bake(ctx, mesh, knobs, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64)
+    })?;
     bar.finish_and_clear();
     let started = std::time::Instant::now();
     let field = SsdfField::compress(&samples, knobs.components);
@@ -80,6 +83,12 @@ pub fn bake_ssdf_with_progress(
     eprintln!(
         "baked the SSDF field of {} ({}³ nodes, {}² directions, {} components): {report}",
         mesh.name, knobs.grid, knobs.directions, field.components
+    );
+    eprintln!(
+        "  {} of {} nodes blended from coarser lattices (coarse angle {} rad), the rest baked",
+        samples.blended,
+        knobs.grid.pow(3),
+        knobs.coarse_angle
     );
     let kernels: Vec<String> = samples
         .kernel_seconds

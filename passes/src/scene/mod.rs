@@ -581,6 +581,9 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             grid: sp.and_then(|s| s.grid).unwrap_or(d.bake.grid),
             directions: sp.and_then(|s| s.directions).unwrap_or(d.bake.directions),
             components: sp.and_then(|s| s.components).unwrap_or(d.bake.components),
+            coarse_angle: sp
+                .and_then(|s| s.coarse_angle)
+                .unwrap_or(d.bake.coarse_angle),
         };
         if let Some((k, m)) = bake.problem() {
             return Err(e(&format!("shadows.{k}"), m));

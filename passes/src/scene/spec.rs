@@ -61,6 +61,7 @@ pub(crate) struct ShadowsSpec {
     pub grid: Option<u32>,
     pub directions: Option<u32>,
     pub components: Option<u32>,
+    pub coarse_angle: Option<f64>,
     pub cast_scale: Option<ScaleSpec>,
     pub cast_refine: Option<f64>,
 }

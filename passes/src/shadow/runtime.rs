@@ -541,6 +541,7 @@ mod tests {
             values,
             object: mesh.geometry_key(),
             seconds: 0.0,
+            blended: 0,
             kernel_seconds: Vec::new(),
         };
         let field = SsdfField::compress(&samples, 8);

@@ -29,6 +29,10 @@
 //! instead the SSDF seen from the nearest surface point, lifted off the
 //! surface by 10⁻³ of the radius along its face normal: the field then
 //! continues across the surface the way it approaches it from outside.
+//!
+//! **Nodes far from the object** may take the blend of a coarser lattice's
+//! values instead of a bake ([`SsdfKnobs::coarse_angle`], [`NodePlan`]):
+//! only the plan's baked nodes go through the kernels.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -38,6 +42,7 @@ use inlay_engine::graph::{BufferHandle, FrameGraph};
 use inlay_engine::shader::{Define, ShaderLibrary};
 use inlay_engine::{BufferReadback, ComputePipeline, Context, DeviceInfo, Renderer, SubmitSync};
 
+use super::coarse::{NodePlan, MAX_COARSE_ANGLE};
 use super::grid::SsdfGrid;
 use super::silhouette::{SilhouetteMesh, ARC_PIECES, OUTSIDE_OFFSET, PIECE_ANGLE};
 use crate::geometry::MeshScene;
@@ -64,7 +69,7 @@ inlay_engine::gpu_struct! {
 }
 
 /// The knobs of an SSDF bake.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SsdfKnobs {
     /// Nodes along each axis of the grid (paper: 16).
     pub grid: u32,
@@ -72,7 +77,17 @@ pub struct SsdfKnobs {
     pub directions: u32,
     /// PCA components kept.
     pub components: u32,
+    /// A node at distance d from the object takes its values from the
+    /// coarsest lattice of the grid whose spacing is at most this angle
+    /// (radians) times d, instead of a bake of its own ([`super::coarse`];
+    /// 0 bakes every node, at most [`MAX_COARSE_ANGLE`]).
+    pub coarse_angle: f64,
 }
+
+/// The default [`SsdfKnobs::coarse_angle`]: where a blended node's
+/// lattice spacing subtends at most 0.2 rad, about two texels of the
+/// default 32² map (docs/benchmarks.md, issue 26's nineteenth pass).
+pub const DEFAULT_COARSE_ANGLE: f64 = 0.2;
 
 impl Default for SsdfKnobs {
     fn default() -> Self {
@@ -80,6 +95,7 @@ impl Default for SsdfKnobs {
             grid: 16,
             directions: 32,
             components: 16,
+            coarse_angle: DEFAULT_COARSE_ANGLE,
         }
     }
 }
@@ -115,6 +131,15 @@ impl SsdfKnobs {
                 format!("{} is not in 1..={most} (at most the directions, the nodes and {MAX_SSDF_COMPONENTS})", self.components),
             ));
         }
+        if !(0.0..=MAX_COARSE_ANGLE).contains(&self.coarse_angle) {
+            return Some((
+                "coarse_angle",
+                format!(
+                    "{} is not in 0..={MAX_COARSE_ANGLE} (radians; 0 bakes every node)",
+                    self.coarse_angle
+                ),
+            ));
+        }
         None
     }
 
@@ -137,6 +162,9 @@ pub struct SsdfSamples {
     pub object: u64,
     /// Seconds the bake took.
     pub seconds: f64,
+    /// Nodes blended from a coarser lattice rather than baked
+    /// ([`super::coarse`]).
+    pub blended: usize,
     /// GPU seconds of each kernel over all batches, in the order they run.
     pub kernel_seconds: KernelSeconds,
 }
@@ -245,17 +273,23 @@ pub fn grid_for(mesh: &ObjectMesh, nodes: u32) -> SsdfGrid {
 /// The point each node's SSDF is computed from: the node itself, or for a
 /// node inside the object the nearest surface point lifted off the surface.
 pub fn lookup_points(scene: &MeshScene, grid: &SsdfGrid) -> Vec<DVec3> {
+    node_sites(scene, grid).into_iter().map(|s| s.0).collect()
+}
+
+/// Each node's [`lookup_points`] point and whether the node lies inside
+/// the object.
+pub fn node_sites(scene: &MeshScene, grid: &SsdfGrid) -> Vec<(DVec3, bool)> {
     use rayon::prelude::*;
     (0..grid.count())
         .into_par_iter()
         .map(|i| {
             let p = grid.position_of(i);
             if !scene.inside(p) {
-                return p;
+                return (p, false);
             }
             match scene.nearest_point(p) {
-                Some((q, n)) => q + n * (1e-3 * grid.radius),
-                None => p,
+                Some((q, n)) => (q + n * (1e-3 * grid.radius), true),
+                None => (p, true),
             }
         })
         .collect()
@@ -414,15 +448,20 @@ impl SsdfBaker {
         let scene = object_scene(mesh);
         let sil = SilhouetteMesh::new(mesh);
         check_outline_fits(mesh, &sil, &scene, &grid)?;
-        let points = lookup_points(&scene, &grid);
-        let (values, kernel_seconds) =
+        let sites = node_sites(&scene, &grid);
+        let inside: Vec<bool> = sites.iter().map(|s| s.1).collect();
+        let plan = NodePlan::new(&scene, &grid, &inside, knobs.coarse_angle);
+        let points: Vec<DVec3> = plan.baked.iter().map(|&i| sites[i].0).collect();
+        let (baked, kernel_seconds) =
             self.run_edges(ctx, mesh, &sil, &scene, &points, knobs.directions, progress)?;
+        let texels = (knobs.directions * knobs.directions) as usize;
         Ok(SsdfSamples {
             grid,
             directions: knobs.directions,
-            values,
+            values: plan.fill(&grid, &baked, texels),
             object: mesh.geometry_key(),
             seconds: started.elapsed().as_secs_f64(),
+            blended: plan.blended.len(),
             kernel_seconds,
         })
     }

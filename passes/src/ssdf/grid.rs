@@ -45,14 +45,15 @@ impl SsdfGrid {
         self.centre - DVec3::splat(self.half_side()) + n.as_dvec3() * self.spacing()
     }
 
+    /// The lattice coordinates of node `i` (x fastest).
+    pub fn coordinates(&self, i: usize) -> UVec3 {
+        let s = self.nodes as usize;
+        UVec3::new((i % s) as u32, ((i / s) % s) as u32, (i / (s * s)) as u32)
+    }
+
     /// The position of node `i` (x fastest).
     pub fn position_of(&self, i: usize) -> DVec3 {
-        let s = self.nodes as usize;
-        self.position(UVec3::new(
-            (i % s) as u32,
-            ((i / s) % s) as u32,
-            (i / (s * s)) as u32,
-        ))
+        self.position(self.coordinates(i))
     }
 
     /// `p` in lattice units (0 at the first node, n − 1 at the last).

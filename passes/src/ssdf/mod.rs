@@ -7,6 +7,7 @@
 //! that read it are in [`crate::shadow`].
 
 pub mod bake;
+pub mod coarse;
 pub mod field;
 pub mod format;
 pub mod grid;

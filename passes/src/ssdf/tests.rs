@@ -119,6 +119,7 @@ fn truncating_components_matches_compressing_to_fewer() {
         values,
         object: 7,
         seconds: 0.0,
+        blended: 0,
         kernel_seconds: Vec::new(),
     };
     let rms = |f: &SsdfField| -> f64 {

@@ -29,6 +29,11 @@ pub struct BakeSsdfArgs {
     /// PCA components kept.
     #[arg(long, default_value_t = SsdfKnobs::default().components)]
     pub components: u32,
+    /// A node at distance d from the object is blended from the coarsest
+    /// lattice of the grid whose spacing is at most this angle (radians)
+    /// times d, instead of baked (0 bakes every node).
+    #[arg(long, default_value_t = SsdfKnobs::default().coarse_angle)]
+    pub coarse_angle: f64,
 }
 
 /// Runs `bake-ssdf`.
@@ -37,6 +42,7 @@ pub fn run(ctx: &Arc<Context>, args: &BakeSsdfArgs) -> anyhow::Result<()> {
         grid: args.grid,
         directions: args.directions,
         components: args.components,
+        coarse_angle: args.coarse_angle,
     };
     if let Some((k, m)) = knobs.problem() {
         anyhow::bail!("--{k}: {m}");
