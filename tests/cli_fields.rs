@@ -505,8 +505,8 @@ fn every_bundled_scene_renders_with_shadows() {
 }
 
 /// `inlay bake-ssdf` prints its time, sizes and compression ratio and
-/// writes a field a scene can name; a corrupt field file is an error naming
-/// the file and the field.
+/// writes a field a scene can name; a knob out of range is refused by its
+/// flag; a corrupt field file is an error naming the file and the field.
 #[test]
 fn bake_ssdf_writes_a_field_scenes_can_use() {
     let dir = scratch("bake-ssdf");
@@ -550,6 +550,21 @@ fn bake_ssdf_writes_a_field_scenes_can_use() {
     assert!(!o.status.success());
     assert!(
         common::output_text(&o).contains("--grid"),
+        "{}",
+        common::output_text(&o)
+    );
+    let o = inlay(
+        &[
+            "bake-ssdf",
+            s(&objects.join("metal-sphere.gltf")),
+            "--coarse-angle",
+            "0.9",
+        ],
+        &dir,
+    );
+    assert!(!o.status.success());
+    assert!(
+        common::output_text(&o).contains("--coarse-angle: 0.9"),
         "{}",
         common::output_text(&o)
     );

@@ -45,7 +45,7 @@ pub fn run(ctx: &Arc<Context>, args: &BakeSsdfArgs) -> anyhow::Result<()> {
         coarse_angle: args.coarse_angle,
     };
     if let Some((k, m)) = knobs.problem() {
-        anyhow::bail!("--{k}: {m}");
+        anyhow::bail!("--{}: {m}", k.replace('_', "-"));
     }
     let out = args.out.clone().unwrap_or_else(|| {
         let stem = args

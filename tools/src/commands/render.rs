@@ -90,6 +90,10 @@ pub struct RenderArgs {
     /// SSDF PCA components for objects baked on first use (overrides `[shadows] components`).
     #[arg(long)]
     pub ssdf_components: Option<u32>,
+    /// SSDF coarse angle for objects baked on first use, radians; 0 bakes
+    /// every node (overrides `[shadows] coarse_angle`).
+    #[arg(long)]
+    pub ssdf_coarse_angle: Option<f64>,
 }
 
 fn parse_outside(s: &str) -> Result<OutsideMode, String> {
@@ -135,8 +139,9 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
         .unwrap_or(bake.components)
         .min(bake.directions.pow(2))
         .min(bake.grid.pow(3));
+    bake.coarse_angle = args.ssdf_coarse_angle.unwrap_or(bake.coarse_angle);
     if let Some((k, m)) = bake.problem() {
-        anyhow::bail!("--ssdf-{k}: {m}");
+        anyhow::bail!("--ssdf-{}: {m}", k.replace('_', "-"));
     }
     let mut knobs = scene.march;
     knobs.samples_per_ray = args.samples_per_ray.unwrap_or(knobs.samples_per_ray);
