@@ -2,8 +2,8 @@
 //! against the f64 CPU mirror (the bake's kernels once ended early on
 //! lavapipe there, silently: llvmpipe stops all of an invocation's loops
 //! after 65535 iterations in all), the batch's candidate edges against
-//! their mirror, and a mesh whose outline outgrows the bake's lists
-//! refused by name.
+//! their mirror, a mesh whose outline outgrows the bake's lists refused
+//! by name, and far nodes blended from a coarser lattice of the grid.
 
 mod common;
 
