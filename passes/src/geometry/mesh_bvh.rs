@@ -414,7 +414,8 @@ impl MeshScene {
                 }
             }
         }
-        let t = &self.triangles[best.1];
+        // None where no distance compared (a point that is not finite).
+        let t = self.triangles.get(best.1)?;
         let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize_or_zero();
         Some((best.2, n))
     }
@@ -529,7 +530,7 @@ mod tests {
 
     /// The hierarchy's nearest point is the one a search over every
     /// triangle finds (the first of equally near ones), near the surface
-    /// and far from it.
+    /// and far from it; a point that is not finite has none.
     #[test]
     fn nearest_points_match_brute_force() {
         let scene = toy_scene();
@@ -551,5 +552,6 @@ mod tests {
                 .map(|(_, q, n)| (q, n));
             assert_eq!(scene.nearest_point(p), slow, "{p}");
         }
+        assert_eq!(scene.nearest_point(DVec3::NAN), None);
     }
 }
