@@ -538,36 +538,15 @@ fn bake_ssdf_writes_a_field_scenes_can_use() {
         (field.grid.nodes, field.directions, field.components),
         (4, 8, 4)
     );
-    let o = inlay(
-        &[
-            "bake-ssdf",
-            s(&objects.join("metal-sphere.gltf")),
-            "--grid",
-            "1",
-        ],
-        &dir,
-    );
-    assert!(!o.status.success());
-    assert!(
-        common::output_text(&o).contains("--grid"),
-        "{}",
-        common::output_text(&o)
-    );
-    let o = inlay(
-        &[
-            "bake-ssdf",
-            s(&objects.join("metal-sphere.gltf")),
-            "--coarse-angle",
-            "0.9",
-        ],
-        &dir,
-    );
-    assert!(!o.status.success());
-    assert!(
-        common::output_text(&o).contains("--coarse-angle: 0.9"),
-        "{}",
-        common::output_text(&o)
-    );
+    for (flag, value, said) in [
+        ("--grid", "1", "--grid"),
+        ("--coarse-angle", "0.9", "--coarse-angle: 0.9"),
+    ] {
+        let sphere = objects.join("metal-sphere.gltf");
+        let o = inlay(&["bake-ssdf", s(&sphere), flag, value], &dir);
+        let t = common::output_text(&o);
+        assert!(!o.status.success() && t.contains(said), "{t}");
+    }
 
     // A scene naming the baked field, and one naming a corrupt copy.
     let text = std::fs::read_to_string(scene_path("books.toml")).unwrap();
