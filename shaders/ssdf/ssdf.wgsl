@@ -148,14 +148,14 @@ fn ssdf_direction_value(d: vec3<f32>) -> f32 {
     return s;
 }
 
-// S along unit object-space direction d from the prepared point.
+// S along unit object-space direction d from the prepared point. The map
+// is read once, along d or, for a point beyond the grid, along d turned
+// to the nearest node's view, and the two cases are chosen by select:
+// lavapipe runs both sides of a branch for a group of invocations, and a
+// second read in the other branch cost the self-shadowed shading about a
+// twelfth of its time (docs/benchmarks.md, issue 26's twentieth pass).
 fn ssdf_value(d: vec3<f32>) -> f32 {
-    if ssdf_state == 2u {
-        return SSDF_PI;
-    }
-    if ssdf_state == 0u || ssdf.dims.w == 0u {
-        return ssdf_direction_value(d);
-    }
+    let beyond = !(ssdf_state == 0u || ssdf.dims.w == 0u);
     let cf = ssdf_cf;
     let cb = ssdf_cb;
     let shrink = ssdf_shrink;
@@ -167,6 +167,6 @@ fn ssdf_value(d: vec3<f32>) -> f32 {
     if c > -1.0 + 1e-6 {
         db_dir = d * c + cross(axis, d) + axis * (dot(axis, d) / (1.0 + c));
     }
-    let sb = ssdf_direction_value(normalize(db_dir));
-    return alpha - shrink * (alpha - sb);
+    let v = ssdf_direction_value(select(d, normalize(db_dir), beyond));
+    return select(select(v, alpha - shrink * (alpha - v), beyond), SSDF_PI, ssdf_state == 2u);
 }
