@@ -280,6 +280,26 @@ struct CastComparison {
     off_surface: (usize, usize),
 }
 
+impl CastComparison {
+    /// Every pixel within 2e-3 of the f64 mirror (f32 against f64
+    /// positions, normals and SSDF reads: measured 1.0e-4), and a shadow
+    /// to compare: at least five sampled pixels that brute force finds
+    /// shadowed.
+    fn assert_on_mirror_and_shadowed(&self) {
+        assert!(
+            self.off_mirror == 0.0,
+            "{} of pixels off the mirror",
+            self.off_mirror
+        );
+        assert!(
+            self.worst_mirror < 2e-3,
+            "worst |ρ_gpu − ρ_cpu| {}",
+            self.worst_mirror
+        );
+        assert!(self.shadowed >= 5, "{} shadowed pixels", self.shadowed);
+    }
+}
+
 /// BOOKS' first object over a small bake of its field, with its SSDF, the
 /// f_h table and a camera looking down at it: what the cast-shadow tests
 /// share.
@@ -800,18 +820,7 @@ fn cast_shadow_matches_mirror_and_brute_force() {
         "SSDF: ρ vs brute force over {} pixels ({} shadowed): mean |Δρ| {:.4}, worst {:.4}; mirror worst {:.2e}",
         c.sampled, c.shadowed, c.mean, c.worst, c.worst_mirror
     );
-    // f32 against f64 positions, normals and SSDF reads (measured 1.0e-4).
-    assert!(
-        c.off_mirror == 0.0,
-        "{} of pixels off the mirror",
-        c.off_mirror
-    );
-    assert!(
-        c.worst_mirror < 2e-3,
-        "worst |ρ_gpu − ρ_cpu| {}",
-        c.worst_mirror
-    );
-    assert!(c.shadowed >= 5, "{} shadowed pixels", c.shadowed);
+    c.assert_on_mirror_and_shadowed();
     // The book's edges put points off any surface, some in the shadow and
     // some not (2 and 8 of them): both of pixel_factor's ways there, the
     // second march and its skip where ρ is 1, are held to the mirror.
@@ -829,6 +838,36 @@ fn cast_shadow_matches_mirror_and_brute_force() {
     // the brute force by 0.05–0.1 each.
     assert!(c.mean < 0.025, "mean |Δρ| {}", c.mean);
     assert!(c.worst < 0.15, "worst |Δρ| {}", c.worst);
+}
+
+/// The cast shadow keeps the fitted lobes a point's SSDF is read for as the
+/// bits of two words, lobes 0–31 and 32–63 (`shaders/shadow/cast_body.wgsl`
+/// `cast_factor`): 37 faint broad lobes spread over the sky come first here,
+/// so that the three of `test_lobes`, which make the shadow, are lobes
+/// 37–39, and the mirror, which has one loop over them all, must still
+/// agree at every pixel.
+#[test]
+fn cast_shadow_over_more_than_32_lobes_matches_mirror() {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let mut lobes: Vec<Sg64> = (0..37)
+        .map(|i| {
+            let y = 1.0 - (i as f64 + 0.5) / 37.0;
+            let r = (1.0 - y * y).sqrt();
+            let phi = i as f64 * golden;
+            Sg64 {
+                direction: DVec3::new(r * phi.cos(), y, r * phi.sin()),
+                sharpness: 2.0 + (i % 5) as f64,
+                amplitude: DVec3::new(0.02, 0.025, 0.03),
+            }
+        })
+        .collect();
+    lobes.extend(test_lobes());
+    let c = compare_cast_shadow(&lobes, 0, None);
+    eprintln!(
+        "40 lobes: mirror worst {:.2e}, {} of {} sampled shadowed",
+        c.worst_mirror, c.shadowed, c.sampled
+    );
+    c.assert_on_mirror_and_shadowed();
 }
 
 /// Far from the object (3–8 bounding radii), where the half-space model

@@ -281,19 +281,41 @@ fn cast_factor(x: vec3<f32>, n: vec3<f32>, radiance: vec3<f32>) -> vec3<f32> {
         }
     }
     var blocked = vec3<f32>(0.0);
-    var prepared = false;
+    // The fitted lobes the object can block (cast_share ≥ 0), as bits of
+    // `low` (lobes 0–31) and `high` (32–63; the fit has at most 64, a
+    // const assertion in passes/src/shadow/cast.rs). Only those are read
+    // through the SSDF, in the same order as one loop over every lobe
+    // would take them. lavapipe runs a branch's body for every invocation
+    // of a group of eight, masked: a lobe skipped by a branch costs its
+    // SSDF read all the same, a loop over the set bits costs the turns of
+    // the group's point with the most (docs/benchmarks.md, issue 26's
+    // twentieth pass).
+    var low = 0u;
+    var high = 0u;
     for (var k = 0u; k < first_direct; k++) {
+        if cast_share(view, sg_product(cast_stored_lobe(k), cosine)) >= 0.0 {
+            low |= select(0u, 1u << k, k < 32u);
+            high |= select(0u, 1u << (k - 32u), k >= 32u);
+        }
+    }
+    if (low | high) != 0u {
+        ssdf_prepare(ssdf_to_object_point(x));
+    }
+    loop {
+        var k = 0u;
+        if low != 0u {
+            k = firstTrailingBit(low);
+            low &= low - 1u;
+        } else if high != 0u {
+            k = 32u + firstTrailingBit(high);
+            high &= high - 1u;
+        } else {
+            break;
+        }
         let g = cast_stored_lobe(k);
         let p = sg_product(g, cosine);
         let share = cast_share(view, p);
-        if share < 0.0 {
-            continue;
-        }
         let e = sg_diffuse_irradiance(g, n);
-        if !prepared {
-            ssdf_prepare(ssdf_to_object_point(x));
-            prepared = true;
-        }
         let q = fh_fraction(ssdf_value(ssdf_to_object_dir(p.direction)), p.sharpness);
         blocked += min(e * (1.0 - q), cast_bound(view, &cone, g, e, share, true));
     }

@@ -27,6 +27,13 @@ use crate::field::GpuGridField;
 use crate::lighting::LightLobes;
 use crate::march::{MarchKnobs, MarchOutputs};
 
+/// The fitted lobes `shaders/shadow/cast_body.wgsl` can take: it keeps the
+/// ones a point's SSDF must be read for as the bits of two u32s.
+pub const MAX_CAST_FITTED_LOBES: u32 = 64;
+
+// Every fit the knobs allow fits those bits.
+const _: () = assert!(crate::sgfit::MAX_LOBES <= MAX_CAST_FITTED_LOBES);
+
 inlay_engine::gpu_struct! {
     /// `CastPush` of `shaders/shadow/cast_body.wgsl`.
     pub struct CastPush = "shadow/cast.wgsl" : "CastPush" {
@@ -528,6 +535,11 @@ impl CastShadowPass {
             ssdf,
         } = inputs;
         let direct = lobes.direct;
+        let fitted = lobes.count - direct.map_or(0, |d| d.lobes).min(lobes.count);
+        assert!(
+            fitted <= MAX_CAST_FITTED_LOBES,
+            "the cast shadow takes at most {MAX_CAST_FITTED_LOBES} fitted lobes, given {fitted}"
+        );
         let push = CastPush {
             camera: camera.rays(),
             normal_step: step,
