@@ -150,12 +150,14 @@ fn ssdf_direction_value(d: vec3<f32>) -> f32 {
 
 // S along unit object-space direction d from the prepared point. The map
 // is read once, along d or, for a point beyond the grid, along d turned
-// to the nearest node's view, and the two cases are chosen by select:
-// lavapipe runs both sides of a branch for a group of invocations, and a
-// second read in the other branch cost the self-shadowed shading about a
-// twelfth of its time (docs/benchmarks.md, issue 26's twentieth pass).
+// to the nearest node's view, and the cases are chosen by select: lavapipe
+// runs both sides of a branch for a group of invocations, and a second
+// read in the other branch cost the self-shadowed shading 2–5 ms of its
+// 60–70 on DOG at 1280 × 720 (docs/benchmarks.md, issue 26's twentieth
+// pass). A point the SSDF leaves unshadowed (state 2, π) reads along d,
+// which is always a direction the map can be read along, and drops it.
 fn ssdf_value(d: vec3<f32>) -> f32 {
-    let beyond = !(ssdf_state == 0u || ssdf.dims.w == 0u);
+    let beyond = ssdf_state == 1u && ssdf.dims.w != 0u;
     let cf = ssdf_cf;
     let cb = ssdf_cb;
     let shrink = ssdf_shrink;
