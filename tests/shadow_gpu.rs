@@ -281,13 +281,14 @@ struct CastComparison {
 }
 
 impl CastComparison {
-    /// Every pixel within 2e-3 of the f64 mirror (f32 against f64
-    /// positions, normals and SSDF reads: measured 1.0e-4), and a shadow
-    /// to compare: at least five sampled pixels that brute force finds
-    /// shadowed.
-    fn assert_on_mirror_and_shadowed(&self) {
+    /// The pixels within 2e-3 of the f64 mirror (f32 against f64
+    /// positions, normals and SSDF reads: measured 1.0e-4): all of them
+    /// where `off_limit` is 0, else all but a share under `off_limit`;
+    /// and a shadow to compare: at least five sampled pixels that brute
+    /// force finds shadowed.
+    fn assert_on_mirror_and_shadowed(&self, off_limit: f64) {
         assert!(
-            self.off_mirror == 0.0,
+            self.off_mirror == 0.0 || self.off_mirror < off_limit,
             "{} of pixels off the mirror",
             self.off_mirror
         );
@@ -820,7 +821,7 @@ fn cast_shadow_matches_mirror_and_brute_force() {
         "SSDF: ρ vs brute force over {} pixels ({} shadowed): mean |Δρ| {:.4}, worst {:.4}; mirror worst {:.2e}",
         c.sampled, c.shadowed, c.mean, c.worst, c.worst_mirror
     );
-    c.assert_on_mirror_and_shadowed();
+    c.assert_on_mirror_and_shadowed(0.0);
     // The book's edges put points off any surface, some in the shadow and
     // some not (2 and 8 of them): both of pixel_factor's ways there, the
     // second march and its skip where ρ is 1, are held to the mirror.
@@ -867,7 +868,7 @@ fn cast_shadow_over_more_than_32_lobes_matches_mirror() {
         "40 lobes: mirror worst {:.2e}, {} of {} sampled shadowed",
         c.worst_mirror, c.shadowed, c.sampled
     );
-    c.assert_on_mirror_and_shadowed();
+    c.assert_on_mirror_and_shadowed(0.0);
 }
 
 /// Far from the object (3–8 bounding radii), where the half-space model
@@ -959,17 +960,8 @@ fn direct_lobe_shadow_matches_mirror_and_brute_force() {
         "rays: ρ vs brute force over {} pixels ({} shadowed): mean |Δρ| {:.4}, worst {:.4}; mirror worst {:.2e}, {:.2} % of pixels off it",
         c.sampled, c.shadowed, c.mean, c.worst, c.worst_mirror, 100.0 * c.off_mirror
     );
-    assert!(
-        c.off_mirror < 0.01,
-        "{} of pixels off the mirror",
-        c.off_mirror
-    );
-    assert!(
-        c.worst_mirror < 2e-3,
-        "worst |ρ_gpu − ρ_cpu| {}",
-        c.worst_mirror
-    );
-    assert!(c.shadowed >= 5, "{} shadowed pixels", c.shadowed);
+    // A ray grazing an edge may go either way in f32 and f64.
+    c.assert_on_mirror_and_shadowed(0.01);
     // Measured on lavapipe: mean 0.0092, worst 0.039 (SSDF: 0.0098,
     // 0.077); the bounce's light from below x's plane, taken at x's ratio,
     // is here distant light, unshadowed.
@@ -1784,15 +1776,5 @@ fn local_light_shadow_matches_its_mirror() {
     // A ray grazing the silhouette may go either way in f32 and f64 (one
     // ninth of the light at that pixel); measured: no pixel. A disk of
     // the sphere's radius instead of the emitter's moves 0.5 %.
-    assert!(
-        result.off_mirror < 0.003,
-        "{} of pixels off the mirror",
-        result.off_mirror
-    );
-    assert!(
-        result.worst_mirror < 2e-3,
-        "worst |ρ_gpu − ρ_cpu| {}",
-        result.worst_mirror
-    );
-    assert!(result.shadowed >= 5, "{} shadowed pixels", result.shadowed);
+    result.assert_on_mirror_and_shadowed(0.003);
 }
