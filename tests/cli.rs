@@ -166,8 +166,8 @@ fn a_broken_shader_directory_is_reported_with_file_and_line() {
 }
 
 /// `inlay render-views` writes a training set that `inlay dataset` reads
-/// back (EXR frames and bracketed PNGs); a broken dataset is refused with
-/// every bad frame named.
+/// back (EXR frames with depth maps, and bracketed PNGs); a broken dataset
+/// is refused with every bad frame named.
 #[test]
 fn render_views_writes_a_dataset_that_dataset_reads() {
     let dir = scratch("render-views");
@@ -183,6 +183,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "--samples",
         "2",
         "--brackets=-1,1",
+        "--depth",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -191,6 +192,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     let o = inlay(&["dataset", out.to_str().unwrap()]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
+    assert!(t.contains("depth maps: 3 of 3 frames"), "{t}");
     assert!(
         t.contains("instant-ngp dialect") && t.contains("frames: 3 usable"),
         "{t}"
@@ -300,6 +302,11 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     assert!(t.contains("a step took") && t.contains("train-rays"), "{t}");
     // And the radiance the knobs were fractions of.
     assert!(t.contains("knobs' scale: radiance"), "{t}");
+    // Its depth maps held each ray's weight.
+    assert!(
+        t.contains("depth maps: 3 of 3 frames") && t.contains("each of their rays held to it"),
+        "{t}"
+    );
     // Its first stage's view-dependent start, said (2 of 20 steps).
     assert!(
         t.contains("the first 2 steps at degree 1, then degree 0"),

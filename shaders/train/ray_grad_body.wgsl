@@ -11,6 +11,9 @@
 // gradient with respect to the gain of every frame but the first is
 // scattered too. With pc.distortion > 0, the distortion loss of the ray's
 // weights is added, and its gradient with respect to the densities.
+// With pc.depth_weight > 0, a ray whose depth is recorded (ray.depth > 0)
+// adds the depth loss (passes/src/train/depth.rs) and its gradient with
+// respect to the densities.
 // Behind the field is pc.background, or where pc.sky_width is not 0 a learnt sky
 // (field/sky.wgsl) whose gradient is scattered too.
 // Mirrors passes/src/train/render.rs render_pixel_with_gradient.
@@ -50,9 +53,11 @@ struct TrainPush {
     // passes/src/train/gpu.rs MAX_RAYS_PER_PIXEL): a pixel's rays lie
     // consecutively in `rays`, ray_count of them in all.
     rays_per_pixel: u32,
+    // The depth loss's weight μ over the field's diagonal (0: none).
+    depth_weight: f32,
+    // The depth loss's tolerance s (scene units).
+    depth_tolerance: f32,
     pad0: u32,
-    pad1: u32,
-    pad2: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -64,9 +69,11 @@ struct TrainRay {
     target_value: vec3<f32>,
     weight: f32,
     frame: u32,
+    // The length along the ray to the surface a depth map records (0:
+    // none).
+    depth: f32,
     pad0: u32,
     pad1: u32,
-    pad2: u32,
 }
 
 var<immediate> pc: TrainPush;
@@ -202,6 +209,9 @@ struct RayForward {
     wt_all: f32,
     pairs: f32,
     own: f32,
+    // The depth loss's sum Σ w·ρ(t − D) (the light past the bounds not
+    // included).
+    depth_sum: f32,
     // The samples marched (dropped bricks' skipped ones included).
     used: u32,
     // Where the ray enters and leaves the bounds.
@@ -209,12 +219,38 @@ struct RayForward {
     t1: f32,
 }
 
+// ρ(x) = √(x² + s²) − s, the depth loss's penalty for weight x away from
+// the recorded surface, as x² / (√(x² + s²) + s). Mirrors
+// passes/src/train/depth.rs depth_penalty.
+fn depth_penalty(x: f32, s: f32) -> f32 {
+    return x * x / (sqrt(x * x + s * s) + s);
+}
+
+// Whether `ray` takes the depth loss.
+fn has_depth(ray: TrainRay) -> bool {
+    return pc.depth_weight > 0.0 && ray.depth > 0.0;
+}
+
+// How many tolerances past the bounds a recorded surface is taken at most.
+// Mirrors passes/src/train/depth.rs FAR_TOLERANCES.
+const FAR_TOLERANCES: f32 = 16.0;
+
+// The depth the loss takes for `ray`, which leaves the bounds at `exit`:
+// its recorded one, or FAR_TOLERANCES tolerances past `exit` where that
+// lies further. Mirrors passes/src/train/depth.rs effective_target.
+fn depth_target(ray: TrainRay, exit: f32) -> f32 {
+    return min(ray.depth, exit + FAR_TOLERANCES * pc.depth_tolerance);
+}
+
 // The forward march of `ray` over the trained grid, with the sums the
-// distortion loss needs where pc.distortion > 0.
+// distortion loss needs where pc.distortion > 0, and the depth loss's
+// where the ray takes it.
 fn march_forward(ray: TrainRay, y: array<f32, 8>) -> RayForward {
     let tb = ray_box(ray.origin, ray.dir, pc.bounds_min, pc.bounds_max);
-    var f = RayForward(vec3<f32>(0.0), 1.0, 0.0, 0.0, 0.0, 0.0, 0u, tb.x, tb.y);
+    var f = RayForward(vec3<f32>(0.0), 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0u, tb.x, tb.y);
     let distort = pc.distortion > 0.0;
+    let depth = has_depth(ray);
+    let recorded = depth_target(ray, f.t1);
     if f.t1 <= f.t0 {
         return f;
     }
@@ -241,6 +277,9 @@ fn march_forward(ray: TrainRay, y: array<f32, 8>) -> RayForward {
             f.w_all += w;
             f.wt_all += w * t;
         }
+        if depth {
+            f.depth_sum += w * depth_penalty(0.5 * (a + b) - recorded, pc.depth_tolerance);
+        }
         f.transmittance *= 1.0 - alpha;
         f.used += 1u;
         if f.transmittance < pc.termination {
@@ -250,12 +289,27 @@ fn march_forward(ray: TrainRay, y: array<f32, 8>) -> RayForward {
     return f;
 }
 
+// The depth loss over its weight: the weights' penalties and the light
+// past the bounds', at the exit (0 for a ray without one or that misses
+// the bounds).
+fn depth_total(ray: TrainRay, f: RayForward) -> f32 {
+    if !has_depth(ray) || f.t1 <= f.t0 {
+        return 0.0;
+    }
+    return f.depth_sum + f.transmittance * depth_penalty(f.t1 - depth_target(ray, f.t1), pc.depth_tolerance);
+}
+
 // The backward walk of `ray` (its forward march `f`, the radiance behind
 // it `background`) with the running sum: scatters the gradient of a loss
 // whose gradient with respect to the ray's colour is `g`, plus the
-// distortion loss `distortion` of weight `lambda` (λ/D, the ray's share).
-fn march_backward(ray: TrainRay, y: array<f32, 8>, f: RayForward, background: vec3<f32>, g: vec3<f32>, lambda: f32, distortion: f32) {
+// distortion loss `distortion` of weight `lambda` (λ/D, the ray's share)
+// and the depth loss of weight `mu` (μ/D, the ray's share).
+fn march_backward(ray: TrainRay, y: array<f32, 8>, f: RayForward, background: vec3<f32>, g: vec3<f32>, lambda: f32, distortion: f32, mu: f32) {
     let distort = pc.distortion > 0.0;
+    let depth = has_depth(ray);
+    let depth_all = depth_total(ray, f);
+    let recorded = depth_target(ray, f.t1);
+    var z_so_far = 0.0;
     let count = select(0u, sh_count(pc.sh_degree), pc.sh_degree > 0u);
     var t_i = 1.0;
     var so_far = vec3<f32>(0.0);
@@ -309,6 +363,11 @@ fn march_backward(ray: TrainRay, y: array<f32, 8>, f: RayForward, background: ve
             d_sigma += dt * (t_next * e - (2.0 * distortion - e_so_far));
             w_before += w;
             wt_before += w * t;
+        }
+        if depth {
+            let rho = depth_penalty(0.5 * (a + b) - recorded, pc.depth_tolerance);
+            z_so_far += w * rho;
+            d_sigma += mu * dt * (t_next * rho - (depth_all - z_so_far));
         }
         d_sigma *= open_sigma;
         // A sample with no weight (empty space: σ = 0) moves no colour:
@@ -364,7 +423,7 @@ fn distortion_of(f: RayForward, lambda: f32) -> f32 {
 // consecutive in `rays`, all carrying the pixel's target, weight and
 // frame), its loss on the mean of its rays' colours (the pixel's light
 // over its area) and the gradient: each ray takes 1/n of the pixel's, and
-// its own distortion loss at 1/n of the pixel's weight.
+// its own distortion and depth losses at 1/n of the pixel's weight.
 fn train_pixel(index: u32) {
     let n = pc.rays_per_pixel;
     if index >= pc.ray_count / n {
@@ -390,7 +449,14 @@ fn train_pixel(index: u32) {
     for (var s = 0u; s < n; s++) {
         distortion += distortion_of(forward[s], lambda);
     }
-    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss + distortion);
+    // The depth loss, weighted as the pixel's (μ/D folded in), each ray's
+    // own target, shared among its rays.
+    let mu = ray.weight * pc.depth_weight / f32(n);
+    var depth = 0.0;
+    for (var s = 0u; s < n; s++) {
+        depth += mu * depth_total(rays[first + s], forward[s]);
+    }
+    ray_out[index] = vec4<f32>(gain * total, ray.weight * l.loss + distortion + depth);
     if pc.learn_gains != 0u && ray.frame != 0u {
         let gg = ray.weight * l.grad * total;
         add_gain_float(4u * ray.frame, gg.x);
@@ -398,7 +464,7 @@ fn train_pixel(index: u32) {
         add_gain_float(4u * ray.frame + 2u, gg.z);
     }
     let g = ray.weight * l.grad * gain / f32(n);
-    if all(g == vec3<f32>(0.0)) && distortion == 0.0 {
+    if all(g == vec3<f32>(0.0)) && distortion == 0.0 && depth == 0.0 {
         return;
     }
     // Backward, each ray with the running sum.
@@ -408,6 +474,6 @@ fn train_pixel(index: u32) {
         if pc.sky_width != 0u && f.transmittance > 0.0 {
             add_sky_grad(r.dir, g * f.transmittance);
         }
-        march_backward(r, sh_basis(r.dir), f, background_along(r.dir), g, lambda, distortion_of(f, lambda));
+        march_backward(r, sh_basis(r.dir), f, background_along(r.dir), g, lambda, distortion_of(f, lambda), mu);
     }
 }

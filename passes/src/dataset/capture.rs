@@ -7,8 +7,10 @@ use serde_json::json;
 
 use super::intrinsics::Intrinsics;
 use super::pose::Pose;
-use crate::camera::CameraSpec;
+use crate::bake::PathTracer;
+use crate::camera::{CameraFrame, CameraSpec};
 use crate::geometry::Aabb;
+use crate::scene::Recipe;
 
 /// Lowest camera elevation above the field's centre, degrees.
 pub const CAP_LOWEST: f64 = 10.0;
@@ -129,6 +131,10 @@ pub struct WrittenFrame {
     /// Exposure time (relative; radiance × exposure is what the sensor
     /// records, 1 at white), for bracketed frames.
     pub exposure_time: Option<f64>,
+    /// Its depth map's file name, relative to the transforms file (a
+    /// 16-bit PNG in units of [`super::depth::PNG_DEPTH_UNIT`]), where one
+    /// is written.
+    pub depth_file: Option<String>,
 }
 
 /// The `transforms.json` of `frames` of `width` × `height` pixels taken of
@@ -161,17 +167,55 @@ pub fn transforms_json(
             if let Some(t) = fr.exposure_time {
                 v["exposure_time"] = t.into();
             }
+            if let Some(d) = &fr.depth_file {
+                v["depth_file_path"] = d.as_str().into();
+            }
             v
         })
         .collect();
-    json!({
+    let mut doc = json!({
         "fl_x": f, "fl_y": f,
         "cx": 0.5 * width as f64, "cy": 0.5 * height as f64,
         "w": width, "h": height,
         "aabb": [bounds.min.to_array(), bounds.max.to_array()],
         "aabb_scale": 1, "scale": scale, "offset": offset,
         "frames": frames,
-    })
+    });
+    if frames_have_depth(&doc) {
+        doc["depth_unit_scale_factor"] = super::depth::PNG_DEPTH_UNIT.into();
+    }
+    doc
+}
+
+/// Whether some frame of the transforms document `doc` names a depth map.
+fn frames_have_depth(doc: &serde_json::Value) -> bool {
+    doc["frames"]
+        .as_array()
+        .is_some_and(|f| f.iter().any(|v| v.get("depth_file_path").is_some()))
+}
+
+/// The z-depth of each pixel of `frame` (row-major) in `recipe`, as a
+/// depth sensor records it: the recipe's expected depth along the pixel's
+/// centre ray ([`crate::train::known_depth`], the media up to the first
+/// opaque surface included) where that ray is at least half opaque, 0
+/// (nothing recorded) elsewhere. `tracer` is made from `recipe` (only its
+/// nearest surface is used).
+pub fn recipe_depth_map(recipe: &Recipe, tracer: &PathTracer, frame: &CameraFrame) -> Vec<f32> {
+    // Far enough for any surface a camera of a scene sees.
+    const FAR: f64 = 1e4;
+    (0..frame.height)
+        .flat_map(|y| (0..frame.width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let ray = frame.pixel_ray(x, y);
+            let along = crate::train::recipe_along(recipe, tracer, &ray, 0.0, FAR);
+            let k = crate::train::known_depth(&along, 0.0, FAR);
+            if k.opacity >= 0.5 {
+                (k.depth / k.opacity * ray.dir.dot(frame.forward)) as f32
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }
 
 /// Linear [0, 1] to 8-bit sRGB (values outside clip).
@@ -293,7 +337,7 @@ mod tests {
         none.add_view(&view, 2f32.powi(-9));
         assert_eq!((none.pixels, none.stops_needed()), (0, None));
     }
-    use crate::camera::CameraFrame;
+    use crate::dataset::depth::{depth_png, PNG_DEPTH_UNIT};
     use crate::dataset::{load_dataset, BoundsSource, Dialect, LoadOptions};
 
     /// A written dataset reads back: the loader's ray through each pixel
@@ -312,10 +356,21 @@ mod tests {
                 let file = format!("v{i}.png");
                 let rgb = vec![[0.2f32, 0.5, 2.0]; (w * h) as usize];
                 std::fs::write(dir.join(&file), bracket_png(&rgb, w, h, 0.5)).unwrap();
+                // A depth map on every frame but the first: pixel p at
+                // z = 1 + p/100 scene units, the last one recording none.
+                let depth_file = (i > 0).then(|| {
+                    let name = format!("d{i}.png");
+                    let mut z: Vec<f32> = (0..w * h).map(|p| 1.0 + p as f32 / 100.0).collect();
+                    z[(w * h - 1) as usize] = 0.0;
+                    let png = depth_png(&z, w, h, PNG_DEPTH_UNIT);
+                    std::fs::write(dir.join(&name), png).unwrap();
+                    name
+                });
                 WrittenFrame {
                     file,
                     camera: c.clone(),
                     exposure_time: Some(0.5),
+                    depth_file,
                 }
             })
             .collect();
@@ -333,6 +388,13 @@ mod tests {
                 assert!((got - want).length() < 1e-9, "{u} {v}: {got} vs {want}");
             }
             assert_eq!(f.exposure_time, Some(0.5));
+            if f.index == 0 {
+                assert!(f.depth.is_empty());
+            } else {
+                assert_eq!(f.depth.len() as u32, w * h);
+                assert!((f.depth[13] - 1.13).abs() < 1e-6, "{}", f.depth[13]);
+                assert_eq!(f.depth[(w * h - 1) as usize], 0.0);
+            }
             // 2.0 × 0.5 clips: the blue channel is a lower bound.
             assert_eq!(f.image.state[0], crate::dataset::PixelState::LowerBound);
             let g = f.image.radiance[0][1];

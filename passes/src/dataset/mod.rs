@@ -16,8 +16,10 @@
 //!   other models are refused with a message that says so.
 //!
 //! In every dialect: an `aabb` key (`[[min], [max]]`, world units) gives the
-//! field's bounds, and a frame's `exposure_time` (seconds) is kept for
-//! exposure brackets. Poses are camera-to-world in the OpenGL convention
+//! field's bounds, a frame's `exposure_time` (seconds) is kept for
+//! exposure brackets, and a frame's `depth_file_path` names its depth map
+//! (nerfstudio's key; z-depths, [`depth`], in units of the file's
+//! `depth_unit_scale_factor`). Poses are camera-to-world in the OpenGL convention
 //! (x right, y up, looking along −z) and must be rigid. Frames whose image
 //! is missing, unreadable or of the wrong size, or whose pose is not rigid,
 //! are all reported together; NaN, infinite and negative pixels are masked
@@ -25,6 +27,7 @@
 
 pub mod bounds;
 pub mod capture;
+pub mod depth;
 pub mod exif;
 pub mod intrinsics;
 mod json;
@@ -111,6 +114,11 @@ pub struct Frame {
     pub exif_exposure: Option<exif::ExifExposure>,
     /// Its pixels.
     pub image: FrameImage,
+    /// Its depth map, where it has one (`depth_file_path`): each pixel's
+    /// z-depth (distance along the camera's viewing direction) in the
+    /// scene's units, 0 where it records nothing ([`depth`]); empty where
+    /// the frame has none.
+    pub depth: Vec<f32>,
 }
 
 /// A frame that cannot be used, and why.
@@ -455,6 +463,8 @@ struct FrameSpec {
     pose: Result<Pose, String>,
     image: Result<PathBuf, String>,
     mask: Option<PathBuf>,
+    /// The depth map and the file's `depth_unit_scale_factor`.
+    depth: Option<(PathBuf, Option<f64>)>,
     exposure_time: Option<f64>,
     camera: CameraKeys,
 }
@@ -525,12 +535,23 @@ fn frame_spec(
         return Err(obj.error("exposure_time", "must be positive (seconds)"));
     }
     let mask = obj.string("mask_path")?.map(|m| folder.join(m));
+    let unit = top.number("depth_unit_scale_factor")?;
+    if unit.is_some_and(|u| !(u > 0.0 && u.is_finite())) {
+        return Err(top.error(
+            "depth_unit_scale_factor",
+            "must be a positive number (the depth maps' unit in the scene's units)",
+        ));
+    }
+    let depth = obj
+        .string("depth_file_path")?
+        .map(|d| (folder.join(d), unit));
     Ok(FrameSpec {
         index,
         key: obj.at.to_string(),
         pose: Pose::new(matrix).map_err(|e| format!("transform_matrix is not rigid: {e}")),
         image: image_file(folder, path),
         mask,
+        depth,
         exposure_time,
         camera,
     })
@@ -587,6 +608,14 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
     if let Some(m) = &s.mask {
         pixels::apply_mask(&mut image, m).map_err(|e| fail(format!("{}: {e}", m.display())))?;
     }
+    let depth = match &s.depth {
+        Some((d, _)) if !d.is_file() => {
+            return Err(fail(format!("depth map {} is missing", d.display())))
+        }
+        Some((d, unit)) => depth::load_depth_map(d, (w, h), *unit)
+            .map_err(|e| fail(format!("{}: {e}", d.display())))?,
+        None => Vec::new(),
+    };
     // The file's key first; an LDR photograph's own record where it has
     // none (an EXR frame is radiance: no exposure applies).
     let exif = match (s.exposure_time, pixels::image_kind(&path)) {
@@ -601,6 +630,7 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
         exposure_time: s.exposure_time.or(exif.map(|e| e.time)),
         exif_exposure: exif,
         image,
+        depth,
     })
 }
 

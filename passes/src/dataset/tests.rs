@@ -45,6 +45,15 @@ fn write_exr(path: &Path, w: u32, h: u32, px: impl Fn(u32, u32) -> [f32; 3]) {
     img.write_file(path, 1.0).unwrap();
 }
 
+/// The dataset in `dir`, its bad frames left out.
+fn load_skipping_bad_frames(dir: &Path) -> Dataset {
+    let options = LoadOptions {
+        skip_bad_frames: true,
+        ..LoadOptions::default()
+    };
+    load_dataset(dir, &options).unwrap()
+}
+
 fn eyes() -> [DVec3; 4] {
     [
         DVec3::new(3.0, 1.0, 0.0),
@@ -248,14 +257,7 @@ fn every_bad_frame_is_reported_and_can_be_skipped() {
     );
     assert!(text.contains("missing") && text.contains("is 7x6, the file says w = 8, h = 6"));
     assert!(text.contains("not rigid"), "{text}");
-    let d = load_dataset(
-        &dir,
-        &LoadOptions {
-            skip_bad_frames: true,
-            ..LoadOptions::default()
-        },
-    )
-    .unwrap();
+    let d = load_skipping_bad_frames(&dir);
     assert_eq!(d.frames.iter().map(|f| f.index).collect::<Vec<_>>(), [0, 4]);
     assert_eq!(d.skipped.len(), 3);
 }
@@ -394,6 +396,58 @@ fn exif_exposures_follow_the_iso_and_the_aperture() {
     }
 }
 
+/// Frames' depth maps (nerfstudio's `depth_file_path`) are read in the
+/// file's `depth_unit_scale_factor`, a frame without one has none, and a
+/// missing depth map or one of another size than its image is reported
+/// with the rest of the bad frames.
+#[test]
+fn depth_maps_are_read_in_the_files_unit_and_bad_ones_reported() {
+    let dir = folder("depth");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.png");
+        write_png_rgba(&dir.join(&name), 8, 6, |_, _| [90, 90, 90, 255]);
+        let depth = format!("d{i}.png");
+        // Pixel p records p + 1 in the file's unit; frame 2's map is 8x5.
+        let h = if i == 2 { 5 } else { 6 };
+        let z: Vec<f32> = (0..8 * h).map(|p| (p + 1) as f32 * 1e-3).collect();
+        if i != 1 {
+            let png = super::depth::depth_png(&z, 8, h, super::depth::PNG_DEPTH_UNIT);
+            std::fs::write(dir.join(&depth), png).unwrap();
+        }
+        let mut f = serde_json::json!({ "file_path": name, "transform_matrix": pose_rows(*e) });
+        if i != 3 {
+            f["depth_file_path"] = depth.into();
+        }
+        frames.push(f);
+    }
+    let doc = serde_json::json!({
+        "camera_model": "PINHOLE", "fl_x": 8.0, "fl_y": 8.0, "w": 8, "h": 6,
+        "depth_unit_scale_factor": 0.01, "frames": frames,
+    });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    let keys: Vec<&str> = e.frames.iter().map(|p| p.key.as_str()).collect();
+    assert_eq!(keys, ["frames[1]", "frames[2]"], "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("depth map") && text.contains("d1.png is missing"),
+        "{text}"
+    );
+    assert!(text.contains("depth map is 8x5, the image 8x6"), "{text}");
+    let d = load_skipping_bad_frames(&dir);
+    assert_eq!(d.frames.iter().map(|f| f.index).collect::<Vec<_>>(), [0, 3]);
+    // Code p + 1 at 0.01 a unit.
+    assert!(
+        (d.frames[0].depth[4] - 0.05).abs() < 1e-7,
+        "{}",
+        d.frames[0].depth[4]
+    );
+    assert!(d.frames[1].depth.is_empty());
+    let counts = super::depth::DepthCounts::of(&d.frames);
+    assert_eq!((counts.frames, counts.pixels, counts.recorded), (1, 48, 48));
+}
+
 #[test]
 fn errors_in_the_file_name_the_key() {
     let dir = folder("keys");
@@ -419,6 +473,10 @@ fn errors_in_the_file_name_the_key() {
         (
             r#"{"fl_x": 5, "frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]], "exposure_time": -1}]}"#,
             "frames[0].exposure_time",
+        ),
+        (
+            r#"{"fl_x": 5, "depth_unit_scale_factor": 0, "frames": [{"file_path": "a.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]}"#,
+            "depth_unit_scale_factor",
         ),
         (r#"[1, 2]"#, ""),
     ];

@@ -439,6 +439,7 @@ mod tests {
                 alpha: Vec::new(),
                 counts: PixelCounts::default(),
             },
+            depth: Vec::new(),
         }
     }
 

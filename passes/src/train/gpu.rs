@@ -54,12 +54,12 @@ inlay_engine::gpu_struct! {
         /// Rays a pixel ([`MAX_RAYS_PER_PIXEL`] at most), consecutive in
         /// the batch.
         pub rays_per_pixel: u32,
+        /// The depth loss's weight μ over the field's diagonal (0: none).
+        pub depth_weight: f32,
+        /// The depth loss's tolerance s (scene units).
+        pub depth_tolerance: f32,
         /// Padding.
         pub pad0: u32,
-        /// Padding.
-        pub pad1: u32,
-        /// Padding.
-        pub pad2: u32,
     }
 }
 
@@ -81,12 +81,13 @@ inlay_engine::gpu_struct! {
         pub weight: f32,
         /// The ray's frame (its exposure gain's index).
         pub frame: u32,
+        /// The length along the ray to the surface a depth map records
+        /// (0: none).
+        pub depth: f32,
         /// Padding.
         pub pad0: u32,
         /// Padding.
         pub pad1: u32,
-        /// Padding.
-        pub pad2: u32,
     }
 }
 
@@ -223,15 +224,22 @@ impl TrainRay {
             target_value: value.as_vec3().to_array(),
             weight: weight as f32,
             frame: 0,
+            depth: 0.0,
             pad0: 0,
             pad1: 0,
-            pad2: 0,
         }
     }
 
     /// The same ray, from frame `frame` (whose exposure gain scales it).
     pub fn in_frame(mut self, frame: u32) -> Self {
         self.frame = frame;
+        self
+    }
+
+    /// The same ray, its surface recorded at length `depth` along it
+    /// (None: no depth; [`GpuTrainer::depth`] weighs the loss).
+    pub fn with_depth(mut self, depth: Option<f64>) -> Self {
+        self.depth = depth.map_or(0.0, |d| d as f32);
         self
     }
 }
@@ -450,6 +458,10 @@ pub struct GpuTrainer {
     /// The distortion loss's weight λ ([`super::render_ray_with_gradient`];
     /// 0 leaves it out).
     pub distortion: f64,
+    /// The depth loss's weight μ and tolerance s, for the rays that record
+    /// a depth ([`TrainRay::with_depth`]; [`super::depth`]); None leaves
+    /// it out.
+    pub depth: Option<(f64, f64)>,
     scatter: GradientScatter,
     rays_per_pixel: u32,
 }
@@ -592,6 +604,7 @@ impl GpuTrainer {
             tv_weights: TvWeights::NONE,
             gain_rate: None,
             distortion: 0.0,
+            depth: None,
             scatter,
             rays_per_pixel: 1,
         })
@@ -721,9 +734,9 @@ impl GpuTrainer {
             brick_dims: self.brick_dims(),
             sky_height: self.sky_size.map_or(0, |s| s.1),
             rays_per_pixel: self.rays_per_pixel,
+            depth_weight: self.depth.map_or(0.0, |d| d.0 / self.bounds.diagonal()) as f32,
+            depth_tolerance: self.depth.map_or(1.0, |d| d.1) as f32,
             pad0: 0,
-            pad1: 0,
-            pad2: 0,
         }
     }
 

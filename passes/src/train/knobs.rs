@@ -155,6 +155,16 @@ pub struct TrainKnobs {
     /// after the stages it cost PLANTS, whose foliage is a medium,
     /// 1.0–2.2 dB (issue 25's thirty-fifth pass).
     pub distortion: f64,
+    /// The depth loss's weight μ ([`super::depth`]) on the rays whose
+    /// frame has a depth map (`depth_file_path`): holds each ray's weight
+    /// at the surface the map records, which a photograph of a plain
+    /// surface cannot place; 0 ignores the maps. Photographs without depth
+    /// maps train the same at any weight.
+    pub depth_weight: f64,
+    /// The depth loss's tolerance s, in node spacings of the final grid:
+    /// within it the loss is quadratic, beyond it linear (a depth map's
+    /// noise and a surface's place within its cell).
+    pub depth_tolerance: f64,
     /// Each step's rays end on a random colour behind the field (each
     /// channel uniform over 0 to twice the photographs' mean radiance)
     /// rather than on the fixed background: a field a ray partly sees
@@ -277,6 +287,8 @@ impl Default for TrainKnobs {
             sparsity: 1e-3,
             sparsity_edge: 0.03,
             distortion: 0.0,
+            depth_weight: 1.0,
+            depth_tolerance: 1.0,
             random_background: false,
             sky: 0,
             sh_degree: 0,
@@ -643,6 +655,7 @@ impl TrainKnobs {
             ("sparsity_edge", self.sparsity_edge),
             ("sparsity", self.sparsity),
             ("distortion", self.distortion),
+            ("depth_weight", self.depth_weight),
             ("prune", self.prune),
         ] {
             if !(v.is_finite() && v >= 0.0) {
@@ -671,6 +684,7 @@ impl TrainKnobs {
             ("density_rate", self.density_rate),
             ("rate_decay", self.rate_decay),
             ("epsilon", self.epsilon),
+            ("depth_tolerance", self.depth_tolerance),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return bad(k, format!("{v} must be positive and finite"));

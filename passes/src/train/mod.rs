@@ -7,6 +7,7 @@
 
 pub mod adam;
 pub mod behind;
+pub mod depth;
 pub mod geometry;
 pub mod gpu;
 pub mod knobs;
@@ -25,6 +26,7 @@ pub mod visibility;
 pub use crate::field::Sky;
 pub use adam::{adam_step, AdamKnobs};
 pub use behind::Behind;
+pub use depth::{depth_penalty, ray_depth, DepthTerm};
 pub use geometry::{
     depth_error_colour, depth_pixels, geometry_score, known_depth, recipe_along, score_pixels,
     GeometryScore, KnownAlong, KnownContent, KnownDepth, MediumSpan, PixelDepth, HAZE_MARGIN,

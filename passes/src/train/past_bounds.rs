@@ -196,6 +196,7 @@ mod tests {
                     alpha: Vec::new(),
                     counts: PixelCounts::default(),
                 },
+                depth: Vec::new(),
             }],
             bounds: Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
             bounds_source: BoundsSource::AabbKey,

@@ -280,7 +280,9 @@ impl PixelPool {
     /// each one's rays drawn as `rays` says (n × n through the centres of
     /// an even split of its area: [`area_offsets`]), what it
     /// says (with `shift` behind its transparent part: [`pixel_target`]),
-    /// and its frame, in the order of their frames and pixels
+    /// its frame, and the length along each ray to the surface the
+    /// frame's depth map records at the pixel (None where it has none:
+    /// [`super::depth::ray_depth`]), in the order of their frames and pixels
     /// (neighbouring rays of a view then march side by side on the device,
     /// over the same nodes and about as far). A pixel whose rays the lens model
     /// cannot all invert is not drawn.
@@ -292,7 +294,7 @@ impl PixelPool {
         step: u64,
         shift: DVec3,
         rays: PixelRays,
-    ) -> Vec<(Vec<Ray>, PixelTarget, u32)> {
+    ) -> Vec<BatchPixel> {
         let (area, jitter) = (rays.area.max(1), rays.jitter);
         let centres = area_offsets(area);
         let mut rng = Pcg32::new(seed, 0x7EA1_0000_0000 ^ step);
@@ -323,10 +325,23 @@ impl PixelPool {
         }
         out.sort_by_key(|(r, _, _)| (r.frame, r.pixel));
         out.into_iter()
-            .map(|(r, ray, t)| (ray, t, r.frame))
+            .map(|(r, rays, t)| {
+                let frame = &dataset.frames[r.frame as usize];
+                let z = frame.depth.get(r.pixel as usize).copied();
+                let forward = frame.pose.forward();
+                let depths = rays
+                    .iter()
+                    .map(|ray| z.and_then(|z| super::depth::ray_depth(z, ray.dir, forward)))
+                    .collect();
+                (rays, t, r.frame, depths)
+            })
             .collect()
     }
 }
+
+/// A pixel of a batch ([`PixelPool::batch`]): its rays, what it says, its
+/// frame, and each ray's length to the surface its depth map records.
+pub type BatchPixel = (Vec<Ray>, PixelTarget, u32, Vec<Option<f64>>);
 
 #[cfg(test)]
 mod tests {

@@ -28,6 +28,9 @@
 //! 2 L_d, and the backward walk's running sums (Σ_{j<i} w_j and
 //! Σ_{j<i} w_j t_j against the forward pass's totals) give the rest.
 //!
+//! A depth map's term ([`super::depth`]) has the same form with
+//! ρ(t_i − D) in the place of c_i and ρ(t_exit − D) in the place of b.
+//!
 //! With view-dependent colour, c_i = max(0, base_i + Σ_k Y_k(d)·s_{k,i})
 //! (`crate::field::sh_basis`): ∂C/∂base_i = T_i α_i and ∂C/∂s_{k,i} =
 //! T_i α_i Y_k(d) in each channel where the sum is positive, zero where
@@ -40,6 +43,7 @@ use crate::geometry::{ray_box, Ray};
 use crate::march::MarchKnobs;
 
 use super::behind::Behind;
+use super::depth::{depth_penalty, effective_target, DepthTerm};
 
 /// One ray's pixel and the gradient of a loss with respect to the nodes it
 /// read.
@@ -49,6 +53,8 @@ pub struct RayGradient {
     pub colour: DVec3,
     /// The distortion loss L_d (0 with λ = 0).
     pub distortion: f64,
+    /// The depth loss L_z (0 without a depth term).
+    pub depth: f64,
     /// Opacity 1 − T_N.
     pub opacity: f64,
     /// ∂loss/∂value for each value the ray read, indexed as the device
@@ -86,29 +92,49 @@ fn samples(field: &GridField, ray: &Ray, knobs: &MarchKnobs) -> Vec<(f64, f64)> 
 /// sky) and, given the loss's gradient with respect to the pixel as
 /// `d_colour(C)`, returns the pixel and the gradient with respect to the
 /// nodes (and the sky's texels) of that loss plus the distortion loss of
-/// weight `distortion` (λ; 0 leaves it out).
+/// weight `distortion` (λ; 0 leaves it out) and the depth loss of `depth`
+/// (None leaves it out; nor does a ray that misses the bounds take one).
 pub fn render_ray_with_gradient<'a>(
     field: &GridField,
     ray: &Ray,
     knobs: &MarchKnobs,
     background: impl Into<Behind<'a>>,
-    distortion: f64,
+    (distortion, depth): (f64, Option<DepthTerm>),
     d_colour: impl Fn(DVec3) -> DVec3,
 ) -> RayGradient {
     let behind = background.into();
     let background = behind.eval(ray.dir);
     let steps = samples(field, ray, knobs);
     let lambda = distortion / field.bounds.diagonal();
+    // The depth term: its weight over the diagonal, the target and the
+    // tolerance (weight 0 where none).
+    let (mu, target, tolerance) = match (depth, steps.last()) {
+        (Some(d), Some(&(t, dt))) => (
+            d.weight / field.bounds.diagonal(),
+            effective_target(d.target, t + 0.5 * dt, d.tolerance),
+            d.tolerance,
+        ),
+        _ => (0.0, 0.0, 1.0),
+    };
+    let penalty = |t: f64| {
+        if mu == 0.0 {
+            0.0
+        } else {
+            depth_penalty(t - target, tolerance)
+        }
+    };
     // Forward, with the weights' totals the distortion loss needs.
     let mut colour = DVec3::ZERO;
     let mut transmittance = 1.0;
     let mut used = 0;
     let (mut w_all, mut wt_all, mut pairs, mut own) = (0.0, 0.0, 0.0, 0.0);
+    let mut depth_sum = 0.0;
     for &(t, dt) in &steps {
         let (sigma, c) = field.sample(ray.at(t), ray.dir);
         let alpha = 1.0 - (-sigma * dt).exp();
         let w = transmittance * alpha;
         colour += w * c;
+        depth_sum += w * penalty(t);
         // Σ_{j<i} w_j (t_i − t_j): each unordered pair once.
         pairs += w * (t * w_all - wt_all);
         own += w * w * dt;
@@ -121,6 +147,10 @@ pub fn render_ray_with_gradient<'a>(
         }
     }
     let distortion_loss = lambda * (2.0 * pairs + own / 3.0);
+    // The depth loss over μ/Diag: the weights' penalties and what passes
+    // the bounds', at the exit.
+    let exit_penalty = steps.last().map_or(0.0, |&(t, dt)| penalty(t + 0.5 * dt));
+    let depth_total = depth_sum + transmittance * exit_penalty;
     let total = colour + transmittance * background;
     let g = d_colour(total);
     let sky = match behind {
@@ -144,6 +174,7 @@ pub fn render_ray_with_gradient<'a>(
     let mut t_i = 1.0;
     let mut so_far = DVec3::ZERO;
     let (mut w_before, mut wt_before, mut e_so_far) = (0.0, 0.0, 0.0);
+    let mut z_so_far = 0.0;
     for &(t, dt) in &steps[..used] {
         let x = ray.at(t);
         let Some(corners) = field.corners(x) else {
@@ -172,11 +203,14 @@ pub fn render_ray_with_gradient<'a>(
         let spread = t * w_before - wt_before + wt_after - t * w_after;
         let e = lambda * (2.0 * spread + 2.0 / 3.0 * w * dt);
         e_so_far += w * e;
+        let rho = penalty(t);
+        z_so_far += w * rho;
         let d_c = g * w * open;
         let d_sigma = open_sigma
             * dt
             * (g.dot(t_next * c - (colour - so_far) - transmittance * background) + t_next * e
-                - (2.0 * distortion_loss - e_so_far));
+                - (2.0 * distortion_loss - e_so_far)
+                + mu * (t_next * rho - (depth_total - z_so_far)));
         w_before += w;
         wt_before += w * t;
         for (n, wn) in corners {
@@ -194,6 +228,7 @@ pub fn render_ray_with_gradient<'a>(
     RayGradient {
         colour: total,
         distortion: distortion_loss,
+        depth: mu * depth_total,
         opacity: 1.0 - transmittance,
         values: grads,
         sky,
@@ -204,35 +239,45 @@ pub fn render_ray_with_gradient<'a>(
 /// (a photograph's pixel gathers the light over its area) over
 /// `background` and, given the loss's gradient with respect to the pixel
 /// as `d_colour(C)`, returns the pixel and the gradient of that loss plus
-/// each ray's distortion loss at weight `distortion` / n (the pixel's
-/// weight shared among its n rays): each ray's own gradient at
-/// `d_colour(C)` / n, summed. One ray is [`render_ray_with_gradient`].
+/// each ray's distortion loss at weight `distortion` / n and its depth
+/// loss (`depths`: one term a ray, each at its weight / n, or empty for
+/// none; the pixel's weight shared among its n rays): each ray's own
+/// gradient at `d_colour(C)` / n, summed. One ray is
+/// [`render_ray_with_gradient`].
 pub fn render_pixel_with_gradient<'a>(
     field: &GridField,
     rays: &[Ray],
     knobs: &MarchKnobs,
     background: impl Into<Behind<'a>>,
-    distortion: f64,
+    (distortion, depths): (f64, &[Option<DepthTerm>]),
     d_colour: impl Fn(DVec3) -> DVec3,
 ) -> RayGradient {
     let behind = background.into();
     let n = rays.len().max(1) as f64;
     let colour = rays
         .iter()
-        .map(|r| render_ray_with_gradient(field, r, knobs, behind, 0.0, |_| DVec3::ZERO).colour)
+        .map(|r| {
+            render_ray_with_gradient(field, r, knobs, behind, (0.0, None), |_| DVec3::ZERO).colour
+        })
         .sum::<DVec3>()
         / n;
     let g = d_colour(colour) / n;
     let mut out = RayGradient {
         colour,
         distortion: 0.0,
+        depth: 0.0,
         opacity: 0.0,
         values: Vec::new(),
         sky: Vec::new(),
     };
-    for ray in rays {
-        let r = render_ray_with_gradient(field, ray, knobs, behind, distortion / n, |_| g);
+    for (k, ray) in rays.iter().enumerate() {
+        let depth = depths.get(k).copied().flatten().map(|d| DepthTerm {
+            weight: d.weight / n,
+            ..d
+        });
+        let r = render_ray_with_gradient(field, ray, knobs, behind, (distortion / n, depth), |_| g);
         out.distortion += r.distortion;
+        out.depth += r.depth;
         out.opacity += r.opacity / n;
         out.values.extend(r.values);
         out.sky.extend(r.sky);
@@ -281,11 +326,25 @@ mod tests {
         f.with_sh(degree, sh)
     }
 
+    /// The depth term of `ray` through `field` whose surface lies at
+    /// `share` of the way from where it enters the bounds to where it
+    /// leaves (past 1: beyond them).
+    fn depth_at_share(field: &GridField, ray: &Ray, share: f64, weight: f64) -> DepthTerm {
+        let (t0, t1) = ray_box(ray, &field.bounds).unwrap();
+        DepthTerm {
+            target: t0 + share * (t1 - t0),
+            weight,
+            tolerance: 0.05,
+        }
+    }
+
     /// The pixel equals the march's (no skipping, black background), and
     /// the gradient of a weighted sum of the pixel (plus, for λ > 0, the
-    /// distortion loss) matches central differences of the rendered pixel
-    /// in every value it reads, density, colour and (degrees 1 and 2) the
-    /// view-dependent coefficients, over a background.
+    /// distortion loss, and where given the depth loss, its surface inside
+    /// the bounds or past them) matches central differences of the
+    /// rendered pixel in every value it reads, density, colour and
+    /// (degrees 1 and 2) the view-dependent coefficients, over a
+    /// background.
     #[test]
     fn the_gradient_matches_finite_differences() {
         let knobs = MarchKnobs {
@@ -295,7 +354,17 @@ mod tests {
         };
         let weights = DVec3::new(0.7, -0.2, 0.4);
         let bg = DVec3::new(0.3, 0.6, 0.9);
-        for (degree, lambda) in [(0, 0.0), (1, 0.0), (2, 0.0), (0, 0.8), (2, 0.3)] {
+        let cases = [
+            (0, 0.0, None),
+            (1, 0.0, None),
+            (2, 0.0, None),
+            (0, 0.8, None),
+            (2, 0.3, None),
+            (0, 0.0, Some(0.4)),
+            (1, 0.5, Some(1.3)),
+            (0, 0.0, Some(1e9)),
+        ];
+        for (degree, lambda, share) in cases {
             let field = small_sh_field(1, degree);
             let first = field.nodes.len();
             let mut checked = 0;
@@ -308,17 +377,26 @@ mod tests {
                     origin: o,
                     dir: d.normalize(),
                 };
-                let black =
-                    render_ray_with_gradient(&field, &ray, &knobs, DVec3::ZERO, 0.0, |_| weights);
+                let black = render_ray_with_gradient(
+                    &field,
+                    &ray,
+                    &knobs,
+                    DVec3::ZERO,
+                    (0.0, None),
+                    |_| weights,
+                );
                 let march = crate::march::march_ray(&field, &ray, f64::INFINITY, &knobs);
                 assert!((black.colour - march.colour).length() < 1e-12);
                 assert!((black.opacity - march.opacity).abs() < 1e-12);
-                assert_eq!(black.distortion, 0.0);
-                let r = render_ray_with_gradient(&field, &ray, &knobs, bg, lambda, |_| weights);
+                assert_eq!((black.distortion, black.depth), (0.0, 0.0));
+                let depth = share.map(|s| depth_at_share(&field, &ray, s, 2.0));
+                let priors = (lambda, depth);
+                let r = render_ray_with_gradient(&field, &ray, &knobs, bg, priors, |_| weights);
                 assert!(!r.values.is_empty());
+                assert_eq!(r.depth > 0.0, depth.is_some());
                 let loss = |f: &GridField| {
-                    let r = render_ray_with_gradient(f, &ray, &knobs, bg, lambda, |_| weights);
-                    r.colour.dot(weights) + r.distortion
+                    let r = render_ray_with_gradient(f, &ray, &knobs, bg, priors, |_| weights);
+                    r.colour.dot(weights) + r.distortion + r.depth
                 };
                 for &(n, grad) in &r.values {
                     for (ch, &analytic) in grad.iter().enumerate() {
@@ -330,7 +408,8 @@ mod tests {
                         // f32 values: the perturbation is exact only to ~1e-7.
                         assert!(
                             (numeric - analytic).abs() < 2e-3 * (1.0 + analytic.abs()),
-                            "degree {degree} λ {lambda} value {n} channel {ch}: {numeric} vs {analytic}"
+                            "degree {degree} λ {lambda} depth {share:?} value {n} channel {ch}: \
+                             {numeric} vs {analytic}"
                         );
                         checked += 1;
                     }
@@ -362,10 +441,11 @@ mod tests {
         (eval(h as f32) - eval(-h as f32)) / (2.0 * h)
     }
 
-    /// A pixel of three rays is their mean (its distortion loss the mean
-    /// of theirs), and the gradient of a squared loss on that mean (not
-    /// the mean of the rays' losses) plus the distortion loss matches
-    /// central differences in every value the rays read.
+    /// A pixel of three rays is their mean (its distortion and depth
+    /// losses the means of theirs), and the gradient of a squared loss on
+    /// that mean (not the mean of the rays' losses) plus the distortion
+    /// and depth losses matches central differences in every value the
+    /// rays read.
     #[test]
     fn a_pixels_gradient_over_its_rays_matches_finite_differences() {
         let knobs = MarchKnobs {
@@ -384,20 +464,30 @@ mod tests {
                 dir: DVec3::new(1.0, 0.05 - k, 0.8).normalize(),
             })
             .collect();
+        let depths: Vec<Option<DepthTerm>> = rays
+            .iter()
+            .map(|ray| Some(depth_at_share(&field, ray, 0.5, 3.0)))
+            .collect();
         let d_colour = |c: DVec3| 2.0 * (c - target);
-        let r = render_pixel_with_gradient(&field, &rays, &knobs, bg, lambda, d_colour);
+        let priors = (lambda, depths.as_slice());
+        let r = render_pixel_with_gradient(&field, &rays, &knobs, bg, priors, d_colour);
         let each: Vec<RayGradient> = rays
             .iter()
-            .map(|ray| render_ray_with_gradient(&field, ray, &knobs, bg, lambda, |_| DVec3::ZERO))
+            .zip(&depths)
+            .map(|(ray, d)| {
+                render_ray_with_gradient(&field, ray, &knobs, bg, (lambda, *d), |_| DVec3::ZERO)
+            })
             .collect();
         let mean = each.iter().map(|e| e.colour).sum::<DVec3>() / 3.0;
         assert!((r.colour - mean).length() < 1e-12);
         let distortion = each.iter().map(|e| e.distortion).sum::<f64>() / 3.0;
         assert!(distortion > 0.0 && (r.distortion - distortion).abs() < 1e-12);
+        let depth = each.iter().map(|e| e.depth).sum::<f64>() / 3.0;
+        assert!(depth > 0.0 && (r.depth - depth).abs() < 1e-12);
         assert!((each[0].colour - each[2].colour).length() > 1e-3);
         let loss = |f: &GridField| {
-            let r = render_pixel_with_gradient(f, &rays, &knobs, bg, lambda, |_| DVec3::ZERO);
-            (r.colour - target).length_squared() + r.distortion
+            let r = render_pixel_with_gradient(f, &rays, &knobs, bg, priors, |_| DVec3::ZERO);
+            (r.colour - target).length_squared() + r.distortion + r.depth
         };
         let mut summed: Vec<(usize, [f64; 4])> = Vec::new();
         for (n, g) in &r.values {
@@ -457,9 +547,9 @@ mod tests {
                 origin: o,
                 dir: d.normalize(),
             };
-            let r = render_ray_with_gradient(&field, &ray, &knobs, &sky, 0.0, |_| weights);
+            let r = render_ray_with_gradient(&field, &ray, &knobs, &sky, (0.0, None), |_| weights);
             let loss = |f: &GridField, s: &Sky| {
-                render_ray_with_gradient(f, &ray, &knobs, s, 0.0, |_| weights)
+                render_ray_with_gradient(f, &ray, &knobs, s, (0.0, None), |_| weights)
                     .colour
                     .dot(weights)
             };
@@ -530,8 +620,9 @@ mod tests {
             expected += wi * wi * di / 3.0;
         }
         expected *= lambda / field.bounds.diagonal();
+        let priors = (lambda, None);
         let r =
-            render_ray_with_gradient(&field, &ray, &knobs, DVec3::ZERO, lambda, |_| DVec3::ZERO);
+            render_ray_with_gradient(&field, &ray, &knobs, DVec3::ZERO, priors, |_| DVec3::ZERO);
         assert!(expected > 0.0);
         assert!(
             (r.distortion - expected).abs() < 1e-12 * (1.0 + expected),
@@ -560,7 +651,9 @@ mod tests {
                 origin: DVec3::new(-1.0, 0.5, 0.5),
                 dir: DVec3::X,
             };
-            let r = render_ray_with_gradient(&f, &ray, &knobs, DVec3::ZERO, 1.0, |_| DVec3::ZERO);
+            let priors = (1.0, None);
+            let r =
+                render_ray_with_gradient(&f, &ray, &knobs, DVec3::ZERO, priors, |_| DVec3::ZERO);
             (r.distortion, r.opacity)
         };
         let (thin, thin_opacity) = slab(true);
@@ -570,5 +663,87 @@ mod tests {
             "{thin_opacity} vs {haze_opacity}"
         );
         assert!(thin < 0.3 * haze, "shell {thin} vs haze {haze}");
+    }
+
+    /// The depth loss is μ/Diag times the march's weights' penalties plus
+    /// the light past the bounds' at the exit, summed anew here from the
+    /// march's own samples; and along a slab a thin shell at the recorded
+    /// depth scores far lower than the same opacity in a haze, or in a
+    /// shell two nodes in front.
+    #[test]
+    fn the_depth_loss_is_the_weights_penalties() {
+        let knobs = MarchKnobs {
+            samples_per_ray: 40,
+            termination: 1e-4,
+            skip_empty: false,
+        };
+        let field = small_field(4);
+        let ray = Ray {
+            origin: DVec3::new(-2.0, 0.1, -1.5),
+            dir: DVec3::new(1.0, 0.05, 0.8).normalize(),
+        };
+        let term = depth_at_share(&field, &ray, 0.6, 1.5);
+        let mut s: Vec<(f64, f64)> = Vec::new();
+        crate::march::march_samples(&field, &ray, f64::INFINITY, &knobs, |m| {
+            s.push((m.t, m.weight))
+        });
+        let m = crate::march::march_ray(&field, &ray, f64::INFINITY, &knobs);
+        let (_, t1) = ray_box(&ray, &field.bounds).unwrap();
+        let rho = |t: f64| depth_penalty(t - term.target, term.tolerance);
+        let sum: f64 = s.iter().map(|&(t, w)| w * rho(t)).sum();
+        let expected = term.weight / field.bounds.diagonal() * (sum + (1.0 - m.opacity) * rho(t1));
+        let r =
+            render_ray_with_gradient(&field, &ray, &knobs, DVec3::ZERO, (0.0, Some(term)), |_| {
+                DVec3::ZERO
+            });
+        assert!(expected > 0.0);
+        assert!(
+            (r.depth - expected).abs() < 1e-12 * (1.0 + expected),
+            "{} vs {expected}",
+            r.depth
+        );
+        // Opacity 1 − e^{−4} in the layer of nodes at x = `at`, or spread
+        // over all; the ray along x, the depth map's surface at `target`.
+        let slab_field = |at: Option<u32>| {
+            let res = UVec3::new(9, 2, 2);
+            let bounds = Aabb::new(DVec3::ZERO, DVec3::new(8.0, 1.0, 1.0));
+            let nodes = (0..res.x * res.y * res.z)
+                .map(|n| {
+                    let i = n % res.x;
+                    let sigma = match at {
+                        None => 4.0 / 8.0,
+                        Some(k) if k == i => 4.0,
+                        _ => 0.0,
+                    };
+                    [1.0, 1.0, 1.0, sigma]
+                })
+                .collect();
+            GridField::new(res, bounds, nodes, 2)
+        };
+        let along = Ray {
+            origin: DVec3::new(-1.0, 0.5, 0.5),
+            dir: DVec3::X,
+        };
+        // Where the shell at x = 4 holds its weight on average.
+        let (mut w_sum, mut wt_sum) = (0.0, 0.0);
+        crate::march::march_samples(&slab_field(Some(4)), &along, f64::INFINITY, &knobs, |m| {
+            w_sum += m.weight;
+            wt_sum += m.weight * m.t;
+        });
+        let target = wt_sum / w_sum;
+        assert!((target - 4.0).abs() < 1.0, "{target}");
+        let slab = |at: Option<u32>| {
+            let term = DepthTerm {
+                target,
+                weight: 1.0,
+                tolerance: 0.1,
+            };
+            let priors = (0.0, Some(term));
+            let f = slab_field(at);
+            render_ray_with_gradient(&f, &along, &knobs, DVec3::ZERO, priors, |_| DVec3::ZERO).depth
+        };
+        let (at, ahead, haze) = (slab(Some(4)), slab(Some(2)), slab(None));
+        assert!(at < 0.3 * ahead, "shell {at} vs two nodes in front {ahead}");
+        assert!(at < 0.3 * haze, "shell {at} vs haze {haze}");
     }
 }

@@ -488,6 +488,10 @@ pub fn train(
             scale,
         );
         gpu.distortion = knobs.distortion;
+        // The depth maps' loss, its tolerance in the final grid's spacings.
+        let final_spacing = (bounds.size() / (final_res - UVec3::ONE).as_dvec3()).min_element();
+        gpu.depth = (knobs.depth_weight > 0.0)
+            .then_some((knobs.depth_weight, knobs.depth_tolerance * final_spacing));
         gpu.set_gains(ctx, &gains)?;
         gpu.set_sky(ctx, sky.as_ref())?;
         while step < end {
@@ -512,9 +516,12 @@ pub fn train(
             );
             let records: Vec<TrainRay> = batch
                 .iter()
-                .flat_map(|(rays, t, f)| {
-                    rays.iter()
-                        .map(|r| TrainRay::new(r.origin, r.dir, *t, 1.0).in_frame(*f))
+                .flat_map(|(rays, t, f, depths)| {
+                    rays.iter().zip(depths).map(|(r, d)| {
+                        TrainRay::new(r.origin, r.dir, *t, 1.0)
+                            .in_frame(*f)
+                            .with_depth(*d)
+                    })
                 })
                 .collect();
             let decay = knobs.rate_decay.powf(step as f64 / knobs.iterations as f64);
@@ -639,14 +646,11 @@ pub const GAIN_RATE: f64 = 0.03;
 /// its photographs say, on sRGB values clipped at 1 as the held-out views
 /// are scored: a bracket at its exposure, a lower bound only where the
 /// pixel falls below it.
-pub fn batch_psnr(
-    batch: &[(Vec<crate::geometry::Ray>, super::PixelTarget, u32)],
-    out: &[[f32; 4]],
-) -> f64 {
+pub fn batch_psnr(batch: &[super::pixels::BatchPixel], out: &[[f32; 4]]) -> f64 {
     use super::PixelTarget;
     let mut se = 0.0;
     let mut n = 0usize;
-    for ((_, target, _), o) in batch.iter().zip(out) {
+    for ((_, target, ..), o) in batch.iter().zip(out) {
         let c = DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64);
         for k in 0..3 {
             let (a, b) = match *target {
@@ -930,6 +934,7 @@ mod tests {
                 alpha: Vec::new(),
                 counts: Default::default(),
             },
+            depth: Vec::new(),
         }
     }
 
@@ -1019,7 +1024,7 @@ mod tests {
         let pool = PixelPool::new(&dataset, 0);
         let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, CENTRE);
         assert_eq!(batch.len(), 64);
-        let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f)| (*f, r[0].dir.x)).collect();
+        let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f, _)| (*f, r[0].dir.x)).collect();
         assert!(keys.windows(2).all(|w| w[0].0 <= w[1].0), "{keys:?}");
         assert!(keys.iter().any(|k| k.0 == 0) && keys.iter().any(|k| k.0 == 2));
         // The same draw for the same seed and step, another for the next step.
@@ -1045,7 +1050,7 @@ mod tests {
                 let rays = PixelRays { area, jitter };
                 let batch = pool.batch(&dataset, 256, 1, 5, DVec3::ZERO, rays);
                 let mut offsets = Vec::new();
-                for (pixel_rays, target, _) in &batch {
+                for (pixel_rays, target, ..) in &batch {
                     assert_eq!(pixel_rays.len() as u32, area * area);
                     for (k, ray) in pixel_rays.iter().enumerate() {
                         let (u, v) = frame

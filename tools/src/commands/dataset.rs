@@ -127,6 +127,10 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         "pixels: {total}; masked: {} NaN or infinite, {} negative, {} by masks; {} saturated (lower bounds); {} with alpha below 1",
         c.non_finite, c.negative, c.masked, c.saturated, c.transparent
     );
+    let depth = inlay_passes::dataset::depth::DepthCounts::of(&d.frames);
+    if let Some(line) = depth.line(d.frames.len()) {
+        println!("{line}");
+    }
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&d).warning() {
         println!("warning: {w}");
     }

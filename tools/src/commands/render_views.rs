@@ -5,7 +5,8 @@
 //! field's bounds as `aabb`), and optionally bracketed sRGB PNGs of the
 //! same views with their `exposure_time` in `DIR/brackets/`. With
 //! `--sky-behind` what the cameras see past the bounds is the scene's
-//! environment, not black.
+//! environment, not black. With `--depth` each view also has a depth map,
+//! as a capture with a depth sensor would (`depth_file_path`).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -13,11 +14,13 @@ use std::time::Instant;
 use anyhow::{ensure, Result};
 use clap::Args;
 use inlay_engine::HdrImage;
-use inlay_passes::bake::{render_reference, ReferenceOptions};
+use inlay_passes::bake::{render_reference, PathTracer, ReferenceOptions};
 use inlay_passes::camera::CameraFrame;
 use inlay_passes::dataset::capture::{
-    bracket_png, cap_cameras, transforms_json, Capture, UnrecordedLight, WrittenFrame,
+    bracket_png, cap_cameras, recipe_depth_map, transforms_json, Capture, UnrecordedLight,
+    WrittenFrame,
 };
+use inlay_passes::dataset::depth::{depth_png, PNG_DEPTH_UNIT};
 use inlay_passes::scene::load_scene;
 
 use crate::field_source::progress_bar;
@@ -65,6 +68,12 @@ pub struct RenderViewsArgs {
     /// there). Train such a set with `inlay train --sky`.
     #[arg(long)]
     pub sky_behind: bool,
+    /// Also write each view's depth map (`depth-NNN.png`, 16-bit z-depths
+    /// in thousandths of the scene's units, its `depth_file_path`): the
+    /// recipe's expected depth along each pixel's centre ray where it is
+    /// at least half opaque, nothing elsewhere, as a depth sensor records.
+    #[arg(long)]
+    pub depth: bool,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -135,6 +144,10 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
         antialias: true,
         sky_behind: args.sky_behind,
     };
+    // Its nearest_surface alone is used: no bounces.
+    let tracer = args
+        .depth
+        .then(|| PathTracer::new(recipe, &scene.environment, 0));
     let started = Instant::now();
     let bar = progress_bar("views", args.views as u64);
     let mut outputs = Outputs::new();
@@ -166,10 +179,20 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
         };
         let file = format!("view-{i:03}.exr");
         outputs.image(&args.out.join(&file), &image, 1.0)?;
+        let depth_file = match &tracer {
+            Some(t) => {
+                let name = format!("depth-{i:03}.png");
+                let z = recipe_depth_map(recipe, t, &frame);
+                outputs.bytes(&args.out.join(&name), &depth_png(&z, w, h, PNG_DEPTH_UNIT))?;
+                Some(name)
+            }
+            None => None,
+        };
         frames.push(WrittenFrame {
             file,
             camera: camera.clone(),
             exposure_time: None,
+            depth_file,
         });
         let rgb: Vec<[f32; 3]> = pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
         if let Some(ev) = shortest {
@@ -186,6 +209,7 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
                 file,
                 camera: camera.clone(),
                 exposure_time: Some(exposure),
+                depth_file: None,
             });
         }
         bar.inc(1);

@@ -132,6 +132,17 @@ pub struct TrainArgs {
     /// surfaces and costs media such as foliage.
     #[arg(long, default_value_t = TrainKnobs::default().distortion)]
     pub distortion: f64,
+    /// Weight of the depth maps' loss, for datasets whose frames name one
+    /// (`depth_file_path`: z-depths, as phones' LiDAR captures and
+    /// `inlay render-views --depth` write them): holds each ray's weight
+    /// at the recorded surface, where a photograph of a plain surface
+    /// cannot place it (0: ignore the maps).
+    #[arg(long, default_value_t = TrainKnobs::default().depth_weight)]
+    pub depth_weight: f64,
+    /// The depth loss's tolerance, in node spacings of the final grid:
+    /// quadratic within it, linear beyond (raise it for noisy maps).
+    #[arg(long, default_value_t = TrainKnobs::default().depth_tolerance)]
+    pub depth_tolerance: f64,
     /// Each step's rays end on a random colour behind the field instead of
     /// `--background`, so that surfaces train opaque rather than
     /// translucent; photographs with an alpha channel take the same colour
@@ -331,6 +342,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         sparsity: args.sparsity.or(TrainKnobs::default().sparsity),
         sparsity_edge: args.sparsity_edge.or(TrainKnobs::default().sparsity_edge),
         distortion: args.distortion,
+        depth_weight: args.depth_weight,
+        depth_tolerance: args.depth_tolerance,
         // Set below from the photographs' alpha where auto.
         random_background: args.random_background == Switch::On,
         // Set below from the dataset's light past the bounds where auto.
@@ -421,6 +434,18 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         b.max.z,
         dataset.bounds_source
     );
+    let depth = inlay_passes::dataset::depth::DepthCounts::of(&dataset.frames);
+    if let Some(line) = depth.line(dataset.frames.len()) {
+        if knobs.depth_weight > 0.0 {
+            eprintln!(
+                "{line}: each of their rays held to it (--depth-weight {}, --depth-tolerance {} \
+                 node spacings)",
+                knobs.depth_weight, knobs.depth_tolerance
+            );
+        } else {
+            eprintln!("{line}: ignored (--depth-weight 0)");
+        }
+    }
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&dataset).warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
