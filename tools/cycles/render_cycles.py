@@ -48,6 +48,15 @@ mean over each pixel's area; no clamping, no denoising):
   another seed: the PSNR between the two renders of a view bounds what any
   field can score against it (docs/benchmarks.md, "The Cycles sets' own
   noise").
+- depth: `training/depth/depth-NNN.png` for the training cameras, Cycles'
+  Z pass (the distance along the camera's viewing direction) at each
+  pixel's centre (one sample, a pixel filter 0.01 wide) as 16-bit integers
+  in thousandths of the scene's units (0 where the ray meets nothing
+  within 65.535), and `training/depth/transforms.json`: the training set's
+  own (rendered first: `--what training`), its frames' images one folder
+  up, each frame's `depth_file_path` and the file's
+  `depth_unit_scale_factor` added. The photographs alone stay
+  `training/transforms.json`.
 - `render.json`: Blender's version, the command, samples, seeds and the
   wall time of each image.
 """
@@ -744,6 +753,63 @@ def measure_irradiance(centre, samples, seed, log):
     return out
 
 
+def png16_grey(path, values):
+    """A 16-bit greyscale PNG of `values` (rows top first, integers), written
+    by hand (zlib and struct: Blender's image saving would apply its colour
+    management)."""
+    import struct
+    import zlib
+
+    h, w = values.shape
+
+    def chunk(kind, data):
+        c = struct.pack(">I", len(data)) + kind + data
+        return c + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    raw = b"".join(b"\x00" + values[y].astype(">u2").tobytes() for y in range(h))
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, 0, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
+    with open(path + ".partial", "wb") as fh:
+        fh.write(png)
+    os.replace(path + ".partial", path)
+
+
+def render_depth(path, log):
+    """Renders the current camera's Z pass through the compositor into a
+    float EXR, reads it back and writes it as `png16_grey` in thousandths
+    of the scene's units."""
+    sc = bpy.context.scene
+    sc.use_nodes = True
+    tree = sc.node_tree
+    tree.nodes.clear()
+    layers = tree.nodes.new("CompositorNodeRLayers")
+    out = tree.nodes.new("CompositorNodeOutputFile")
+    tmp_dir = path + ".partial-dir"
+    out.base_path = tmp_dir
+    out.format.file_format = "OPEN_EXR"
+    out.format.color_depth = "32"
+    out.format.color_mode = "RGB"
+    out.file_slots[0].path = "z"
+    tree.links.new(layers.outputs["Depth"], out.inputs[0])
+    t0 = time.time()
+    bpy.ops.render.render(write_still=False)
+    written = [f for f in os.listdir(tmp_dir) if f.startswith("z") and f.endswith(".exr")]
+    img = bpy.data.images.load(os.path.join(tmp_dir, written[0]))
+    img.colorspace_settings.name = "Non-Color"
+    w, h = img.size
+    px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[::-1, :, 0]
+    bpy.data.images.remove(img)
+    for f in written:
+        os.remove(os.path.join(tmp_dir, f))
+    os.rmdir(tmp_dir)
+    codes = np.round(px * 1000.0)
+    codes[~np.isfinite(codes) | (codes < 1) | (codes > 65535)] = 0
+    png16_grey(path, codes.astype(np.uint16))
+    dt = time.time() - t0
+    log.append({"file": os.path.basename(path), "seconds": round(dt, 1), "samples": sc.cycles.samples, "seed": sc.cycles.seed})
+    print(f"wrote {path} in {dt:.1f} s", flush=True)
+
+
 def training_views(scene_spec, count):
     """Cameras on the upper hemisphere around the field, looking at its
     centre: a Fibonacci spiral from 10° to 70° of elevation; over the
@@ -887,6 +953,38 @@ def main():
         with open(os.path.join(tdir, "transforms.json.partial"), "w") as fh:
             json.dump(transforms, fh, indent=1)
         os.replace(os.path.join(tdir, "transforms.json.partial"), os.path.join(tdir, "transforms.json"))
+
+    if "depth" in what:
+        show_objects(False)
+        set_bounces(0)
+        bpy.context.view_layer.use_pass_z = True
+        tdir = os.path.join(args.out, "training")
+        ddir = os.path.join(tdir, "depth")
+        os.makedirs(ddir, exist_ok=True)
+        n = args.view_size
+        sc.render.resolution_x = sc.render.resolution_y = n
+        # One sample at each pixel's centre: the depth along its centre ray.
+        sc.cycles.samples = 1
+        sc.cycles.filter_width = 0.01
+        fov = math.radians(40.0)
+        with open(os.path.join(tdir, "transforms.json")) as fh:
+            transforms = json.load(fh)
+        by_file = {f["file_path"]: f for f in transforms["frames"]}
+        for k, (pos, tgt) in enumerate(training_views(spec, args.views)):
+            frame = by_file.get(f"view-{k:03d}.exr")
+            if frame is None:
+                continue
+            cam = add_camera(f"depth-{k:03d}", pos, tgt, [0, 1, 0], math.degrees(fov))
+            sc.camera = cam
+            name = f"depth-{k:03d}.png"
+            render_depth(os.path.join(ddir, name), log)
+            frame["file_path"] = "../" + frame["file_path"]
+            frame["depth_file_path"] = name
+        transforms["depth_unit_scale_factor"] = 0.001
+        dpath = os.path.join(ddir, "transforms.json")
+        with open(dpath + ".partial", "w") as fh:
+            json.dump(transforms, fh, indent=1)
+        os.replace(dpath + ".partial", dpath)
 
     command = "blender -b --factory-startup --python tools/cycles/render_cycles.py -- " + " ".join(
         sys.argv[sys.argv.index("--") + 1 :]
