@@ -2,12 +2,11 @@
 //! z-depth of each pixel, its distance along the camera's viewing
 //! direction, as phones' LiDAR captures, RGB-D cameras and renderers'
 //! depth passes record it. A greyscale PNG (16 or 8 bits) holds integers
-//! in units of the
-//! file's `depth_unit_scale_factor` (nerfstudio's default 0.001: millimetres
-//! of a scene in metres); an EXR holds depths in the scene's units, from
-//! its `Z` channel (else `depth`, `Y`, `R` or its only one), scaled only
-//! where the file gives the factor. Zero, negative and non-finite pixels
-//! record nothing.
+//! in units of the file's `depth_unit_scale_factor` (nerfstudio's default
+//! 0.001: millimetres of a scene in metres); an EXR holds depths in the
+//! scene's units, from its `Z` channel (else `depth`, `Y`, `R` or its
+//! only one), scaled only where the file gives the factor. Zero, negative
+//! and non-finite pixels record nothing.
 
 use std::path::Path;
 
@@ -86,7 +85,7 @@ pub fn load_depth_map(
             let (w, h, raw) = exr_depth(path)?;
             (w, h, raw, 1.0)
         }
-        _ => return Err("a depth map must be a 16-bit .png or an .exr".into()),
+        _ => return Err("a depth map must be a greyscale .png or an .exr".into()),
     };
     if (w, h) != size {
         return Err(format!(
