@@ -108,10 +108,12 @@ pub fn render_ray_with_gradient<'a>(
     let lambda = distortion / field.bounds.diagonal();
     // The depth term: its weight over the diagonal, the target and the
     // tolerance (weight 0 where none).
-    let (mu, target, tolerance) = match (depth, steps.last()) {
-        (Some(d), Some(&(t, dt))) => (
+    // Where the ray leaves the bounds: the last step's end.
+    let exit = steps.last().map(|&(t, dt)| t + 0.5 * dt);
+    let (mu, target, tolerance) = match (depth, exit) {
+        (Some(d), Some(exit)) => (
             d.weight / field.bounds.diagonal(),
-            effective_target(d.target, t + 0.5 * dt, d.tolerance),
+            effective_target(d.target, exit, d.tolerance),
             d.tolerance,
         ),
         _ => (0.0, 0.0, 1.0),
@@ -149,7 +151,7 @@ pub fn render_ray_with_gradient<'a>(
     let distortion_loss = lambda * (2.0 * pairs + own / 3.0);
     // The depth loss over μ/Diag: the weights' penalties and what passes
     // the bounds', at the exit.
-    let exit_penalty = steps.last().map_or(0.0, |&(t, dt)| penalty(t + 0.5 * dt));
+    let exit_penalty = exit.map_or(0.0, penalty);
     let depth_total = depth_sum + transmittance * exit_penalty;
     let total = colour + transmittance * background;
     let g = d_colour(total);
