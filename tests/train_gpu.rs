@@ -1141,6 +1141,7 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
             &empty,
             &MarchKnobs::default(),
             DVec3::ZERO,
+            &[],
             false,
             1,
         );
@@ -1453,6 +1454,7 @@ fn brackets_train_the_hdr_field_their_linear_views_do() {
                 field,
                 &MarchKnobs::default(),
                 DVec3::ZERO,
+                &[],
                 false,
                 1,
             )
@@ -1614,6 +1616,7 @@ fn exposure_gains_are_learnt_for_photographs_of_unknown_exposure() {
             &equal.field,
             &Default::default(),
             DVec3::ZERO,
+            &[],
             true,
             inlay_passes::train::TrainKnobs::default().held_out_samples,
         );

@@ -16,6 +16,7 @@ pub mod past_bounds;
 pub mod pixels;
 pub mod prune;
 pub mod render;
+pub mod seen_lights;
 pub mod sh_pages;
 pub mod sparse_stage;
 pub mod step_times;

@@ -18,6 +18,7 @@ use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::past_bounds::{pixel_sees_bounds, pose_light};
 use super::pixels::{area_offsets, bracket_sets, is_bracket, pixel_ray_at, PixelPool};
+use super::seen_lights::{with_seen_lights, SeenLight};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, PixelState};
@@ -322,6 +323,11 @@ pub struct TrainControl<'a> {
     pub budget: Option<Duration>,
     /// Stop when this says so (Ctrl-C).
     pub stop: &'a dyn Fn() -> bool,
+    /// Lights the photographs show past the bounds
+    /// ([`super::seen_lights`]), drawn in the held-out views. Their
+    /// training pixels are the caller's to leave out
+    /// ([`super::seen_lights::mask_seen_lights`]).
+    pub seen_lights: &'a [SeenLight],
 }
 
 impl Default for TrainControl<'_> {
@@ -331,6 +337,7 @@ impl Default for TrainControl<'_> {
             resume_sky: None,
             budget: None,
             stop: &|| false,
+            seen_lights: &[],
         }
     }
 }
@@ -610,6 +617,7 @@ pub fn train(
                 &field,
                 &view_march,
                 behind,
+                control.seen_lights,
                 knobs.learn_exposure,
                 knobs.held_out_samples,
             )
@@ -744,17 +752,20 @@ pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
 }
 
 /// Renders frame `f` of `dataset` from `field` over `background` (a
-/// colour or a learnt sky) and scores it; with
+/// colour or a learnt sky), with `lights` beside it
+/// ([`super::seen_lights::with_seen_lights`]), and scores it; with
 /// `fit_exposure`, at the RGB gain that fits the photograph best (least
 /// squares over its usable pixels: a frame of unknown exposure). Each
 /// pixel is the mean of `samples` × `samples` rays spread evenly over it
 /// (1: the ray through its centre), as its photograph gathered it.
+#[allow(clippy::too_many_arguments)]
 pub fn score_view<'a>(
     dataset: &Dataset,
     f: u32,
     field: &GridField,
     march: &MarchKnobs,
     background: impl Into<Behind<'a>>,
+    lights: &[SeenLight],
     fit_exposure: bool,
     samples: u32,
 ) -> HeldOutView {
@@ -778,8 +789,10 @@ pub fn score_view<'a>(
                 .filter_map(|&o| pixel_ray_at(frame, p, o))
                 .fold((DVec3::ZERO, 0u32), |(sum, count), ray| {
                     let r = march_ray(field, &ray, f64::INFINITY, march);
+                    let behind = behind.eval(ray.dir);
+                    let bounds = &field.bounds;
                     (
-                        sum + r.colour + (1.0 - r.opacity) * behind.eval(ray.dir),
+                        sum + with_seen_lights(lights, &ray, bounds, r.colour, r.opacity, behind),
                         count + 1,
                     )
                 });
@@ -1117,7 +1130,7 @@ mod tests {
         let sky = Sky::new(w, h, texels).unwrap();
         let empty = GridField::new(UVec3::splat(2), dataset.bounds, vec![[0.0; 4]; 8], 8);
         let knobs = MarchKnobs::default();
-        let view = |n| score_view(&dataset, 0, &empty, &knobs, &sky, false, n);
+        let view = |n| score_view(&dataset, 0, &empty, &knobs, &sky, &[], false, n);
         let (centre, area) = (view(1), view(4));
         let read = |v: &HeldOutView| v.rendered.iter().map(|c| c[0]).collect::<Vec<f32>>();
         for (p, t) in truth.iter().enumerate() {

@@ -16,6 +16,7 @@ pub mod profile;
 pub mod reference;
 pub mod render;
 pub mod render_views;
+pub mod seen_lights;
 pub mod sweep;
 pub mod train;
 

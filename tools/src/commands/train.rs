@@ -265,6 +265,13 @@ pub struct TrainArgs {
     /// holds anything.
     #[arg(long, requires = "scene")]
     pub depth_picture: Option<PathBuf>,
+    /// Lights the training photographs show past the bounds (a bulb above
+    /// the box): found where bright spots of several views meet, fitted
+    /// as spheres, their pixels left out of training and drawn in the
+    /// held-out views (`on`, `auto`: the same); `off` trains on every
+    /// pixel as it is.
+    #[arg(long, value_parser = parse_switch, default_value = "auto")]
+    pub seen_lights: Switch,
 }
 
 /// A knob that is on, off, or chosen from the dataset.
@@ -386,7 +393,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         skip_bad_frames: args.skip_bad_frames,
         ..LoadOptions::default()
     };
-    let dataset = load_dataset(&args.dataset, &options)?;
+    let mut dataset = load_dataset(&args.dataset, &options)?;
     let scene = match &args.scene {
         Some(p) => {
             let scene = inlay_passes::scene::load_scene(p)?;
@@ -451,6 +458,16 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
     let bounds = resume.as_ref().map_or(dataset.bounds, |f| f.bounds);
+    let seen_lights = match args.seen_lights {
+        Switch::Off => Vec::new(),
+        Switch::On | Switch::Auto => super::seen_lights::find_and_mask(
+            &mut dataset,
+            args.hold_out,
+            &bounds,
+            knobs.scale,
+            scene.as_ref().and_then(|s| s.recipe()),
+        ),
+    };
     let past = inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds);
     if let Some(w) = past.warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
@@ -570,6 +587,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         resume_sky: resume_sky.as_ref(),
         budget,
         stop: &inlay_engine::interrupt::interrupted,
+        seen_lights: &seen_lights,
     };
     let trained = train(
         ctx,

@@ -1,0 +1,203 @@
+//! A light's radius and radiance from the pixels around its spots: each
+//! pixel reads the background plus the light's radiance times the share of
+//! the pixel its disc covers; the radiance follows from a radius in closed
+//! form, and the radius is the one whose coverage fits best.
+
+use glam::DVec3;
+
+use crate::dataset::{Dataset, PixelState};
+use crate::geometry::Ray;
+use crate::scene::Shape;
+use crate::sgfit::model::luminance;
+
+use super::blobs::{radiance_at, Blob};
+use crate::train::pixels::pixel_ray_at;
+
+/// A pixel's coverage is read with this many × this many rays.
+pub const COVERAGE_RAYS: u32 = 16;
+
+/// The window read around a spot reaches this many pixels past it; the
+/// background is read in a ring this many pixels wide beyond the window.
+pub const WINDOW_PIXELS: u32 = 2;
+
+/// The radii tried between the smallest and the largest, evenly in log.
+const RADII: usize = 48;
+
+/// The nearest point at which `ray` meets the sphere (`centre`, `radius`)
+/// in front of its origin.
+pub fn sphere_hit(ray: &Ray, centre: DVec3, radius: f64) -> Option<f64> {
+    let (t0, t1) = Shape::Sphere { centre, radius }.interval(ray)?;
+    if t0 > 0.0 {
+        Some(t0)
+    } else {
+        (t1 > 0.0).then_some(t1)
+    }
+}
+
+/// One pixel near a spot: its rays over its area, and its reading less the
+/// background around the spot.
+struct Reading {
+    rays: Vec<Ray>,
+    excess: DVec3,
+}
+
+/// The share of `rays` that meet the sphere.
+fn coverage(rays: &[Ray], centre: DVec3, radius: f64) -> f64 {
+    let hits = rays
+        .iter()
+        .filter(|r| sphere_hit(r, centre, radius).is_some())
+        .count();
+    hits as f64 / rays.len().max(1) as f64
+}
+
+/// The median of `v` (0 where empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The pixels of `blob`'s window, each read less the median of the ring
+/// around the window (per channel).
+fn readings(dataset: &Dataset, blob: &Blob) -> Vec<Reading> {
+    let frame = &dataset.frames[blob.frame as usize];
+    let (w, h) = (frame.image.width as i64, frame.image.height as i64);
+    let (x0, y0, x1, y1) = blob.bbox;
+    let grow = |g: i64| {
+        (
+            (x0 as i64 - g).max(0),
+            (y0 as i64 - g).max(0),
+            (x1 as i64 + g).min(w - 1),
+            (y1 as i64 + g).min(h - 1),
+        )
+    };
+    let inside =
+        |b: (i64, i64, i64, i64), x: i64, y: i64| x >= b.0 && x <= b.2 && y >= b.1 && y <= b.3;
+    let window = grow(WINDOW_PIXELS as i64);
+    let ring = grow(2 * WINDOW_PIXELS as i64 + 1);
+    let mut bg: [Vec<f64>; 3] = Default::default();
+    let mut kept = Vec::new();
+    for y in ring.1..=ring.3 {
+        for x in ring.0..=ring.2 {
+            let p = (y * w + x) as u32;
+            if frame.image.state[p as usize] != PixelState::Value {
+                continue;
+            }
+            if inside(window, x, y) {
+                kept.push(p);
+            } else {
+                let c = radiance_at(frame, p);
+                for k in 0..3 {
+                    bg[k].push(c[k]);
+                }
+            }
+        }
+    }
+    let [r, g, b] = bg;
+    let background = DVec3::new(median(r), median(g), median(b));
+    let n = COVERAGE_RAYS;
+    let offsets: Vec<(f64, f64)> = (0..n * n)
+        .map(|i| {
+            (
+                ((i % n) as f64 + 0.5) / n as f64,
+                ((i / n) as f64 + 0.5) / n as f64,
+            )
+        })
+        .collect();
+    kept.into_iter()
+        .filter_map(|p| {
+            let rays: Option<Vec<Ray>> =
+                offsets.iter().map(|&o| pixel_ray_at(frame, p, o)).collect();
+            Some(Reading {
+                rays: rays?,
+                excess: radiance_at(frame, p) - background,
+            })
+        })
+        .collect()
+}
+
+/// A light's fitted size and radiance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizeAndRadiance {
+    /// Its radius.
+    pub radius: f64,
+    /// Its radiance (linear RGB, each channel at least 0).
+    pub radiance: DVec3,
+    /// The share of the window pixels' excess luminance (squared) the fit
+    /// leaves unexplained (0 a perfect fit).
+    pub residual: f64,
+}
+
+/// The radius in `[smallest, largest]` and the radiance of a sphere at
+/// `centre` that best explain the windows around `blobs`: at each radius
+/// the radiance that gives the windows' excess light, and the radius whose
+/// coverage fits the pixels best (least squares in luminance); each
+/// channel the same way. None where no radius covers any pixel.
+pub fn fit_size_and_radiance(
+    dataset: &Dataset,
+    blobs: &[&Blob],
+    centre: DVec3,
+    smallest: f64,
+    largest: f64,
+) -> Option<SizeAndRadiance> {
+    let readings: Vec<Reading> = blobs.iter().flat_map(|b| readings(dataset, b)).collect();
+    let excess: Vec<f64> = readings.iter().map(|r| luminance(r.excess)).collect();
+    let total: f64 = excess.iter().map(|e| e * e).sum();
+    // Σ (e − L·cov)² at radius r, with L = Σ e / Σ cov: the light the
+    // window holds is the sphere's whatever its radius (a least-squares L
+    // weighs the brightest pixels, and a centre a tenth of a pixel off
+    // then takes 2 % of the light).
+    let sum_e: f64 = excess.iter().sum();
+    let error = |r: f64| -> Option<(f64, f64, Vec<f64>)> {
+        let cov: Vec<f64> = readings
+            .iter()
+            .map(|x| coverage(&x.rays, centre, r))
+            .collect();
+        let sum_c: f64 = cov.iter().sum();
+        if sum_c <= 0.0 {
+            return None;
+        }
+        let l = (sum_e / sum_c).max(0.0);
+        let err = cov
+            .iter()
+            .zip(&excess)
+            .map(|(c, e)| (e - l * c).powi(2))
+            .sum();
+        Some((err, l, cov))
+    };
+    let ratio = (largest / smallest).max(1.0);
+    let radius_at = |k: f64| smallest * ratio.powf(k / (RADII - 1) as f64);
+    let mut best: Option<(f64, f64)> = None;
+    for k in 0..RADII {
+        let r = radius_at(k as f64);
+        if let Some((e, _, _)) = error(r) {
+            if best.is_none_or(|b| e < b.1) {
+                best = Some((k as f64, e));
+            }
+        }
+    }
+    let (k, _) = best?;
+    // Golden-section search between the neighbours of the best radius.
+    let (mut lo, mut hi) = ((k - 1.0).max(0.0), (k + 1.0).min((RADII - 1) as f64));
+    let at = |k: f64| error(radius_at(k)).map_or(f64::INFINITY, |e| e.0);
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..24 {
+        let (a, b) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
+        if at(a) <= at(b) {
+            hi = b;
+        } else {
+            lo = a;
+        }
+    }
+    let radius = radius_at(0.5 * (lo + hi));
+    let (err, _, cov) = error(radius)?;
+    let sum_c: f64 = cov.iter().sum();
+    let channel = |k: usize| (readings.iter().map(|r| r.excess[k]).sum::<f64>() / sum_c).max(0.0);
+    Some(SizeAndRadiance {
+        radius,
+        radiance: DVec3::new(channel(0), channel(1), channel(2)),
+        residual: if total > 0.0 { err / total } else { 0.0 },
+    })
+}
