@@ -666,3 +666,116 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         text(&o)
     );
 }
+
+/// Six views of a grey world with a bulb hanging above the box: `inlay
+/// train` finds the bulb from the five it trains on, writes it beside the
+/// field, and draws it in the held-out view; trained again with
+/// `--seen-lights off` to the same file, the stale lights are emptied.
+#[test]
+fn train_finds_a_bulb_past_the_bounds_and_keeps_it_beside_the_field() {
+    use inlay_passes::dataset::{Intrinsics, Pose};
+    let dir = scratch("seen-lights");
+    let data = dir.join("bulb");
+    std::fs::create_dir_all(&data).unwrap();
+    let (w, h) = (40u32, 30u32);
+    let (bulb, radius) = (glam::DVec3::new(0.2, 2.4, -0.1), 0.05);
+    let intrinsics = Intrinsics::centred(w, h, 50.0);
+    let mut frames = Vec::new();
+    for k in 0..6 {
+        let a = k as f64 * std::f64::consts::TAU / 6.0;
+        let eye = glam::DVec3::new(4.0 * a.cos(), 1.5, 4.0 * a.sin());
+        let pose = Pose::looking_at(eye, glam::DVec3::new(0.0, 0.9, 0.0), glam::DVec3::Y);
+        // Each pixel the share of an 8 × 8 grid of its rays the bulb meets.
+        let pixels = (0..w * h)
+            .map(|p| {
+                let hits = (0..64)
+                    .filter(|i| {
+                        let (u, v) = (
+                            (p % w) as f64 + (i % 8) as f64 / 8.0 + 1.0 / 16.0,
+                            (p / w) as f64 + (i / 8) as f64 / 8.0 + 1.0 / 16.0,
+                        );
+                        let d = pose
+                            .to_world(intrinsics.direction(u, v).unwrap())
+                            .normalize();
+                        let oc = eye - bulb;
+                        let b = oc.dot(d);
+                        b * b - (oc.length_squared() - radius * radius) > 0.0 && b < 0.0
+                    })
+                    .count();
+                let c = (0.2 + hits as f64 / 64.0 * 5000.0) as f32;
+                [c, c, c, 1.0]
+            })
+            .collect();
+        let name = format!("view-{k}.exr");
+        HdrImage {
+            width: w,
+            height: h,
+            pixels,
+        }
+        .save(&data.join(&name), 1.0)
+        .unwrap();
+        let m = pose.matrix.transpose().to_cols_array_2d();
+        frames.push(serde_json::json!({ "file_path": name, "transform_matrix": m }));
+    }
+    let transforms = serde_json::json!({
+        "aabb": [[-1.0, -0.1, -1.0], [1.0, 1.4, 1.0]],
+        "fl_x": intrinsics.fx, "fl_y": intrinsics.fy,
+        "cx": intrinsics.cx, "cy": intrinsics.cy,
+        "w": w, "h": h,
+        "frames": frames,
+    });
+    std::fs::write(data.join("transforms.json"), transforms.to_string()).unwrap();
+    let field = dir.join("bulb.inlayfield");
+    let lights = dir.join("bulb.lights.toml");
+    let train = |extra: &[&str]| {
+        let mut args = vec![
+            "train",
+            data.to_str().unwrap(),
+            "--out",
+            field.to_str().unwrap(),
+            "--resolution",
+            "8",
+            "--stages",
+            "1",
+            "--iterations",
+            "5",
+            "--hold-out",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        inlay(&args)
+    };
+    let o = train(&[]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("light past the bounds: a sphere at") && t.contains("seen in 5 training views"),
+        "{t}"
+    );
+    assert!(
+        t.contains("1 light seen past the bounds, drawn wherever the field is"),
+        "{t}"
+    );
+    let found = inlay_passes::field::seen_lights::load_seen_lights(&lights).unwrap();
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!((found[0].centre - bulb).length() < 0.02, "{found:?}");
+    // The held-out view holds the bulb's light: the field alone, dark and
+    // grey, would read a twentieth of it.
+    let held = t
+        .lines()
+        .find(|l| l.starts_with("held-out frame 3:"))
+        .unwrap_or_else(|| panic!("{t}"));
+    let brightness: f64 = held
+        .rsplit(' ')
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{held}"));
+    assert!((0.7..1.3).contains(&brightness), "{held}");
+    let o = train(&["--seen-lights", "off"]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("no light seen past the bounds"), "{t}");
+    assert!(inlay_passes::field::seen_lights::load_seen_lights(&lights)
+        .unwrap()
+        .is_empty());
+}

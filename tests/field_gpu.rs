@@ -655,7 +655,9 @@ fn marched_field_matches_the_path_traced_reference() {
 #[test]
 fn the_sky_behind_the_frame_matches_the_cpu_reference() {
     use inlay_passes::field::Sky;
-    use inlay_passes::sky_behind::{sky_behind_reference, SkyBehindPass, SKY_BEHIND_FORMAT};
+    use inlay_passes::sky_behind::{
+        sky_behind_reference, Beyond, SkyBehindPass, SKY_BEHIND_FORMAT,
+    };
     let ctx = common::gpu();
     let lib = common::test_library();
     let (w, h) = (40u32, 30u32);
@@ -689,7 +691,12 @@ fn the_sky_behind_the_frame_matches_the_cpu_reference() {
         | inlay_engine::vk::ImageUsageFlags::TRANSFER_DST;
     let input = Arc::new(inlay_engine::Image::new(&ctx, "frame", desc, usage).unwrap());
     input.write_rgba32f(&frame).unwrap();
-    let pass = SkyBehindPass::new(&ctx, &lib, &sky).unwrap();
+    let beyond = Beyond {
+        sky: Some(&sky),
+        lights: &[],
+        bounds: inlay_passes::geometry::Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+    };
+    let pass = SkyBehindPass::new(&ctx, &lib, &beyond).unwrap().unwrap();
     let readback = Readback::new(&ctx, desc).unwrap();
     common::run_frame(&ctx, |graph| {
         let c = graph.import_image(&input, "frame", None);
@@ -698,7 +705,7 @@ fn the_sky_behind_the_frame_matches_the_cpu_reference() {
     });
     let gpu = readback.read().unwrap().pixels;
     let seen: Vec<[f64; 4]> = frame.iter().map(|c| c.map(|v| v as f64)).collect();
-    let cpu = sky_behind_reference(&seen, &camera, &sky);
+    let cpu = sky_behind_reference(&seen, &camera, &beyond);
     let mut behind = 0;
     for (i, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
         let d = camera.pixel_ray(i as u32 % w, i as u32 / w).dir;
@@ -728,4 +735,115 @@ fn the_sky_behind_the_frame_matches_the_cpu_reference() {
         behind > (w * h / 2) as usize,
         "{behind} pixels show the sky"
     );
+}
+
+/// The lights seen past the bounds, drawn by `sky-behind` on lavapipe
+/// against its f64 CPU mirror, with and without a sky: from inside a room's
+/// box looking up past its top, a bulb above the box (past the bounds:
+/// behind the frame) and from outside, looking down through a bulb that
+/// hangs between the camera and the box (before the bounds: over it), a
+/// second light behind the first, one a tenth of a pixel wide. The disc's
+/// edge is ramped over a pixel, so f32 moves an edge pixel's coverage by
+/// its ray's rounding over the pixel's angle (about 1e-7 rad over 0.02,
+/// 5e-6 of the brightest light's 8000: 0.04), beside f32 rounding of the
+/// values themselves.
+#[test]
+fn the_lights_seen_past_the_bounds_match_the_cpu_reference() {
+    use inlay_passes::field::{SeenLight, Sky};
+    use inlay_passes::geometry::Aabb;
+    use inlay_passes::sky_behind::{
+        sky_behind_reference, Beyond, SkyBehindPass, SKY_BEHIND_FORMAT,
+    };
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let (w, h) = (48u32, 36u32);
+    let bounds = Aabb::new(DVec3::new(-1.0, -0.1, -1.0), DVec3::new(1.0, 1.4, 1.0));
+    let bulb = |c: DVec3, r: f64, e: f64| SeenLight {
+        centre: c,
+        radius: r,
+        radiance: DVec3::new(e, 0.9 * e, 0.8 * e),
+        views: 3,
+        residual: 0.0,
+    };
+    let lights = [
+        bulb(DVec3::new(0.2, 2.9, 0.3), 0.08, 8000.0),
+        bulb(DVec3::new(0.5, 3.5, 0.3), 0.15, 50.0),
+        bulb(DVec3::new(-0.3, 2.9, 0.3), 0.004, 3000.0),
+    ];
+    let cameras = [
+        // Inside the box, looking up: every light past the bounds.
+        inlay_passes::camera::CameraSpec {
+            name: None,
+            position: DVec3::new(0.0, 0.5, 0.3),
+            look_at: DVec3::new(0.1, 3.0, 0.3),
+            up: DVec3::Z,
+            fov_y: 40.0,
+        },
+        // Above the bulbs, looking down through them at the box.
+        inlay_passes::camera::CameraSpec {
+            name: None,
+            position: DVec3::new(0.1, 4.5, 0.3),
+            look_at: DVec3::new(0.1, 0.0, 0.3),
+            up: DVec3::Z,
+            fov_y: 40.0,
+        },
+    ];
+    let mut rng = inlay_passes::rng::Pcg32::new(5, 9);
+    let texels: Vec<DVec3> = (0..8 * 4)
+        .map(|_| DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()))
+        .collect();
+    let sky = Sky::new(8, 4, texels).unwrap();
+    let frame: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| {
+            let a = [0.0, 0.25, 0.5, 1.0][((i % w) + 3 * (i / w)) as usize % 4];
+            [0.3 * a, 0.2 * a, 0.1 * a, a]
+        })
+        .collect();
+    let desc = ImageDesc {
+        width: w,
+        height: h,
+        format: SKY_BEHIND_FORMAT,
+    };
+    let usage = inlay_engine::vk::ImageUsageFlags::SAMPLED
+        | inlay_engine::vk::ImageUsageFlags::TRANSFER_DST;
+    let input = Arc::new(inlay_engine::Image::new(&ctx, "frame", desc, usage).unwrap());
+    input.write_rgba32f(&frame).unwrap();
+    let seen: Vec<[f64; 4]> = frame.iter().map(|c| c.map(|v| v as f64)).collect();
+    let mut lit = [0usize; 2];
+    for (k, spec) in cameras.iter().enumerate() {
+        let camera = CameraFrame::new(spec, w, h);
+        for with_sky in [false, true] {
+            let beyond = Beyond {
+                sky: with_sky.then_some(&sky),
+                lights: &lights,
+                bounds,
+            };
+            let pass = SkyBehindPass::new(&ctx, &lib, &beyond).unwrap().unwrap();
+            let readback = Readback::new(&ctx, desc).unwrap();
+            common::run_frame(&ctx, |graph| {
+                let c = graph.import_image(&input, "frame", None);
+                let out = pass.add(graph, c, &camera);
+                readback.add_to_graph(graph, out);
+            });
+            let gpu = readback.read().unwrap().pixels;
+            let cpu = sky_behind_reference(&seen, &camera, &beyond);
+            for (i, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
+                if c[0] > 10.0 {
+                    lit[k] += 1;
+                }
+                for ch in 0..4 {
+                    let tolerance = 1e-4 * c[ch].abs() + 0.05;
+                    assert!(
+                        (g[ch] as f64 - c[ch]).abs() <= tolerance,
+                        "camera {k}, sky {with_sky}, pixel {i} channel {ch}: gpu {} cpu {}",
+                        g[ch],
+                        c[ch]
+                    );
+                }
+            }
+        }
+    }
+    // Both views see the lights: from inside past the bounds, from above
+    // over the box.
+    assert!(lit[0] > 8 && lit[1] > 8, "{lit:?}");
 }

@@ -1,6 +1,7 @@
 //! Getting a scene's field: a field file, or its recipe baked (with a
 //! progress bar) and kept in a cache so the next run loads it; and the sky
-//! learnt with a field file, drawn behind it.
+//! learnt with a field file, drawn behind it, and the lights its
+//! photographs saw past its bounds, drawn with it.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -9,9 +10,10 @@ use anyhow::Context as _;
 use indicatif::{ProgressBar, ProgressStyle};
 use inlay_engine::DeviceInfo;
 use inlay_passes::bake::{bake_grid, BakeKnobs};
+use inlay_passes::field::seen_lights::load_seen_lights;
 use inlay_passes::field::{
     check_field_may_fit, check_sparse_field_fits, field_bytes, load_field, read_field_header,
-    sky_path, GridField, NodeStorage, Sky, FIELD_VERSION,
+    seen_lights_path, sky_path, GridField, NodeStorage, SeenLight, Sky, FIELD_VERSION,
 };
 use inlay_passes::scene::{FieldSource, Scene};
 
@@ -166,6 +168,45 @@ pub fn scene_sky(scene: &Scene, override_file: Option<&Path>) -> anyhow::Result<
     Ok(Some(sky))
 }
 
+/// The lights the scene's trained field saw past its bounds
+/// (`override_file` when given, else its field file): the TOML beside it
+/// ([`seen_lights_path`]), none where there is none or the field is baked
+/// from a recipe. A file that cannot be read is an error naming it and
+/// its key.
+pub fn scene_seen_lights(
+    scene: &Scene,
+    override_file: Option<&Path>,
+) -> anyhow::Result<Vec<SeenLight>> {
+    let field = match (override_file, &scene.field) {
+        (Some(f), _) => f,
+        (None, FieldSource::File(f)) => f.as_path(),
+        (None, FieldSource::Recipe(_)) => return Ok(Vec::new()),
+    };
+    let file = seen_lights_path(field);
+    if !file.exists() {
+        return Ok(Vec::new());
+    }
+    let lights = load_seen_lights(&file)?;
+    if !lights.is_empty() {
+        eprintln!(
+            "{} seen past the field's bounds by its photographs {} drawn with it{}: {}",
+            if lights.len() == 1 {
+                "1 light".to_string()
+            } else {
+                format!("{} lights", lights.len())
+            },
+            if lights.len() == 1 { "is" } else { "are" },
+            if scene.object_environment.is_none() {
+                " and light the objects"
+            } else {
+                " (the scene's environment file lights the objects)"
+            },
+            file.display()
+        );
+    }
+    Ok(lights)
+}
+
 /// Lights `scene`'s objects with `sky` (the one learnt with its field) as
 /// their distant light where the scene gives them none: a field file (no
 /// recipe, whose known lights stand), a black `[environment]` and no
@@ -271,5 +312,66 @@ look_at = [0.0, 0.0, 0.0]
         let cups = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cups.toml");
         let mut recipe = inlay_passes::scene::load_scene(&cups).unwrap();
         assert!(!light_with_sky(&mut recipe, Some(&sky)).unwrap());
+    }
+    /// The lights beside a field file are read with it and light its
+    /// objects as balls of their size (an environment file's lights stand
+    /// in their place); none beside it reads none, and a bad file is an
+    /// error naming it and the key.
+    #[test]
+    fn the_lights_beside_a_field_are_read_and_light_its_objects() {
+        use inlay_passes::field::seen_lights::seen_lights_text;
+        use inlay_passes::lighting::object_lights;
+        let dir = std::env::temp_dir().join(format!("inlay-seen-lights-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let cube = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects/checker-cube.gltf");
+        let text = format!(
+            "name = \"lit\"\nfield = \"f.inlayfield\"\n[[objects]]\nname = \"cube\"\nfile = {:?}\n\
+             position = [0.0, 0.0, 0.0]\n[[cameras]]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n",
+            cube.display().to_string()
+        );
+        std::fs::write(dir.join("lit.toml"), &text).unwrap();
+        let mut scene = inlay_passes::scene::load_scene(&dir.join("lit.toml")).unwrap();
+        assert!(scene_seen_lights(&scene, None).unwrap().is_empty());
+        let bulb = SeenLight {
+            centre: glam::DVec3::new(0.2, 2.9, 0.3),
+            radius: 0.03,
+            radiance: glam::DVec3::new(8000.0, 7400.0, 6400.0),
+            views: 13,
+            residual: 0.02,
+        };
+        let file = dir.join("f.lights.toml");
+        std::fs::write(&file, seen_lights_text(&[bulb])).unwrap();
+        let lights = scene_seen_lights(&scene, None).unwrap();
+        assert_eq!(lights, vec![bulb]);
+        scene.seen_lights = lights;
+        let (_, local) = object_lights(&scene, glam::DVec3::ZERO, true);
+        assert_eq!(local.len(), 1);
+        assert_eq!(
+            (local[0].centre, local[0].radius),
+            (bulb.centre, bulb.radius)
+        );
+        let emission = local[0].emission.unwrap();
+        assert!((emission.intensity - bulb.intensity()).abs().max_element() < 1e-9);
+        // Without local lights, a lobe towards it.
+        let (lobes, none) = object_lights(&scene, glam::DVec3::ZERO, false);
+        assert!(none.is_empty());
+        assert_eq!(lobes.len(), 1);
+        assert!(lobes[0].direction.angle_between(bulb.centre) < 1e-9);
+        // An environment file lights the objects instead.
+        scene.object_environment = Some(inlay_passes::scene::ObjectEnvironment {
+            file: dir.join("env.toml"),
+            lobes: Vec::new(),
+            lights: Vec::new(),
+        });
+        assert!(object_lights(&scene, glam::DVec3::ZERO, true).1.is_empty());
+        // A bad file names itself and its key.
+        let bad = seen_lights_text(&[bulb]).replace("radius = 0.03", "radius = 0.0");
+        std::fs::write(&file, bad).unwrap();
+        let e = scene_seen_lights(&scene, None).unwrap_err().to_string();
+        assert!(
+            e.contains("f.lights.toml") && e.contains("lights[0].radius"),
+            "{e}"
+        );
     }
 }

@@ -12,7 +12,7 @@ use inlay_passes::field::{GpuGridField, GridField};
 use inlay_passes::march::{MarchKnobs, MarchPass};
 use inlay_passes::scene::Scene;
 
-use crate::field_source::{light_with_sky, scene_field, scene_sky};
+use crate::field_source::{light_with_sky, scene_field, scene_seen_lights, scene_sky};
 use crate::insertion_view::InsertionView;
 
 /// `scene` seen from its camera `camera` (index or name), the field from
@@ -35,9 +35,13 @@ pub fn open_view(
         .map_err(|(k, m)| anyhow::anyhow!("march knob `{k}`: {m}"))?;
     let field = scene_field(scene, field_file, use_cache, Some(ctx.info()))?;
     let sky = scene_sky(scene, field_file)?;
+    let seen = scene_seen_lights(scene, field_file)?;
     let mut lit = scene.clone();
     light_with_sky(&mut lit, sky.as_ref())?;
-    let gpu = GpuGridField::upload(ctx, &field)?.with_sky(sky.map(Arc::new));
+    lit.seen_lights = seen.clone();
+    let gpu = GpuGridField::upload(ctx, &field)?
+        .with_sky(sky.map(Arc::new))
+        .with_seen_lights(seen);
     view_over_gpu_field(ctx, lib, &lit, knobs, gpu, camera, use_cache)
 }
 

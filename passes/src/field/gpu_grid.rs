@@ -111,6 +111,9 @@ pub struct GpuGridField {
     /// The sky learnt with it, drawn behind every frame
     /// ([`crate::sky_behind`]; None: black behind the field).
     pub sky: Option<Arc<super::Sky>>,
+    /// The lights its photographs saw past its bounds, drawn with every
+    /// frame ([`crate::sky_behind`]).
+    pub seen_lights: Arc<Vec<super::SeenLight>>,
 }
 
 /// A field on the device, as [`GpuGridField::identity`] gives it: equal
@@ -455,12 +458,19 @@ impl GpuGridField {
             sparse: bricks.is_some(),
             node_bytes: (nodes.len() + 4 * (sh_words.len() + rest_words.len())) as u64,
             sky: None,
+            seen_lights: Arc::new(Vec::new()),
         })
     }
 
     /// The same field with `sky` behind it (None: black).
     pub fn with_sky(mut self, sky: Option<Arc<super::Sky>>) -> Self {
         self.sky = sky;
+        self
+    }
+
+    /// The same field with `lights` seen past its bounds.
+    pub fn with_seen_lights(mut self, lights: Vec<super::SeenLight>) -> Self {
+        self.seen_lights = Arc::new(lights);
         self
     }
 

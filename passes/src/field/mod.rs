@@ -13,6 +13,7 @@ pub(crate) mod gpu_grid;
 mod grid;
 mod occupancy;
 mod perturb;
+pub mod seen_lights;
 mod sh;
 pub mod sh_half;
 pub mod sky;
@@ -30,6 +31,7 @@ pub use gpu_grid::{
 pub use grid::{density_at, GridField};
 pub use occupancy::{Occupancy, DEFAULT_OCCUPANCY_BLOCK};
 pub use perturb::{perturb, Perturbation};
+pub use seen_lights::{seen_lights_path, SeenLight};
 pub use sh::{sh_basis, sh_colour_unclamped, sh_extra_coefficients, MAX_SH_DEGREE};
 pub use sky::{sky_path, Sky};
 

@@ -258,10 +258,12 @@ impl InsertionFrame {
                 },
             });
         }
-        let sky = match field.sky.as_deref() {
-            Some(s) => Some(SkyBehindPass::new(ctx, lib, s)?),
-            None => None,
+        let beyond = crate::sky_behind::Beyond {
+            sky: field.sky.as_deref(),
+            lights: &field.seen_lights,
+            bounds: field.bounds,
         };
+        let sky = SkyBehindPass::new(ctx, lib, &beyond)?;
         Ok(Self {
             gbuffer: GBufferPass::new(ctx, lib)?,
             shade: ShadePass::new(ctx, lib, scene.shading.ndf_lobes, *march.knobs())?
@@ -364,7 +366,7 @@ impl InsertionFrame {
         Ok(match &self.sky {
             Some(sky) => sky.add(graph, image, frame),
             None => {
-                graph.note_skipped(SKY_BEHIND, "the field has no sky");
+                graph.note_skipped(SKY_BEHIND, "the field has no sky and no light seen past it");
                 image
             }
         })

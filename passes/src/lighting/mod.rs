@@ -484,7 +484,8 @@ pub fn sharp_limit(knobs: &ProbeKnobs) -> f64 {
 /// the recipe's world is lit by those lights as the field is (seen from
 /// the field's centre instead, ROOM's bulb 2.7 m above its monkey lit
 /// it 1.33× too brightly); for a field file, the declared environment
-/// ([`environment_lobes`]).
+/// ([`environment_lobes`]) and the lights its photographs saw past its
+/// bounds ([`Scene::seen_lights`]), each a lobe seen from `at`.
 pub fn object_light_lobes(scene: &Scene, at: DVec3) -> Vec<Sg64> {
     match (&scene.object_environment, scene.recipe()) {
         (Some(o), _) => o
@@ -503,14 +504,30 @@ pub fn object_light_lobes(scene: &Scene, at: DVec3) -> Vec<Sg64> {
             at,
             crate::sgfit::model::MAX_SHARPNESS,
         ),
-        (None, None) => environment_lobes(&scene.environment),
+        (None, None) => environment_lobes(&scene.environment)
+            .into_iter()
+            .chain(
+                seen_point_lights(scene)
+                    .map(|l| l.lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)),
+            )
+            .collect(),
     }
+}
+
+/// A field file's lights seen past its bounds ([`Scene::seen_lights`]) as
+/// point lights of their intensity (π r² L) at their centres.
+fn seen_point_lights(scene: &Scene) -> impl Iterator<Item = crate::envest::PointLight> + '_ {
+    scene.seen_lights.iter().map(|l| crate::envest::PointLight {
+        position: l.centre,
+        intensity: l.intensity(),
+    })
 }
 
 /// The light an object at `at` is lit with from outside the field, split
 /// for shading: distant lobes, and the lights with a position, shaded per
 /// pixel as local lights ([`local`]) when `local` is on: a recipe's
-/// hidden balls (a ceiling bulb) and an environment file's point lights.
+/// hidden balls (a ceiling bulb), an environment file's point lights, and
+/// a field file's lights seen past its bounds ([`Scene::seen_lights`]).
 /// Seen from one point, a bulb 1.5 m above a 50 cm object comes from one
 /// direction at one distance; per pixel its direction, its fall-off and
 /// the field between are each point's own. With `local` off, all of it is
@@ -545,7 +562,14 @@ pub fn object_lights(scene: &Scene, at: DVec3, local: bool) -> (Vec<Sg64>, Vec<L
             let (_, outside) = r.lights();
             (lobes, outside.into_iter().filter_map(ball).collect())
         }
-        (None, None) => (environment_lobes(&scene.environment), Vec::new()),
+        (None, None) => (
+            environment_lobes(&scene.environment),
+            scene
+                .seen_lights
+                .iter()
+                .map(|l| LocalLight::known_ball(l.centre, l.radius, l.radiance))
+                .collect(),
+        ),
     }
 }
 

@@ -185,6 +185,12 @@ pub struct Scene {
     /// Where a training set of the recipe is photographed from
     /// (`[capture]`; the whole cap by default).
     pub capture: crate::dataset::capture::Capture,
+    /// The lights a trained field's photographs saw past its bounds (read
+    /// from beside its file: [`crate::field::seen_lights`]; none for a
+    /// scene as written). They light the objects where the scene names no
+    /// environment file and the field is a file
+    /// ([`crate::lighting::object_lights`]).
+    pub seen_lights: Vec<crate::field::SeenLight>,
 }
 
 /// Distant light for the objects from an environment file.
@@ -709,6 +715,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         shadows,
         object_environment,
         capture,
+        seen_lights: Vec::new(),
     })
 }
 

@@ -5,8 +5,12 @@
 //! trainer's T_N·b, so a held-out view renders as the trainer scored it.
 //! The sky lies beyond everything, so an object hides it whole and a cast
 //! shadow (which darkens the field's part of a pixel) never reaches it.
-//! A field without a sky runs no such pass. [`sky_behind_pixel`] is the
-//! CPU mirror of `shaders/sky_behind/sky_behind.wgsl`.
+//! The lights the photographs saw past the bounds ([`SeenLight`]) are
+//! drawn here too: one past the bounds as the sky is, one before them
+//! over the whole frame ([`light_over_pixel`]). A field with neither runs
+//! no such pass. [`sky_behind_reference`] (over
+//! [`light_over_pixel`]) is the CPU mirror of
+//! `shaders/sky_behind/sky_behind.wgsl`.
 
 use std::sync::Arc;
 
@@ -16,22 +20,24 @@ use inlay_engine::shader::ShaderLibrary;
 use inlay_engine::{vk, Buffer, ComputePipeline, Context, ImageDesc};
 
 use crate::camera::{CameraFrame, CameraRays};
-use crate::field::Sky;
+use crate::field::seen_lights::light_over_pixel;
+use crate::field::{SeenLight, Sky};
 use crate::frame::meta::{PassInfo, Table1Module};
+use crate::geometry::Aabb;
 
 inlay_engine::gpu_struct! {
     /// `SkyBehindPush` of `shaders/sky_behind/sky_behind.wgsl`.
     pub struct SkyBehindPush = "sky_behind/sky_behind.wgsl" : "SkyBehindPush" {
         /// The camera.
         pub camera: CameraRays,
-        /// The sky's texels across.
+        /// The sky's texels across (0: black behind the frame).
         pub sky_width: u32,
         /// The sky's texels down.
         pub sky_height: u32,
+        /// The lights seen past the bounds.
+        pub light_count: u32,
         /// Padding to the block's 16-byte size.
         pub _pad0: u32,
-        /// Padding.
-        pub _pad1: u32,
     }
 }
 
@@ -49,56 +55,102 @@ pub const SKY_BEHIND: &str = SKY_BEHIND_INFO.name;
 /// Format of the image it writes (the frame's).
 pub const SKY_BEHIND_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
-/// One pixel: `colour` (premultiplied, coverage in alpha) over the sky seen
-/// along unit direction `d`; its coverage becomes 1.
-pub fn sky_behind_pixel(colour: [f64; 4], d: DVec3, sky: &Sky) -> [f64; 4] {
-    let left = (1.0 - colour[3]).max(0.0);
-    if left <= 0.0 {
-        return [colour[0], colour[1], colour[2], 1.0];
-    }
-    let b = sky.eval(d);
-    [
-        colour[0] + left * b.x,
-        colour[1] + left * b.y,
-        colour[2] + left * b.z,
-        1.0,
-    ]
+/// What lies outside a field: its learnt sky, and the lights its
+/// photographs saw past its `bounds`.
+#[derive(Debug, Clone, Copy)]
+pub struct Beyond<'a> {
+    /// The sky (None: black).
+    pub sky: Option<&'a Sky>,
+    /// The lights seen past the bounds.
+    pub lights: &'a [SeenLight],
+    /// The field's bounds.
+    pub bounds: Aabb,
 }
 
-/// A whole `camera`-sized image (row-major) with the sky behind it.
-pub fn sky_behind_reference(image: &[[f64; 4]], camera: &CameraFrame, sky: &Sky) -> Vec<[f64; 4]> {
+/// The angle one pixel spans at pixel (`x`, `y`) of `camera`: the chord
+/// between its centre's ray and the next pixel's along the row (f32 keeps
+/// a chord of 10⁻⁴, where an arc cosine of their dot product does not).
+pub fn pixel_angle(camera: &CameraFrame, x: u32, y: u32) -> f64 {
+    let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+    (camera.ray(cx + 1.0, cy).dir - camera.ray(cx, cy).dir).length()
+}
+
+/// A whole `camera`-sized image (row-major) with what lies `beyond` the
+/// field drawn behind (and, for lights before the bounds, over) it.
+pub fn sky_behind_reference(
+    image: &[[f64; 4]],
+    camera: &CameraFrame,
+    beyond: &Beyond,
+) -> Vec<[f64; 4]> {
     image
         .iter()
         .enumerate()
         .map(|(i, &c)| {
             let (x, y) = (i as u32 % camera.width, i as u32 / camera.width);
-            sky_behind_pixel(c, camera.pixel_ray(x, y).dir, sky)
+            let ray = camera.pixel_ray(x, y);
+            let back = beyond.sky.map_or(DVec3::ZERO, |s| s.eval(ray.dir));
+            light_over_pixel(
+                c,
+                back,
+                beyond.lights,
+                &beyond.bounds,
+                ray.origin,
+                ray.dir,
+                pixel_angle(camera, x, y),
+            )
         })
         .collect()
 }
 
-/// The pass: its pipeline and the sky on the device.
+/// The pass: its pipeline, the sky and the lights on the device.
 pub struct SkyBehindPass {
     pipeline: Arc<ComputePipeline>,
     texels: Arc<Buffer>,
+    lights: Arc<Buffer>,
     width: u32,
     height: u32,
+    light_count: u32,
 }
 
 impl SkyBehindPass {
-    /// Compiles the pass and uploads `sky`.
-    pub fn new(ctx: &Arc<Context>, lib: &ShaderLibrary, sky: &Sky) -> anyhow::Result<Self> {
-        let values: Vec<f32> = sky
-            .texels
+    /// Compiles the pass and uploads what lies `beyond` the field; None
+    /// where there is neither a sky nor a light (no pass runs).
+    pub fn new(
+        ctx: &Arc<Context>,
+        lib: &ShaderLibrary,
+        beyond: &Beyond,
+    ) -> anyhow::Result<Option<Self>> {
+        if beyond.sky.is_none() && beyond.lights.is_empty() {
+            return Ok(None);
+        }
+        let values: Vec<f32> = match beyond.sky {
+            Some(sky) => sky
+                .texels
+                .iter()
+                .flat_map(|t| [t.x as f32, t.y as f32, t.z as f32, 0.0])
+                .collect(),
+            None => vec![0.0; 4],
+        };
+        // The bounds, then each light's (centre, radius) and (radiance, 0).
+        let b = &beyond.bounds;
+        let mut lights: Vec<f32> = [b.min, b.max]
             .iter()
-            .flat_map(|t| [t.x as f32, t.y as f32, t.z as f32, 0.0])
+            .flat_map(|v| [v.x as f32, v.y as f32, v.z as f32, 0.0])
             .collect();
-        Ok(Self {
+        for l in beyond.lights {
+            let (c, e) = (l.centre, l.radiance);
+            lights.extend([c.x, c.y, c.z, l.radius].map(|v| v as f32));
+            lights.extend([e.x, e.y, e.z, 0.0].map(|v| v as f32));
+        }
+        let (width, height) = beyond.sky.map_or((0, 0), |s| (s.width, s.height));
+        Ok(Some(Self {
             pipeline: lib.compute_pipeline(ctx, "sky_behind/sky_behind.wgsl", "main", &[])?,
             texels: crate::shadow::gpu::storage(ctx, "sky", &values)?,
-            width: sky.width,
-            height: sky.height,
-        })
+            lights: crate::shadow::gpu::storage(ctx, "seen-lights", &lights)?,
+            width,
+            height,
+            light_count: beyond.lights.len() as u32,
+        }))
     }
 
     /// Adds `sky-behind` over `frame` (an RGBA32F image the size of
@@ -116,17 +168,19 @@ impl SkyBehindPass {
         };
         let mut out = graph.create_image("sky-behind", desc);
         let sky = graph.import_buffer(&self.texels, None);
+        let lights = graph.import_buffer(&self.lights, None);
         graph
             .compute(SKY_BEHIND, &self.pipeline)
             .read("frame_colour", frame)
             .read("sky", sky)
+            .read("lights", lights)
             .write("out_colour", &mut out)
             .push(&SkyBehindPush {
                 camera: camera.rays(),
                 sky_width: self.width,
                 sky_height: self.height,
+                light_count: self.light_count,
                 _pad0: 0,
-                _pad1: 0,
             })
             .threads([camera.width, camera.height, 1]);
         out
@@ -143,19 +197,13 @@ mod tests {
     fn the_sky_fills_what_the_frame_leaves_uncovered() {
         let sky = Sky::uniform(4, DVec3::new(2.0, 4.0, 8.0));
         let d = DVec3::new(0.3, 0.5, -0.8).normalize();
-        assert_eq!(
-            sky_behind_pixel([0.1, 0.2, 0.3, 1.0], d, &sky),
-            [0.1, 0.2, 0.3, 1.0]
-        );
-        assert_eq!(sky_behind_pixel([0.0; 4], d, &sky), [2.0, 4.0, 8.0, 1.0]);
-        assert_eq!(
-            sky_behind_pixel([0.5, 0.5, 0.5, 0.5], d, &sky),
-            [1.5, 2.5, 4.5, 1.0]
-        );
+        let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        let pixel =
+            |c: [f64; 4]| light_over_pixel(c, sky.eval(d), &[], &bounds, DVec3::ZERO, d, 0.01);
+        assert_eq!(pixel([0.1, 0.2, 0.3, 1.0]), [0.1, 0.2, 0.3, 1.0]);
+        assert_eq!(pixel([0.0; 4]), [2.0, 4.0, 8.0, 1.0]);
+        assert_eq!(pixel([0.5, 0.5, 0.5, 0.5]), [1.5, 2.5, 4.5, 1.0]);
         // Coverage a hair past 1 (f32 sums) reads no sky, never a negative one.
-        assert_eq!(
-            sky_behind_pixel([0.1, 0.2, 0.3, 1.000001], d, &sky),
-            [0.1, 0.2, 0.3, 1.0]
-        );
+        assert_eq!(pixel([0.1, 0.2, 0.3, 1.000001]), [0.1, 0.2, 0.3, 1.0]);
     }
 }

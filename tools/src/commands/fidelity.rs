@@ -32,7 +32,7 @@ use crate::fidelity::{
     median_relative_error, median_seed_noise, psnr, relative_l1, shadow_figures, side_by_side, Rgb,
     AREA_THRESHOLDS, FAR_RADII, SHADOW_EDGE, UMBRA,
 };
-use crate::field_source::{scene_field, scene_sky};
+use crate::field_source::{scene_field, scene_seen_lights, scene_sky};
 use crate::headless::run_headless;
 use crate::outputs::{check_output, Outputs};
 use crate::scene_view::view_over_gpu_field;
@@ -199,20 +199,31 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     let trained = args.field.as_deref();
     let field = scene_field(&scene, trained, true, Some(ctx.info()))?;
     let sky = scene_sky(&scene, trained)?;
+    let seen = scene_seen_lights(&scene, trained)?;
     // The scene the field is rendered and lit with.
     let lit = match trained {
         Some(f) => {
             writeln!(
                 md,
-                "The field trained from photographs, `{}`; its objects lit by the field and, as the distant light, {} (not the recipe's known lights).\n",
+                "The field trained from photographs, `{}`; its objects lit by the field and, as the distant light, {}{} (not the recipe's known lights).\n",
                 f.display(),
                 if sky.is_some() {
                     "the sky learnt with it (also drawn behind it)"
                 } else {
                     "nothing: no sky was learnt with it"
+                },
+                match seen.len() {
+                    0 => String::new(),
+                    n => format!(
+                        ", with the {n} light{} its photographs saw past its bounds (`{}`, also drawn with it) unless an environment file is given",
+                        if n == 1 { "" } else { "s" },
+                        inlay_passes::field::seen_lights_path(f).display()
+                    ),
                 }
             )?;
-            trained_scene(&scene, f, sky.as_ref())?
+            let mut lit = trained_scene(&scene, f, sky.as_ref())?;
+            lit.seen_lights = seen.clone();
+            lit
         }
         None => scene.clone(),
     };
@@ -235,7 +246,9 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
     }
     let library = inlay_passes::shaders::library()?;
     // Probe irradiance per object.
-    let gpu_field = GpuGridField::upload(ctx, &field)?.with_sky(sky.map(Arc::new));
+    let gpu_field = GpuGridField::upload(ctx, &field)?
+        .with_sky(sky.map(Arc::new))
+        .with_seen_lights(seen);
     let library = gpu_field.library(&library);
     writeln!(md, "Irradiance at each object's centre (luminance; Cycles: a 1 mm white sensor per axis, two seeds):\n")?;
     writeln!(

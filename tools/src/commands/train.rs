@@ -14,6 +14,7 @@ use clap::Args;
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage};
 use inlay_passes::dataset::{load_dataset, LoadOptions};
+use inlay_passes::field::seen_lights::{seen_lights_path, seen_lights_text};
 use inlay_passes::field::{checked_field_bytes, sky_path};
 use inlay_passes::geometry::Aabb;
 use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
@@ -686,6 +687,21 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             sky_out.display()
         );
         outputs.image(&sky_out, &sky.to_image(), 1.0)?;
+    }
+    // A field's lights file is its own: one beside an earlier field at
+    // `--out` would be drawn with this one, so it is emptied.
+    let lights_out = seen_lights_path(&args.out);
+    if !seen_lights.is_empty() || lights_out.exists() {
+        eprintln!(
+            "{} seen past the bounds, drawn wherever the field is: {}",
+            match seen_lights.len() {
+                0 => "no light".to_string(),
+                1 => "1 light".to_string(),
+                n => format!("{n} lights"),
+            },
+            lights_out.display()
+        );
+        outputs.bytes(&lights_out, seen_lights_text(&seen_lights).as_bytes())?;
     }
     if let (Some(path), false) = (&args.picture, trained.held_out.is_empty()) {
         outputs.image(path, &held_out_picture(&trained.held_out), 1.0)?;

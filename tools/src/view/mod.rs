@@ -135,8 +135,12 @@ impl Viewer {
         authored.shadows.cast = true;
         let field = scene_field(&authored, None, use_cache, Some(ctx.info()))?;
         let sky = crate::field_source::scene_sky(&authored, None)?;
+        let seen = crate::field_source::scene_seen_lights(&authored, None)?;
         crate::field_source::light_with_sky(&mut authored, sky.as_ref())?;
-        let gpu_field = GpuGridField::upload(ctx, &field)?.with_sky(sky.map(Arc::new));
+        authored.seen_lights = seen.clone();
+        let gpu_field = GpuGridField::upload(ctx, &field)?
+            .with_sky(sky.map(Arc::new))
+            .with_seen_lights(seen);
         let scene = preset.apply(&authored);
         let mut view = view_over_gpu_field(
             ctx,

@@ -6,8 +6,8 @@
 use glam::DVec3;
 
 use crate::dataset::{Dataset, PixelState};
+use crate::field::seen_lights::sphere_hit;
 use crate::geometry::Ray;
-use crate::scene::Shape;
 use crate::sgfit::model::luminance;
 
 use super::blobs::{radiance_at, Blob};
@@ -22,17 +22,6 @@ pub const WINDOW_PIXELS: u32 = 2;
 
 /// The radii tried between the smallest and the largest, evenly in log.
 const RADII: usize = 48;
-
-/// The nearest point at which `ray` meets the sphere (`centre`, `radius`)
-/// in front of its origin.
-pub fn sphere_hit(ray: &Ray, centre: DVec3, radius: f64) -> Option<f64> {
-    let (t0, t1) = Shape::Sphere { centre, radius }.interval(ray)?;
-    if t0 > 0.0 {
-        Some(t0)
-    } else {
-        (t1 > 0.0).then_some(t1)
-    }
-}
 
 /// One pixel near a spot: its rays over its area, and its reading less the
 /// background around the spot.

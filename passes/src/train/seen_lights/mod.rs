@@ -13,7 +13,8 @@
 //! spots explains their light ([`fit`]). A meeting point within the bounds
 //! is a light the field holds itself (a lamp in the room) and is left to
 //! it. The lights' pixels are left out of training ([`mask_seen_lights`]);
-//! the held-out views draw them ([`with_seen_lights`]).
+//! the held-out views draw them ([`with_seen_lights`]), and `inlay train`
+//! keeps them beside the field ([`crate::field::seen_lights`]).
 
 pub mod blobs;
 pub mod fit;
@@ -25,11 +26,12 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::dataset::{Dataset, Frame, PixelState};
-use crate::geometry::{ray_box, Aabb, Ray};
+pub use crate::field::seen_lights::{with_seen_lights, SeenLight};
+use crate::geometry::Aabb;
 
 use super::pixels::{is_bracket, pixel_ray_at};
 use blobs::{bright_blobs, Blob};
-use fit::{fit_size_and_radiance, sphere_hit};
+use fit::fit_size_and_radiance;
 use triangulate::{meetings, Sighting, MAX_SIGHTINGS};
 
 /// A pixel is a candidate where its luminance is at least this many times
@@ -46,36 +48,6 @@ pub const MIN_VIEWS: usize = 3;
 /// light's radius plus this many pixels' width of its centre: the light's
 /// own pixels, those its edge shares, and a margin for the fit's error.
 pub const MASK_PIXELS: f64 = 2.0;
-
-/// A light seen past the field's bounds: a sphere of uniform radiance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SeenLight {
-    /// Its centre.
-    pub centre: DVec3,
-    /// Its radius.
-    pub radius: f64,
-    /// Its radiance (linear RGB).
-    pub radiance: DVec3,
-    /// The training frames whose spots meet at it.
-    pub views: usize,
-    /// The share of its spots' excess light (squared) the sphere leaves
-    /// unexplained.
-    pub residual: f64,
-}
-
-impl SeenLight {
-    /// Where `ray` first meets it in front of the ray's origin.
-    pub fn hit(&self, ray: &Ray) -> Option<f64> {
-        sphere_hit(ray, self.centre, self.radius)
-    }
-
-    /// Its radiant intensity, π r² L: what lights a point far from it, and
-    /// what a view of it measures best (its radius and radiance alone
-    /// trade against each other where it spans a pixel or two).
-    pub fn intensity(&self) -> DVec3 {
-        std::f64::consts::PI * self.radius * self.radius * self.radiance
-    }
-}
 
 /// What [`find_seen_lights`] found.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -224,30 +196,4 @@ pub fn mask_seen_lights(dataset: &mut Dataset, lights: &[SeenLight], frames: &[u
         }
     }
     masked
-}
-
-/// The radiance along `ray` with `lights` beside a field in `bounds`: the
-/// nearest light it meets where that lies before the bounds (or the ray
-/// misses them), `colour` plus what is left of `opacity` times the light
-/// where the light lies past them, and `colour` over `behind` where it
-/// meets none. (`colour`, `opacity`) is the field's march along the ray.
-pub fn with_seen_lights(
-    lights: &[SeenLight],
-    ray: &Ray,
-    bounds: &Aabb,
-    colour: DVec3,
-    opacity: f64,
-    behind: DVec3,
-) -> DVec3 {
-    let nearest = lights
-        .iter()
-        .filter_map(|l| l.hit(ray).map(|t| (t, l.radiance)))
-        .min_by(|a, b| a.0.total_cmp(&b.0));
-    match nearest {
-        None => colour + (1.0 - opacity) * behind,
-        Some((t, radiance)) => match ray_box(ray, bounds) {
-            Some((t0, _)) if t > t0 => colour + (1.0 - opacity) * radiance,
-            _ => radiance,
-        },
-    }
 }

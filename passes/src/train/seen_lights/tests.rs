@@ -6,6 +6,7 @@ use glam::DVec3;
 use super::*;
 use crate::dataset::pixels::{FrameImage, PixelCounts};
 use crate::dataset::{BoundsSource, Dialect, Intrinsics, Pose};
+use crate::field::seen_lights::sphere_hit;
 use crate::rng::Pcg32;
 
 const GREY: f64 = 0.2;
@@ -158,52 +159,4 @@ fn two_views_do_not_make_a_light() {
     d.frames.truncate(2);
     let found = find_seen_lights(&d, &all(&d), &d.bounds, GREY);
     assert!(found.lights.is_empty() && found.spots == 2, "{found:?}");
-}
-
-/// A light before the bounds hides the field; past them the field's
-/// transmittance shows it; a ray that meets none sees what is behind.
-#[test]
-fn the_lights_are_drawn_in_front_of_and_behind_the_field() {
-    let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
-    let light = |z: f64| SeenLight {
-        centre: DVec3::new(0.0, 0.0, z),
-        radius: 0.2,
-        radiance: DVec3::splat(100.0),
-        views: 3,
-        residual: 0.0,
-    };
-    let ray = Ray {
-        origin: DVec3::new(0.0, 0.0, 5.0),
-        dir: -DVec3::Z,
-    };
-    let (colour, opacity, behind) = (DVec3::splat(0.3), 0.75, DVec3::splat(0.1));
-    let front = with_seen_lights(&[light(3.0)], &ray, &bounds, colour, opacity, behind);
-    assert_eq!(front, DVec3::splat(100.0));
-    let back = with_seen_lights(&[light(-3.0)], &ray, &bounds, colour, opacity, behind);
-    assert_eq!(back, DVec3::splat(0.3 + 0.25 * 100.0));
-    let none = with_seen_lights(&[], &ray, &bounds, colour, opacity, behind);
-    assert_eq!(none, DVec3::splat(0.3 + 0.25 * 0.1));
-    // Both: the nearer one, in front.
-    let both = with_seen_lights(
-        &[light(-3.0), light(3.0)],
-        &ray,
-        &bounds,
-        colour,
-        opacity,
-        behind,
-    );
-    assert_eq!(both, DVec3::splat(100.0));
-    // A ray that misses the box sees the light whole.
-    let past = Ray {
-        origin: DVec3::new(3.0, 0.0, 5.0),
-        dir: -DVec3::Z,
-    };
-    let aside = SeenLight {
-        centre: DVec3::new(3.0, 0.0, -3.0),
-        ..light(0.0)
-    };
-    assert_eq!(
-        with_seen_lights(&[aside], &past, &bounds, DVec3::ZERO, 0.0, behind),
-        DVec3::splat(100.0)
-    );
 }
