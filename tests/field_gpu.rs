@@ -647,6 +647,36 @@ fn marched_field_matches_the_path_traced_reference() {
     );
 }
 
+/// `sky-behind` run on lavapipe over `frame` (a `camera`-sized RGBA
+/// image) with what lies `beyond` the field.
+fn sky_behind_on_gpu(
+    ctx: &Arc<inlay_engine::Context>,
+    frame: &[[f32; 4]],
+    camera: &CameraFrame,
+    beyond: &inlay_passes::sky_behind::Beyond,
+) -> Vec<[f32; 4]> {
+    use inlay_passes::sky_behind::{SkyBehindPass, SKY_BEHIND_FORMAT};
+    let desc = ImageDesc {
+        width: camera.width,
+        height: camera.height,
+        format: SKY_BEHIND_FORMAT,
+    };
+    let usage = inlay_engine::vk::ImageUsageFlags::SAMPLED
+        | inlay_engine::vk::ImageUsageFlags::TRANSFER_DST;
+    let input = Arc::new(inlay_engine::Image::new(ctx, "frame", desc, usage).unwrap());
+    input.write_rgba32f(frame).unwrap();
+    let pass = SkyBehindPass::new(ctx, &common::test_library(), beyond)
+        .unwrap()
+        .unwrap();
+    let readback = Readback::new(ctx, desc).unwrap();
+    common::run_frame(ctx, |graph| {
+        let c = graph.import_image(&input, "frame", None);
+        let out = pass.add(graph, c, camera);
+        readback.add_to_graph(graph, out);
+    });
+    readback.read().unwrap().pixels
+}
+
 /// `sky-behind` on lavapipe against its f64 CPU mirror
 /// ([`sky_behind_reference`]): a camera looking almost straight up with a
 /// wide view, so the image holds the pole and the seam at φ = 0, over a
@@ -655,11 +685,8 @@ fn marched_field_matches_the_path_traced_reference() {
 #[test]
 fn the_sky_behind_the_frame_matches_the_cpu_reference() {
     use inlay_passes::field::Sky;
-    use inlay_passes::sky_behind::{
-        sky_behind_reference, Beyond, SkyBehindPass, SKY_BEHIND_FORMAT,
-    };
+    use inlay_passes::sky_behind::{sky_behind_reference, Beyond};
     let ctx = common::gpu();
-    let lib = common::test_library();
     let (w, h) = (40u32, 30u32);
     let spec = inlay_passes::camera::CameraSpec {
         name: None,
@@ -682,28 +709,12 @@ fn the_sky_behind_the_frame_matches_the_cpu_reference() {
             [0.3 * a, 0.2 * a + 0.01 * x as f32, 0.1, a]
         })
         .collect();
-    let desc = ImageDesc {
-        width: w,
-        height: h,
-        format: SKY_BEHIND_FORMAT,
-    };
-    let usage = inlay_engine::vk::ImageUsageFlags::SAMPLED
-        | inlay_engine::vk::ImageUsageFlags::TRANSFER_DST;
-    let input = Arc::new(inlay_engine::Image::new(&ctx, "frame", desc, usage).unwrap());
-    input.write_rgba32f(&frame).unwrap();
     let beyond = Beyond {
         sky: Some(&sky),
         lights: &[],
         bounds: inlay_passes::geometry::Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
     };
-    let pass = SkyBehindPass::new(&ctx, &lib, &beyond).unwrap().unwrap();
-    let readback = Readback::new(&ctx, desc).unwrap();
-    common::run_frame(&ctx, |graph| {
-        let c = graph.import_image(&input, "frame", None);
-        let out = pass.add(graph, c, &camera);
-        readback.add_to_graph(graph, out);
-    });
-    let gpu = readback.read().unwrap().pixels;
+    let gpu = sky_behind_on_gpu(&ctx, &frame, &camera, &beyond);
     let seen: Vec<[f64; 4]> = frame.iter().map(|c| c.map(|v| v as f64)).collect();
     let cpu = sky_behind_reference(&seen, &camera, &beyond);
     let mut behind = 0;
@@ -751,11 +762,8 @@ fn the_sky_behind_the_frame_matches_the_cpu_reference() {
 fn the_lights_seen_past_the_bounds_match_the_cpu_reference() {
     use inlay_passes::field::{SeenLight, Sky};
     use inlay_passes::geometry::Aabb;
-    use inlay_passes::sky_behind::{
-        sky_behind_reference, Beyond, SkyBehindPass, SKY_BEHIND_FORMAT,
-    };
+    use inlay_passes::sky_behind::{sky_behind_reference, Beyond};
     let ctx = common::gpu();
-    let lib = common::test_library();
     let (w, h) = (48u32, 36u32);
     let bounds = Aabb::new(DVec3::new(-1.0, -0.1, -1.0), DVec3::new(1.0, 1.4, 1.0));
     let bulb = |c: DVec3, r: f64, e: f64| SeenLight {
@@ -799,15 +807,6 @@ fn the_lights_seen_past_the_bounds_match_the_cpu_reference() {
             [0.3 * a, 0.2 * a, 0.1 * a, a]
         })
         .collect();
-    let desc = ImageDesc {
-        width: w,
-        height: h,
-        format: SKY_BEHIND_FORMAT,
-    };
-    let usage = inlay_engine::vk::ImageUsageFlags::SAMPLED
-        | inlay_engine::vk::ImageUsageFlags::TRANSFER_DST;
-    let input = Arc::new(inlay_engine::Image::new(&ctx, "frame", desc, usage).unwrap());
-    input.write_rgba32f(&frame).unwrap();
     let seen: Vec<[f64; 4]> = frame.iter().map(|c| c.map(|v| v as f64)).collect();
     let mut lit = [0usize; 2];
     for (k, spec) in cameras.iter().enumerate() {
@@ -818,14 +817,7 @@ fn the_lights_seen_past_the_bounds_match_the_cpu_reference() {
                 lights: &lights,
                 bounds,
             };
-            let pass = SkyBehindPass::new(&ctx, &lib, &beyond).unwrap().unwrap();
-            let readback = Readback::new(&ctx, desc).unwrap();
-            common::run_frame(&ctx, |graph| {
-                let c = graph.import_image(&input, "frame", None);
-                let out = pass.add(graph, c, &camera);
-                readback.add_to_graph(graph, out);
-            });
-            let gpu = readback.read().unwrap().pixels;
+            let gpu = sky_behind_on_gpu(&ctx, &frame, &camera, &beyond);
             let cpu = sky_behind_reference(&seen, &camera, &beyond);
             for (i, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
                 if c[0] > 10.0 {

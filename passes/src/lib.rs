@@ -38,4 +38,5 @@ pub mod shaders;
 pub mod shadow;
 pub mod sky_behind;
 pub mod ssdf;
+pub mod toml_file;
 pub mod train;

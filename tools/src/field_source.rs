@@ -188,19 +188,14 @@ pub fn scene_seen_lights(
     }
     let lights = load_seen_lights(&file)?;
     if !lights.is_empty() {
+        let (count, verb) = match lights.len() {
+            1 => ("1 light".to_string(), "is"),
+            n => (format!("{n} lights"), "are"),
+        };
         eprintln!(
-            "{} seen past the field's bounds by its photographs {} drawn with it{}: {}",
-            if lights.len() == 1 {
-                "1 light".to_string()
-            } else {
-                format!("{} lights", lights.len())
-            },
-            if lights.len() == 1 { "is" } else { "are" },
-            if scene.object_environment.is_none() {
-                " and light the objects"
-            } else {
-                " (the scene's environment file lights the objects)"
-            },
+            "{count} that its photographs saw past the field's bounds {verb} drawn with it and \
+             light{} any objects where the scene names no environment file: {}",
+            if lights.len() == 1 { "s" } else { "" },
             file.display()
         );
     }
@@ -278,11 +273,11 @@ look_at = [0.0, 0.0, 0.0]
         assert_ne!(before, cache_entry(&load(), &scene.bake).unwrap());
     }
 
-    /// A trained field's sky lights the objects where the scene gives them
-    /// no distant light, and only there.
-    #[test]
-    fn the_sky_lights_the_objects_only_where_nothing_else_does() {
-        let dir = std::env::temp_dir().join(format!("inlay-sky-light-{}", std::process::id()));
+    /// A scene file `lit.toml` in a fresh directory (named from `name`):
+    /// the field file `f.inlayfield` beside it, a cube, a camera. Returns
+    /// the directory and the file's text.
+    fn field_file_scene(name: &str) -> (PathBuf, String) {
+        let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let cube = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects/checker-cube.gltf");
@@ -292,6 +287,14 @@ look_at = [0.0, 0.0, 0.0]
             cube.display().to_string()
         );
         std::fs::write(dir.join("lit.toml"), &text).unwrap();
+        (dir, text)
+    }
+
+    /// A trained field's sky lights the objects where the scene gives them
+    /// no distant light, and only there.
+    #[test]
+    fn the_sky_lights_the_objects_only_where_nothing_else_does() {
+        let (dir, text) = field_file_scene("inlay-sky-light");
         let mut scene = inlay_passes::scene::load_scene(&dir.join("lit.toml")).unwrap();
         let sky = Sky::uniform(4, glam::DVec3::new(0.5, 1.0, 2.0));
         assert!(!light_with_sky(&mut scene, None).unwrap());
@@ -321,16 +324,7 @@ look_at = [0.0, 0.0, 0.0]
     fn the_lights_beside_a_field_are_read_and_light_its_objects() {
         use inlay_passes::field::seen_lights::seen_lights_text;
         use inlay_passes::lighting::object_lights;
-        let dir = std::env::temp_dir().join(format!("inlay-seen-lights-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let cube = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/objects/checker-cube.gltf");
-        let text = format!(
-            "name = \"lit\"\nfield = \"f.inlayfield\"\n[[objects]]\nname = \"cube\"\nfile = {:?}\n\
-             position = [0.0, 0.0, 0.0]\n[[cameras]]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n",
-            cube.display().to_string()
-        );
-        std::fs::write(dir.join("lit.toml"), &text).unwrap();
+        let (dir, _) = field_file_scene("inlay-seen-lights");
         let mut scene = inlay_passes::scene::load_scene(&dir.join("lit.toml")).unwrap();
         assert!(scene_seen_lights(&scene, None).unwrap().is_empty());
         let bulb = SeenLight {

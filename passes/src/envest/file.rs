@@ -23,6 +23,7 @@ use serde::Deserialize;
 
 use super::near_lights::PointLight;
 use crate::sg::Sg64;
+use crate::toml_file::{check_format, parse_toml};
 
 /// What an environment file holds: distant lobes and near point lights.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -106,28 +107,14 @@ pub fn parse_environment_file(path: &Path, text: &str) -> Result<EstimatedLight,
         field: field.to_owned(),
         message,
     };
-    let spec: EnvFileSpec = toml::from_str(text).map_err(|x| {
-        let at = x
-            .span()
-            .map(|s| format!("line {}", text[..s.start].lines().count().max(1)))
-            .unwrap_or_else(|| "toml".into());
-        e(&at, x.message().to_owned())
-    })?;
-    if spec.format != ENV_FILE_FORMAT {
-        return Err(e(
-            "format",
-            format!("\"{}\" is not \"{ENV_FILE_FORMAT}\"", spec.format),
-        ));
-    }
-    if spec.version != ENV_FILE_VERSION {
-        return Err(e(
-            "version",
-            format!(
-                "{} is not supported (this reader reads {ENV_FILE_VERSION})",
-                spec.version
-            ),
-        ));
-    }
+    let spec: EnvFileSpec = parse_toml(text).map_err(|(k, m)| e(&k, m))?;
+    check_format(
+        &spec.format,
+        spec.version,
+        ENV_FILE_FORMAT,
+        ENV_FILE_VERSION,
+    )
+    .map_err(|(k, m)| e(&k, m))?;
     let mut lobes = spec.lobes;
     for (i, l) in lobes.iter_mut().enumerate() {
         if let Some(m) = lobe_problem(l) {

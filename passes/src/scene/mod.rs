@@ -406,16 +406,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         message,
     };
     let text = std::fs::read_to_string(path).map_err(|x| e("file", x.to_string()))?;
-    let mut spec: SceneSpec = toml::from_str(&text).map_err(|x| {
-        let at = x
-            .span()
-            .map(|s| {
-                let line = text[..s.start].lines().count().max(1);
-                format!("line {line}")
-            })
-            .unwrap_or_else(|| "toml".into());
-        e(&at, x.message().to_owned())
-    })?;
+    let mut spec: SceneSpec = crate::toml_file::parse_toml(&text).map_err(|(k, m)| e(&k, m))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let field = match (spec.field, spec.recipe) {
         (Some(f), None) => FieldSource::File(dir.join(f)),

@@ -18,6 +18,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::SeenLight;
+use crate::toml_file::{check_format, parse_toml};
 
 /// The `format` value of a seen-lights file.
 pub const SEEN_LIGHTS_FORMAT: &str = "inlay-seen-lights";
@@ -100,28 +101,14 @@ pub fn parse_seen_lights(path: &Path, text: &str) -> Result<Vec<SeenLight>, Seen
         key: key.to_owned(),
         message,
     };
-    let spec: FileSpec = toml::from_str(text).map_err(|x| {
-        let at = x
-            .span()
-            .map(|s| format!("line {}", text[..s.start].lines().count().max(1)))
-            .unwrap_or_else(|| "toml".into());
-        e(&at, x.message().to_owned())
-    })?;
-    if spec.format != SEEN_LIGHTS_FORMAT {
-        return Err(e(
-            "format",
-            format!("\"{}\" is not \"{SEEN_LIGHTS_FORMAT}\"", spec.format),
-        ));
-    }
-    if spec.version != SEEN_LIGHTS_VERSION {
-        return Err(e(
-            "version",
-            format!(
-                "{} is not supported (this reader reads {SEEN_LIGHTS_VERSION})",
-                spec.version
-            ),
-        ));
-    }
+    let spec: FileSpec = parse_toml(text).map_err(|(k, m)| e(&k, m))?;
+    check_format(
+        &spec.format,
+        spec.version,
+        SEEN_LIGHTS_FORMAT,
+        SEEN_LIGHTS_VERSION,
+    )
+    .map_err(|(k, m)| e(&k, m))?;
     spec.lights
         .into_iter()
         .enumerate()
