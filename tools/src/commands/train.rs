@@ -268,11 +268,11 @@ pub struct TrainArgs {
     pub depth_picture: Option<PathBuf>,
     /// Lights the training photographs show past the bounds (a bulb above
     /// the box): found where bright spots of several views meet, fitted
-    /// as spheres, their pixels left out of training and drawn in the
-    /// held-out views (`on`, `auto`: the same); `off` trains on every
-    /// pixel as it is.
-    #[arg(long, value_parser = parse_switch, default_value = "auto")]
-    pub seen_lights: Switch,
+    /// as spheres, their pixels left out of training, drawn in the
+    /// held-out views and written beside the field as FIELD.lights.toml
+    /// (`on`, the default); `off` trains on every pixel as it is.
+    #[arg(long, value_parser = parse_on_off, default_value = "on", action = clap::ArgAction::Set)]
+    pub seen_lights: bool,
 }
 
 /// A knob that is on, off, or chosen from the dataset.
@@ -293,6 +293,15 @@ pub fn parse_switch(s: &str) -> Result<Switch, String> {
         "on" => Ok(Switch::On),
         "off" => Ok(Switch::Off),
         _ => Err(format!("{s}: expected auto, on or off")),
+    }
+}
+
+/// Parses `on` or `off`.
+pub fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("{s}: expected on or off")),
     }
 }
 
@@ -459,15 +468,16 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
     let bounds = resume.as_ref().map_or(dataset.bounds, |f| f.bounds);
-    let seen_lights = match args.seen_lights {
-        Switch::Off => Vec::new(),
-        Switch::On | Switch::Auto => super::seen_lights::find_and_mask(
+    let seen_lights = if args.seen_lights {
+        super::seen_lights::find_and_mask(
             &mut dataset,
             args.hold_out,
             &bounds,
             knobs.scale,
             scene.as_ref().and_then(|s| s.recipe()),
-        ),
+        )
+    } else {
+        Vec::new()
     };
     let past = inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds);
     if let Some(w) = past.warning() {

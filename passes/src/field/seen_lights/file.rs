@@ -47,8 +47,10 @@ pub struct SeenLightsError {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightSpec {
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     centre: DVec3,
     radius: f64,
+    #[serde(deserialize_with = "crate::scene::vec3::exact")]
     radiance: DVec3,
     #[serde(default)]
     views: usize,

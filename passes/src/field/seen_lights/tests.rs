@@ -134,4 +134,11 @@ fn the_lights_file_round_trips_and_names_a_bad_key() {
     )
     .unwrap_err();
     assert!(e.key.starts_with("line"), "{e}");
+    // Four numbers where three are asked for.
+    let e =
+        parse_seen_lights(path, &text.replacen("centre = [", "centre = [9.0, ", 1)).unwrap_err();
+    assert!(
+        e.key.starts_with("line") && e.message.contains("3 numbers"),
+        "{e}"
+    );
 }

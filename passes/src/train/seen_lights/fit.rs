@@ -17,7 +17,8 @@ use crate::train::pixels::pixel_ray_at;
 pub const COVERAGE_RAYS: u32 = 16;
 
 /// The window read around a spot reaches this many pixels past it; the
-/// background is read in a ring this many pixels wide beyond the window.
+/// background is read in the ring of this many pixels and one more
+/// beyond the window.
 pub const WINDOW_PIXELS: u32 = 2;
 
 /// The radii tried between the smallest and the largest, evenly in log.
