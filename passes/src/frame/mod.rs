@@ -364,7 +364,14 @@ impl InsertionFrame {
     ) -> anyhow::Result<ImageHandle> {
         let image = self.add_layers(graph, frame, placed, effects)?;
         Ok(match &self.sky {
-            Some(sky) => sky.add(graph, image, frame),
+            Some(sky) if sky.draws(frame) => sky.add(graph, image, frame),
+            Some(_) => {
+                graph.note_skipped(
+                    SKY_BEHIND,
+                    "the field has no sky, and no light seen past its bounds is in view",
+                );
+                image
+            }
             None => {
                 graph.note_skipped(SKY_BEHIND, "the field has no sky and no light seen past it");
                 image

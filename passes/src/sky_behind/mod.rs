@@ -102,6 +102,18 @@ pub fn sky_behind_reference(
         .collect()
 }
 
+/// Whether any of `lights` can cover a pixel of `camera`'s image (its
+/// disc's edge spread over a pixel included): a field without a sky needs
+/// no `sky-behind` pass where none can.
+pub fn lights_in_view(lights: &[SeenLight], camera: &CameraFrame) -> bool {
+    lights.iter().any(|l| {
+        camera.sphere_visible(l.centre, l.radius)
+            && camera
+                .sphere_pixels(l.centre, l.radius)
+                .is_none_or(|[x0, y0, x1, y1]| x0 < x1 && y0 < y1)
+    })
+}
+
 /// The pass: its pipeline, the sky and the lights on the device.
 pub struct SkyBehindPass {
     pipeline: Arc<ComputePipeline>,
@@ -110,6 +122,8 @@ pub struct SkyBehindPass {
     width: u32,
     height: u32,
     light_count: u32,
+    /// The lights, to tell whether a frame sees any.
+    seen: Vec<SeenLight>,
 }
 
 impl SkyBehindPass {
@@ -150,7 +164,14 @@ impl SkyBehindPass {
             width,
             height,
             light_count: beyond.lights.len() as u32,
+            seen: beyond.lights.to_vec(),
         }))
+    }
+
+    /// Whether a frame seen through `camera` needs the pass: its field has
+    /// a sky, or one of its lights can be in view ([`lights_in_view`]).
+    pub fn draws(&self, camera: &CameraFrame) -> bool {
+        self.width > 0 || lights_in_view(&self.seen, camera)
     }
 
     /// Adds `sky-behind` over `frame` (an RGBA32F image the size of
@@ -190,6 +211,44 @@ impl SkyBehindPass {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A light ahead of the camera is in view, one behind it or off to
+    /// the side is not, and one the image plane cuts may be anywhere.
+    #[test]
+    fn a_light_is_in_view_only_where_its_disc_can_cover_a_pixel() {
+        let spec = crate::camera::CameraSpec {
+            name: None,
+            position: DVec3::ZERO,
+            look_at: -DVec3::Z,
+            up: DVec3::Y,
+            fov_y: 40.0,
+        };
+        let camera = CameraFrame::new(&spec, 64, 48);
+        let at = |c: DVec3, radius: f64| SeenLight {
+            centre: c,
+            radius,
+            radiance: DVec3::ONE,
+            views: 3,
+            residual: 0.0,
+        };
+        assert!(lights_in_view(
+            &[at(DVec3::new(0.0, 0.0, -3.0), 0.01)],
+            &camera
+        ));
+        assert!(!lights_in_view(
+            &[at(DVec3::new(0.0, 0.0, 3.0), 0.01)],
+            &camera
+        ));
+        assert!(!lights_in_view(
+            &[at(DVec3::new(5.0, 0.0, -3.0), 0.01)],
+            &camera
+        ));
+        assert!(lights_in_view(
+            &[at(DVec3::new(0.0, 0.0, 0.5), 1.0)],
+            &camera
+        ));
+        assert!(!lights_in_view(&[], &camera));
+    }
 
     /// A covered pixel keeps its colour, an empty one reads the sky, a
     /// half-covered one half of it; the coverage is 1 after.
