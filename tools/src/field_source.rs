@@ -352,6 +352,20 @@ look_at = [0.0, 0.0, 0.0]
         assert!(none.is_empty());
         assert_eq!(lobes.len(), 1);
         assert!(lobes[0].direction.angle_between(bulb.centre) < 1e-9);
+        // More seen lights than are shaded locally: the brightest are,
+        // the rest are lobes.
+        scene.seen_lights = (0..10)
+            .map(|i| SeenLight {
+                centre: glam::DVec3::new(i as f64 - 4.5, 3.0, 0.0),
+                radiance: bulb.radiance * (1.0 + i as f64),
+                ..bulb
+            })
+            .collect();
+        let (lobes, local) = object_lights(&scene, glam::DVec3::ZERO, true);
+        let most = inlay_passes::lighting::local::MAX_LOCAL_LIGHTS as usize;
+        assert_eq!((local.len(), lobes.len()), (most, 10 - most));
+        assert!(local.iter().all(|l| l.centre.x > 4.5 - most as f64));
+        scene.seen_lights = vec![bulb];
         // An environment file lights the objects instead.
         scene.object_environment = Some(inlay_passes::scene::ObjectEnvironment {
             file: dir.join("env.toml"),

@@ -158,8 +158,10 @@ impl IncidentLight {
         // write past it, silently.
         anyhow::ensure!(
             local.len() <= local::MAX_LOCAL_LIGHTS as usize,
-            "{} local lights light the object (the field's, up to `[lighting] local_lights`, and the \
-             recipe's hidden bulbs together); at most {} are shaded: lower `local_lights`",
+            "{} local lights light the object (the field's, up to `[lighting] local_lights`, and \
+             those outside it: a recipe's hidden bulbs, an environment file's point lights or the \
+             lights seen past a trained field's bounds); at most {} are shaded: lower \
+             `local_lights`",
             local.len(),
             local::MAX_LOCAL_LIGHTS
         );
@@ -562,14 +564,30 @@ pub fn object_lights(scene: &Scene, at: DVec3, local: bool) -> (Vec<Sg64>, Vec<L
             let (_, outside) = r.lights();
             (lobes, outside.into_iter().filter_map(ball).collect())
         }
-        (None, None) => (
-            environment_lobes(&scene.environment),
-            scene
-                .seen_lights
+        (None, None) => {
+            // The brightest seen lights as local lights, as many as are
+            // shaded; any more as lobes seen from `at`.
+            let mut seen: Vec<_> = scene.seen_lights.iter().collect();
+            let power =
+                |l: &&crate::field::SeenLight| crate::sgfit::model::luminance(l.intensity());
+            seen.sort_by(|a, b| power(b).total_cmp(&power(a)));
+            let (near, far) = seen.split_at(seen.len().min(local::MAX_LOCAL_LIGHTS as usize));
+            let lobes = environment_lobes(&scene.environment)
+                .into_iter()
+                .chain(far.iter().map(|l| {
+                    crate::envest::PointLight {
+                        position: l.centre,
+                        intensity: l.intensity(),
+                    }
+                    .lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)
+                }))
+                .collect();
+            let balls = near
                 .iter()
                 .map(|l| LocalLight::known_ball(l.centre, l.radius, l.radiance))
-                .collect(),
-        ),
+                .collect();
+            (lobes, balls)
+        }
     }
 }
 
