@@ -508,21 +508,20 @@ pub fn object_light_lobes(scene: &Scene, at: DVec3) -> Vec<Sg64> {
         ),
         (None, None) => environment_lobes(&scene.environment)
             .into_iter()
-            .chain(
-                seen_point_lights(scene)
-                    .map(|l| l.lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)),
-            )
+            .chain(scene.seen_lights.iter().map(|l| seen_light_lobe(l, at)))
             .collect(),
     }
 }
 
-/// A field file's lights seen past its bounds ([`Scene::seen_lights`]) as
-/// point lights of their intensity (π r² L) at their centres.
-fn seen_point_lights(scene: &Scene) -> impl Iterator<Item = crate::envest::PointLight> + '_ {
-    scene.seen_lights.iter().map(|l| crate::envest::PointLight {
+/// A light seen past a field file's bounds ([`Scene::seen_lights`]) as a
+/// lobe seen from `at`: a point light of its intensity (π r² L) at its
+/// centre.
+fn seen_light_lobe(l: &crate::field::SeenLight, at: DVec3) -> Sg64 {
+    crate::envest::PointLight {
         position: l.centre,
         intensity: l.intensity(),
-    })
+    }
+    .lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)
 }
 
 /// The light an object at `at` is lit with from outside the field, split
@@ -574,13 +573,7 @@ pub fn object_lights(scene: &Scene, at: DVec3, local: bool) -> (Vec<Sg64>, Vec<L
             let (near, far) = seen.split_at(seen.len().min(local::MAX_LOCAL_LIGHTS as usize));
             let lobes = environment_lobes(&scene.environment)
                 .into_iter()
-                .chain(far.iter().map(|l| {
-                    crate::envest::PointLight {
-                        position: l.centre,
-                        intensity: l.intensity(),
-                    }
-                    .lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)
-                }))
+                .chain(far.iter().map(|l| seen_light_lobe(l, at)))
                 .collect();
             let balls = near
                 .iter()
