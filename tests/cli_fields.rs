@@ -643,6 +643,20 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
     let env = dir.join("books-env.toml");
     let picture = dir.join("books-env.exr");
     let compare = dir.join("compare.png");
+    // A light the field's photographs saw past its bounds, in the file
+    // beside the field: the estimate takes it as known and carries it.
+    let bulb = inlay_passes::field::SeenLight {
+        centre: glam::DVec3::new(0.3, 4.0, 0.2),
+        radius: 0.05,
+        radiance: glam::DVec3::new(500.0, 450.0, 400.0),
+        views: 5,
+        residual: 0.01,
+    };
+    std::fs::write(
+        inlay_passes::field::seen_lights_path(&field),
+        inlay_passes::field::seen_lights::seen_lights_text(&[bulb]),
+    )
+    .unwrap();
     let args = [
         "--validate",
         "estimate-env",
@@ -693,12 +707,13 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
         "mean relative difference",
         "kept without asking",
         "the points' loss under the recipe's hidden light",
+        "known light (seen past the field's bounds) at 0.300 4.000 0.200",
     ] {
         assert!(text.contains(want), "no `{want}` in:\n{text}");
     }
-    let lobes = inlay_passes::envest::load_environment_file(&env)
-        .unwrap()
-        .lobes;
+    let written = inlay_passes::envest::load_environment_file(&env).unwrap();
+    assert_eq!(written.seen_lights, vec![bulb]);
+    let lobes = written.lobes;
     assert_eq!(lobes.len(), 4);
     let img = HdrImage::load_exr(&picture).unwrap();
     assert_eq!((img.width, img.height), (256, 128));
@@ -716,6 +731,20 @@ fn estimate_env_writes_a_file_render_can_light_objects_with() {
             .lobes,
         lobes
     );
+    // `--seen-lights off` estimates all the outside light, the bulb's too,
+    // and its file carries no seen light.
+    let off = dir.join("off.toml");
+    args2[6] = s(&off);
+    let mut args3 = args2[..args2.len() - 6].to_vec();
+    args3.extend(["--seen-lights", "off"]);
+    let o = inlay(&args3, &dir);
+    let text = common::output_text(&o);
+    assert!(
+        o.status.success() && !text.contains("known light"),
+        "{text}"
+    );
+    let off = inlay_passes::envest::load_environment_file(&off).unwrap();
+    assert!(off.seen_lights.is_empty() && off.lobes != lobes);
     // render lights the objects with it; a bad file is named.
     let out = dir.join("lit.png");
     let render = |env: &Path| {

@@ -72,6 +72,7 @@ fn validate_field(
         &knobs,
         &Default::default(),
         None,
+        &[],
         &|_, _, _, _| {},
     )
     .unwrap();

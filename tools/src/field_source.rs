@@ -194,7 +194,8 @@ pub fn scene_seen_lights(
         };
         eprintln!(
             "{count} that its photographs saw past the field's bounds {verb} drawn with it and \
-             light{} any objects where the scene names no environment file: {}",
+             light{} any objects (an environment file the scene names takes their place, and \
+             carries them when `estimate-env` took them as known): {}",
             if lights.len() == 1 { "s" } else { "" },
             file.display()
         );
@@ -367,12 +368,33 @@ look_at = [0.0, 0.0, 0.0]
         assert!(local.iter().all(|l| l.centre.x > 4.5 - most as f64));
         scene.seen_lights = vec![bulb];
         // An environment file lights the objects instead.
-        scene.object_environment = Some(inlay_passes::scene::ObjectEnvironment {
-            file: dir.join("env.toml"),
-            lobes: Vec::new(),
-            lights: Vec::new(),
-        });
+        scene.object_environment = Some(inlay_passes::scene::ObjectEnvironment::new(
+            dir.join("env.toml"),
+            Default::default(),
+        ));
         assert!(object_lights(&scene, glam::DVec3::ZERO, true).1.is_empty());
+        // One estimated with the seen lights known carries them: they
+        // light the objects from it, as balls beside its point lights.
+        let light = inlay_passes::envest::EstimatedLight {
+            lights: vec![inlay_passes::envest::PointLight {
+                position: glam::DVec3::new(0.0, 3.0, 1.0),
+                intensity: glam::DVec3::ONE,
+            }],
+            seen_lights: vec![bulb],
+            ..Default::default()
+        };
+        scene.object_environment = Some(inlay_passes::scene::ObjectEnvironment::new(
+            dir.join("env.toml"),
+            light,
+        ));
+        let (lobes, local) = object_lights(&scene, glam::DVec3::ZERO, true);
+        assert!(lobes.is_empty() && local.len() == 2);
+        assert_eq!(
+            (local[1].centre, local[1].radius),
+            (bulb.centre, bulb.radius)
+        );
+        let (lobes, none) = object_lights(&scene, glam::DVec3::ZERO, false);
+        assert!(none.is_empty() && lobes.len() == 2);
         // A bad file names itself and its key.
         let bad = seen_lights_text(&[bulb]).replace("radius = 0.03", "radius = 0.0");
         std::fs::write(&file, bad).unwrap();

@@ -11,7 +11,9 @@ use inlay_engine::{Context, ImageDesc, Readback, Renderer, SubmitSync};
 
 use super::fit::{fit_environment, FitData, FitResult};
 use super::knobs::EnvEstimateKnobs;
+use super::known_lights::known_irradiance;
 use super::near_field::{NearField, NearFieldTracer};
+use super::near_lights::PointLight;
 use super::outside_light::{keep_if_needed, OutsideLightTest};
 use super::quality::{view_quality, QualityScore, ViewImage};
 use super::surface::{
@@ -81,6 +83,9 @@ pub struct EnvEstimate {
     pub surface: SurfaceSample,
     /// Their near-field light.
     pub near: NearField,
+    /// The irradiance each point gets from the lights known beside the
+    /// field (empty when none were given).
+    pub known: Vec<glam::DVec3>,
     /// The fit and its lobes (black when the points need no light from
     /// outside the field: `outside`).
     pub fit: FitResult,
@@ -295,7 +300,8 @@ pub fn sample_surface(
 }
 
 /// Runs the whole estimate on `field`, its views from `source`, its
-/// surface points those `seen_from` saw (all without).
+/// surface points those `seen_from` saw (all without), the `known` lights
+/// beside it given ([`super::known_lights`]).
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_environment(
     ctx: &Arc<Context>,
@@ -305,6 +311,7 @@ pub fn estimate_environment(
     knobs: &EnvEstimateKnobs,
     source: &ViewSource,
     seen_from: Option<&Witnesses>,
+    known: &[PointLight],
     progress: Progress,
 ) -> anyhow::Result<EnvEstimate> {
     if let Some((k, m)) = knobs.problem() {
@@ -331,9 +338,11 @@ pub fn estimate_environment(
     )?;
     ctx.check_validation()?;
     let t2 = Instant::now();
+    let known = known_irradiance(&surface.points, &near, known);
     let data = FitData {
         points: &surface.points,
         near: &near,
+        known: &known,
         bounds: field.bounds,
     };
     let fit = fit_environment(&data, knobs, &|step, steps, loss| {
@@ -344,6 +353,7 @@ pub fn estimate_environment(
     Ok(EnvEstimate {
         surface,
         near,
+        known,
         fit,
         outside,
         seconds: [

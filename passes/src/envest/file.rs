@@ -1,6 +1,10 @@
 //! The environment file `inlay estimate-env` writes and scene files name
 //! (`[lighting] environment = "file"`): TOML holding SG lobes in the same
-//! form as a scene's `[environment] lobes`.
+//! form as a scene's `[environment] lobes`, the point lights the estimate
+//! placed near the field, and the lights the field's photographs saw past
+//! its bounds, which the estimate took as known (so that the file holds
+//! all the light from outside the field, and a scene that names it needs
+//! nothing else).
 //!
 //! ```toml
 //! format = "inlay-environment"   # required, exactly this
@@ -15,6 +19,10 @@
 //! [[lights]]                     # optional: point lights near the field
 //! position = [0.1, 2.9, 0.3]     # finite (scene units)
 //! intensity = [22.0, 20.0, 17.0] # RGB radiant intensity, finite, ≥ 0
+//! [[seen_lights]]                # optional: spheres seen past the bounds
+//! centre = [0.198, 2.894, 0.298] # finite (scene units)
+//! radius = 0.03                  # finite, > 0
+//! radiance = [7954, 7358, 6364]  # RGB radiance, finite, ≥ 0
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -22,16 +30,22 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::near_lights::PointLight;
+use crate::field::seen_lights::file::LightSpec;
+use crate::field::SeenLight;
 use crate::sg::Sg64;
 use crate::toml_file::{check_format, parse_toml};
 
-/// What an environment file holds: distant lobes and near point lights.
+/// What an environment file holds: distant lobes, near point lights and
+/// the lights seen past the field's bounds.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct EstimatedLight {
     /// The distant lobes.
     pub lobes: Vec<Sg64>,
     /// The point lights near the field.
     pub lights: Vec<PointLight>,
+    /// The lights the field's photographs saw past its bounds, taken as
+    /// known by the estimate.
+    pub seen_lights: Vec<SeenLight>,
 }
 
 /// The version this reader understands.
@@ -67,6 +81,8 @@ struct EnvFileSpec {
     lobes: Vec<Sg64>,
     #[serde(default)]
     lights: Vec<PointLight>,
+    #[serde(default)]
+    seen_lights: Vec<LightSpec>,
 }
 
 /// Why one lobe cannot be used, if it cannot (shared with scene files).
@@ -133,17 +149,24 @@ pub fn parse_environment_file(path: &Path, text: &str) -> Result<EstimatedLight,
             ));
         }
     }
+    let seen_lights = spec
+        .seen_lights
+        .into_iter()
+        .enumerate()
+        .map(|(i, l)| l.checked(&format!("seen_lights[{i}]")))
+        .collect::<Result<_, _>>()
+        .map_err(|(k, m)| e(&k, m))?;
     Ok(EstimatedLight {
         lobes,
         lights: spec.lights,
+        seen_lights,
     })
 }
 
-/// The text of an environment file for `lobes`, estimated from scene
+/// The text of an environment file for `light`, estimated from scene
 /// `source`, with `estimate` lines (`key = value` TOML) recording how.
 pub fn environment_file_text(
-    lobes: &[Sg64],
-    lights: &[PointLight],
+    light: &EstimatedLight,
     source: &str,
     estimate: &[(String, String)],
 ) -> String {
@@ -157,7 +180,7 @@ pub fn environment_file_text(
             s += &format!("{k} = {v}\n");
         }
     }
-    for l in lobes {
+    for l in &light.lobes {
         let d = l.direction;
         let a = l.amplitude;
         s += &format!(
@@ -165,11 +188,18 @@ pub fn environment_file_text(
             d.x, d.y, d.z, l.sharpness, a.x, a.y, a.z
         );
     }
-    for l in lights {
+    for l in &light.lights {
         let (p, i) = (l.position, l.intensity);
         s += &format!(
             "\n[[lights]]\nposition = [{:e}, {:e}, {:e}]\nintensity = [{:e}, {:e}, {:e}]\n",
             p.x, p.y, p.z, i.x, i.y, i.z
+        );
+    }
+    for l in &light.seen_lights {
+        let (c, r) = (l.centre, l.radiance);
+        s += &format!(
+            "\n[[seen_lights]]\ncentre = [{:e}, {:e}, {:e}]\nradius = {:e}\nradiance = [{:e}, {:e}, {:e}]\nviews = {}\nresidual = {:e}\n",
+            c.x, c.y, c.z, l.radius, r.x, r.y, r.z, l.views, l.residual
         );
     }
     s

@@ -2,7 +2,8 @@
 //! (METHOD.md eq. 3): minimise the mean squared difference, over surface
 //! points and RGB, between each point's radiance and the Lambertian
 //! L_o(x) = a(x)/π · (E_nerf(x) + E_env(x)), by Adam on random batches of
-//! points, E_env importance sampled afresh every step
+//! points (E_nerf joined by the light of any lights known beside the
+//! field, [`super::known_lights`]), E_env importance sampled afresh every step
 //! ([`super::env_model`]). The step sizes decay exponentially to a tenth
 //! over the run. Beyond the paper, the loss gains a prior on the
 //! environment's share of the points' irradiance ([`super::share_prior`]),
@@ -87,8 +88,9 @@ fn point_loss(
     let term_a = env_term(env_lobes, sampler, p.normal, half, &visibility, rng);
     let term_b = env_term(env_lobes, sampler, p.normal, half, &visibility, rng);
     let near_light = near_term(lights, p.position, p.normal, &visibility);
-    let e_a = data.near.irradiance[i] + term_a.irradiance + near_light.irradiance;
-    let e_b = data.near.irradiance[i] + term_b.irradiance + near_light.irradiance;
+    let given = data.given(i);
+    let e_a = given + term_a.irradiance + near_light.irradiance;
+    let e_b = given + term_b.irradiance + near_light.irradiance;
     let a = trace.albedo;
     let inv_pi = 1.0 / std::f64::consts::PI;
     let r_a = a * e_a * inv_pi - p.radiance;
@@ -111,7 +113,7 @@ fn point_loss(
             // Each half's gradient scaled by the slope the other half sees,
             // so the noise of the two does not multiply. The near lights
             // are hidden light too: they count in the share.
-            let near = luminance(data.near.irradiance[i]);
+            let near = luminance(given);
             let lit = luminance(near_light.irradiance);
             let slope_a = prior.slope(near, luminance(term_a.irradiance) + lit);
             let slope_b = prior.slope(near, luminance(term_b.irradiance) + lit);

@@ -5,7 +5,9 @@
 //! its CPU mirror [`near_field_reference`], the ray set [`hemisphere`]),
 //! and the joint Adam fit of a 6-layer albedo MLP ([`mlp`]) and M SG lobes
 //! ([`env_model`], [`fit`], with [`share_prior`] and [`prune`]), kept only
-//! when the points need light from outside the field ([`outside_light`]);
+//! when the points need light from outside the field ([`outside_light`]),
+//! the lights the field's photographs saw past its bounds given, not
+//! fitted ([`known_lights`]);
 //! [`witnesses`] keeps a trained field's points to what its photographs
 //! saw; `estimate` runs them in order, `file` stores the lobes, and
 //! [`truth`] checks them against a recipe's lights ([`recovery`]: did it
@@ -19,6 +21,7 @@ pub mod fit;
 pub mod fit_data;
 pub mod hemisphere;
 pub mod knobs;
+pub mod known_lights;
 pub mod mlp;
 pub mod near_field;
 pub mod near_field_reference;

@@ -242,7 +242,7 @@ pub const MIN_LIGHT_SHARE: f64 = 0.01;
 pub fn prune_dim(data: &super::fit_data::FitData, lights: Vec<PointLight>) -> Vec<PointLight> {
     use crate::sgfit::model::luminance;
     let n = data.points.len().max(1) as f64;
-    let reference = super::fit_data::mean_near_luminance(data);
+    let reference = super::fit_data::mean_given_luminance(data);
     lights
         .into_iter()
         .filter(|l| {

@@ -2,12 +2,13 @@
 //! only the model's misfit asks for (not in the paper): a charge on the
 //! environment's share of each surface point's irradiance.
 
-use super::fit_data::{mean_luminance, mean_near_luminance, FitData};
+use super::fit_data::{mean_given_luminance, mean_luminance, FitData};
 
 /// The prior that keeps out of the environment light which only the
 /// model's misfit asks for: the loss gains `weight`·s̄, the mean over
 /// points of the environment's share of each point's irradiance,
-/// s = Y(E_env)/(Y(E_nerf) + Y(E_env) + ε) in luminance Y.
+/// s = Y(E_env)/(Y(E_nerf) + Y(E_env) + ε) in luminance Y (E_nerf with
+/// the known lights' light, [`FitData::given`]).
 ///
 /// The share, unlike the light's energy, is blind to where the light comes
 /// from and how much of it there is once it dominates: a point that the
@@ -28,7 +29,7 @@ pub struct SharePrior {
 impl SharePrior {
     /// The prior for knob `kappa` on `data`.
     pub fn new(kappa: f64, data: &FitData) -> Self {
-        let mean_near = mean_near_luminance(data);
+        let mean_near = mean_given_luminance(data);
         let mean = mean_luminance(data.points);
         Self {
             weight: kappa * mean * mean,

@@ -479,7 +479,8 @@ pub fn sharp_limit(knobs: &ProbeKnobs) -> f64 {
 
 /// The distant light L_env an object at `at` is lit with, as SG lobes:
 /// the environment file's if the scene names one (its near point
-/// lights as lobes seen from `at`); otherwise, for a
+/// lights and the lights seen past the bounds it was estimated with as
+/// lobes seen from `at`); otherwise, for a
 /// recipe, the whole light from outside the field — the declared
 /// environment and every emitter outside the bounds as a lobe seen
 /// from `at` ([`crate::envest::hidden_light_lobes`]), since an object in
@@ -499,6 +500,7 @@ pub fn object_light_lobes(scene: &Scene, at: DVec3) -> Vec<Sg64> {
                     .iter()
                     .map(|l| l.lobe_from(at, crate::sgfit::model::MAX_SHARPNESS)),
             )
+            .chain(o.seen_lights.iter().map(|l| seen_light_lobe(l, at)))
             .collect(),
         (None, Some(r)) => crate::envest::hidden_light_lobes(
             r,
@@ -527,8 +529,10 @@ fn seen_light_lobe(l: &crate::field::SeenLight, at: DVec3) -> Sg64 {
 /// The light an object at `at` is lit with from outside the field, split
 /// for shading: distant lobes, and the lights with a position, shaded per
 /// pixel as local lights ([`local`]) when `local` is on: a recipe's
-/// hidden balls (a ceiling bulb), an environment file's point lights, and
-/// a field file's lights seen past its bounds ([`Scene::seen_lights`]).
+/// hidden balls (a ceiling bulb), an environment file's point lights and
+/// the seen lights it was estimated with, and a field file's lights seen
+/// past its bounds ([`Scene::seen_lights`]) where no environment file is
+/// named.
 /// Seen from one point, a bulb 1.5 m above a 50 cm object comes from one
 /// direction at one distance; per pixel its direction, its fall-off and
 /// the field between are each point's own. With `local` off, all of it is
@@ -539,13 +543,17 @@ pub fn object_lights(scene: &Scene, at: DVec3, local: bool) -> (Vec<Sg64>, Vec<L
         return (object_light_lobes(scene, at), Vec::new());
     }
     match (&scene.object_environment, scene.recipe()) {
-        (Some(o), _) => (
-            o.lobes.clone(),
-            o.lights
+        (Some(o), _) => {
+            let mut balls: Vec<LocalLight> = o
+                .lights
                 .iter()
                 .map(|l| LocalLight::known_point(l.position, l.intensity))
-                .collect(),
-        ),
+                .collect();
+            let room = (local::MAX_LOCAL_LIGHTS as usize).saturating_sub(balls.len());
+            let (lobes, seen) = seen_lights_split(&o.seen_lights, at, room);
+            balls.extend(seen);
+            (o.lobes.iter().copied().chain(lobes).collect(), balls)
+        }
         (None, Some(r)) => {
             let ball = |p: &crate::scene::Primitive| match p.shape {
                 Shape::Sphere { centre, radius } => {
@@ -564,24 +572,35 @@ pub fn object_lights(scene: &Scene, at: DVec3, local: bool) -> (Vec<Sg64>, Vec<L
             (lobes, outside.into_iter().filter_map(ball).collect())
         }
         (None, None) => {
-            // The brightest seen lights as local lights, as many as are
-            // shaded; any more as lobes seen from `at`.
-            let mut seen: Vec<_> = scene.seen_lights.iter().collect();
-            let power =
-                |l: &&crate::field::SeenLight| crate::sgfit::model::luminance(l.intensity());
-            seen.sort_by(|a, b| power(b).total_cmp(&power(a)));
-            let (near, far) = seen.split_at(seen.len().min(local::MAX_LOCAL_LIGHTS as usize));
+            let room = local::MAX_LOCAL_LIGHTS as usize;
+            let (lobes, balls) = seen_lights_split(&scene.seen_lights, at, room);
             let lobes = environment_lobes(&scene.environment)
                 .into_iter()
-                .chain(far.iter().map(|l| seen_light_lobe(l, at)))
-                .collect();
-            let balls = near
-                .iter()
-                .map(|l| LocalLight::known_ball(l.centre, l.radius, l.radiance))
+                .chain(lobes)
                 .collect();
             (lobes, balls)
         }
     }
+}
+
+/// Lights seen past a field's bounds, for an object at `at`: the brightest
+/// `room` as local lights (balls), any more as lobes seen from `at` (a
+/// capture with many lamps is lit, not refused).
+fn seen_lights_split(
+    seen: &[crate::field::SeenLight],
+    at: DVec3,
+    room: usize,
+) -> (Vec<Sg64>, Vec<LocalLight>) {
+    let mut seen: Vec<_> = seen.iter().collect();
+    let power = |l: &&crate::field::SeenLight| crate::sgfit::model::luminance(l.intensity());
+    seen.sort_by(|a, b| power(b).total_cmp(&power(a)));
+    let (near, far) = seen.split_at(seen.len().min(room));
+    let lobes = far.iter().map(|l| seen_light_lobe(l, at)).collect();
+    let balls = near
+        .iter()
+        .map(|l| LocalLight::known_ball(l.centre, l.radius, l.radiance))
+        .collect();
+    (lobes, balls)
 }
 
 /// The distant light L_env as M SG lobes from a scene's declared

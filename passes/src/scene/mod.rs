@@ -202,6 +202,21 @@ pub struct ObjectEnvironment {
     pub lobes: Vec<crate::sg::Sg64>,
     /// Its point lights near the field.
     pub lights: Vec<crate::envest::PointLight>,
+    /// The lights seen past the field's bounds that it was estimated with
+    /// (it holds them, so that a scene naming it needs no lights file).
+    pub seen_lights: Vec<crate::field::SeenLight>,
+}
+
+impl ObjectEnvironment {
+    /// The light read from environment file `file`.
+    pub fn new(file: PathBuf, light: crate::envest::EstimatedLight) -> Self {
+        Self {
+            file,
+            lobes: light.lobes,
+            lights: light.lights,
+            seen_lights: light.seen_lights,
+        }
+    }
 }
 
 /// An object's files, as the scene names them.
@@ -525,11 +540,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             let file = dir.join(file);
             let light = crate::envest::load_environment_file(&file)
                 .map_err(|x| e("lighting.environment", x.to_string()))?;
-            Some(ObjectEnvironment {
-                file,
-                lobes: light.lobes,
-                lights: light.lights,
-            })
+            Some(ObjectEnvironment::new(file, light))
         }
     };
     let shading = ShadingKnobs {

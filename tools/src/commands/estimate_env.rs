@@ -12,11 +12,12 @@ use std::sync::Arc;
 use clap::Args;
 use glam::DVec3;
 use inlay_engine::{Context, HdrImage};
+use inlay_passes::envest::known_lights::as_point_lights;
 use inlay_passes::envest::recovery::SEARCH_CONE_DEGREES;
 use inlay_passes::envest::PointLight;
 use inlay_passes::envest::{
     emitter_recovery, environment_file_text, estimate_environment, field_light_irradiance,
-    hidden_light_lobes, EnvEstimateKnobs, Stage, Validation, ViewSource,
+    hidden_light_lobes, EnvEstimateKnobs, EstimatedLight, Stage, Validation, ViewSource,
 };
 use inlay_passes::envest::{SurfaceNormals, SurfaceTest, Witness, Witnesses};
 use inlay_passes::field::{perturb, GpuGridField, Perturbation};
@@ -25,7 +26,7 @@ use inlay_passes::scene::{load_scene, ObjectEnvironment, Scene};
 use inlay_passes::sg::Sg64;
 use inlay_passes::sgfit::model::luminance;
 
-use crate::field_source::{progress_bar, scene_field};
+use crate::field_source::{progress_bar, scene_field, scene_seen_lights};
 use crate::headless::run_headless;
 use crate::insertion_view::InsertionView;
 use crate::outputs::{check_image_output, check_output, Outputs};
@@ -167,6 +168,13 @@ pub struct EstimateEnvArgs {
     /// Seed of every random choice.
     #[arg(long, default_value_t = EnvEstimateKnobs::default().seed)]
     pub seed: u64,
+    /// Take the lights the field's photographs saw past its bounds
+    /// (FIELD.lights.toml beside a trained field, `inlay train`) as known
+    /// (`on`): the estimate fits only the light no photograph saw, and the
+    /// environment file carries them with it. `off` estimates all the light
+    /// from outside the field, those lights included.
+    #[arg(long, value_parser = super::train::parse_on_off, default_value = "on", action = clap::ArgAction::Set)]
+    pub seen_lights: bool,
     /// Render the objects lit by the true hidden light and by the estimate, side by side, to this image.
     #[arg(long)]
     pub compare: Option<PathBuf>,
@@ -350,6 +358,19 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             p.noise, p.floaters, p.see_through, p.seed
         );
     }
+    let seen = if args.seen_lights {
+        scene_seen_lights(&scene, args.field.as_deref())?
+    } else {
+        Vec::new()
+    };
+    let known = as_point_lights(&seen);
+    for l in &known {
+        println!(
+            "known light (seen past the field's bounds) at {:.3} {:.3} {:.3}, intensity {:.4} {:.4} {:.4}: \
+             its light is given to the fit, not estimated (--seen-lights off estimates it too)",
+            l.position.x, l.position.y, l.position.z, l.intensity.x, l.intensity.y, l.intensity.z
+        );
+    }
     let lib = inlay_passes::shaders::library()?;
     let bars = [
         progress_bar("views", knobs.views as u64),
@@ -379,6 +400,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         &knobs,
         &source,
         seen_from.as_ref(),
+        &known,
         &progress,
     )?;
     bars.iter().for_each(|b| b.finish_and_clear());
@@ -444,8 +466,12 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             knobs.min_loss_gain
         ),
         (Some(g), false) => println!(
-            "light from outside the field: not needed (the points' loss without it, the albedo fitted alone, is {g:.3}× the estimate's, under {}×): the environment is black",
-            knobs.min_loss_gain
+            "light from outside the field: not needed (the points' loss without it, the albedo fitted alone, is {g:.3}× the estimate's, under {}×): the environment is black{}",
+            knobs.min_loss_gain,
+            match seen.len() {
+                0 => String::new(),
+                n => format!(" beyond the {n} known light(s)"),
+            }
         ),
         (None, _) => println!("light from outside the field: kept without asking (--min-loss-gain 0)"),
     }
@@ -476,6 +502,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
             },
         ),
         ("lobes_kept".to_string(), lobes.len().to_string()),
+        ("seen_lights_known".to_string(), seen.len().to_string()),
         (
             "loss_gain_of_outside_light".to_string(),
             outside
@@ -492,7 +519,12 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         ),
     ];
     let mut outputs = Outputs::new();
-    let text = environment_file_text(lobes, &estimate.fit.lights, &scene.name, &record);
+    let light = EstimatedLight {
+        lobes: lobes.clone(),
+        lights: estimate.fit.lights.clone(),
+        seen_lights: seen.clone(),
+    };
+    let text = environment_file_text(&light, &scene.name, &record);
     outputs.bytes(&out, text.as_bytes())?;
     let (image, exposure) = equirect_picture(lobes, 256, 128);
     outputs.image(&picture, &image, exposure)?;
@@ -503,8 +535,9 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         );
     }
     if let Some(recipe) = scene.recipe() {
-        let lights = &estimate.fit.lights;
-        let v = Validation::with_lights(&scene, recipe, lobes, lights, 4096, knobs.seed);
+        // The known lights stand in the estimate beside its own.
+        let lights: Vec<PointLight> = estimate.fit.lights.iter().chain(&known).copied().collect();
+        let v = Validation::with_lights(&scene, recipe, lobes, &lights, 4096, knobs.seed);
         println!(
             "against the recipe's lights at {} test points: hidden-light irradiance error {:.1} %, \
              estimate = {:.2} % of all the lights' irradiance",
@@ -519,13 +552,13 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
                 o.sphere().0
             });
         print_true_light_loss(&estimate, &field, &knobs, recipe, &scene, at);
-        // The near lights count as lobes seen from the object.
-        let seen: Vec<Sg64> = lobes
+        // The near and known lights count as lobes seen from the object.
+        let as_lobes: Vec<Sg64> = lobes
             .iter()
             .copied()
             .chain(lights.iter().map(|l| l.lobe_from(at, 1e4)))
             .collect();
-        for r in emitter_recovery(recipe, &seen, at) {
+        for r in emitter_recovery(recipe, &as_lobes, at) {
             let here = format!(
                 "hidden light `{}` seen from {:.2} {:.2} {:.2}",
                 r.name, at.x, at.y, at.z
@@ -589,8 +622,7 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(path) = &args.compare {
-        let lights = &estimate.fit.lights;
-        let image = compare(ctx, args, &scene, &field, lobes, lights, path)?;
+        let image = compare(ctx, args, &scene, &field, light, path)?;
         outputs.image(path, &image, 1.0)?;
     }
     outputs.commit(Some(ctx))?;
@@ -639,16 +671,11 @@ fn render_with(
     args: &EstimateEnvArgs,
     scene: &Scene,
     field: &inlay_passes::field::GridField,
-    lobes: Vec<Sg64>,
-    lights: Vec<PointLight>,
+    light: EstimatedLight,
     what: &str,
 ) -> anyhow::Result<HdrImage> {
     let mut scene = scene.clone();
-    scene.object_environment = Some(ObjectEnvironment {
-        file: PathBuf::from(what),
-        lobes,
-        lights,
-    });
+    scene.object_environment = Some(ObjectEnvironment::new(PathBuf::from(what), light));
     let gpu_field = GpuGridField::upload(ctx, field)?;
     let library = gpu_field.library(&inlay_passes::shaders::library()?);
     let camera = scene.camera(&args.camera)?.clone();
@@ -679,8 +706,7 @@ fn compare(
     args: &EstimateEnvArgs,
     scene: &Scene,
     field: &inlay_passes::field::GridField,
-    lobes: &[Sg64],
-    lights: &[PointLight],
+    estimate: EstimatedLight,
     path: &Path,
 ) -> anyhow::Result<HdrImage> {
     let recipe = scene.recipe().ok_or_else(|| {
@@ -696,24 +722,12 @@ fn compare(
     );
     let at = scene.objects.iter().map(|o| o.sphere().0).sum::<DVec3>() / scene.objects.len() as f64;
     let truth = hidden_light_lobes(recipe, &scene.environment, at, 1e4);
-    let a = render_with(
-        ctx,
-        args,
-        scene,
-        field,
-        truth,
-        Vec::new(),
-        "the recipe's hidden light",
-    )?;
-    let b = render_with(
-        ctx,
-        args,
-        scene,
-        field,
-        lobes.to_vec(),
-        lights.to_vec(),
-        "the estimate",
-    )?;
+    let truth = EstimatedLight {
+        lobes: truth,
+        ..Default::default()
+    };
+    let a = render_with(ctx, args, scene, field, truth, "the recipe's hidden light")?;
+    let b = render_with(ctx, args, scene, field, estimate, "the estimate")?;
     let (w, h) = (a.width, a.height);
     let mut pixels = Vec::with_capacity((3 * w * h) as usize);
     let (mut diff, mut total, mut sq) = (0.0f64, 0.0f64, 0.0f64);
@@ -771,14 +785,21 @@ fn print_true_light_loss(
 ) {
     use inlay_passes::envest::outside_light::loss_under;
     use inlay_passes::envest::{hidden_light_model, FitData};
-    let data = FitData {
+    // The recipe's hidden light stands alone; the estimate's beside the
+    // known lights it was given.
+    let bare = FitData {
         points: &estimate.surface.points,
         near: &estimate.near,
+        known: &[],
         bounds: field.bounds,
     };
+    let given = FitData {
+        known: &estimate.known,
+        ..bare
+    };
     let (lobes, lights) = hidden_light_model(recipe, &scene.environment, at, knobs.max_sharpness);
-    let truth = loss_under(&data, knobs, &lobes, &lights);
-    let own = loss_under(&data, knobs, &estimate.fit.lobes, &estimate.fit.lights);
+    let truth = loss_under(&bare, knobs, &lobes, &lights);
+    let own = loss_under(&given, knobs, &estimate.fit.lobes, &estimate.fit.lights);
     // The exact losses are unbiased estimates and can dip below zero on a
     // near-exact fit; the two within 5 % are read as alike.
     let ratio = truth / own;

@@ -233,16 +233,16 @@ pub fn run(ctx: &Arc<Context>, args: &FidelityArgs) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("--environment: {e}"))?;
         writeln!(
             md,
-            "The objects' distant light: `{}` ({} lobes, {} point lights).\n",
+            "The objects' distant light: `{}` ({} lobes, {} point lights, {} lights seen past the bounds).\n",
             file.display(),
             light.lobes.len(),
-            light.lights.len()
+            light.lights.len(),
+            light.seen_lights.len()
         )?;
-        lit.object_environment = Some(inlay_passes::scene::ObjectEnvironment {
-            file: file.clone(),
-            lobes: light.lobes,
-            lights: light.lights,
-        });
+        lit.object_environment = Some(inlay_passes::scene::ObjectEnvironment::new(
+            file.clone(),
+            light,
+        ));
     }
     let library = inlay_passes::shaders::library()?;
     // Probe irradiance per object.

@@ -201,11 +201,7 @@ pub fn run(ctx: &Arc<Context>, args: &ProfileArgs) -> anyhow::Result<()> {
     let mut scene = load_scene(&args.scene)?;
     if let Some(file) = &args.environment {
         let light = load_environment_file(file)?;
-        scene.object_environment = Some(ObjectEnvironment {
-            lobes: light.lobes,
-            lights: light.lights,
-            file: file.clone(),
-        });
+        scene.object_environment = Some(ObjectEnvironment::new(file.clone(), light));
     }
     if args.no_shadows {
         scene.shadows.self_shadow = false;

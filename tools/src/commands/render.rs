@@ -120,11 +120,7 @@ pub fn run(ctx: &Arc<Context>, args: &RenderArgs) -> anyhow::Result<()> {
     }
     if let Some(file) = &args.environment {
         let light = load_environment_file(file)?;
-        scene.object_environment = Some(ObjectEnvironment {
-            lobes: light.lobes,
-            lights: light.lights,
-            file: file.clone(),
-        });
+        scene.object_environment = Some(ObjectEnvironment::new(file.clone(), light));
     }
     scene.shading.ndf_lobes = args.ndf_lobes.unwrap_or(scene.shading.ndf_lobes);
     scene.shading.field_light = args.field_light.unwrap_or(scene.shading.field_light);

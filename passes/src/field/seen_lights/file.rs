@@ -44,9 +44,12 @@ pub struct SeenLightsError {
     pub message: String,
 }
 
+/// One light as a file holds it: the seen-lights file's `[[lights]]`,
+/// and the environment file's `[[seen_lights]]` (the lights an estimate
+/// took as known).
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct LightSpec {
+pub(crate) struct LightSpec {
     #[serde(deserialize_with = "crate::scene::vec3::exact")]
     centre: DVec3,
     radius: f64,
@@ -56,6 +59,53 @@ struct LightSpec {
     views: usize,
     #[serde(default)]
     residual: f64,
+}
+
+impl LightSpec {
+    /// How `l` is written.
+    pub(crate) fn of(l: &SeenLight) -> Self {
+        Self {
+            centre: l.centre,
+            radius: l.radius,
+            radiance: l.radiance,
+            views: l.views,
+            residual: l.residual,
+        }
+    }
+
+    /// The light, or the key (under `prefix`) that is wrong and why.
+    pub(crate) fn checked(self, prefix: &str) -> Result<SeenLight, (String, String)> {
+        let key = |k: &str| format!("{prefix}.{k}");
+        if !self.centre.is_finite() {
+            return Err((key("centre"), "must be finite".into()));
+        }
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err((
+                key("radius"),
+                format!("{} must be finite and > 0", self.radius),
+            ));
+        }
+        if !(self.radiance.is_finite() && self.radiance.min_element() >= 0.0) {
+            return Err((key("radiance"), "must be finite and ≥ 0".into()));
+        }
+        if self.radiance.max_element() > crate::scene::RADIANCE_LIMIT {
+            return Err((
+                key("radiance"),
+                format!(
+                    "{} is above the radiance limit {:e}",
+                    self.radiance,
+                    crate::scene::RADIANCE_LIMIT
+                ),
+            ));
+        }
+        Ok(SeenLight {
+            centre: self.centre,
+            radius: self.radius,
+            radiance: self.radiance,
+            views: self.views,
+            residual: self.residual,
+        })
+    }
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -72,16 +122,7 @@ pub fn seen_lights_text(lights: &[SeenLight]) -> String {
     let spec = FileSpec {
         format: SEEN_LIGHTS_FORMAT.into(),
         version: SEEN_LIGHTS_VERSION,
-        lights: lights
-            .iter()
-            .map(|l| LightSpec {
-                centre: l.centre,
-                radius: l.radius,
-                radiance: l.radiance,
-                views: l.views,
-                residual: l.residual,
-            })
-            .collect(),
+        lights: lights.iter().map(LightSpec::of).collect(),
     };
     toml::to_string(&spec).expect("plain numbers and strings serialise")
 }
@@ -115,36 +156,8 @@ pub fn parse_seen_lights(path: &Path, text: &str) -> Result<Vec<SeenLight>, Seen
         .into_iter()
         .enumerate()
         .map(|(i, l)| {
-            let key = |k: &str| format!("lights[{i}].{k}");
-            if !l.centre.is_finite() {
-                return Err(e(&key("centre"), "must be finite".into()));
-            }
-            if !(l.radius.is_finite() && l.radius > 0.0) {
-                return Err(e(
-                    &key("radius"),
-                    format!("{} must be finite and > 0", l.radius),
-                ));
-            }
-            if !(l.radiance.is_finite() && l.radiance.min_element() >= 0.0) {
-                return Err(e(&key("radiance"), "must be finite and ≥ 0".into()));
-            }
-            if l.radiance.max_element() > crate::scene::RADIANCE_LIMIT {
-                return Err(e(
-                    &key("radiance"),
-                    format!(
-                        "{} is above the radiance limit {:e}",
-                        l.radiance,
-                        crate::scene::RADIANCE_LIMIT
-                    ),
-                ));
-            }
-            Ok(SeenLight {
-                centre: l.centre,
-                radius: l.radius,
-                radiance: l.radiance,
-                views: l.views,
-                residual: l.residual,
-            })
+            l.checked(&format!("lights[{i}]"))
+                .map_err(|(k, m)| e(&k, m))
         })
         .collect()
 }
