@@ -43,7 +43,7 @@ pub fn find_and_mask(
         );
     }
     let masked = mask_seen_lights(dataset, &found.lights, &training);
-    for l in &found.lights {
+    for (l, &saturated) in found.lights.iter().zip(&found.saturated) {
         let (c, e) = (l.centre, l.radiance);
         eprintln!(
             "light past the bounds: a sphere at ({:.3}, {:.3}, {:.3}), radius {:.4}, radiance \
@@ -61,6 +61,13 @@ pub fn find_and_mask(
             scale,
             100.0 * l.residual
         );
+        if saturated > 0 {
+            eprintln!(
+                "  warning: {saturated} of its pixels saturated in every exposure: its radiance is \
+                 a lower bound (what its recorded pixels and those say it is at least); a shorter \
+                 bracket would record it"
+            );
+        }
         if let Some(r) = recipe {
             against_recipe(l, r);
         }

@@ -13,7 +13,7 @@ pub const MAX_BLOB_SHARE: f64 = 0.01;
 /// One bright spot of a frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Blob {
-    /// Its frame (index into the dataset's frames).
+    /// Its frame (index into the frames searched).
     pub frame: u32,
     /// Its pixels (row-major indices).
     pub pixels: Vec<u32>,
@@ -33,12 +33,13 @@ pub fn radiance_at(frame: &Frame, p: u32) -> DVec3 {
 }
 
 /// The bright spots of `frame` (frame index `f`): groups of 8-connected
-/// pixels that are values (not bounds, not masked) with luminance at least
-/// `threshold`, at most [`MAX_BLOB_SHARE`] of the image each.
+/// pixels with luminance at least `threshold`, values or lower bounds (a
+/// light's core that saturated every exposure is at least that bright),
+/// not masked, at most [`MAX_BLOB_SHARE`] of the image each.
 pub fn bright_blobs(frame: &Frame, f: u32, threshold: f64) -> Vec<Blob> {
     let (w, h) = (frame.image.width, frame.image.height);
     let bright = |p: u32| {
-        frame.image.state[p as usize] == PixelState::Value
+        frame.image.state[p as usize] != PixelState::Masked
             && luminance(radiance_at(frame, p)) >= threshold
     };
     let mut seen = vec![false; (w * h) as usize];

@@ -1,11 +1,14 @@
 //! A light's radius and radiance from the pixels around its spots: each
 //! pixel reads the background plus the light's radiance times the share of
 //! the pixel its disc covers; the radiance follows from a radius in closed
-//! form, and the radius is the one whose coverage fits best.
+//! form, and the radius is the one whose coverage fits best. Pixels that
+//! saturated in every exposure (lower bounds) take no part in the fit, but
+//! the radiance is raised, where needed, to what the mostly covered ones
+//! among them say it is at least.
 
 use glam::DVec3;
 
-use crate::dataset::{Dataset, PixelState};
+use crate::dataset::{Frame, PixelState};
 use crate::field::seen_lights::sphere_hit;
 use crate::geometry::Ray;
 use crate::sgfit::model::luminance;
@@ -25,11 +28,16 @@ pub const WINDOW_PIXELS: u32 = 2;
 const RADII: usize = 48;
 
 /// One pixel near a spot: its rays over its area, and its reading less the
-/// background around the spot.
+/// background around the spot (for a lower bound, at least that).
 struct Reading {
     rays: Vec<Ray>,
     excess: DVec3,
 }
+
+/// A lower bound's pixel tells the radiance where the disc covers at least
+/// this share of it (less covered, an error in the coverage would ask for
+/// far too much light).
+pub const BOUND_COVERAGE: f64 = 0.5;
 
 /// The share of `rays` that meet the sphere.
 fn coverage(rays: &[Ray], centre: DVec3, radius: f64) -> f64 {
@@ -50,9 +58,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The pixels of `blob`'s window, each read less the median of the ring
-/// around the window (per channel).
-fn readings(dataset: &Dataset, blob: &Blob) -> Vec<Reading> {
-    let frame = &dataset.frames[blob.frame as usize];
+/// around the window (per channel): the values, and the lower bounds.
+fn readings_of(frame: &Frame, blob: &Blob) -> (Vec<Reading>, Vec<Reading>) {
     let (w, h) = (frame.image.width as i64, frame.image.height as i64);
     let (x0, y0, x1, y1) = blob.bbox;
     let grow = |g: i64| {
@@ -68,11 +75,15 @@ fn readings(dataset: &Dataset, blob: &Blob) -> Vec<Reading> {
     let window = grow(WINDOW_PIXELS as i64);
     let ring = grow(2 * WINDOW_PIXELS as i64 + 1);
     let mut bg: [Vec<f64>; 3] = Default::default();
-    let mut kept = Vec::new();
+    let (mut kept, mut bounds) = (Vec::new(), Vec::new());
     for y in ring.1..=ring.3 {
         for x in ring.0..=ring.2 {
             let p = (y * w + x) as u32;
-            if frame.image.state[p as usize] != PixelState::Value {
+            let state = frame.image.state[p as usize];
+            if state == PixelState::LowerBound && inside(window, x, y) {
+                bounds.push(p);
+            }
+            if state != PixelState::Value {
                 continue;
             }
             if inside(window, x, y) {
@@ -96,16 +107,20 @@ fn readings(dataset: &Dataset, blob: &Blob) -> Vec<Reading> {
             )
         })
         .collect();
-    kept.into_iter()
-        .filter_map(|p| {
-            let rays: Option<Vec<Ray>> =
-                offsets.iter().map(|&o| pixel_ray_at(frame, p, o)).collect();
-            Some(Reading {
-                rays: rays?,
-                excess: radiance_at(frame, p) - background,
+    let read = |pixels: Vec<u32>| -> Vec<Reading> {
+        pixels
+            .into_iter()
+            .filter_map(|p| {
+                let rays: Option<Vec<Ray>> =
+                    offsets.iter().map(|&o| pixel_ray_at(frame, p, o)).collect();
+                Some(Reading {
+                    rays: rays?,
+                    excess: radiance_at(frame, p) - background,
+                })
             })
-        })
-        .collect()
+            .collect()
+    };
+    (read(kept), read(bounds))
 }
 
 /// A light's fitted size and radiance.
@@ -118,21 +133,31 @@ pub struct SizeAndRadiance {
     /// The share of the window pixels' excess luminance (squared) the fit
     /// leaves unexplained (0 a perfect fit).
     pub residual: f64,
+    /// The window pixels that saturated in every exposure: where any, the
+    /// radiance is at least what the values and these say, and may be more.
+    pub saturated: usize,
 }
 
 /// The radius in `[smallest, largest]` and the radiance of a sphere at
 /// `centre` that best explain the windows around `blobs`: at each radius
 /// the radiance that gives the windows' excess light, and the radius whose
 /// coverage fits the pixels best (least squares in luminance); each
-/// channel the same way. None where no radius covers any pixel.
+/// channel the same way, then raised where a lower bound's pixel the disc
+/// mostly covers ([`BOUND_COVERAGE`]) asks for more. `blobs` index
+/// `frames`. None where no radius covers any value's pixel.
 pub fn fit_size_and_radiance(
-    dataset: &Dataset,
+    frames: &[&Frame],
     blobs: &[&Blob],
     centre: DVec3,
     smallest: f64,
     largest: f64,
 ) -> Option<SizeAndRadiance> {
-    let readings: Vec<Reading> = blobs.iter().flat_map(|b| readings(dataset, b)).collect();
+    let (mut readings, mut bounds) = (Vec::new(), Vec::new());
+    for b in blobs {
+        let (values, lower) = readings_of(frames[b.frame as usize], b);
+        readings.extend(values);
+        bounds.extend(lower);
+    }
     let excess: Vec<f64> = readings.iter().map(|r| luminance(r.excess)).collect();
     let total: f64 = excess.iter().map(|e| e * e).sum();
     // Σ (e − L·cov)² at radius r, with L = Σ e / Σ cov: the light the
@@ -185,9 +210,27 @@ pub fn fit_size_and_radiance(
     let (err, _, cov) = error(radius)?;
     let sum_c: f64 = cov.iter().sum();
     let channel = |k: usize| (readings.iter().map(|r| r.excess[k]).sum::<f64>() / sum_c).max(0.0);
+    let mut radiance = DVec3::new(channel(0), channel(1), channel(2));
+    // What each mostly covered lower bound asks for at least.
+    let needed = bounds
+        .iter()
+        .filter_map(|b| {
+            let c = coverage(&b.rays, centre, radius);
+            (c >= BOUND_COVERAGE).then(|| luminance(b.excess) / c)
+        })
+        .fold(0.0, f64::max);
+    let have = luminance(radiance);
+    if needed > have {
+        radiance = if have > 0.0 {
+            radiance * (needed / have)
+        } else {
+            DVec3::splat(needed)
+        };
+    }
     Some(SizeAndRadiance {
         radius,
-        radiance: DVec3::new(channel(0), channel(1), channel(2)),
+        radiance,
         residual: if total > 0.0 { err / total } else { 0.0 },
+        saturated: bounds.len(),
     })
 }

@@ -7,7 +7,8 @@
 //! renders: ROOM's Cycles view 24 holds 95 % of its light in its bulb's
 //! 20 pixels (`docs/benchmarks.md`, issue 25's twenty-ninth pass).
 //!
-//! Each is found from the training photographs alone: bright spots
+//! Each is found from the training photographs alone, one image per pose
+//! (a pose's exposure brackets merged, [`merge`]): bright spots
 //! ([`blobs`]) whose rays meet in one point in several views
 //! ([`triangulate`]), and a sphere whose coverage of the pixels around the
 //! spots explains their light ([`fit`]). A meeting point within the bounds
@@ -18,6 +19,7 @@
 
 pub mod blobs;
 pub mod fit;
+pub mod merge;
 #[cfg(test)]
 mod tests;
 pub mod triangulate;
@@ -28,8 +30,9 @@ use rayon::prelude::*;
 use crate::dataset::{Dataset, Frame, PixelState};
 pub use crate::field::seen_lights::{with_seen_lights, SeenLight};
 use crate::geometry::Aabb;
+use merge::search_frames;
 
-use super::pixels::{is_bracket, pixel_ray_at};
+use super::pixels::pixel_ray_at;
 use blobs::{bright_blobs, Blob};
 use fit::fit_size_and_radiance;
 use triangulate::{meetings, Sighting, MAX_SIGHTINGS};
@@ -61,6 +64,9 @@ pub struct SeenLights {
     pub threshold: f64,
     /// The bright spots found in the frames read.
     pub spots: usize,
+    /// Per light of `lights`, the pixels around its spots that saturated
+    /// in every exposure: where any, its radiance is a lower bound.
+    pub saturated: Vec<usize>,
 }
 
 /// The angle one pixel spans at pixel coordinates (`u`, `v`) of `frame`.
@@ -78,10 +84,10 @@ fn touches(bounds: &Aabb, centre: DVec3, radius: f64) -> bool {
     (centre.clamp(bounds.min, bounds.max) - centre).length() <= radius
 }
 
-/// The lights that `frames` of `dataset` (photographs of linear radiance;
-/// brackets are not read) show past `bounds`: spots of luminance at least
-/// [`LIGHT_RATIO`] × `scale` whose rays meet in [`MIN_VIEWS`] frames or
-/// more, each fitted as a sphere.
+/// The lights that `frames` of `dataset` show past `bounds`, one image
+/// per pose ([`search_frames`]: brackets merged): spots of luminance at
+/// least [`LIGHT_RATIO`] × `scale` whose rays meet in [`MIN_VIEWS`] poses
+/// or more, each fitted as a sphere.
 pub fn find_seen_lights(
     dataset: &Dataset,
     frames: &[u32],
@@ -89,14 +95,11 @@ pub fn find_seen_lights(
     scale: f64,
 ) -> SeenLights {
     let threshold = LIGHT_RATIO * scale;
-    let linear: Vec<u32> = frames
-        .iter()
-        .copied()
-        .filter(|&f| !is_bracket(&dataset.frames[f as usize]))
-        .collect();
-    let mut spots: Vec<Blob> = linear
-        .par_iter()
-        .flat_map_iter(|&f| bright_blobs(&dataset.frames[f as usize], f, threshold))
+    let search = search_frames(dataset, frames);
+    let search: Vec<&Frame> = search.iter().map(|f| f.as_ref()).collect();
+    let mut spots: Vec<Blob> = (0..search.len() as u32)
+        .into_par_iter()
+        .flat_map_iter(|f| bright_blobs(search[f as usize], f, threshold))
         .collect();
     let found = spots.len();
     spots.sort_by(|a, b| b.peak.total_cmp(&a.peak));
@@ -104,7 +107,7 @@ pub fn find_seen_lights(
     let sightings: Vec<Sighting> = spots
         .iter()
         .filter_map(|b| {
-            let frame = &dataset.frames[b.frame as usize];
+            let frame = search[b.frame as usize];
             Some(Sighting {
                 frame: b.frame,
                 ray: pixel_ray_at(frame, 0, b.centre)?,
@@ -137,7 +140,7 @@ pub fn find_seen_lights(
                 ((x1 - x0).max(y1 - y0) + 2) as f64 * footprint(i)
             })
             .fold(0.0, f64::max);
-        let Some(fit) = fit_size_and_radiance(dataset, &blobs, m.point, smallest, largest) else {
+        let Some(fit) = fit_size_and_radiance(&search, &blobs, m.point, smallest, largest) else {
             continue;
         };
         if touches(bounds, m.point, fit.radius) {
@@ -151,6 +154,7 @@ pub fn find_seen_lights(
             views: m.sightings.len(),
             residual: fit.residual,
         });
+        out.saturated.push(fit.saturated);
     }
     out
 }

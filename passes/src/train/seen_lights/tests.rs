@@ -160,3 +160,74 @@ fn two_views_do_not_make_a_light() {
     let found = find_seen_lights(&d, &all(&d), &d.bounds, GREY);
     assert!(found.lights.is_empty() && found.spots == 2, "{found:?}");
 }
+
+/// `d`'s views taken as 8-bit sRGB brackets at `exposures` (a frame per
+/// view and exposure, as a bracketed capture loads: linear readings, a
+/// lower bound where a channel saturated).
+fn bracketed(d: &Dataset, exposures: &[f32]) -> Dataset {
+    use crate::dataset::capture::bracket_reading;
+    let mut out = d.clone();
+    out.frames = d
+        .frames
+        .iter()
+        .flat_map(|f| {
+            exposures.iter().map(move |&t| {
+                let mut b = f.clone();
+                b.image_path = "view.png".into();
+                b.exposure_time = Some(t as f64);
+                for (c, s) in b.image.radiance.iter_mut().zip(&mut b.image.state) {
+                    let read = c.map(|v| bracket_reading(v, t));
+                    *c = read.map(|r| r.0);
+                    if read.iter().any(|r| r.1) {
+                        *s = PixelState::LowerBound;
+                    }
+                }
+                b
+            })
+        })
+        .collect();
+    out
+}
+
+/// The same bulb photographed as exposure brackets: the poses' brackets
+/// merged, it is found from the shortest, which records it, as from
+/// linear views; where even the shortest saturates, it is still placed,
+/// and its radiance is what its unsaturated pixels and the saturated
+/// ones it mostly covers say it is at least.
+#[test]
+fn a_bulb_in_bracketed_photographs_is_found_from_the_bracket_that_records_it() {
+    let (centre, radius) = (DVec3::new(0.3, 2.4, -0.2), 0.04);
+    let radiance = DVec3::new(5000.0, 4000.0, 3000.0);
+    let linear = views((centre, radius, radiance));
+    let footprint = 4.3 * 50f64.to_radians() / 48.0;
+    let truth = std::f64::consts::PI * radius * radius * radiance;
+    for (shortest, recorded) in [(1.0 / 8192.0, true), (1.0 / 512.0, false)] {
+        let d = bracketed(&linear, &[1.0, 1.0 / 16.0, 1.0 / 128.0, shortest]);
+        let found = find_seen_lights(&d, &all(&d), &d.bounds, GREY);
+        assert_eq!(found.lights.len(), 1, "{found:?}");
+        let l = found.lights[0];
+        let ratio = l.intensity() / truth;
+        eprintln!(
+            "shortest 1/{}: {} off, intensity {ratio:?}, radius {:.4}, {} views, {} saturated",
+            1.0 / shortest,
+            (l.centre - centre).length(),
+            l.radius,
+            l.views,
+            found.saturated[0]
+        );
+        assert_eq!(l.views, 8, "a pose counts once, however many brackets");
+        assert!((l.centre - centre).length() < 0.2 * footprint, "{l:?}");
+        if recorded {
+            assert_eq!(found.saturated[0], 0);
+            assert!((ratio - DVec3::ONE).abs().max_element() < 0.03, "{ratio:?}");
+        } else {
+            // A lower bound: at least white over the shortest exposure
+            // (a pixel it covers whole), and not above the truth.
+            assert!(found.saturated[0] > 0);
+            let white = 1.0 / shortest as f64;
+            let y = crate::sgfit::model::luminance(l.radiance);
+            assert!(y > 0.98 * white, "{y} against white {white}");
+            assert!(ratio.max_element() < 1.05, "{ratio:?}");
+        }
+    }
+}
