@@ -38,7 +38,7 @@ pub use knobs::{
     VIEW_DEPENDENT_START_DEGREE,
 };
 pub use loss::{pixel_loss, PixelTarget};
-pub use pixels::held_out_frames;
+pub use pixels::{held_out_frames, held_out_poses};
 pub use render::{render_pixel_with_gradient, render_ray_with_gradient, RayGradient};
 pub use step_times::StepTimes;
 pub use trainer::{

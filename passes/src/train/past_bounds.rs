@@ -13,7 +13,7 @@
 
 use rayon::prelude::*;
 
-use crate::dataset::{Dataset, PixelState};
+use crate::dataset::{Dataset, Frame, PixelState};
 use crate::geometry::{ray_box, Aabb};
 
 use super::pixels::{bracket_sets, merged_luminance, pixel_ray};
@@ -46,7 +46,12 @@ pub const AUTO_SKY_HEIGHT: u32 = 8;
 /// Whether pixel `pixel` of frame `f` of `dataset` looks into `bounds`
 /// (its ray enters the box in front of the camera).
 pub fn pixel_sees_bounds(dataset: &Dataset, f: u32, pixel: u32, bounds: &Aabb) -> bool {
-    pixel_ray(&dataset.frames[f as usize], pixel)
+    frame_sees_bounds(&dataset.frames[f as usize], pixel, bounds)
+}
+
+/// Whether pixel `pixel` of `frame` looks into `bounds`.
+pub fn frame_sees_bounds(frame: &Frame, pixel: u32, bounds: &Aabb) -> bool {
+    pixel_ray(frame, pixel)
         .and_then(|ray| ray_box(&ray, bounds))
         .is_some_and(|(_, t1)| t1 > 0.0)
 }

@@ -163,6 +163,42 @@ pub fn merged_luminance(dataset: &Dataset, set: &[u32], pixel: u32) -> Option<f6
     Some(reading(unsaturated.unwrap_or(last)))
 }
 
+/// The frame a pose's brackets `set` (longest exposure first,
+/// [`bracket_sets`]) record together, in radiance, not a bracket itself:
+/// each pixel the longest exposure that did not saturate there over that
+/// exposure (the least noisy reading, as [`merged_luminance`] reads it),
+/// and where every bracket saturated, the shortest's reading over its
+/// exposure, a lower bound.
+pub fn merged_brackets(dataset: &Dataset, set: &[u32]) -> Frame {
+    let frames: Vec<&Frame> = set.iter().map(|&f| &dataset.frames[f as usize]).collect();
+    let mut out = frames[0].clone();
+    out.exposure_time = None;
+    out.exif_exposure = None;
+    for i in 0..out.image.state.len() {
+        // The longest exposure that recorded a value, else the shortest
+        // that saw the pixel at all.
+        let pick = frames
+            .iter()
+            .find(|f| f.image.state[i] == PixelState::Value)
+            .or_else(|| {
+                frames
+                    .iter()
+                    .rev()
+                    .find(|f| f.image.state[i] != PixelState::Masked)
+            });
+        let (state, radiance) = match pick {
+            Some(f) => {
+                let t = recorded_exposure(f) as f32;
+                (f.image.state[i], f.image.radiance[i].map(|c| c / t))
+            }
+            None => (PixelState::Masked, [0.0; 3]),
+        };
+        out.image.state[i] = state;
+        out.image.radiance[i] = radiance;
+    }
+    out
+}
+
 /// What a dataset's brackets cannot tell: pixels that every bracket of
 /// their pose recorded white (in some channel), where the photographs say
 /// only that the radiance is at least white over the shortest exposure.
@@ -245,20 +281,49 @@ pub fn held_out_frames(frames: u32, hold_out: u32) -> Vec<u32> {
     (0..k).map(|i| (2 * i + 1) * frames / (2 * k)).collect()
 }
 
+/// The poses of `dataset`, each its frames ([`bracket_sets`]: a pose's
+/// brackets, the longest exposure first; any other frame alone), in the
+/// order of their first frames.
+pub fn poses(dataset: &Dataset) -> Vec<Vec<u32>> {
+    let all: Vec<u32> = (0..dataset.frames.len() as u32).collect();
+    let sets = bracket_sets(dataset, &all);
+    all.iter()
+        .filter(|&&f| sets[f as usize].iter().min() == Some(&f))
+        .map(|&f| sets[f as usize].clone())
+        .collect()
+}
+
+/// The frames of `dataset` held out for `hold_out` poses spread evenly
+/// over its [`poses`] ([`held_out_frames`] over them; never all): a pose's
+/// exposure brackets together, since one bracket held out alone would be
+/// scored against a pose its other brackets trained on. Where no frame is
+/// a bracket, the same frames as [`held_out_frames`]. Sorted.
+pub fn held_out_poses(dataset: &Dataset, hold_out: u32) -> Vec<u32> {
+    let poses = poses(dataset);
+    let mut out: Vec<u32> = held_out_frames(poses.len() as u32, hold_out)
+        .into_iter()
+        .flat_map(|k| poses[k as usize].iter().copied())
+        .collect();
+    out.sort_unstable();
+    out
+}
+
 /// The training pixels: every usable pixel of the frames not held out.
 #[derive(Debug, Clone)]
 pub struct PixelPool {
     /// The usable pixels.
     pub pixels: Vec<PixelRef>,
-    /// The frames held out (indices into the dataset's frames).
+    /// The frames held out (indices into the dataset's frames; every
+    /// bracket of a held-out pose).
     pub held_out: Vec<u32>,
 }
 
 impl PixelPool {
-    /// The pool of `dataset`, holding out `hold_out` frames spread evenly
-    /// over the list (never all of them).
+    /// The pool of `dataset`, holding out `hold_out` poses spread evenly
+    /// over its poses (never all of them), each with all its brackets
+    /// ([`held_out_poses`]).
     pub fn new(dataset: &Dataset, hold_out: u32) -> Self {
-        let held_out = held_out_frames(dataset.frames.len() as u32, hold_out);
+        let held_out = held_out_poses(dataset, hold_out);
         let mut pixels = Vec::new();
         for (f, frame) in dataset.frames.iter().enumerate() {
             if held_out.contains(&(f as u32)) {

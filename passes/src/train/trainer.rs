@@ -16,12 +16,14 @@ use super::adam::AdamKnobs;
 use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
-use super::past_bounds::{pixel_sees_bounds, pose_light};
-use super::pixels::{area_offsets, bracket_sets, is_bracket, pixel_ray_at, PixelPool};
+use super::past_bounds::{frame_sees_bounds, pose_light};
+use super::pixels::{
+    area_offsets, bracket_sets, is_bracket, merged_brackets, pixel_ray_at, PixelPool,
+};
 use super::seen_lights::{with_seen_lights, SeenLight};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
-use crate::dataset::{Dataset, PixelState};
+use crate::dataset::{Dataset, Frame, PixelState};
 use crate::field::FieldLayout::Auto;
 use crate::field::Sky;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
@@ -51,8 +53,13 @@ pub struct TrainProgress {
 /// A held-out view rendered from the trained field and scored.
 #[derive(Debug, Clone)]
 pub struct HeldOutView {
-    /// Its index in the dataset's frames.
+    /// Its index in the dataset's frames (a bracketed pose's longest
+    /// exposure).
     pub frame: u32,
+    /// The frames it stands for: a bracketed pose's brackets, merged into
+    /// one view of radiance and scored as one ([`merged_brackets`]); 1
+    /// for any other frame.
+    pub brackets: usize,
     /// PSNR in dB of the rendered view against the photograph, on
     /// sRGB-encoded values clipped at 1 (brackets at their exposure).
     pub psnr: f64,
@@ -607,20 +614,30 @@ pub fn train(
     // changes no density.
     (field, _) = super::prune::clear_inert_negatives(&field);
     let behind = sky.as_ref().map_or(Behind::Colour(background), Behind::Sky);
+    // Each held-out pose once; a bracketed one as its brackets merged.
+    let sets = bracket_sets(dataset, &pool.held_out);
     let held_out = pool
         .held_out
         .iter()
+        .filter(|&&f| sets[f as usize][0] == f)
         .map(|&f| {
-            score_view(
-                dataset,
-                f,
-                &field,
-                &view_march,
-                behind,
-                control.seen_lights,
-                knobs.learn_exposure,
-                knobs.held_out_samples,
-            )
+            let set = &sets[f as usize];
+            let merged =
+                is_bracket(&dataset.frames[f as usize]).then(|| merged_brackets(dataset, set));
+            let frame = merged.as_ref().unwrap_or(&dataset.frames[f as usize]);
+            HeldOutView {
+                brackets: set.len(),
+                ..score_frame(
+                    frame,
+                    f,
+                    &field,
+                    &view_march,
+                    behind,
+                    control.seen_lights,
+                    knobs.learn_exposure,
+                    knobs.held_out_samples,
+                )
+            }
         })
         .collect();
     Ok(Trained {
@@ -769,8 +786,33 @@ pub fn score_view<'a>(
     fit_exposure: bool,
     samples: u32,
 ) -> HeldOutView {
-    let behind = background.into();
     let frame = &dataset.frames[f as usize];
+    score_frame(
+        frame,
+        f,
+        field,
+        march,
+        background,
+        lights,
+        fit_exposure,
+        samples,
+    )
+}
+
+/// [`score_view`] of `frame` (frame `f` of its dataset, or a pose's
+/// brackets merged: [`merged_brackets`]).
+#[allow(clippy::too_many_arguments)]
+pub fn score_frame<'a>(
+    frame: &Frame,
+    f: u32,
+    field: &GridField,
+    march: &MarchKnobs,
+    background: impl Into<Behind<'a>>,
+    lights: &[SeenLight],
+    fit_exposure: bool,
+    samples: u32,
+) -> HeldOutView {
+    let behind = background.into();
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     let exposure = if is_bracket(frame) {
         frame.exposure_time
@@ -822,7 +864,7 @@ pub fn score_view<'a>(
     let inside: Vec<PixelState> = (0..w * h)
         .map(|p| match frame.image.state[p as usize] {
             PixelState::Masked => PixelState::Masked,
-            _ if !pixel_sees_bounds(dataset, f, p, &field.bounds) => PixelState::Masked,
+            _ if !frame_sees_bounds(frame, p, &field.bounds) => PixelState::Masked,
             state => state,
         })
         .collect();
@@ -837,6 +879,7 @@ pub fn score_view<'a>(
     });
     HeldOutView {
         frame: f,
+        brackets: 1,
         psnr: s.psnr,
         relative_error: s.relative_error,
         brightness: s.brightness,
@@ -949,6 +992,43 @@ mod tests {
             },
             depth: Vec::new(),
         }
+    }
+
+    /// A bracketed pose is held out whole (its brackets would otherwise
+    /// train the pose its held-out bracket is scored on), and its
+    /// brackets merge into the radiance each pixel's longest unsaturated
+    /// bracket records over its exposure; linear frames are held out as
+    /// before, one frame a pose.
+    #[test]
+    fn a_bracketed_pose_is_held_out_whole_and_merged_into_radiance() {
+        use crate::train::pixels::{held_out_frames, merged_brackets, poses};
+        let radiance: Vec<f32> = (0..50)
+            .map(|i| if i == 7 { 40.0 } else { 0.02 + 0.01 * i as f32 })
+            .collect();
+        let mut d = dataset_with(0);
+        for k in 0..4 {
+            for e in [1.0, 1.0 / 8.0, 1.0 / 64.0] {
+                let mut f = frame_of(&radiance, Some(e));
+                let eye = DVec3::new(k as f64, 0.0, 1.0);
+                f.pose = crate::dataset::Pose::looking_at(eye, DVec3::ZERO, DVec3::Y);
+                d.frames.push(f);
+            }
+        }
+        assert_eq!(poses(&d).len(), 4);
+        let held = PixelPool::new(&d, 1).held_out;
+        assert_eq!(held, vec![6, 7, 8]);
+        let merged = merged_brackets(&d, &[6, 7, 8]);
+        assert_eq!(merged.exposure_time, None);
+        for (i, &v) in radiance.iter().enumerate() {
+            let m = merged.image.radiance[i][0];
+            assert_eq!(merged.image.state[i], PixelState::Value, "pixel {i}");
+            assert!((m / v - 1.0).abs() < 0.03, "pixel {i}: {m} against {v}");
+        }
+        // Pixel 7 saturates the longest exposures; the shortest holds it.
+        assert_eq!(d.frames[6].image.state[7], PixelState::LowerBound);
+        let mut linear = dataset_with(0);
+        linear.frames = (0..5).map(|_| frame_of(&radiance, None)).collect();
+        assert_eq!(PixelPool::new(&linear, 2).held_out, held_out_frames(5, 2));
     }
 
     /// The loss's and the colours' scale is the scene's mean radiance

@@ -580,11 +580,11 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             knobs.sh_degree
         );
     }
-    let frames = dataset.frames.len() as u32;
-    let held = inlay_passes::train::held_out_frames(frames, args.hold_out).len() as u32;
-    if held < args.hold_out {
+    let poses = inlay_passes::train::pixels::poses(&dataset).len() as u32;
+    let held_poses = inlay_passes::train::held_out_frames(poses, args.hold_out).len() as u32;
+    if held_poses < args.hold_out {
         eprintln!(
-            "--hold-out {}: the dataset has {frames} frames and one must train, so {held} are held out",
+            "--hold-out {}: the dataset has {poses} poses and one must train, so {held_poses} are held out",
             args.hold_out
         );
     }
@@ -675,8 +675,12 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                 100.0 * share
             )
         });
+        let merged = match v.brackets {
+            1 => String::new(),
+            n => format!(" (its pose's {n} brackets merged: linear radiance)"),
+        };
         println!(
-            "held-out frame {}: PSNR {:.2} dB{inside}, relative error {:.3}, brightness field / photograph {:.3}",
+            "held-out frame {}{merged}: PSNR {:.2} dB{inside}, relative error {:.3}, brightness field / photograph {:.3}",
             v.frame, v.psnr, v.relative_error, v.brightness
         );
     }
