@@ -1136,7 +1136,7 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
         inlay_passes::field::GridField::new(UVec3::splat(2), recipe.bounds, vec![[0.0; 4]; 8], 8);
     for v in &trained.held_out {
         let base = inlay_passes::train::trainer::score_view(
-            &dataset,
+            &dataset.frames[v.frame as usize],
             v.frame,
             &empty,
             &MarchKnobs::default(),
@@ -1449,7 +1449,7 @@ fn brackets_train_the_hdr_field_their_linear_views_do() {
     let brightness = |field: &GridField| {
         let views = held.map(|f| {
             inlay_passes::train::trainer::score_view(
-                &linear_set,
+                &linear_set.frames[f],
                 f as u32,
                 field,
                 &MarchKnobs::default(),
@@ -1611,7 +1611,7 @@ fn exposure_gains_are_learnt_for_photographs_of_unknown_exposure() {
     );
     for (a, b) in learnt.held_out.iter().zip(&equal.held_out) {
         let fitted = score_view(
-            &dataset,
+            &dataset.frames[b.frame as usize],
             b.frame,
             &equal.field,
             &Default::default(),

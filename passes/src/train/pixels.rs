@@ -139,54 +139,43 @@ pub fn bracket_sets(dataset: &Dataset, frames: &[u32]) -> Vec<Vec<u32>> {
         .collect()
 }
 
+/// The frame of `set` ([`bracket_sets`]) whose reading of `pixel` tells
+/// its radiance best: the longest exposure that recorded a value there
+/// (the least noisy), else the shortest that saw it at all (where every
+/// bracket saturated, a lower bound). None where every frame masks it.
+pub fn recording<'a>(dataset: &'a Dataset, set: &[u32], pixel: u32) -> Option<&'a Frame> {
+    let i = pixel as usize;
+    let frames = || set.iter().map(|&f| &dataset.frames[f as usize]);
+    frames()
+        .find(|f| f.image.state[i] == PixelState::Value)
+        .or_else(|| {
+            frames()
+                .rev()
+                .find(|f| f.image.state[i] != PixelState::Masked)
+        })
+}
+
 /// The scene's luminance at `pixel` as the frames `set` ([`bracket_sets`])
 /// record it: a frame that is not a bracket, its value; brackets, the
 /// longest exposure that did not saturate there over its exposure (the
 /// least noisy reading), or where all saturated the shortest's, a lower
-/// bound. None where every frame masks the pixel.
+/// bound ([`recording`]). None where every frame masks the pixel.
 pub fn merged_luminance(dataset: &Dataset, set: &[u32], pixel: u32) -> Option<f64> {
-    let i = pixel as usize;
-    let reading = |f: &Frame| {
-        let c = f.image.radiance[i];
-        luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)) / recorded_exposure(f)
-    };
-    let seen: Vec<&Frame> = set
-        .iter()
-        .map(|&f| &dataset.frames[f as usize])
-        .filter(|f| f.image.state[i] != PixelState::Masked)
-        .collect();
-    let last = seen.last()?;
-    if !is_bracket(last) {
-        return Some(reading(last));
-    }
-    let unsaturated = seen.iter().find(|f| f.image.state[i] == PixelState::Value);
-    Some(reading(unsaturated.unwrap_or(last)))
+    let f = recording(dataset, set, pixel)?;
+    let c = f.image.radiance[pixel as usize];
+    Some(luminance(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)) / recorded_exposure(f))
 }
 
 /// The frame a pose's brackets `set` (longest exposure first,
 /// [`bracket_sets`]) record together, in radiance, not a bracket itself:
-/// each pixel the longest exposure that did not saturate there over that
-/// exposure (the least noisy reading, as [`merged_luminance`] reads it),
-/// and where every bracket saturated, the shortest's reading over its
-/// exposure, a lower bound.
+/// each pixel [`recording`]'s reading over its exposure, as
+/// [`merged_luminance`] reads it.
 pub fn merged_brackets(dataset: &Dataset, set: &[u32]) -> Frame {
-    let frames: Vec<&Frame> = set.iter().map(|&f| &dataset.frames[f as usize]).collect();
-    let mut out = frames[0].clone();
+    let mut out = dataset.frames[set[0] as usize].clone();
     out.exposure_time = None;
     out.exif_exposure = None;
     for i in 0..out.image.state.len() {
-        // The longest exposure that recorded a value, else the shortest
-        // that saw the pixel at all.
-        let pick = frames
-            .iter()
-            .find(|f| f.image.state[i] == PixelState::Value)
-            .or_else(|| {
-                frames
-                    .iter()
-                    .rev()
-                    .find(|f| f.image.state[i] != PixelState::Masked)
-            });
-        let (state, radiance) = match pick {
+        let (state, radiance) = match recording(dataset, set, i as u32) {
             Some(f) => {
                 let t = recorded_exposure(f) as f32;
                 (f.image.state[i], f.image.radiance[i].map(|c| c / t))

@@ -627,7 +627,7 @@ pub fn train(
             let frame = merged.as_ref().unwrap_or(&dataset.frames[f as usize]);
             HeldOutView {
                 brackets: set.len(),
-                ..score_frame(
+                ..score_view(
                     frame,
                     f,
                     &field,
@@ -768,7 +768,8 @@ pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
     }
 }
 
-/// Renders frame `f` of `dataset` from `field` over `background` (a
+/// Renders `frame` (frame `f` of its dataset, or a pose's brackets
+/// merged: [`merged_brackets`]) from `field` over `background` (a
 /// colour or a learnt sky), with `lights` beside it
 /// ([`super::seen_lights::with_seen_lights`]), and scores it; with
 /// `fit_exposure`, at the RGB gain that fits the photograph best (least
@@ -777,32 +778,6 @@ pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
 /// (1: the ray through its centre), as its photograph gathered it.
 #[allow(clippy::too_many_arguments)]
 pub fn score_view<'a>(
-    dataset: &Dataset,
-    f: u32,
-    field: &GridField,
-    march: &MarchKnobs,
-    background: impl Into<Behind<'a>>,
-    lights: &[SeenLight],
-    fit_exposure: bool,
-    samples: u32,
-) -> HeldOutView {
-    let frame = &dataset.frames[f as usize];
-    score_frame(
-        frame,
-        f,
-        field,
-        march,
-        background,
-        lights,
-        fit_exposure,
-        samples,
-    )
-}
-
-/// [`score_view`] of `frame` (frame `f` of its dataset, or a pose's
-/// brackets merged: [`merged_brackets`]).
-#[allow(clippy::too_many_arguments)]
-pub fn score_frame<'a>(
     frame: &Frame,
     f: u32,
     field: &GridField,
@@ -1210,7 +1185,7 @@ mod tests {
         let sky = Sky::new(w, h, texels).unwrap();
         let empty = GridField::new(UVec3::splat(2), dataset.bounds, vec![[0.0; 4]; 8], 8);
         let knobs = MarchKnobs::default();
-        let view = |n| score_view(&dataset, 0, &empty, &knobs, &sky, &[], false, n);
+        let view = |n| score_view(&dataset.frames[0], 0, &empty, &knobs, &sky, &[], false, n);
         let (centre, area) = (view(1), view(4));
         let read = |v: &HeldOutView| v.rendered.iter().map(|c| c[0]).collect::<Vec<f32>>();
         for (p, t) in truth.iter().enumerate() {
