@@ -22,6 +22,7 @@ pub mod sparse_stage;
 pub mod step_times;
 pub mod trainer;
 pub mod tv;
+pub mod view_pixel;
 pub mod visibility;
 
 pub use crate::field::Sky;

@@ -100,11 +100,12 @@ impl LightPastBounds {
     }
 }
 
-/// The light of `dataset`'s usable pixels (each pose's brackets merged,
-/// [`merged_luminance`]) whose rays miss `bounds`.
-pub fn light_past_bounds(dataset: &Dataset, bounds: &Aabb) -> LightPastBounds {
-    let frames: Vec<u32> = (0..dataset.frames.len() as u32).collect();
-    let sets = bracket_sets(dataset, &frames);
+/// The light of the usable pixels of `dataset`'s frames `frames` (each
+/// pose's brackets among them merged, [`merged_luminance`]) whose rays
+/// miss `bounds`: `inlay train` reads its training frames
+/// ([`super::pixels::training_frames`]), `inlay dataset` every frame.
+pub fn light_past_bounds(dataset: &Dataset, frames: &[u32], bounds: &Aabb) -> LightPastBounds {
+    let sets = bracket_sets(dataset, frames);
     // Each pose once (at its longest exposure's frame), in parallel.
     let poses: Vec<PoseLight> = frames
         .par_iter()
@@ -220,7 +221,7 @@ mod tests {
             .filter(|&p| pixel_sees_bounds(&d, 0, p, &d.bounds))
             .count();
         assert!(inside > 16 && inside < 240, "{inside}");
-        let past = light_past_bounds(&d, &d.bounds);
+        let past = light_past_bounds(&d, &[0], &d.bounds);
         assert_eq!((past.pixels, past.of), (256 - inside, 256));
         assert_eq!(past.brightest, 1000.0);
         let total = 1000.0 + 255.0 * 0.2;
@@ -239,7 +240,7 @@ mod tests {
         // Bounds that hold every pixel's ray: nothing past them, and the
         // scale is the plain mean.
         let wide = Aabb::new(DVec3::splat(-4.0), DVec3::splat(4.0));
-        let none = light_past_bounds(&d, &wide);
+        let none = light_past_bounds(&d, &[0], &wide);
         assert_eq!((none.pixels, none.share), (0, 0.0));
         assert_eq!(none.warning(), None);
         // A sky is learnt behind the first bounds, not the wide ones, nor
@@ -249,5 +250,36 @@ mod tests {
         assert_eq!(none.auto_sky(false), 0);
         let plain = radiance_scale(&d, &PixelPool::new(&d, 0), &wide);
         assert!((plain / (total / 256.0) - 1.0).abs() < 1e-4, "{plain}");
+    }
+
+    /// Four views black past the bounds and one that sees the lamp there:
+    /// held out, the lamp's view chooses no sky for the run that scores
+    /// it; trained, it does.
+    #[test]
+    fn a_held_out_views_light_past_the_bounds_chooses_no_sky() {
+        let lamp = dataset();
+        let mut dark = lamp.frames[0].clone();
+        for p in 0..256u32 {
+            if !pixel_sees_bounds(&lamp, 0, p, &lamp.bounds) {
+                dark.image.radiance[p as usize] = [0.0; 3];
+            }
+        }
+        let mut d = Dataset {
+            frames: vec![dark; 5],
+            ..lamp.clone()
+        };
+        let held = crate::train::held_out_poses(&d, 1);
+        assert_eq!(held.len(), 1);
+        d.frames[held[0] as usize] = lamp.frames[0].clone();
+        let training = crate::train::pixels::training_frames(&d, 1);
+        assert_eq!(training.len(), 4);
+        assert!(!training.contains(&held[0]));
+        let trained = light_past_bounds(&d, &training, &d.bounds);
+        assert_eq!((trained.share, trained.auto_sky(false)), (0.0, 0));
+        let every = crate::train::pixels::training_frames(&d, 0);
+        assert_eq!(every.len(), 5);
+        let all = light_past_bounds(&d, &every, &d.bounds);
+        assert!(all.share > 0.5, "{all:?}");
+        assert_eq!(all.auto_sky(false), AUTO_SKY_HEIGHT);
     }
 }

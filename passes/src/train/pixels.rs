@@ -297,6 +297,17 @@ pub fn held_out_poses(dataset: &Dataset, hold_out: u32) -> Vec<u32> {
     out
 }
 
+/// The frames of `dataset` that train when `hold_out` poses are held out
+/// ([`held_out_poses`]): every choice a run makes from its photographs
+/// reads these alone, so that a held-out view never shapes the field it
+/// scores. Sorted.
+pub fn training_frames(dataset: &Dataset, hold_out: u32) -> Vec<u32> {
+    let held = held_out_poses(dataset, hold_out);
+    (0..dataset.frames.len() as u32)
+        .filter(|f| held.binary_search(f).is_err())
+        .collect()
+}
+
 /// The training pixels: every usable pixel of the frames not held out.
 #[derive(Debug, Clone)]
 pub struct PixelPool {

@@ -17,10 +17,9 @@ use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::past_bounds::{frame_sees_bounds, pose_light};
-use super::pixels::{
-    area_offsets, bracket_sets, is_bracket, merged_brackets, pixel_ray_at, PixelPool,
-};
-use super::seen_lights::{with_seen_lights, SeenLight};
+use super::pixels::{bracket_sets, is_bracket, merged_brackets, PixelPool};
+use super::seen_lights::SeenLight;
+use super::view_pixel::view_pixel;
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, Frame, PixelState};
@@ -28,7 +27,7 @@ use crate::field::FieldLayout::Auto;
 use crate::field::Sky;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Aabb;
-use crate::march::{march_ray, MarchKnobs};
+use crate::march::MarchKnobs;
 use crate::rng::Pcg32;
 use crate::sgfit::model::luminance;
 
@@ -286,10 +285,12 @@ impl TransparentPixels {
     }
 }
 
-/// Counts `dataset`'s transparent pixels.
-pub fn transparent_pixels(dataset: &Dataset) -> TransparentPixels {
+/// Counts the transparent pixels of `dataset`'s frames `frames` (`inlay
+/// train` chooses the random background from its training frames', and
+/// refuses one behind any bracket's).
+pub fn transparent_pixels(dataset: &Dataset, frames: &[u32]) -> TransparentPixels {
     let mut out = TransparentPixels::default();
-    for f in &dataset.frames {
+    for f in frames.iter().map(|&f| &dataset.frames[f as usize]) {
         let n = f.image.alpha.iter().filter(|a| **a < 1.0).count();
         if super::pixels::is_bracket(f) {
             out.brackets += n;
@@ -306,7 +307,8 @@ pub fn transparent_pixels(dataset: &Dataset) -> TransparentPixels {
 /// cannot be put behind it). Transparent linear frames take it: their
 /// alpha composites each step's background.
 pub fn check_dataset(knobs: &TrainKnobs, dataset: &Dataset) -> anyhow::Result<()> {
-    let transparent = transparent_pixels(dataset).brackets;
+    let every: Vec<u32> = (0..dataset.frames.len() as u32).collect();
+    let transparent = transparent_pixels(dataset, &every).brackets;
     anyhow::ensure!(
         !knobs.random_background || transparent == 0,
         "random background: {} has {transparent} pixels with alpha below 1 in its exposure \
@@ -724,13 +726,22 @@ pub struct ViewScores {
 
 /// [`ViewScores`] of `rendered` against `truth` (linear rgb), leaving out
 /// the pixels `state` masks; with no light in the photograph the relative
-/// figures are infinite.
+/// figures are infinite. A lower bound (saturated in every exposure) is
+/// scored against the nearest radiance it allows, each channel the larger
+/// of the bound and the rendered value: a field brighter than the bound
+/// is not wrong there, one darker is wrong by what it lacks.
 pub fn view_scores(rendered: &[[f32; 3]], truth: &[[f32; 3]], state: &[PixelState]) -> ViewScores {
     let (mut se, mut n, mut diff, mut total, mut ours) = (0.0, 0usize, 0.0, 0.0, 0.0);
     for (i, (a, b)) in rendered.iter().zip(truth).enumerate() {
-        if state[i] == PixelState::Masked {
-            continue;
-        }
+        let bound;
+        let b = match state[i] {
+            PixelState::Masked => continue,
+            PixelState::LowerBound => {
+                bound = [0, 1, 2].map(|k| b[k].max(a[k]));
+                &bound
+            }
+            PixelState::Value => b,
+        };
         let (la, lb) = (
             luminance(DVec3::from_array(a.map(|v| v as f64))),
             luminance(DVec3::from_array(b.map(|v| v as f64))),
@@ -770,12 +781,12 @@ pub fn view_march(knobs: &TrainKnobs) -> MarchKnobs {
 
 /// Renders `frame` (frame `f` of its dataset, or a pose's brackets
 /// merged: [`merged_brackets`]) from `field` over `background` (a
-/// colour or a learnt sky), with `lights` beside it
-/// ([`super::seen_lights::with_seen_lights`]), and scores it; with
+/// colour or a learnt sky), with `lights` beside it, and scores it; with
 /// `fit_exposure`, at the RGB gain that fits the photograph best (least
 /// squares over its usable pixels: a frame of unknown exposure). Each
 /// pixel is the mean of `samples` × `samples` rays spread evenly over it
-/// (1: the ray through its centre), as its photograph gathered it.
+/// (1: the ray through its centre), a light's share of it read over finer
+/// rays, as its photograph gathered it ([`view_pixel`]).
 #[allow(clippy::too_many_arguments)]
 pub fn score_view<'a>(
     frame: &Frame,
@@ -796,25 +807,9 @@ pub fn score_view<'a>(
     };
     // What the sensor records of radiance c, before clipping.
     let recorded = |c: DVec3| c * exposure.unwrap_or(1.0);
-    let offsets = area_offsets(samples);
     let radiance: Vec<DVec3> = (0..w * h)
         .into_par_iter()
-        .map(|p| {
-            // The mean over the rays the lens model can invert (none: black).
-            let (sum, count) = offsets
-                .iter()
-                .filter_map(|&o| pixel_ray_at(frame, p, o))
-                .fold((DVec3::ZERO, 0u32), |(sum, count), ray| {
-                    let r = march_ray(field, &ray, f64::INFINITY, march);
-                    let behind = behind.eval(ray.dir);
-                    let bounds = &field.bounds;
-                    (
-                        sum + with_seen_lights(lights, &ray, bounds, r.colour, r.opacity, behind),
-                        count + 1,
-                    )
-                });
-            recorded(sum / count.max(1) as f64)
-        })
+        .map(|p| recorded(view_pixel(frame, p, field, march, &behind, lights, samples)))
         .collect();
     let gain = if fit_exposure {
         fitted_gain(frame, &radiance)
@@ -868,7 +863,9 @@ pub fn score_view<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::train::pixels::PixelRays;
+    use crate::train::pixels::{area_offsets, pixel_ray_at, PixelRays};
+    use crate::train::seen_lights::fit::COVERAGE_RAYS;
+    use crate::train::seen_lights::with_seen_lights;
 
     /// One ray through each pixel's centre.
     const CENTRE: PixelRays = PixelRays {
@@ -1205,6 +1202,84 @@ mod tests {
         );
     }
 
+    /// A bright light that covers a small part of a held-out pixel,
+    /// between its 4 × 4 rays, is drawn at the share it covers (the share
+    /// the lights' fit reads, and near the disc's area over the pixel's):
+    /// the centre rays alone read it black. Pixels it does not touch read
+    /// as they would with no light at all.
+    #[test]
+    fn a_light_between_a_pixels_rays_is_drawn_at_the_share_it_covers() {
+        let mut frame = frame_of(&[0.0; 8], None);
+        frame.intrinsics = crate::dataset::Intrinsics::centred(8, 1, 5.0);
+        // A disc of 0.15 pixels' radius centred at (3.25, 0.25): 0.177
+        // pixels from each of the four nearest of pixel 3's 4 × 4 rays.
+        let to_world = |u: f64| {
+            let d = frame.intrinsics.direction(u, 0.25).unwrap();
+            frame.pose.to_world(d).normalize()
+        };
+        let (origin, distance) = (frame.pose.origin(), 20.0);
+        let pixel_angle = to_world(3.25).angle_between(to_world(4.25));
+        let light = SeenLight {
+            centre: origin + distance * to_world(3.25),
+            radius: 0.15 * pixel_angle * distance,
+            radiance: DVec3::splat(1000.0),
+            views: 3,
+            residual: 0.0,
+        };
+        let dataset = Dataset {
+            frames: vec![frame],
+            ..dataset_with(0)
+        };
+        let empty = GridField::new(UVec3::splat(2), dataset.bounds, vec![[0.0; 4]; 8], 8);
+        let (knobs, back) = (MarchKnobs::default(), DVec3::splat(0.2));
+        let frame = &dataset.frames[0];
+        let read = |lights: &[SeenLight], n| {
+            score_view(frame, 0, &empty, &knobs, back, lights, false, n).rendered
+        };
+        // What the fit reads of the pixel: its 16 × 16 rays that meet it.
+        let rays = area_offsets(COVERAGE_RAYS);
+        let hits = rays
+            .iter()
+            .filter(|&&o| light.hit(&pixel_ray_at(frame, 3, o).unwrap()).is_some())
+            .count();
+        let share = hits as f64 / rays.len() as f64;
+        let disc = std::f64::consts::PI * 0.15 * 0.15;
+        assert!((share - disc).abs() < 0.2 * disc, "{share} {disc}");
+        let expected = share * 1000.0 + (1.0 - share) * 0.2;
+        let (with, without) = (read(&[light], 4), read(&[], 4));
+        assert!(
+            (with[3][0] as f64 - expected).abs() < 1e-3 * expected,
+            "{} {expected}",
+            with[3][0]
+        );
+        let centre_rays_only = (with_seen_lights_mean(frame, &light, &empty, back), 0.2);
+        assert!((centre_rays_only.0 - centre_rays_only.1).abs() < 1e-9);
+        for p in (0..8).filter(|&p| p != 3) {
+            assert_eq!(with[p], without[p], "pixel {p}");
+        }
+    }
+
+    /// Pixel 3 of `frame` as the mean of its 4 × 4 centre rays alone, each
+    /// drawn with `light`: what held-out views read before a light's
+    /// share was read over finer rays.
+    fn with_seen_lights_mean(
+        frame: &crate::dataset::Frame,
+        light: &SeenLight,
+        field: &GridField,
+        back: DVec3,
+    ) -> f64 {
+        let offsets = area_offsets(4);
+        let sum: f64 = offsets
+            .iter()
+            .map(|&o| {
+                let ray = pixel_ray_at(frame, 3, o).unwrap();
+                let r = crate::march::march_ray(field, &ray, f64::INFINITY, &MarchKnobs::default());
+                with_seen_lights(&[*light], &ray, &field.bounds, r.colour, r.opacity, back).x
+            })
+            .sum();
+        sum / offsets.len() as f64
+    }
+
     /// A lamp past the shortest bracket's white is counted once for its
     /// pose; one the shortest records is not; linear frames have no
     /// brackets to count.
@@ -1338,5 +1413,29 @@ mod tests {
         let black = vec![[0.0f32; 3]; 3];
         let none = view_scores(&scaled(1.0), &black, &state);
         assert!(none.brightness.is_infinite() && none.relative_error.is_infinite());
+    }
+
+    /// A lower bound scores a field above it as right and one below it
+    /// wrong by what it lacks; read as a value, the field above it was
+    /// scored wrong.
+    #[test]
+    fn a_lower_bound_is_scored_as_what_it_allows() {
+        let truth = vec![[0.5f32; 3], [4.0; 3]];
+        let (bounded, valued) = (
+            [PixelState::Value, PixelState::LowerBound],
+            [PixelState::Value, PixelState::Value],
+        );
+        let above = vec![[0.5f32; 3], [9.0; 3]];
+        let s = view_scores(&above, &truth, &bounded);
+        assert!(
+            s.psnr >= 119.0 && s.relative_error == 0.0 && s.brightness == 1.0,
+            "{s:?}"
+        );
+        let as_value = view_scores(&above, &truth, &valued);
+        assert!(as_value.relative_error > 1.0, "{as_value:?}");
+        let below = vec![[0.5f32; 3], [3.0; 3]];
+        let s = view_scores(&below, &truth, &bounded);
+        assert!((s.relative_error - 1.0 / 4.5).abs() < 1e-6, "{s:?}");
+        assert!((s.brightness - 3.5 / 4.5).abs() < 1e-6, "{s:?}");
     }
 }

@@ -134,7 +134,8 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&d).warning() {
         println!("warning: {w}");
     }
-    let past = inlay_passes::train::past_bounds::light_past_bounds(&d, &d.bounds);
+    let every: Vec<u32> = (0..d.frames.len() as u32).collect();
+    let past = inlay_passes::train::past_bounds::light_past_bounds(&d, &every, &d.bounds);
     println!(
         "past the bounds: {} of {} pixels, {:.1} % of the views' light",
         past.pixels,

@@ -5,7 +5,7 @@
 use inlay_passes::dataset::Dataset;
 use inlay_passes::geometry::Aabb;
 use inlay_passes::scene::{Recipe, Shape};
-use inlay_passes::train::pixels::PixelPool;
+use inlay_passes::train::pixels::{training_frames, PixelPool};
 use inlay_passes::train::seen_lights::{
     find_seen_lights, mask_seen_lights, SeenLight, LIGHT_RATIO,
 };
@@ -23,9 +23,7 @@ pub fn find_and_mask(
     recipe: Option<&Recipe>,
 ) -> Vec<SeenLight> {
     let pool = PixelPool::new(dataset, hold_out);
-    let training: Vec<u32> = (0..dataset.frames.len() as u32)
-        .filter(|f| !pool.held_out.contains(f))
-        .collect();
+    let training = training_frames(dataset, hold_out);
     let scale = scale.unwrap_or_else(|| radiance_scale(dataset, &pool, bounds));
     drop(pool);
     let found = find_seen_lights(dataset, &training, bounds, scale);

@@ -479,12 +479,15 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     } else {
         Vec::new()
     };
-    let past = inlay_passes::train::past_bounds::light_past_bounds(&dataset, &bounds);
+    // What the run chooses from its photographs (the sky, the random
+    // background) it reads from its training frames alone.
+    let training = inlay_passes::train::pixels::training_frames(&dataset, args.hold_out);
+    let past = inlay_passes::train::past_bounds::light_past_bounds(&dataset, &training, &bounds);
     if let Some(w) = past.warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
     if args.random_background == Switch::Auto {
-        let alpha = inlay_passes::train::transparent_pixels(&dataset);
+        let alpha = inlay_passes::train::transparent_pixels(&dataset, &training);
         let sky_asked = resume_sky.is_some() || args.sky.or(0) > 0;
         knobs.random_background = alpha.takes_random_background() && !sky_asked;
         if knobs.random_background {

@@ -34,7 +34,7 @@ use merge::search_frames;
 
 use super::pixels::pixel_ray_at;
 use blobs::{bright_blobs, Blob};
-use fit::fit_size_and_radiance;
+use fit::fit_sphere;
 use triangulate::{meetings, Sighting, MAX_SIGHTINGS};
 
 /// A pixel is a candidate where its luminance is at least this many times
@@ -140,15 +140,20 @@ pub fn find_seen_lights(
                 ((x1 - x0).max(y1 - y0) + 2) as f64 * footprint(i)
             })
             .fold(0.0, f64::max);
-        let Some(fit) = fit_size_and_radiance(&search, &blobs, m.point, smallest, largest) else {
+        let pixel = m
+            .sightings
+            .iter()
+            .map(|&i| footprint(i))
+            .fold(f64::INFINITY, f64::min);
+        let Some(fit) = fit_sphere(&search, &blobs, m.point, (smallest, largest), pixel) else {
             continue;
         };
-        if touches(bounds, m.point, fit.radius) {
-            out.inside.push(m.point);
+        if touches(bounds, fit.centre, fit.radius) {
+            out.inside.push(fit.centre);
             continue;
         }
         out.lights.push(SeenLight {
-            centre: m.point,
+            centre: fit.centre,
             radius: fit.radius,
             radiance: fit.radiance,
             views: m.sightings.len(),
