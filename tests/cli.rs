@@ -725,6 +725,14 @@ fn train_finds_a_bulb_past_the_bounds_and_keeps_it_beside_the_field() {
         "frames": frames,
     });
     std::fs::write(data.join("transforms.json"), transforms.to_string()).unwrap();
+    // `inlay dataset` says what training will find, from all six views.
+    let o = inlay(&["dataset", data.to_str().unwrap()]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("light past the bounds: a sphere at") && t.contains("seen in 6 views"),
+        "{t}"
+    );
     let field = dir.join("bulb.inlayfield");
     let lights = dir.join("bulb.lights.toml");
     let train = |extra: &[&str]| {

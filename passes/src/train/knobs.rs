@@ -329,6 +329,23 @@ pub const DEFAULT_HELD_OUT_SAMPLES: u32 = 4;
 /// ([`TrainKnobs::view_dependent_start`]).
 pub const VIEW_DEPENDENT_START_DEGREE: u32 = 1;
 
+/// A pixel at least this many node spacings wide at the field's centre
+/// takes [`AREA_RAYS_WIDE_PIXELS`] rays a side by default (`inlay train
+/// --area-rays auto`, [`TrainKnobs::auto_area_rays`]). Measured on
+/// photographs without alpha at 128 nodes: the five Cycles sets, whose 96
+/// × 96 pixels span 2.15–2.42 spacings, read 0.06–3.05 dB higher on all
+/// ten held-out views at 2 × 2 rays (ROOM 29.45/29.84 → 31.45/32.89, DOG
+/// 33.83/34.24 → 35.30/36.34), their surfaces 0–0.23 spacings further
+/// off; DOG's `render-views` set without alpha, whose 160 × 120 pixels
+/// span 1.88, read the same (−0.31 to +0.23 dB) and its surfaces 0.14–0.43
+/// spacings further off, with more haze (`docs/benchmarks.md`, issue
+/// 25's thirty-ninth pass). Behind a random background 2 × 2 rays left a
+/// haze on the surfaces (the twenty-ninth pass), so it takes none.
+pub const WIDE_PIXEL_SPACINGS: f64 = 2.0;
+
+/// The rays a side a wide pixel takes by default ([`WIDE_PIXEL_SPACINGS`]).
+pub const AREA_RAYS_WIDE_PIXELS: u32 = 2;
+
 /// The most rays a training pixel per axis [`TrainKnobs::area_rays`]
 /// takes: its square is the trainer's most rays a pixel
 /// ([`super::gpu::MAX_RAYS_PER_PIXEL`]).
@@ -426,6 +443,19 @@ impl TrainKnobs {
             REFINE_EXPONENT_BEHIND_RANDOM
         } else {
             0.0
+        }
+    }
+
+    /// The rays a training pixel takes per axis where none are asked for,
+    /// its pixels [`super::pixels::pixel_footprint`] node spacings wide:
+    /// [`AREA_RAYS_WIDE_PIXELS`] where that is more than
+    /// [`WIDE_PIXEL_SPACINGS`] and no random background goes behind the
+    /// photographs, else 1.
+    pub fn auto_area_rays(&self, footprint: f64) -> u32 {
+        if footprint > WIDE_PIXEL_SPACINGS && !self.random_background {
+            AREA_RAYS_WIDE_PIXELS
+        } else {
+            1
         }
     }
 

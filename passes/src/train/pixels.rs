@@ -7,7 +7,7 @@ use glam::DVec3;
 use super::loss::PixelTarget;
 use crate::dataset::pixels::{image_kind, ImageKind};
 use crate::dataset::{Dataset, Frame, PixelState};
-use crate::geometry::Ray;
+use crate::geometry::{Aabb, Ray};
 use crate::rng::Pcg32;
 use crate::sgfit::model::luminance;
 
@@ -308,6 +308,31 @@ pub fn training_frames(dataset: &Dataset, hold_out: u32) -> Vec<u32> {
         .collect()
 }
 
+/// How wide a pixel of `dataset`'s frames `frames` is at the centre of
+/// `bounds`, in node spacings of a grid of `nodes` along the bounds'
+/// longest axis: the median over the frames of the camera's distance to
+/// the centre over its focal length in pixels (0 where no frame). A pixel
+/// wider than a few spacings averages detail the grid holds, and one ray
+/// through its centre asks a point for that average
+/// ([`super::knobs::TrainKnobs::auto_area_rays`]).
+pub fn pixel_footprint(dataset: &Dataset, frames: &[u32], bounds: &Aabb, nodes: u32) -> f64 {
+    let spacing = bounds.size().max_element() / (nodes.max(2) - 1) as f64;
+    let mut widths: Vec<f64> = frames
+        .iter()
+        .map(|&f| {
+            let frame = &dataset.frames[f as usize];
+            let focal = 0.5 * (frame.intrinsics.fx + frame.intrinsics.fy);
+            (frame.pose.origin() - bounds.center()).length() / focal / spacing
+        })
+        .filter(|w| w.is_finite())
+        .collect();
+    if widths.is_empty() {
+        return 0.0;
+    }
+    widths.sort_by(f64::total_cmp);
+    widths[widths.len() / 2]
+}
+
 /// The training pixels: every usable pixel of the frames not held out.
 #[derive(Debug, Clone)]
 pub struct PixelPool {
@@ -410,7 +435,63 @@ pub type BatchPixel = (Vec<Ray>, PixelTarget, u32, Vec<Option<f64>>);
 
 #[cfg(test)]
 mod tests {
-    use super::held_out_frames;
+    use super::{held_out_frames, pixel_footprint};
+    use crate::dataset::pixels::{FrameImage, PixelCounts};
+    use crate::dataset::{BoundsSource, Dataset, Dialect, Frame, Intrinsics, Pose};
+    use crate::geometry::Aabb;
+    use crate::train::TrainKnobs;
+    use glam::DVec3;
+
+    /// A pixel 5 units from a box of side 2, 60° over 16 pixels, spans
+    /// 5 / 13.86 of a unit: 1.44 spacings of a 9-node grid, 2.89 of a
+    /// 17-node one; only the wide pixel takes area rays by default, and
+    /// only behind a fixed background.
+    #[test]
+    fn a_pixel_wider_than_the_nodes_takes_area_rays_behind_a_fixed_background() {
+        let frame = Frame {
+            index: 0,
+            image_path: "view.exr".into(),
+            pose: Pose::looking_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y),
+            intrinsics: Intrinsics::centred(16, 16, 60.0),
+            exposure_time: None,
+            exif_exposure: None,
+            image: FrameImage {
+                width: 16,
+                height: 16,
+                radiance: vec![[0.2; 3]; 256],
+                state: vec![crate::dataset::PixelState::Value; 256],
+                alpha: Vec::new(),
+                counts: PixelCounts::default(),
+            },
+            depth: Vec::new(),
+        };
+        let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        let d = Dataset {
+            file: "shots/transforms.json".into(),
+            dialect: Dialect::InstantNgp,
+            frames: vec![frame],
+            bounds,
+            bounds_source: BoundsSource::AabbKey,
+            counts: PixelCounts::default(),
+            skipped: Vec::new(),
+        };
+        let focal = 8.0 / 30f64.to_radians().tan();
+        let (coarse, fine) = (
+            pixel_footprint(&d, &[0], &bounds, 9),
+            pixel_footprint(&d, &[0], &bounds, 17),
+        );
+        assert!((coarse - 5.0 / focal / 0.25).abs() < 1e-9, "{coarse}");
+        assert!((fine - 2.0 * coarse).abs() < 1e-9, "{fine}");
+        assert_eq!(pixel_footprint(&d, &[], &bounds, 9), 0.0);
+        let fixed = TrainKnobs::default();
+        let random = TrainKnobs {
+            random_background: true,
+            ..fixed
+        };
+        assert_eq!(fixed.auto_area_rays(coarse), 1);
+        assert_eq!(fixed.auto_area_rays(fine), 2);
+        assert_eq!(random.auto_area_rays(fine), 1);
+    }
 
     /// Held-out frames are spread evenly over the list, and one frame is
     /// always left to train.

@@ -145,6 +145,7 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     if let Some(w) = past.warning() {
         println!("warning: {w}");
     }
+    report_seen_lights(&d, &every);
     let mut lum: Vec<f32> = d
         .frames
         .iter()
@@ -168,4 +169,36 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Prints the lights past the bounds `inlay train` would find in `d`'s
+/// frames `frames` (all of them: `--hold-out` is the trainer's), and those
+/// it would leave to the field inside them.
+fn report_seen_lights(d: &inlay_passes::dataset::Dataset, frames: &[u32]) {
+    use inlay_passes::train::pixels::PixelPool;
+    use inlay_passes::train::seen_lights::{find_seen_lights, LIGHT_RATIO, MIN_VIEWS};
+    let scale = inlay_passes::train::trainer::radiance_scale(d, &PixelPool::new(d, 0), &d.bounds);
+    let found = find_seen_lights(d, frames, &d.bounds, scale);
+    for (l, &saturated) in found.lights.iter().zip(&found.saturated) {
+        for line in super::seen_lights::light_lines(l, saturated, "views", scale) {
+            println!("{line}");
+        }
+    }
+    if found.lights.is_empty() {
+        println!(
+            "lights past the bounds: none (no spot over {LIGHT_RATIO:.0}x the photographs' scale \
+             {scale:.3e} seen from {MIN_VIEWS} views or more)"
+        );
+    }
+    if !found.inside.is_empty() {
+        let at: Vec<String> = found
+            .inside
+            .iter()
+            .map(|c| format!("({:.3}, {:.3}, {:.3})", c.x, c.y, c.z))
+            .collect();
+        println!(
+            "lights inside the bounds, the field's to hold: {}",
+            at.join(", ")
+        );
+    }
 }

@@ -42,29 +42,8 @@ pub fn find_and_mask(
     }
     let masked = mask_seen_lights(dataset, &found.lights, &training);
     for (l, &saturated) in found.lights.iter().zip(&found.saturated) {
-        let (c, e) = (l.centre, l.radiance);
-        eprintln!(
-            "light past the bounds: a sphere at ({:.3}, {:.3}, {:.3}), radius {:.4}, radiance \
-             ({:.4e}, {:.4e}, {:.4e}) (seen in {} training views, spots over {:.0}x the knobs' \
-             scale {:.3e}; {:.1} % of its spots' light unexplained)",
-            c.x,
-            c.y,
-            c.z,
-            l.radius,
-            e.x,
-            e.y,
-            e.z,
-            l.views,
-            LIGHT_RATIO,
-            scale,
-            100.0 * l.residual
-        );
-        if saturated > 0 {
-            eprintln!(
-                "  warning: {saturated} of its pixels saturated in every exposure: its radiance is \
-                 a lower bound (what its recorded pixels and those say it is at least); a shorter \
-                 bracket would record it"
-            );
+        for line in light_lines(l, saturated, "training views", scale) {
+            eprintln!("{line}");
         }
         if let Some(r) = recipe {
             against_recipe(l, r);
@@ -77,6 +56,38 @@ pub fn find_and_mask(
         );
     }
     found.lights
+}
+
+/// What `inlay train` and `inlay dataset` say of a light found past the
+/// bounds: where, how large and how bright, in how many `views` (what the
+/// frames read are called), the spots' threshold over `scale`, and where
+/// `saturated` of its pixels were lower bounds, that its radiance is one.
+pub fn light_lines(light: &SeenLight, saturated: usize, views: &str, scale: f64) -> Vec<String> {
+    let (c, e) = (light.centre, light.radiance);
+    let mut lines = vec![format!(
+        "light past the bounds: a sphere at ({:.3}, {:.3}, {:.3}), radius {:.4}, radiance \
+         ({:.4e}, {:.4e}, {:.4e}) (seen in {} {views}, spots over {:.0}x the knobs' scale {:.3e}; \
+         {:.1} % of its spots' light unexplained)",
+        c.x,
+        c.y,
+        c.z,
+        light.radius,
+        e.x,
+        e.y,
+        e.z,
+        light.views,
+        LIGHT_RATIO,
+        scale,
+        100.0 * light.residual
+    )];
+    if saturated > 0 {
+        lines.push(format!(
+            "  warning: {saturated} of its pixels saturated in every exposure: its radiance is a \
+             lower bound (what its recorded pixels and those say it is at least); a shorter \
+             bracket would record it"
+        ));
+    }
+    lines
 }
 
 /// Prints how far `light` is from the nearest of `recipe`'s spheres that

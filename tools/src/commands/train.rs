@@ -215,11 +215,14 @@ pub struct TrainArgs {
     pub jitter: bool,
     /// Each training pixel is the mean of N x N rays over its area, and
     /// the loss is taken on that mean (a step keeps --batch rays: 1/N² as
-    /// many pixels). 1, the default, is one ray through each pixel's
-    /// centre; 2 read the Cycles sets' held-out views up to 1.8 dB higher
-    /// but left a haze in front of the surfaces.
-    #[arg(long, default_value_t = TrainKnobs::default().area_rays)]
-    pub area_rays: u32,
+    /// many pixels); 1 is one ray through each pixel's centre. `auto` (the
+    /// default): 2 where the photographs' pixels span more than 2 node
+    /// spacings at the field's centre and no random background goes
+    /// behind them (the Cycles sets' 96 x 96 views at 128 nodes: 0.06-3.05
+    /// dB higher held out), else 1 (behind a random background, or with
+    /// finer pixels, 2 left a haze in front of the surfaces).
+    #[arg(long, value_parser = parse_auto::<u32>, default_value = "auto")]
+    pub area_rays: Auto<u32>,
     /// Views never trained on, scored at the end.
     #[arg(long, default_value_t = 2)]
     pub hold_out: u32,
@@ -376,7 +379,11 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         sparse: args.sparse,
         learn_exposure: args.learn_exposure,
         jitter: args.jitter,
-        area_rays: args.area_rays,
+        // Set below from the pixels' width where auto; checked here at the
+        // most auto may take.
+        area_rays: args
+            .area_rays
+            .or(inlay_passes::train::knobs::AREA_RAYS_WIDE_PIXELS),
         held_out_samples: args.held_out_samples,
         seed: args.seed,
         ..TrainKnobs::default()
@@ -496,6 +503,19 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                  alpha below 1, so they say where nothing is (--random-background off keeps \
                  --background)",
                 alpha.linear
+            );
+        }
+    }
+    if args.area_rays.is_auto() {
+        let footprint =
+            inlay_passes::train::pixels::pixel_footprint(&dataset, &training, &bounds, nodes);
+        knobs.area_rays = knobs.auto_area_rays(footprint);
+        if knobs.area_rays > 1 {
+            eprintln!(
+                "{n}x{n} rays a training pixel, the loss on their mean: its pixels span {footprint:.2} \
+                 node spacings at the field's centre (--area-rays 1 takes one through each \
+                 pixel's centre)",
+                n = knobs.area_rays
             );
         }
     }
