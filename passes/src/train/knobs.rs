@@ -329,7 +329,7 @@ pub const DEFAULT_HELD_OUT_SAMPLES: u32 = 4;
 /// ([`TrainKnobs::view_dependent_start`]).
 pub const VIEW_DEPENDENT_START_DEGREE: u32 = 1;
 
-/// A pixel at least this many node spacings wide at the field's centre
+/// A pixel wider than this many node spacings at the field's centre
 /// takes [`AREA_RAYS_WIDE_PIXELS`] rays a side by default (`inlay train
 /// --area-rays auto`, [`TrainKnobs::auto_area_rays`]). Measured on
 /// photographs without alpha at 128 nodes: the five Cycles sets, whose 96

@@ -379,11 +379,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         sparse: args.sparse,
         learn_exposure: args.learn_exposure,
         jitter: args.jitter,
-        // Set below from the pixels' width where auto; checked here at the
-        // most auto may take.
-        area_rays: args
-            .area_rays
-            .or(inlay_passes::train::knobs::AREA_RAYS_WIDE_PIXELS),
+        // Set below from the pixels' width where auto (and checked there).
+        area_rays: args.area_rays.or(1),
         held_out_samples: args.held_out_samples,
         seed: args.seed,
         ..TrainKnobs::default()
@@ -509,14 +506,27 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     if args.area_rays.is_auto() {
         let footprint =
             inlay_passes::train::pixels::pixel_footprint(&dataset, &training, &bounds, nodes);
-        knobs.area_rays = knobs.auto_area_rays(footprint);
-        if knobs.area_rays > 1 {
-            eprintln!(
-                "{n}x{n} rays a training pixel, the loss on their mean: its pixels span {footprint:.2} \
-                 node spacings at the field's centre (--area-rays 1 takes one through each \
-                 pixel's centre)",
-                n = knobs.area_rays
-            );
+        let n = knobs.auto_area_rays(footprint);
+        let fits = inlay_passes::train::check_train_rays(
+            ctx,
+            knobs.samples_per_ray,
+            knobs.highest_sh_degree(knobs.stages_run(resume.is_some())),
+            n * n,
+        );
+        match (n > 1, fits) {
+            (true, Ok(())) => {
+                knobs.area_rays = n;
+                eprintln!(
+                    "{n}x{n} rays a training pixel, the loss on their mean: its pixels span \
+                     {footprint:.2} node spacings at the field's centre (--area-rays 1 takes one \
+                     through each pixel's centre)"
+                );
+            }
+            (true, Err(e)) => eprintln!(
+                "one ray a training pixel, though its pixels span {footprint:.2} node spacings at \
+                 the field's centre: {n}x{n} would not fit the device ({e:#})"
+            ),
+            (false, _) => {}
         }
     }
     if args.refine_density_exponent.is_auto() {
