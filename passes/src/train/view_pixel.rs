@@ -8,10 +8,10 @@
 //! that the light's disc only grazes records it at full white, while n × n
 //! centre rays may all miss it: at n = 4, the bulb's edge pixels in ROOM's
 //! held-out view 24 read black where Cycles' read white, and those four
-//! pixels alone cost the view 1.6 dB. So each cell's light is read over
-//! finer rays, at least as many a pixel as the lights' fit reads a pixel's
-//! coverage with ([`COVERAGE_RAYS`]), each sharing its cell's march: a
-//! light's share of a pixel is then the fit's own.
+//! pixels held two fifths of the view's squared error. So each cell's
+//! light is read over finer rays, at least as many a pixel as the lights'
+//! fit reads a pixel's coverage with ([`COVERAGE_RAYS`]), each sharing its
+//! cell's march: a light's share of a pixel is then the fit's own.
 
 use glam::DVec3;
 
