@@ -174,7 +174,6 @@ mod tests {
     use super::*;
     use crate::dataset::pixels::{FrameImage, PixelCounts};
     use crate::dataset::{BoundsSource, Dialect, Frame, Intrinsics, Pose};
-    use crate::train::pixels::PixelPool;
     use crate::train::trainer::radiance_scale;
 
     /// A 16 × 16 view from 5 units up +z of a box of side 2 at the origin,
@@ -234,7 +233,7 @@ mod tests {
             w.contains(&format!("{} of 256 pixels", 256 - inside)),
             "{w}"
         );
-        let scale = radiance_scale(&d, &PixelPool::new(&d, 0), &d.bounds);
+        let scale = radiance_scale(&d, &[0], &d.bounds);
         let grey = 0.2 * inside as f64 / 256.0;
         assert!((scale / grey - 1.0).abs() < 1e-4, "{scale} {grey}");
         // Bounds that hold every pixel's ray: nothing past them, and the
@@ -248,7 +247,7 @@ mod tests {
         assert_eq!(past.auto_sky(false), AUTO_SKY_HEIGHT);
         assert_eq!(past.auto_sky(true), 0);
         assert_eq!(none.auto_sky(false), 0);
-        let plain = radiance_scale(&d, &PixelPool::new(&d, 0), &wide);
+        let plain = radiance_scale(&d, &[0], &wide);
         assert!((plain / (total / 256.0) - 1.0).abs() < 1e-4, "{plain}");
     }
 

@@ -17,9 +17,9 @@ use super::behind::Behind;
 use super::gpu::{GpuTrainer, TrainRay};
 use super::knobs::TrainKnobs;
 use super::past_bounds::{frame_sees_bounds, pose_light};
-use super::pixels::{bracket_sets, is_bracket, merged_brackets, PixelPool};
+use super::pixels::{bracket_sets, is_bracket, merged_brackets, training_frames, PixelPool};
 use super::seen_lights::SeenLight;
-use super::view_pixel::view_pixel;
+use super::view_pixel::{view_pixel, PixelSplit};
 use super::visibility::node_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, Frame, PixelState};
@@ -220,11 +220,8 @@ pub const SCALE_OUTLIER: f64 = 4.0;
 /// highest views, and the mean over every pose was 3 times the room's:
 /// `docs/benchmarks.md`, issue 25's twenty-second pass). A light inside
 /// the field, which most views see (PLANTS' lamp), stays in it.
-pub fn radiance_scale(dataset: &Dataset, pool: &PixelPool, bounds: &Aabb) -> f64 {
-    let training: Vec<u32> = (0..dataset.frames.len() as u32)
-        .filter(|f| !pool.held_out.contains(f))
-        .collect();
-    let sets = bracket_sets(dataset, &training);
+pub fn radiance_scale(dataset: &Dataset, training: &[u32], bounds: &Aabb) -> f64 {
+    let sets = bracket_sets(dataset, training);
     // Each pose once, at its longest exposure's frame.
     let mut means: Vec<f64> = training
         .par_iter()
@@ -375,7 +372,7 @@ pub fn train(
     let bounds = control.resume.map_or(dataset.bounds, |f| f.bounds);
     let scale = knobs
         .scale
-        .unwrap_or_else(|| radiance_scale(dataset, &pool, &bounds));
+        .unwrap_or_else(|| radiance_scale(dataset, &training_frames(dataset, hold_out), &bounds));
     let diag = bounds.diagonal();
     let march = MarchKnobs {
         skip_empty: false,
@@ -807,9 +804,10 @@ pub fn score_view<'a>(
     };
     // What the sensor records of radiance c, before clipping.
     let recorded = |c: DVec3| c * exposure.unwrap_or(1.0);
+    let split = PixelSplit::new(samples, lights);
     let radiance: Vec<DVec3> = (0..w * h)
         .into_par_iter()
-        .map(|p| recorded(view_pixel(frame, p, field, march, &behind, lights, samples)))
+        .map(|p| recorded(view_pixel(frame, p, field, march, &behind, lights, &split)))
         .collect();
     let gain = if fit_exposure {
         fitted_gain(frame, &radiance)
@@ -1030,7 +1028,7 @@ mod tests {
                 .map(|e| frame_of(&radiance, Some(e)))
                 .to_vec(),
         );
-        let of = |d: &Dataset| radiance_scale(d, &PixelPool::new(d, 0), &d.bounds);
+        let of = |d: &Dataset| radiance_scale(d, &training_frames(d, 0), &d.bounds);
         let truth = of(&linear);
         let read = of(&brackets);
         assert!(
@@ -1058,7 +1056,7 @@ mod tests {
             bounds: crate::geometry::Aabb::new(DVec3::splat(-10.0), DVec3::splat(10.0)),
             ..dataset_with(0)
         };
-        let scale = radiance_scale(&dataset, &PixelPool::new(&dataset, 0), &dataset.bounds);
+        let scale = radiance_scale(&dataset, &training_frames(&dataset, 0), &dataset.bounds);
         assert!((scale - 0.2).abs() < 1e-6, "{scale}");
         // Two views of three with the lamp: the median view has it, and
         // the grey view is no outlier, so the scale is the views' mean.
@@ -1070,7 +1068,7 @@ mod tests {
             ],
             ..dataset
         };
-        let scale = radiance_scale(&dataset, &PixelPool::new(&dataset, 0), &dataset.bounds);
+        let scale = radiance_scale(&dataset, &training_frames(&dataset, 0), &dataset.bounds);
         let with_lamp = (49.0 * 0.2 + 1000.0) / 50.0;
         let mean = (0.2 + 2.0 * with_lamp) / 3.0;
         assert!((scale - mean).abs() < 1e-4, "{scale} {mean}");

@@ -21,27 +21,55 @@ use super::seen_lights::fit::COVERAGE_RAYS;
 use super::seen_lights::{with_seen_lights, SeenLight};
 use crate::dataset::Frame;
 use crate::field::GridField;
+use crate::geometry::Ray;
 use crate::march::{march_ray, MarchKnobs};
 
-/// The finer rays across each side of one of a pixel's `samples` ×
-/// `samples` cells that its lights are read with: none past the cell's own
-/// where there is no light, otherwise enough that the pixel holds at least
-/// [`COVERAGE_RAYS`] × [`COVERAGE_RAYS`].
-pub fn light_rays_per_cell(samples: u32, lights: &[SeenLight]) -> u32 {
-    if lights.is_empty() {
-        1
-    } else {
-        COVERAGE_RAYS.div_ceil(samples.max(1))
+/// Where a held-out pixel's rays pass, in pixels from its top-left corner:
+/// the centres of its n × n cells ([`area_offsets`]), and within each cell
+/// the finer rays its lights are read with. Made once a view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PixelSplit {
+    /// Each cell's centre, row by row.
+    pub cells: Vec<(f64, f64)>,
+    /// Each cell's finer rays (its centre alone where there is no light),
+    /// k × k of them, k enough that the pixel holds at least
+    /// [`COVERAGE_RAYS`] × [`COVERAGE_RAYS`]: the pixel's (n k)² rays
+    /// ([`area_offsets`]) split among its cells.
+    pub fine: Vec<Vec<(f64, f64)>>,
+}
+
+impl PixelSplit {
+    /// The split of a pixel into `samples` × `samples` cells, each read
+    /// with finer rays where there are `lights`.
+    pub fn new(samples: u32, lights: &[SeenLight]) -> Self {
+        let n = samples.max(1);
+        let k = if lights.is_empty() {
+            1
+        } else {
+            COVERAGE_RAYS.div_ceil(n)
+        };
+        let all = area_offsets(n * k);
+        let fine = (0..n * n)
+            .map(|c| {
+                let (cx, cy) = (c % n, c / n);
+                (0..k * k)
+                    .map(|i| all[((cy * k + i / k) * n * k + cx * k + i % k) as usize])
+                    .collect()
+            })
+            .collect();
+        Self {
+            cells: area_offsets(n),
+            fine,
+        }
     }
 }
 
 /// The radiance of pixel `pixel` of `frame` seen through `field` (marched
 /// with `march`) over `behind`, with `lights` beside it: the mean of
-/// `samples` × `samples` cells ([`area_offsets`]), each the field's march
-/// through the cell's centre, and where a light meets any of the cell's
-/// [`light_rays_per_cell`]² finer rays, the mean over those of the light
-/// drawn with that march ([`with_seen_lights`]). A ray the lens model
-/// cannot invert is left out; a pixel with none reads black.
+/// `split`'s cells, each the field's march through the cell's centre, and
+/// where a light meets any of the cell's finer rays, the mean over those
+/// of the light drawn with that march ([`with_seen_lights`]). A ray the
+/// lens model cannot invert is left out; a pixel with none reads black.
 pub fn view_pixel(
     frame: &Frame,
     pixel: u32,
@@ -49,44 +77,29 @@ pub fn view_pixel(
     march: &MarchKnobs,
     behind: &Behind,
     lights: &[SeenLight],
-    samples: u32,
+    split: &PixelSplit,
 ) -> DVec3 {
-    let n = samples.max(1);
-    let k = light_rays_per_cell(n, lights);
-    let fine = area_offsets(n * k);
+    let bounds = &field.bounds;
     let (mut sum, mut count) = (DVec3::ZERO, 0u32);
-    for (c, offset) in area_offsets(n).into_iter().enumerate() {
+    for (&offset, fine) in split.cells.iter().zip(&split.fine) {
         let Some(ray) = pixel_ray_at(frame, pixel, offset) else {
             continue;
         };
         let r = march_ray(field, &ray, f64::INFINITY, march);
         let back = behind.eval(ray.dir);
-        let centre = with_seen_lights(lights, &ray, &field.bounds, r.colour, r.opacity, back);
+        let draw = |ray: &Ray| with_seen_lights(lights, ray, bounds, r.colour, r.opacity, back);
         count += 1;
-        if k == 1 {
-            sum += centre;
-            continue;
+        // The cell as its centre ray reads it unless a finer ray meets a
+        // light, then as the mean of its finer rays.
+        let (mut drawn, mut rays, mut lit) = (DVec3::ZERO, 0u32, false);
+        if fine.len() > 1 {
+            for f in fine.iter().filter_map(|&o| pixel_ray_at(frame, pixel, o)) {
+                lit |= lights.iter().any(|l| l.hit(&f).is_some());
+                drawn += draw(&f);
+                rays += 1;
+            }
         }
-        // The cell's finer rays, row by row within the pixel's (n k)².
-        let (cx, cy) = (c as u32 % n, c as u32 / n);
-        let rays: Vec<_> = (0..k * k)
-            .filter_map(|i| {
-                let (fx, fy) = (cx * k + i % k, cy * k + i / k);
-                pixel_ray_at(frame, pixel, fine[(fy * n * k + fx) as usize])
-            })
-            .collect();
-        if rays
-            .iter()
-            .all(|f| lights.iter().all(|l| l.hit(f).is_none()))
-        {
-            sum += centre;
-            continue;
-        }
-        let drawn: DVec3 = rays
-            .iter()
-            .map(|f| with_seen_lights(lights, f, &field.bounds, r.colour, r.opacity, back))
-            .sum();
-        sum += drawn / rays.len() as f64;
+        sum += if lit { drawn / rays as f64 } else { draw(&ray) };
     }
     sum / count.max(1) as f64
 }

@@ -175,9 +175,8 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
 /// frames `frames` (all of them: `--hold-out` is the trainer's), and those
 /// it would leave to the field inside them.
 fn report_seen_lights(d: &inlay_passes::dataset::Dataset, frames: &[u32]) {
-    use inlay_passes::train::pixels::PixelPool;
     use inlay_passes::train::seen_lights::{find_seen_lights, LIGHT_RATIO, MIN_VIEWS};
-    let scale = inlay_passes::train::trainer::radiance_scale(d, &PixelPool::new(d, 0), &d.bounds);
+    let scale = inlay_passes::train::trainer::radiance_scale(d, frames, &d.bounds);
     let found = find_seen_lights(d, frames, &d.bounds, scale);
     for (l, &saturated) in found.lights.iter().zip(&found.saturated) {
         for line in super::seen_lights::light_lines(l, saturated, "views", scale) {

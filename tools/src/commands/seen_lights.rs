@@ -5,7 +5,7 @@
 use inlay_passes::dataset::Dataset;
 use inlay_passes::geometry::Aabb;
 use inlay_passes::scene::{Recipe, Shape};
-use inlay_passes::train::pixels::{training_frames, PixelPool};
+use inlay_passes::train::pixels::training_frames;
 use inlay_passes::train::seen_lights::{
     find_seen_lights, mask_seen_lights, SeenLight, LIGHT_RATIO,
 };
@@ -22,10 +22,8 @@ pub fn find_and_mask(
     scale: Option<f64>,
     recipe: Option<&Recipe>,
 ) -> Vec<SeenLight> {
-    let pool = PixelPool::new(dataset, hold_out);
     let training = training_frames(dataset, hold_out);
-    let scale = scale.unwrap_or_else(|| radiance_scale(dataset, &pool, bounds));
-    drop(pool);
+    let scale = scale.unwrap_or_else(|| radiance_scale(dataset, &training, bounds));
     let found = find_seen_lights(dataset, &training, bounds, scale);
     if !found.inside.is_empty() {
         eprintln!(
