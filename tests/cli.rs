@@ -239,6 +239,41 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
             && t.contains("of 1 of its 1 bracketed poses are white in every bracket"),
         "{t}"
     );
+    // The same poses written in OpenCV's camera convention look away from
+    // the field: training is refused before any work, naming the file, the
+    // key and the convention, and no field is written.
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("transforms.json")).unwrap())
+            .unwrap();
+    for f in json["frames"].as_array_mut().unwrap() {
+        for row in f["transform_matrix"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .take(3)
+        {
+            for c in [1, 2] {
+                row[c] = (-row[c].as_f64().unwrap()).into();
+            }
+        }
+    }
+    let opencv = out.join("opencv.json");
+    std::fs::write(&opencv, json.to_string()).unwrap();
+    let refused = dir.join("opencv.inlayfield");
+    let o = inlay(&[
+        "train",
+        opencv.to_str().unwrap(),
+        "--out",
+        refused.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert!(!o.status.success() && !refused.exists(), "{t}");
+    assert!(
+        t.contains(
+            "opencv.json: frames: 3 of the 3 frames' cameras see none of the field's bounds"
+        ) && t.contains("OpenCV's camera convention"),
+        "{t}"
+    );
 
     // `inlay train` takes it: a tiny grid, a few steps, the field written
     // and readable by `render`.

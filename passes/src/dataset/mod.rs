@@ -24,6 +24,8 @@
 //! is missing, unreadable or of the wrong size, or whose pose is not rigid,
 //! are all reported together; NaN, infinite and negative pixels are masked
 //! and counted, saturated LDR pixels kept as lower bounds.
+//! Cameras that see none of the field's bounds are named, and a dataset
+//! whose cameras look away from them is refused ([`sight`]).
 
 pub mod bounds;
 pub mod capture;
@@ -33,6 +35,7 @@ pub mod intrinsics;
 mod json;
 pub mod pixels;
 pub mod pose;
+pub mod sight;
 
 use std::path::{Path, PathBuf};
 
@@ -149,6 +152,39 @@ pub struct Dataset {
     pub counts: PixelCounts,
     /// Frames left out (with [`LoadOptions::skip_bad_frames`]).
     pub skipped: Vec<FrameProblem>,
+}
+
+impl Dataset {
+    /// The file's indices of the frames whose cameras see none of the
+    /// bounds ([`sight::sees_bounds`]): they teach the field nothing, only
+    /// what lies past it.
+    pub fn blind_frames(&self) -> Vec<usize> {
+        self.frames
+            .iter()
+            .filter(|f| !sight::sees_bounds(&f.pose, &f.intrinsics, &self.bounds))
+            .map(|f| f.index)
+            .collect()
+    }
+
+    /// A warning naming the frames that see none of the bounds, if any do.
+    pub fn blind_frames_warning(&self) -> Option<String> {
+        let blind = self.blind_frames();
+        let list: Vec<String> = blind.iter().take(8).map(|i| i.to_string()).collect();
+        (!blind.is_empty()).then(|| {
+            format!(
+                "frames {}{} ({} of {}) see none of the field's bounds: they teach only the \
+                 light past them",
+                list.join(", "),
+                if blind.len() > list.len() {
+                    ", …"
+                } else {
+                    ""
+                },
+                blind.len(),
+                self.frames.len()
+            )
+        })
+    }
 }
 
 /// Why a dataset cannot be read: the file, the key and what is wrong, and
@@ -273,6 +309,17 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
         frames[i].exposure_time = Some(e);
     }
     let (bounds, bounds_source) = dataset_bounds(top, dialect, &frames, options)?;
+    let cameras = frames.iter().map(|f| (&f.pose, &f.intrinsics));
+    if let Some(p) = sight::Sight::of(cameras, &bounds).problem() {
+        let (lo, hi) = (bounds.min, bounds.max);
+        return Err(top.error(
+            "frames",
+            format!(
+                "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {bounds_source})",
+                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+            ),
+        ));
+    }
     let mut counts = PixelCounts::default();
     for f in &frames {
         counts += f.image.counts;

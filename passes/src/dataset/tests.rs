@@ -489,3 +489,49 @@ fn errors_in_the_file_name_the_key() {
     let e = load_dataset(&dir.join("nowhere"), &LoadOptions::default()).unwrap_err();
     assert!(e.to_string().contains("no such file"), "{e}");
 }
+
+/// Poses written in OpenCV's camera convention look away from the field:
+/// the read stops before any training, naming the frames and the
+/// convention; one frame looking away from it is named in a warning.
+#[test]
+fn poses_in_opencv_convention_are_refused_and_a_frame_looking_away_named() {
+    let write = |dir: &Path, flip: &dyn Fn(usize) -> bool| {
+        let mut frames = Vec::new();
+        for (i, e) in eyes().iter().enumerate() {
+            let name = format!("f{i}.exr");
+            write_exr(&dir.join(&name), 8, 6, |_, _| [0.5, 0.4, 0.3]);
+            let mut rows = pose_rows(*e);
+            if flip(i) {
+                for r in rows.iter_mut().take(3) {
+                    r[1] = -r[1];
+                    r[2] = -r[2];
+                }
+            }
+            frames.push(serde_json::json!({ "file_path": name, "transform_matrix": rows }));
+        }
+        let text = serde_json::json!({
+            "camera_angle_x": 0.8, "aabb": [[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]],
+            "frames": frames
+        });
+        std::fs::write(dir.join("transforms.json"), text.to_string()).unwrap();
+    };
+    let dir = folder("opencv");
+    write(&dir, &|_| true);
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.key, "frames");
+    assert!(
+        e.message.contains("4 of the 4 frames' cameras see none")
+            && e.message.contains("4 would see them read in OpenCV's"),
+        "{e}"
+    );
+    let dir = folder("one-away");
+    write(&dir, &|i| i == 1);
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert_eq!(d.blind_frames(), vec![1]);
+    let w = d.blind_frames_warning().unwrap();
+    assert!(w.starts_with("frames 1 (1 of 4) see none"), "{w}");
+    let dir = folder("all-see");
+    write(&dir, &|_| false);
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert_eq!(d.blind_frames_warning(), None);
+}

@@ -121,6 +121,9 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         "bounds: {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {}",
         b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z, d.bounds_source
     );
+    if let Some(w) = d.blind_frames_warning() {
+        println!("warning: {w}");
+    }
     let total: usize = d.frames.iter().map(|f| f.image.state.len()).sum();
     let c = d.counts;
     println!(

@@ -468,6 +468,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             eprintln!("{line}: ignored (--depth-weight 0)");
         }
     }
+    if let Some(w) = dataset.blind_frames_warning() {
+        eprintln!("warning: {}: {w}", dataset.file.display());
+    }
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&dataset).warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
