@@ -768,6 +768,9 @@ fn train_finds_a_bulb_past_the_bounds_and_keeps_it_beside_the_field() {
         t.contains("light past the bounds: a sphere at") && t.contains("seen in 6 views"),
         "{t}"
     );
+    // Its share of the light past the bounds leaves the bulb's pixels out,
+    // as training does.
+    assert!(t.contains("pixels left out, as training leaves them"), "{t}");
     let field = dir.join("bulb.inlayfield");
     let lights = dir.join("bulb.lights.toml");
     let train = |extra: &[&str]| {

@@ -69,7 +69,7 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         split: args.split.clone(),
         skip_bad_frames: args.skip_bad_frames,
     };
-    let d = load_dataset(&args.path, &options)?;
+    let mut d = load_dataset(&args.path, &options)?;
     println!("{}: {} dialect", d.file.display(), d.dialect);
     println!(
         "frames: {} usable{}",
@@ -138,37 +138,29 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         println!("warning: {w}");
     }
     let every: Vec<u32> = (0..d.frames.len() as u32).collect();
+    let lum = luminance_quantiles(&d);
+    // The lights past the bounds, found and left out as training finds and
+    // leaves them, before the share of light past the bounds is read.
+    let lights = report_seen_lights(&d, &every);
+    let masked = inlay_passes::train::seen_lights::mask_seen_lights(&mut d, &lights, &every);
     let past = inlay_passes::train::past_bounds::light_past_bounds(&d, &every, &d.bounds);
     println!(
-        "past the bounds: {} of {} pixels, {:.1} % of the views' light",
+        "past the bounds: {} of {} pixels, {:.1} % of the views' light{}",
         past.pixels,
         past.of,
-        100.0 * past.share
+        100.0 * past.share,
+        if masked > 0 {
+            format!(" (the lights' {masked} pixels left out, as training leaves them)")
+        } else {
+            String::new()
+        }
     );
     if let Some(w) = past.warning() {
         println!("warning: {w}");
     }
-    report_seen_lights(&d, &every);
-    let mut lum: Vec<f32> = d
-        .frames
-        .iter()
-        .flat_map(|f| {
-            f.image
-                .radiance
-                .iter()
-                .zip(&f.image.state)
-                .filter(|(_, s)| **s != inlay_passes::dataset::PixelState::Masked)
-                .map(|(p, _)| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
-        })
-        .collect();
-    if !lum.is_empty() {
-        lum.sort_by(f32::total_cmp);
-        let q = |f: f64| lum[((lum.len() - 1) as f64 * f) as usize];
+    if let Some([median, p99, max]) = lum {
         println!(
-            "radiance (luminance): median {:.4}, 99th percentile {:.4}, max {:.4}",
-            q(0.5),
-            q(0.99),
-            q(1.0)
+            "radiance (luminance): median {median:.4}, 99th percentile {p99:.4}, max {max:.4}"
         );
     }
     Ok(())
@@ -176,8 +168,11 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
 
 /// Prints the lights past the bounds `inlay train` would find in `d`'s
 /// frames `frames` (all of them: `--hold-out` is the trainer's), and those
-/// it would leave to the field inside them.
-fn report_seen_lights(d: &inlay_passes::dataset::Dataset, frames: &[u32]) {
+/// it would leave to the field inside them; returns the lights past them.
+fn report_seen_lights(
+    d: &inlay_passes::dataset::Dataset,
+    frames: &[u32],
+) -> Vec<inlay_passes::train::seen_lights::SeenLight> {
     use inlay_passes::train::seen_lights::{find_seen_lights, LIGHT_RATIO, MIN_VIEWS};
     let scale = inlay_passes::train::trainer::radiance_scale(d, frames, &d.bounds);
     let found = find_seen_lights(d, frames, &d.bounds, scale);
@@ -203,4 +198,28 @@ fn report_seen_lights(d: &inlay_passes::dataset::Dataset, frames: &[u32]) {
             at.join(", ")
         );
     }
+    found.lights
+}
+
+/// The median, 99th percentile and largest luminance of `d`'s pixels that
+/// are not masked; None where every pixel is.
+fn luminance_quantiles(d: &inlay_passes::dataset::Dataset) -> Option<[f32; 3]> {
+    let mut lum: Vec<f32> = d
+        .frames
+        .iter()
+        .flat_map(|f| {
+            f.image
+                .radiance
+                .iter()
+                .zip(&f.image.state)
+                .filter(|(_, s)| **s != inlay_passes::dataset::PixelState::Masked)
+                .map(|(p, _)| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+        })
+        .collect();
+    if lum.is_empty() {
+        return None;
+    }
+    lum.sort_by(f32::total_cmp);
+    let q = |f: f64| lum[((lum.len() - 1) as f64 * f) as usize];
+    Some([q(0.5), q(0.99), q(1.0)])
 }
