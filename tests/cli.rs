@@ -770,7 +770,10 @@ fn train_finds_a_bulb_past_the_bounds_and_keeps_it_beside_the_field() {
     );
     // Its share of the light past the bounds leaves the bulb's pixels out,
     // as training does.
-    assert!(t.contains("pixels left out, as training leaves them"), "{t}");
+    assert!(
+        t.contains("pixels left out, as training leaves them"),
+        "{t}"
+    );
     let field = dir.join("bulb.inlayfield");
     let lights = dir.join("bulb.lights.toml");
     let train = |extra: &[&str]| {

@@ -30,9 +30,11 @@
 pub mod bounds;
 pub mod capture;
 pub mod depth;
+pub mod downscale;
 pub mod exif;
 pub mod intrinsics;
 mod json;
+pub mod memory;
 pub mod pixels;
 pub mod pose;
 pub mod sight;
@@ -83,6 +85,13 @@ pub struct LoadOptions {
     /// Leave out the frames that cannot be used (reported) instead of
     /// failing.
     pub skip_bad_frames: bool,
+    /// Read each image at 1/n of its width and height ([`downscale`]); 1
+    /// reads it as it is.
+    pub downscale: u32,
+    /// The memory the photographs may hold once read, in bytes: a dataset
+    /// that would hold more is refused before any pixel is read
+    /// ([`memory`]). None reads it whatever it holds.
+    pub memory_available: Option<u64>,
 }
 
 impl Default for LoadOptions {
@@ -92,6 +101,8 @@ impl Default for LoadOptions {
             background: [1.0; 3],
             split: "train".into(),
             skip_bad_frames: false,
+            downscale: 1,
+            memory_available: None,
         }
     }
 }
@@ -267,6 +278,49 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
         file: &file,
         at: "",
     };
+    let n = options.downscale;
+    if !(1..=downscale::MAX_DOWNSCALE).contains(&n) {
+        return Err(top.error(
+            "--downscale",
+            format!("{n}: must be 1 to {}", downscale::MAX_DOWNSCALE),
+        ));
+    }
+    // The cameras from the images' headers alone, so that the bounds, the
+    // cameras' sight of them and the memory the pixels will hold are
+    // checked before any pixel is read (a frame that cannot be used is
+    // reported with the others below).
+    let cameras: Vec<(Pose, Intrinsics)> = specs
+        .par_iter()
+        .filter_map(|s| frame_camera(s, options).ok())
+        .map(|(pose, _, k)| (pose, k))
+        .collect();
+    // With no usable camera, the frames' problems are the error (below).
+    let checked = if cameras.is_empty() {
+        None
+    } else {
+        let (bounds, source) = dataset_bounds(top, dialect, &cameras, options)?;
+        let sight = sight::Sight::of(cameras.iter().map(|(p, k)| (p, k)), &bounds);
+        if let Some(p) = sight.problem() {
+            let (lo, hi) = (bounds.min, bounds.max);
+            return Err(top.error(
+                "frames",
+                format!(
+                    "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {source})",
+                    lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+                ),
+            ));
+        }
+        Some((bounds, source))
+    };
+    if let Some(available) = options.memory_available {
+        let pixels: u64 = cameras
+            .iter()
+            .map(|(_, k)| k.width as u64 * k.height as u64)
+            .sum();
+        if let Some(p) = memory::problem(pixels, n, available) {
+            return Err(top.error("frames", p));
+        }
+    }
     let results: Vec<Result<Frame, FrameProblem>> = specs
         .into_par_iter()
         .map(|s| read_frame(s, options))
@@ -308,18 +362,9 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
     for (&i, e) in from_exif.iter().zip(exif::relative_exposure(&exposures)) {
         frames[i].exposure_time = Some(e);
     }
-    let (bounds, bounds_source) = dataset_bounds(top, dialect, &frames, options)?;
-    let cameras = frames.iter().map(|f| (&f.pose, &f.intrinsics));
-    if let Some(p) = sight::Sight::of(cameras, &bounds).problem() {
-        let (lo, hi) = (bounds.min, bounds.max);
-        return Err(top.error(
-            "frames",
-            format!(
-                "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {bounds_source})",
-                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
-            ),
-        ));
-    }
+    let Some((bounds, bounds_source)) = checked else {
+        return Err(top.error("frames", "no frame can be used"));
+    };
     let mut counts = PixelCounts::default();
     for f in &frames {
         counts += f.image.counts;
@@ -628,6 +673,37 @@ fn image_file(folder: &Path, path: &str) -> Result<PathBuf, String> {
     ))
 }
 
+/// A frame's camera as its image's header gives it: its pose, its image
+/// and its intrinsics at full size, or why it cannot be used.
+fn frame_camera(
+    s: &FrameSpec,
+    options: &LoadOptions,
+) -> Result<(Pose, PathBuf, Intrinsics), String> {
+    let pose = s.pose.clone()?;
+    let path = s.image.clone()?;
+    let (w, h) = pixels::image_size(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if let [Some(fw), Some(fh)] = s.camera.size {
+        if (fw, fh) != (w as f64, h as f64) {
+            return Err(format!(
+                "{} is {w}x{h}, the file says w = {fw}, h = {fh}",
+                path.display()
+            ));
+        }
+    }
+    let intrinsics = intrinsics_for(&s.camera, w, h);
+    if let Some(p) = intrinsics.problem() {
+        return Err(p);
+    }
+    if w < options.downscale || h < options.downscale {
+        return Err(format!(
+            "{} is {w}x{h}, smaller than --downscale {}",
+            path.display(),
+            options.downscale
+        ));
+    }
+    Ok((pose, path, intrinsics))
+}
+
 /// Reads one frame's image and resolves its intrinsics.
 fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem> {
     let fail = |problem: String| FrameProblem {
@@ -635,21 +711,8 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
         key: s.key.clone(),
         problem,
     };
-    let pose = s.pose.clone().map_err(&fail)?;
-    let path = s.image.clone().map_err(&fail)?;
-    let (w, h) = pixels::image_size(&path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-    if let [Some(fw), Some(fh)] = s.camera.size {
-        if (fw, fh) != (w as f64, h as f64) {
-            return Err(fail(format!(
-                "{} is {w}x{h}, the file says w = {fw}, h = {fh}",
-                path.display()
-            )));
-        }
-    }
-    let intrinsics = intrinsics_for(&s.camera, w, h);
-    if let Some(p) = intrinsics.problem() {
-        return Err(fail(p));
-    }
+    let (pose, path, intrinsics) = frame_camera(&s, options).map_err(&fail)?;
+    let (w, h) = (intrinsics.width, intrinsics.height);
     let mut image = pixels::load_image(&path, options.background)
         .map_err(|e| fail(format!("{}: {e}", path.display())))?;
     if let Some(m) = &s.mask {
@@ -662,6 +725,16 @@ fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem
         Some((d, unit)) => depth::load_depth_map(d, (w, h), *unit)
             .map_err(|e| fail(format!("{}: {e}", d.display())))?,
         None => Vec::new(),
+    };
+    let n = options.downscale;
+    let (image, depth, intrinsics) = if n > 1 {
+        (
+            downscale::image(&image, n),
+            downscale::depth(&depth, w, h, n),
+            downscale::intrinsics(&intrinsics, n),
+        )
+    } else {
+        (image, depth, intrinsics)
     };
     // The file's key first; an LDR photograph's own record where it has
     // none (an EXR frame is radiance: no exposure applies).
@@ -707,7 +780,7 @@ fn intrinsics_for(keys: &CameraKeys, w: u32, h: u32) -> Intrinsics {
 fn dataset_bounds(
     top: Obj,
     dialect: Dialect,
-    frames: &[Frame],
+    cameras: &[(Pose, Intrinsics)],
     options: &LoadOptions,
 ) -> Result<(Aabb, BoundsSource), DatasetError> {
     let valid = |b: Aabb, key: &str| {
@@ -758,11 +831,10 @@ fn dataset_bounds(
             return Ok((valid(b, "aabb_scale")?, BoundsSource::NgpAabbScale));
         }
     }
-    let poses: Vec<Pose> = frames.iter().map(|f| f.pose).collect();
-    let half_fovs: Vec<f64> = frames
+    let poses: Vec<Pose> = cameras.iter().map(|(p, _)| *p).collect();
+    let half_fovs: Vec<f64> = cameras
         .iter()
-        .map(|f| {
-            let k = &f.intrinsics;
+        .map(|(_, k)| {
             (0.5 * k.width as f64 / k.fx)
                 .atan()
                 .min((0.5 * k.height as f64 / k.fy).atan())

@@ -535,3 +535,84 @@ fn poses_in_opencv_convention_are_refused_and_a_frame_looking_away_named() {
     let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
     assert_eq!(d.blind_frames_warning(), None);
 }
+
+/// `--downscale 2` reads each 2 × 2 block as one pixel, its mean, with the
+/// intrinsics scaled to match (its rays those through the blocks' centres
+/// at full size) and its depth map reduced alike; a factor the images are
+/// smaller than is reported with the frames; a dataset too large for the
+/// memory given is refused before any pixel is read, naming the factor
+/// that fits.
+#[test]
+fn downscale_reads_blocks_and_photographs_past_the_memory_are_refused() {
+    let dir = folder("downscale");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.exr");
+        write_exr(&dir.join(&name), 9, 6, |x, y| {
+            [(x + 10 * y) as f32, 1.0, 2.0]
+        });
+        let z: Vec<f32> = (0..54).map(|p| 4.0 + (p % 9) as f32 * 0.01).collect();
+        std::fs::write(
+            dir.join(format!("d{i}.png")),
+            depth::depth_png(&z, 9, 6, 0.001),
+        )
+        .unwrap();
+        frames.push(serde_json::json!({
+            "file_path": name, "depth_file_path": format!("d{i}.png"),
+            "transform_matrix": pose_rows(*e)
+        }));
+    }
+    let text = serde_json::json!({
+        "camera_model": "OPENCV", "fl_x": 8.0, "fl_y": 8.5, "cx": 4.3, "cy": 2.9,
+        "k1": -0.05, "k2": 0.01, "p1": 0.0, "p2": 0.0,
+        "aabb": [[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]], "frames": frames
+    });
+    std::fs::write(dir.join("transforms.json"), text.to_string()).unwrap();
+    let full = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    let options = LoadOptions {
+        downscale: 2,
+        ..LoadOptions::default()
+    };
+    let half = load_dataset(&dir, &options).unwrap();
+    let (f, h) = (&full.frames[1], &half.frames[1]);
+    assert_eq!((h.image.width, h.image.height), (4, 3));
+    assert_eq!((h.intrinsics.fx, h.intrinsics.cx), (4.0, 2.15));
+    // Block (1, 2): pixels (2..4, 4..6) of the original.
+    assert_eq!(h.image.radiance[2 * 4 + 1], [47.5, 1.0, 2.0]);
+    let ray = |fr: &Frame, u: f64, v: f64| fr.pose.to_world(fr.intrinsics.direction(u, v).unwrap());
+    assert!((ray(h, 1.5, 2.5) - ray(f, 3.0, 5.0)).length() < 1e-12);
+    // The depth: the block's median (4.02 or 4.03 mm-rounded), in metres.
+    assert!((h.depth[2 * 4 + 1] - 4.03).abs() < 1e-3, "{}", h.depth[9]);
+    let tiny = LoadOptions {
+        downscale: 7,
+        ..LoadOptions::default()
+    };
+    let e = load_dataset(&dir, &tiny).unwrap_err();
+    assert!(e.to_string().contains("smaller than --downscale 7"), "{e}");
+    let e = load_dataset(
+        &dir,
+        &LoadOptions {
+            downscale: 0,
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap_err();
+    assert_eq!(e.key, "--downscale");
+    // 4 frames of 54 pixels hold 6912 bytes; 4000 leaves half free at 2.
+    let tight = LoadOptions {
+        memory_available: Some(4000),
+        ..LoadOptions::default()
+    };
+    let e = load_dataset(&dir, &tight).unwrap_err();
+    assert_eq!(e.key, "frames");
+    assert!(
+        e.message.contains("216 pixels") && e.message.contains("--downscale 2 "),
+        "{e}"
+    );
+    let fits = LoadOptions {
+        memory_available: Some(4000),
+        downscale: 2,
+        ..LoadOptions::default()
+    };
+    assert!(load_dataset(&dir, &fits).is_ok());
+}

@@ -11,8 +11,6 @@
 
 use rayon::prelude::*;
 
-use super::pixels::{pixel_ray, PixelPool};
-use crate::dataset::Dataset;
 use crate::field::{GridField, DEFAULT_OCCUPANCY_BLOCK};
 use crate::geometry::Ray;
 use crate::march::{march_samples, MarchKnobs};
@@ -47,14 +45,6 @@ pub fn node_visibility(field: &GridField, rays: &[Ray], knobs: &MarchKnobs) -> V
                 a
             },
         )
-}
-
-/// The rays of the training pixels of `pool`.
-pub fn training_rays(dataset: &Dataset, pool: &PixelPool) -> Vec<Ray> {
-    pool.pixels
-        .iter()
-        .filter_map(|p| pixel_ray(&dataset.frames[p.frame as usize], p.pixel))
-        .collect()
 }
 
 /// `field` with every negative density that no point's density depends on

@@ -20,7 +20,7 @@ use super::past_bounds::{frame_sees_bounds, pose_light};
 use super::pixels::{bracket_sets, is_bracket, merged_brackets, training_frames, PixelPool};
 use super::seen_lights::SeenLight;
 use super::view_pixel::{view_pixel, PixelSplit};
-use super::visibility::node_visibility_gpu;
+use super::visibility::pool_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
 use crate::dataset::{Dataset, Frame, PixelState};
 use crate::field::FieldLayout::Auto;
@@ -452,9 +452,15 @@ pub fn train(
         // The bricks around what the stage before (or the resumed field)
         // made visible, and those a resumed field holds.
         let layout = if sparse {
-            let rays = super::prune::training_rays(dataset, &pool);
-            let visibility =
-                node_visibility_gpu(&mut renderer, lib, &field, &rays, &view_march, Auto)?;
+            let visibility = pool_visibility_gpu(
+                &mut renderer,
+                lib,
+                &field,
+                dataset,
+                &pool,
+                &view_march,
+                Auto,
+            )?;
             Some(super::sparse_stage::stage_layout(
                 &field,
                 &visibility,
@@ -605,8 +611,15 @@ pub fn train(
     // Pruned unless Ctrl-C ended the run (the field so far, at once).
     let mut pruned = 0;
     if knobs.prune > 0.0 && !(control.stop)() {
-        let rays = super::prune::training_rays(dataset, &pool);
-        let visibility = node_visibility_gpu(&mut renderer, lib, &field, &rays, &view_march, Auto)?;
+        let visibility = pool_visibility_gpu(
+            &mut renderer,
+            lib,
+            &field,
+            dataset,
+            &pool,
+            &view_march,
+            Auto,
+        )?;
         (field, pruned) = super::prune::prune(&field, &visibility, knobs.prune);
     }
     // Empty space below zero costs a sparse file its bricks; zeroing it

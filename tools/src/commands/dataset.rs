@@ -31,6 +31,20 @@ pub struct DatasetArgs {
     /// Leave out the frames that cannot be used instead of failing.
     #[arg(long)]
     pub skip_bad_frames: bool,
+    /// Read each photograph at 1/N of its width and height (each N x N
+    /// block one pixel), as `inlay train --downscale N` does.
+    #[arg(long, default_value_t = 1)]
+    pub downscale: u32,
+}
+
+/// The memory this machine has available, in bytes (Linux's
+/// `MemAvailable`); None where it cannot be read, and then a dataset is
+/// read whatever it holds.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// `x,y,z,X,Y,Z` as a box.
@@ -68,6 +82,8 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         background: args.background,
         split: args.split.clone(),
         skip_bad_frames: args.skip_bad_frames,
+        downscale: args.downscale,
+        memory_available: available_memory(),
     };
     let mut d = load_dataset(&args.path, &options)?;
     println!("{}: {} dialect", d.file.display(), d.dialect);
@@ -100,8 +116,13 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
         .filter(|f| f.intrinsics.distortion != Distortion::None)
         .count();
     println!(
-        "images: {}; focal length fx {fmin:.1}–{fmax:.1} px; {distorted} with lens distortion (undistorted exactly)",
-        sizes.join(", ")
+        "images: {}{}; focal length fx {fmin:.1}–{fmax:.1} px; {distorted} with lens distortion (undistorted exactly)",
+        sizes.join(", "),
+        if args.downscale > 1 {
+            format!(" (read at 1/{} of their size)", args.downscale)
+        } else {
+            String::new()
+        }
     );
     let timed = d
         .frames

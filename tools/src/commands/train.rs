@@ -251,6 +251,12 @@ pub struct TrainArgs {
     /// Leave out the frames that cannot be used instead of failing.
     #[arg(long)]
     pub skip_bad_frames: bool,
+    /// Read each photograph at 1/N of its width and height (each N x N
+    /// block one pixel, its mean; the intrinsics scaled to match): for
+    /// photographs too many or too large for memory, which are refused
+    /// before any pixel is read, naming the N that fits.
+    #[arg(long, default_value_t = 1)]
+    pub downscale: u32,
     /// Seed of every random choice.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -405,6 +411,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         bounds: args.bounds,
         background: args.background,
         skip_bad_frames: args.skip_bad_frames,
+        downscale: args.downscale,
+        memory_available: crate::commands::dataset::available_memory(),
         ..LoadOptions::default()
     };
     let mut dataset = load_dataset(&args.dataset, &options)?;
