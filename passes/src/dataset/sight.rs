@@ -3,7 +3,7 @@
 //! away from them has poses in another camera convention, or bounds in
 //! other units, more often than it is a capture of something else.
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec4};
 
 use super::intrinsics::Intrinsics;
 use super::pose::Pose;
@@ -38,26 +38,11 @@ pub fn sees_bounds(pose: &Pose, k: &Intrinsics, bounds: &Aabb) -> bool {
         return true;
     }
     let to_camera = pose.matrix.inverse();
-    let corners = (0..8).map(|c| {
-        DVec3::new(
-            if c & 1 == 0 {
-                bounds.min.x
-            } else {
-                bounds.max.x
-            },
-            if c & 2 == 0 {
-                bounds.min.y
-            } else {
-                bounds.max.y
-            },
-            if c & 4 == 0 {
-                bounds.min.z
-            } else {
-                bounds.max.z
-            },
-        )
-    });
-    corners.chain(std::iter::once(bounds.center())).any(|p| {
+    let mut points = bounds
+        .corners()
+        .into_iter()
+        .chain(std::iter::once(bounds.center()));
+    points.any(|p| {
         let d = to_camera.transform_point3(p);
         k.project(d)
             .is_some_and(|(u, v)| (0.0..=w).contains(&u) && (0.0..=h).contains(&v))
@@ -144,6 +129,7 @@ impl Sight {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     fn ring(count: usize, target: DVec3) -> Vec<Pose> {
         (0..count)

@@ -41,6 +41,18 @@ impl Aabb {
         self.size().length()
     }
 
+    /// The eight corners, corner k taking max along x where bit 0 of k is
+    /// set, along y for bit 1, along z for bit 2.
+    pub fn corners(&self) -> [DVec3; 8] {
+        std::array::from_fn(|k| {
+            DVec3::new(
+                if k & 1 == 0 { self.min.x } else { self.max.x },
+                if k & 2 == 0 { self.min.y } else { self.max.y },
+                if k & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
     /// Whether every edge is finite and positive.
     pub fn is_valid(&self) -> bool {
         self.min.is_finite() && self.max.is_finite() && self.min.cmplt(self.max).all()

@@ -58,10 +58,11 @@ pub fn node_visibility_gpu(
 
 /// The farthest apart, in node spacings of the marched field, that the
 /// rays of one photograph may pass through the bounds for
-/// [`pool_visibility_gpu`]: a node half a spacing from the nearest ray
-/// still takes at least a quarter of its trilinear weight from it, so a
-/// node seen by any photograph keeps a visibility within a few times of
-/// what every pixel's ray would give it.
+/// [`pool_visibility_gpu`]: the nearest ray then passes within a quarter
+/// of a spacing of each node along the two directions across the rays,
+/// where the node's trilinear weight is still about 0.75² of the weight a
+/// ray through it gives, so a node seen by any photograph keeps most of
+/// the visibility every pixel's ray would give it.
 pub const VISIBILITY_RAY_SPACING: f64 = 0.5;
 
 /// The stride of the pixels of `frame` whose rays [`pool_visibility_gpu`]
@@ -73,16 +74,11 @@ pub const VISIBILITY_RAY_SPACING: f64 = 0.5;
 /// photographs.
 pub fn visibility_stride(frame: &Frame, field: &GridField) -> u32 {
     let spacing = field.spacing().min_element();
-    let b = field.bounds;
-    let far = (0..8)
-        .map(|c| {
-            let corner = glam::DVec3::new(
-                if c & 1 == 0 { b.min.x } else { b.max.x },
-                if c & 2 == 0 { b.min.y } else { b.max.y },
-                if c & 4 == 0 { b.min.z } else { b.max.z },
-            );
-            (corner - frame.pose.origin()).length()
-        })
+    let far = field
+        .bounds
+        .corners()
+        .iter()
+        .map(|c| (*c - frame.pose.origin()).length())
         .fold(0.0f64, f64::max);
     let pixel = far / frame.intrinsics.fx.min(frame.intrinsics.fy);
     let stride = (VISIBILITY_RAY_SPACING * spacing / pixel).floor();

@@ -67,15 +67,10 @@ pub fn field_depth(field: &GridField, ray: &Ray, knobs: &MarchKnobs) -> Option<f
 pub fn rest_on(placed: &PlacedObject, surface: DVec3) -> DVec3 {
     let m = placed.pose.matrix();
     let b = placed.mesh.bounds();
-    let lowest = (0..8)
-        .map(|k| {
-            let corner = DVec3::new(
-                if k & 1 == 0 { b.min.x } else { b.max.x },
-                if k & 2 == 0 { b.min.y } else { b.max.y },
-                if k & 4 == 0 { b.min.z } else { b.max.z },
-            );
-            m.transform_point3(corner).y
-        })
+    let lowest = b
+        .corners()
+        .iter()
+        .map(|&corner| m.transform_point3(corner).y)
         .fold(f64::INFINITY, f64::min);
     let (centre, _) = placed.sphere();
     let p = placed.pose.position;
