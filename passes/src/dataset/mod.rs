@@ -289,50 +289,81 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
     // cameras' sight of them and the memory the pixels will hold are
     // checked before any pixel is read (a frame that cannot be used is
     // reported with the others below).
-    let cameras: Vec<(Pose, Intrinsics)> = specs
+    let cameras: Vec<(usize, Pose, Intrinsics)> = specs
         .par_iter()
-        .filter_map(|s| frame_camera(s, options).ok())
-        .map(|(pose, _, k)| (pose, k))
+        .enumerate()
+        .filter_map(|(i, s)| frame_camera(s, options).ok().map(|(p, _, k)| (i, p, k)))
         .collect();
     // With no usable camera, the frames' problems are the error (below).
+    let mut problems = Vec::new();
+    let mut blind = Vec::new();
     let checked = if cameras.is_empty() {
         None
     } else {
-        let (bounds, source) = dataset_bounds(top, dialect, &cameras, options)?;
-        let sight = sight::Sight::of(cameras.iter().map(|(p, k)| (p, k)), &bounds);
+        let poses: Vec<(Pose, Intrinsics)> = cameras.iter().map(|(_, p, k)| (*p, *k)).collect();
+        let (bounds, source) = dataset_bounds(top, dialect, &poses, options)?;
+        let sight = sight::Sight::of(poses.iter().map(|(p, k)| (p, k)), &bounds);
         if let Some(p) = sight.problem() {
-            let (lo, hi) = (bounds.min, bounds.max);
-            return Err(top.error(
-                "frames",
-                format!(
-                    "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {source})",
-                    lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
-                ),
-            ));
+            // Under --skip-bad-frames the frames that see none are left
+            // out, as long as one sees them.
+            if !options.skip_bad_frames || sight.blind.len() == cameras.len() {
+                let (lo, hi) = (bounds.min, bounds.max);
+                return Err(top.error(
+                    "frames",
+                    format!(
+                        "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {source}){}",
+                        lo.x,
+                        lo.y,
+                        lo.z,
+                        hi.x,
+                        hi.y,
+                        hi.z,
+                        if sight.blind.len() < cameras.len() {
+                            "; --skip-bad-frames trains on those that see them"
+                        } else {
+                            ""
+                        }
+                    ),
+                ));
+            }
+            blind = sight.blind.iter().map(|&b| cameras[b].0).collect();
         }
         Some((bounds, source))
     };
     if let Some(available) = options.memory_available {
         let pixels: u64 = cameras
             .iter()
-            .map(|(_, k)| k.width as u64 * k.height as u64)
+            .filter(|(i, _, _)| !blind.contains(i))
+            .map(|(_, _, k)| k.width as u64 * k.height as u64)
             .sum();
         if let Some(p) = memory::problem(pixels, n, available) {
             return Err(top.error("frames", p));
         }
     }
-    let results: Vec<Result<Frame, FrameProblem>> = specs
+    let mut read = Vec::with_capacity(specs.len());
+    for (i, s) in specs.into_iter().enumerate() {
+        if blind.contains(&i) {
+            problems.push(FrameProblem {
+                index: s.index,
+                key: s.key,
+                problem: "its camera sees none of the field's bounds".into(),
+            });
+        } else {
+            read.push(s);
+        }
+    }
+    let results: Vec<Result<Frame, FrameProblem>> = read
         .into_par_iter()
         .map(|s| read_frame(s, options))
         .collect();
     let mut frames = Vec::new();
-    let mut problems = Vec::new();
     for r in results {
         match r {
             Ok(f) => frames.push(f),
             Err(p) => problems.push(p),
         }
     }
+    problems.sort_by_key(|p| p.index);
     if !problems.is_empty() && (!options.skip_bad_frames || frames.is_empty()) {
         let n = problems.len();
         let mut e = top.error(

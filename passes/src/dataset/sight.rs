@@ -94,22 +94,21 @@ impl Sight {
         s
     }
 
-    /// Why the poses cannot be trained on as read, if they cannot: no
-    /// camera sees the bounds, or most see none and OpenCV's convention
-    /// would at least halve those that see none (then the message says
-    /// how to convert them).
+    /// Why the poses cannot be trained on as read, if they cannot: more
+    /// than half the cameras see none of the bounds. Where OpenCV's
+    /// convention would at least halve those, the message says how to
+    /// convert the poses; otherwise it names the bounds' units and axes,
+    /// and poses written world-to-camera.
     pub fn problem(&self) -> Option<String> {
         let blind = self.blind.len();
-        let most = 2 * blind > self.cameras;
-        let convention = most && 2 * self.blind_as_opencv <= blind;
-        if blind < self.cameras && !convention {
+        if 2 * blind <= self.cameras {
             return None;
         }
         let head = format!(
             "{blind} of the {} frames' cameras see none of the field's bounds",
             self.cameras
         );
-        Some(if convention {
+        Some(if 2 * self.blind_as_opencv <= blind {
             format!(
                 "{head}; {} would see them read in OpenCV's camera convention (x right, y \
                  down, looking along +z; COLMAP's): transform_matrix is camera-to-world in OpenGL's \
@@ -120,7 +119,8 @@ impl Sight {
         } else {
             format!(
                 "{head}: check that the bounds (`aabb`, `aabb_scale`, --bounds) are in the \
-                 poses' units and axes, and that the poses are camera-to-world"
+                 poses' units and axes, and that the poses are camera-to-world (not their \
+                 inverse)"
             )
         })
     }
@@ -180,6 +180,19 @@ mod tests {
             .unwrap();
         assert!(
             p.contains("check that the bounds") && !p.contains("OpenCV"),
+            "{p}"
+        );
+
+        // Most cameras looking away, and no convention that would help.
+        let mut most = poses.clone();
+        for p in most.iter_mut().take(5) {
+            *p = Pose::looking_at(p.origin(), p.origin() * 2.0, DVec3::Y);
+        }
+        let sight = Sight::of(most.iter().map(|p| (p, &k)), &b);
+        assert_eq!(sight.blind, vec![0, 1, 2, 3, 4]);
+        let p = sight.problem().unwrap();
+        assert!(
+            p.contains("5 of the 8") && p.contains("not their inverse"),
             "{p}"
         );
 

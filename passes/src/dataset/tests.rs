@@ -492,7 +492,8 @@ fn errors_in_the_file_name_the_key() {
 
 /// Poses written in OpenCV's camera convention look away from the field:
 /// the read stops before any training, naming the frames and the
-/// convention; one frame looking away from it is named in a warning.
+/// convention; one frame looking away from it is named in a warning, and
+/// most frames looking away are refused unless they may be left out.
 #[test]
 fn poses_in_opencv_convention_are_refused_and_a_frame_looking_away_named() {
     let write = |dir: &Path, flip: &dyn Fn(usize) -> bool| {
@@ -530,6 +531,25 @@ fn poses_in_opencv_convention_are_refused_and_a_frame_looking_away_named() {
     assert_eq!(d.blind_frames(), vec![1]);
     let w = d.blind_frames_warning().unwrap();
     assert!(w.starts_with("frames 1 (1 of 4) see none"), "{w}");
+    // Three of four looking away: refused, unless the frames that see
+    // none may be left out.
+    let dir = folder("three-away");
+    write(&dir, &|i| i != 2);
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    assert!(
+        e.message.contains("3 of the 4 frames' cameras see none")
+            && e.message
+                .contains("--skip-bad-frames trains on those that see them"),
+        "{e}"
+    );
+    let d = load_skipping_bad_frames(&dir);
+    assert_eq!(d.frames.len(), 1);
+    assert_eq!(d.frames[0].index, 2);
+    let skipped: Vec<usize> = d.skipped.iter().map(|p| p.index).collect();
+    assert_eq!(skipped, vec![0, 1, 3]);
+    assert!(d.skipped[0]
+        .problem
+        .contains("sees none of the field's bounds"));
     let dir = folder("all-see");
     write(&dir, &|_| false);
     let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
