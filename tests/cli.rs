@@ -274,6 +274,54 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         ) && t.contains("OpenCV's camera convention"),
         "{t}"
     );
+    // Two of the three written so: refused, unless they may be left out,
+    // and then training names them.
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("transforms.json")).unwrap())
+            .unwrap();
+    for f in json["frames"].as_array_mut().unwrap().iter_mut().take(2) {
+        for row in f["transform_matrix"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .take(3)
+        {
+            for c in [1, 2] {
+                row[c] = (-row[c].as_f64().unwrap()).into();
+            }
+        }
+    }
+    let two = out.join("two-opencv.json");
+    std::fs::write(&two, json.to_string()).unwrap();
+    let kept = dir.join("two.inlayfield");
+    let args = [
+        "train",
+        two.to_str().unwrap(),
+        "--out",
+        kept.to_str().unwrap(),
+        "--resolution",
+        "8",
+        "--stages",
+        "1",
+        "--iterations",
+        "2",
+        "--hold-out",
+        "0",
+    ];
+    let o = inlay(&args);
+    let t = text(&o);
+    assert!(
+        !o.status.success() && t.contains("--skip-bad-frames trains on those that see them"),
+        "{t}"
+    );
+    let o = inlay(&[&args[..], &["--skip-bad-frames"]].concat());
+    let t = text(&o);
+    assert!(o.status.success() && kept.exists(), "{t}");
+    assert!(
+        t.contains("2 frames left out (--skip-bad-frames):")
+            && t.contains("frames[1]: its camera sees none of the field's bounds"),
+        "{t}"
+    );
 
     // `inlay train` takes it: a tiny grid, a few steps, the field written
     // and readable by `render`.
