@@ -311,7 +311,7 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
                 return Err(top.error(
                     "frames",
                     format!(
-                        "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {source}){}",
+                        "{p} (bounds {:.3} {:.3} {:.3} to {:.3} {:.3} {:.3}, from {source}){}{}",
                         lo.x,
                         lo.y,
                         lo.z,
@@ -320,6 +320,14 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
                         hi.z,
                         if sight.blind.len() < cameras.len() {
                             "; --skip-bad-frames trains on those that see them"
+                        } else {
+                            ""
+                        },
+                        if source == BoundsSource::Cameras {
+                            ". With no `aabb`, the bounds lie where the cameras' optical axes \
+                             meet, which for cameras that look out from inside the scene (a \
+                             room photographed from its middle) is behind them: give the \
+                             bounds (`aabb`, --bounds)"
                         } else {
                             ""
                         }

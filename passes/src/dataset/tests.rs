@@ -525,6 +525,16 @@ fn poses_in_opencv_convention_are_refused_and_a_frame_looking_away_named() {
             && e.message.contains("4 would see them read in OpenCV's"),
         "{e}"
     );
+    // Without an `aabb` the bounds are the cameras' common view, and the
+    // error says what that means for cameras looking out from inside.
+    let file = dir.join("transforms.json");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    json.as_object_mut().unwrap().remove("aabb");
+    std::fs::write(&file, json.to_string()).unwrap();
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    assert!(e.message.contains("from the cameras' common view"), "{e}");
+    assert!(e.message.contains("look out from inside the scene"), "{e}");
     let dir = folder("one-away");
     write(&dir, &|i| i == 1);
     let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
