@@ -168,6 +168,32 @@ fn a_broken_shader_directory_is_reported_with_file_and_line() {
 /// `inlay render-views` writes a training set that `inlay dataset` reads
 /// back (EXR frames with depth maps, and bracketed PNGs); a broken dataset
 /// is refused with every bad frame named.
+/// `from` (a `transforms.json`) written to `to` with the first `count`
+/// frames' poses in OpenCV's camera convention: each matrix's second and
+/// third columns negated.
+fn write_opencv_poses(from: &std::path::Path, to: &std::path::Path, count: usize) {
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(from).unwrap()).unwrap();
+    for f in json["frames"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .take(count)
+    {
+        for row in f["transform_matrix"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .take(3)
+        {
+            for c in [1, 2] {
+                row[c] = (-row[c].as_f64().unwrap()).into();
+            }
+        }
+    }
+    std::fs::write(to, json.to_string()).unwrap();
+}
+
 #[test]
 fn render_views_writes_a_dataset_that_dataset_reads() {
     let dir = scratch("render-views");
@@ -242,23 +268,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     // The same poses written in OpenCV's camera convention look away from
     // the field: training is refused before any work, naming the file, the
     // key and the convention, and no field is written.
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("transforms.json")).unwrap())
-            .unwrap();
-    for f in json["frames"].as_array_mut().unwrap() {
-        for row in f["transform_matrix"]
-            .as_array_mut()
-            .unwrap()
-            .iter_mut()
-            .take(3)
-        {
-            for c in [1, 2] {
-                row[c] = (-row[c].as_f64().unwrap()).into();
-            }
-        }
-    }
     let opencv = out.join("opencv.json");
-    std::fs::write(&opencv, json.to_string()).unwrap();
+    write_opencv_poses(&out.join("transforms.json"), &opencv, 3);
     let refused = dir.join("opencv.inlayfield");
     let o = inlay(&[
         "train",
@@ -276,23 +287,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     );
     // Two of the three written so: refused, unless they may be left out,
     // and then training names them.
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("transforms.json")).unwrap())
-            .unwrap();
-    for f in json["frames"].as_array_mut().unwrap().iter_mut().take(2) {
-        for row in f["transform_matrix"]
-            .as_array_mut()
-            .unwrap()
-            .iter_mut()
-            .take(3)
-        {
-            for c in [1, 2] {
-                row[c] = (-row[c].as_f64().unwrap()).into();
-            }
-        }
-    }
     let two = out.join("two-opencv.json");
-    std::fs::write(&two, json.to_string()).unwrap();
+    write_opencv_poses(&out.join("transforms.json"), &two, 2);
     let kept = dir.join("two.inlayfield");
     let args = [
         "train",

@@ -289,10 +289,12 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
     // cameras' sight of them and the memory the pixels will hold are
     // checked before any pixel is read (a frame that cannot be used is
     // reported with the others below).
-    let cameras: Vec<(usize, Pose, Intrinsics)> = specs
-        .par_iter()
+    let headers: Vec<Result<FrameCamera, String>> =
+        specs.par_iter().map(|s| frame_camera(s, options)).collect();
+    let cameras: Vec<(usize, Pose, Intrinsics)> = headers
+        .iter()
         .enumerate()
-        .filter_map(|(i, s)| frame_camera(s, options).ok().map(|(p, _, k)| (i, p, k)))
+        .filter_map(|(i, c)| c.as_ref().ok().map(|(p, _, k)| (i, *p, *k)))
         .collect();
     // With no usable camera, the frames' problems are the error (below).
     let mut problems = Vec::new();
@@ -349,7 +351,7 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
         }
     }
     let mut read = Vec::with_capacity(specs.len());
-    for (i, s) in specs.into_iter().enumerate() {
+    for (i, (s, camera)) in specs.into_iter().zip(headers).enumerate() {
         if blind.contains(&i) {
             problems.push(FrameProblem {
                 index: s.index,
@@ -357,12 +359,12 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
                 problem: "its camera sees none of the field's bounds".into(),
             });
         } else {
-            read.push(s);
+            read.push((s, camera));
         }
     }
     let results: Vec<Result<Frame, FrameProblem>> = read
         .into_par_iter()
-        .map(|s| read_frame(s, options))
+        .map(|(s, camera)| read_frame(s, camera, options))
         .collect();
     let mut frames = Vec::new();
     for r in results {
@@ -712,12 +714,12 @@ fn image_file(folder: &Path, path: &str) -> Result<PathBuf, String> {
     ))
 }
 
-/// A frame's camera as its image's header gives it: its pose, its image
-/// and its intrinsics at full size, or why it cannot be used.
-fn frame_camera(
-    s: &FrameSpec,
-    options: &LoadOptions,
-) -> Result<(Pose, PathBuf, Intrinsics), String> {
+/// A frame's pose, image and intrinsics at full size.
+type FrameCamera = (Pose, PathBuf, Intrinsics);
+
+/// A frame's camera as its image's header gives it, or why it cannot be
+/// used.
+fn frame_camera(s: &FrameSpec, options: &LoadOptions) -> Result<FrameCamera, String> {
     let pose = s.pose.clone()?;
     let path = s.image.clone()?;
     let (w, h) = pixels::image_size(&path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -743,14 +745,19 @@ fn frame_camera(
     Ok((pose, path, intrinsics))
 }
 
-/// Reads one frame's image and resolves its intrinsics.
-fn read_frame(s: FrameSpec, options: &LoadOptions) -> Result<Frame, FrameProblem> {
+/// Reads the image of frame `s`, whose camera its header gave
+/// ([`frame_camera`]).
+fn read_frame(
+    s: FrameSpec,
+    camera: Result<FrameCamera, String>,
+    options: &LoadOptions,
+) -> Result<Frame, FrameProblem> {
     let fail = |problem: String| FrameProblem {
         index: s.index,
         key: s.key.clone(),
         problem,
     };
-    let (pose, path, intrinsics) = frame_camera(&s, options).map_err(&fail)?;
+    let (pose, path, intrinsics) = camera.map_err(&fail)?;
     let (w, h) = (intrinsics.width, intrinsics.height);
     let mut image = pixels::load_image(&path, options.background)
         .map_err(|e| fail(format!("{}: {e}", path.display())))?;
