@@ -165,6 +165,30 @@ fn outputs_and_device_limits_are_checked_before_any_work() {
             vec![
                 "estimate-env".into(),
                 dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.toml")).into(),
+                "--downscale".into(),
+                "2".into(),
+            ],
+            vec!["--downscale 2", "--seen-from DATASET", "none are read"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
+                "--out".into(),
+                s(&dir.join("env.toml")).into(),
+                "--seen-from".into(),
+                concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cycles/dog/training").into(),
+                "--downscale".into(),
+                "65".into(),
+            ],
+            vec!["--seen-from", "--downscale", "65: must be 1 to 64"],
+        ),
+        (
+            vec![
+                "estimate-env".into(),
+                dog.clone(),
                 "--picture".into(),
                 s(&missing).into(),
             ],

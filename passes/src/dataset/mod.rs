@@ -196,6 +196,21 @@ impl Dataset {
             )
         })
     }
+
+    /// The frames [`LoadOptions::skip_bad_frames`] left out, a line each
+    /// under a heading, if any were.
+    pub fn skipped_report(&self) -> Option<String> {
+        (!self.skipped.is_empty()).then(|| {
+            let mut r = format!(
+                "{} frames left out (--skip-bad-frames):",
+                self.skipped.len()
+            );
+            for p in &self.skipped {
+                r.push_str(&format!("\n  {}: {}", p.key, p.problem));
+            }
+            r
+        })
+    }
 }
 
 /// Why a dataset cannot be read: the file, the key and what is wrong, and
@@ -341,12 +356,17 @@ pub fn load_dataset(path: &Path, options: &LoadOptions) -> Result<Dataset, Datas
         Some((bounds, source))
     };
     if let Some(available) = options.memory_available {
-        let pixels: u64 = cameras
+        let sizes: Vec<u64> = cameras
             .iter()
             .filter(|(i, _, _)| !blind.contains(i))
             .map(|(_, _, k)| k.width as u64 * k.height as u64)
-            .sum();
-        if let Some(p) = memory::problem(pixels, n, available) {
+            .collect();
+        let photos = memory::PhotoSizes {
+            pixels: sizes.iter().sum(),
+            largest: sizes.iter().copied().max().unwrap_or(0),
+            readers: rayon::current_num_threads().min(sizes.len()) as u64,
+        };
+        if let Some(p) = memory::problem(photos, n, available) {
             return Err(top.error("frames", p));
         }
     }

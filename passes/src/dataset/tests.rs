@@ -628,21 +628,38 @@ fn downscale_reads_blocks_and_photographs_past_the_memory_are_refused() {
     )
     .unwrap_err();
     assert_eq!(e.key, "--downscale");
-    // 4 frames of 54 pixels hold 6912 bytes; 4000 leaves half free at 2.
+    // 4 frames of 54 pixels hold 6912 bytes, and each reading thread
+    // decodes one at full size (2160 bytes). With one thread 8000 bytes
+    // leave half free at --downscale 2 (1728 + 2160).
+    let in_threads = |threads: usize, options: &LoadOptions| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| load_dataset(&dir, options))
+    };
     let tight = LoadOptions {
-        memory_available: Some(4000),
+        memory_available: Some(8000),
         ..LoadOptions::default()
     };
-    let e = load_dataset(&dir, &tight).unwrap_err();
+    let e = in_threads(1, &tight).unwrap_err();
     assert_eq!(e.key, "frames");
     assert!(
         e.message.contains("216 pixels") && e.message.contains("--downscale 2 "),
         "{e}"
     );
+    // Two threads decoding at once need 4320 bytes whatever the
+    // downscale: one thread is what fits.
+    let e = in_threads(2, &tight).unwrap_err();
+    assert!(
+        e.message
+            .contains("RAYON_NUM_THREADS=1 with --downscale 2 fits"),
+        "{e}"
+    );
     let fits = LoadOptions {
-        memory_available: Some(4000),
+        memory_available: Some(8000),
         downscale: 2,
         ..LoadOptions::default()
     };
-    assert!(load_dataset(&dir, &fits).is_ok());
+    assert!(in_threads(1, &fits).is_ok());
 }

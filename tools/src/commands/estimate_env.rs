@@ -83,6 +83,16 @@ pub struct EstimateEnvArgs {
     /// them, with its errors.
     #[arg(long)]
     pub radiance_from_photos: bool,
+    /// Read the photographs of `--seen-from DATASET` at 1/N of their width
+    /// and height, as `inlay train --downscale N` does (photographs too
+    /// many or too large for memory are refused before any pixel is read,
+    /// naming the N that fits).
+    #[arg(long, default_value_t = 1)]
+    pub downscale: u32,
+    /// Leave out the frames of `--seen-from DATASET` that cannot be used
+    /// instead of failing.
+    #[arg(long)]
+    pub skip_bad_frames: bool,
     /// Views kept after the quality check (paper: 100).
     #[arg(long, default_value_t = EnvEstimateKnobs::default().views)]
     pub views: u32,
@@ -271,10 +281,11 @@ fn view_source(scene: &Scene, views_from: &str) -> anyhow::Result<(ViewSource, S
 /// the latter, `radiance_from_photos`, needs a dataset).
 fn witnesses(
     scene: &Scene,
+    args: &EstimateEnvArgs,
     seen_from: &str,
     photos: bool,
-    radiance_from_photos: bool,
 ) -> anyhow::Result<Witnesses> {
+    let radiance_from_photos = args.radiance_from_photos;
     let cameras = match seen_from {
         "scene" if radiance_from_photos => anyhow::bail!(
             "--radiance-from-photos reads the photographs of a dataset: give --seen-from DATASET/transforms.json, not `scene`"
@@ -289,6 +300,9 @@ fn witnesses(
             // the part no surface covers.
             let options = inlay_passes::dataset::LoadOptions {
                 background: [0.0; 3],
+                downscale: args.downscale,
+                skip_bad_frames: args.skip_bad_frames,
+                memory_available: crate::commands::dataset::available_memory(),
                 ..Default::default()
             };
             let hint = if radiance_from_photos {
@@ -296,8 +310,12 @@ fn witnesses(
             } else {
                 " (its photographs judge the surface points; --max-photo-spread 0 takes its cameras alone)"
             };
-            inlay_passes::dataset::load_dataset(Path::new(path), &options)
-                .map_err(|e| anyhow::anyhow!("--seen-from: {e}{hint}"))?
+            let dataset = inlay_passes::dataset::load_dataset(Path::new(path), &options)
+                .map_err(|e| anyhow::anyhow!("--seen-from: {e}{hint}"))?;
+            if let Some(r) = dataset.skipped_report() {
+                eprintln!("--seen-from {r}");
+            }
+            dataset
                 .frames
                 .into_iter()
                 .map(Witness::photographed)
@@ -318,6 +336,22 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     if let Some((k, m)) = knobs.problem() {
         anyhow::bail!("--{}: {m}", k.replace('_', "-"));
     }
+    let reads_photos = matches!(&args.seen_from, Some(s) if s != "scene")
+        && (args.radiance_from_photos || knobs.max_photo_spread > 0.0);
+    if !reads_photos {
+        let flag = if args.downscale != 1 {
+            Some(format!("--downscale {}", args.downscale))
+        } else {
+            args.skip_bad_frames
+                .then(|| "--skip-bad-frames".to_string())
+        };
+        if let Some(flag) = flag {
+            anyhow::bail!(
+                "{flag}: it applies to the photographs of --seen-from DATASET/transforms.json, and \
+                 none are read (they are with --max-photo-spread above 0 or --radiance-from-photos)"
+            );
+        }
+    }
     let scene = load_scene(&args.scene)?;
     let out = args
         .out
@@ -336,9 +370,9 @@ pub fn run(ctx: &Arc<Context>, args: &EstimateEnvArgs) -> anyhow::Result<()> {
     let seen_from = match &args.seen_from {
         Some(s) => Some(witnesses(
             &scene,
+            args,
             s,
             args.radiance_from_photos || knobs.max_photo_spread > 0.0,
-            args.radiance_from_photos,
         )?),
         None if args.radiance_from_photos => anyhow::bail!(
             "--radiance-from-photos needs the photographs: give --seen-from DATASET/transforms.json"

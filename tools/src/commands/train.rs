@@ -464,14 +464,8 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         b.max.z,
         dataset.bounds_source
     );
-    if !dataset.skipped.is_empty() {
-        eprintln!(
-            "{} frames left out (--skip-bad-frames):",
-            dataset.skipped.len()
-        );
-        for p in &dataset.skipped {
-            eprintln!("  {}: {}", p.key, p.problem);
-        }
+    if let Some(r) = dataset.skipped_report() {
+        eprintln!("{r}");
     }
     let depth = inlay_passes::dataset::depth::DepthCounts::of(&dataset.frames);
     if let Some(line) = depth.line(dataset.frames.len()) {
