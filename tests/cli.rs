@@ -319,6 +319,30 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "{t}"
     );
 
+    // A prior that pulls every density down leaves nothing: an error, and
+    // no empty field written as if trained.
+    let empty = dir.join("empty.inlayfield");
+    let o = inlay(&[
+        "train",
+        out.to_str().unwrap(),
+        "--out",
+        empty.to_str().unwrap(),
+        "--resolution",
+        "8",
+        "--stages",
+        "1",
+        "--iterations",
+        "20",
+        "--sparsity",
+        "1e3",
+    ]);
+    let t = text(&o);
+    assert!(!o.status.success() && !empty.exists(), "{t}");
+    assert!(
+        t.contains("training left the field empty") && t.contains("--sparsity 1000"),
+        "{t}"
+    );
+
     // `inlay train` takes it: a tiny grid, a few steps, the field written
     // and readable by `render`.
     let field = dir.join("views.inlayfield");

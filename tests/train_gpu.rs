@@ -12,8 +12,9 @@ use inlay_passes::march::MarchKnobs;
 use inlay_passes::rng::Pcg32;
 use inlay_passes::sgfit::model::luminance;
 use inlay_passes::train::{
-    adam_step, pixel_loss, render_pixel_with_gradient, render_ray_with_gradient, AdamKnobs,
-    DepthTerm, GpuTrainer, GradientScatter, PixelTarget, Sky, TrainRay,
+    adam_step, pixel_loss, render_pixel_with_gradient, render_ray_with_gradient,
+    render_ray_with_gradient_gated, AdamKnobs, DensityGate, DepthTerm, GpuTrainer, GradientScatter,
+    PixelTarget, Sky, TrainRay,
 };
 
 /// The surface a depth map would record along ray `i` of a batch through
@@ -186,8 +187,10 @@ fn the_gpu_gradient_and_adam_step_match_the_cpu_reference() {
     let depth = Some((3.0, 0.05));
     for scatter in scatters_of(&ctx) {
         for (degree, distortion, depth) in [(0, 0.4, None), (2, 0.0, depth), (0, 0.4, depth)] {
-            gradient_and_adam_match(degree, (distortion, depth), scatter);
+            gradient_and_adam_match(degree, (distortion, depth), scatter, DensityGate::Clamp);
         }
+        // Densities below zero taking the gradient that asks for more.
+        gradient_and_adam_match(0, (0.4, depth), scatter, DensityGate::Revive);
     }
 }
 
@@ -195,6 +198,7 @@ fn gradient_and_adam_match(
     degree: u32,
     (distortion, depth): (f64, Option<(f64, f64)>),
     scatter: GradientScatter,
+    gate: DensityGate,
 ) {
     let ctx = common::gpu();
     let lib = common::test_library();
@@ -213,6 +217,7 @@ fn gradient_and_adam_match(
         .unwrap();
     trainer.distortion = distortion;
     trainer.depth = depth;
+    trainer.gate = gate;
     let gains = [
         DVec3::ONE,
         DVec3::new(0.7, 1.2, 0.9),
@@ -237,6 +242,7 @@ fn gradient_and_adam_match(
     // The CPU reference: each ray's pixel, weighted loss and gradient.
     let mut cpu_grad = vec![0.0f64; 4 * values.len()];
     let mut cpu_gain_grad = [DVec3::ZERO; 3];
+    let mut clamped_density = vec![0.0f64; values.len()];
     for (i, ((ray, target, w), gpu)) in batch.iter().zip(&out).enumerate() {
         // The photograph records g·C: the gradient reaches C through g.
         let f = frame_of(i) as usize;
@@ -246,9 +252,15 @@ fn gradient_and_adam_match(
             ..d
         });
         let priors = (*w * distortion, term);
-        let r = render_ray_with_gradient(&field, ray, &knobs, bg, priors, |c| {
-            *w * g * pixel_loss(g * c, *target, eps).1
-        });
+        let r = render_ray_with_gradient_gated(
+            &field,
+            ray,
+            &knobs,
+            bg,
+            priors,
+            |c| *w * g * pixel_loss(g * c, *target, eps).1,
+            gate,
+        );
         assert_eq!(r.depth > 0.0, term.is_some());
         let loss = w * pixel_loss(g * r.colour, *target, eps).0 + r.distortion + r.depth;
         if f != 0 {
@@ -270,6 +282,25 @@ fn gradient_and_adam_match(
                 cpu_grad[4 * n + c] += g[c];
             }
         }
+        if gate == DensityGate::Revive {
+            let clamp = render_ray_with_gradient(&field, ray, &knobs, bg, priors, |c| {
+                *w * g * pixel_loss(g * c, *target, eps).1
+            });
+            for (n, g) in &clamp.values {
+                clamped_density[*n] += g[3];
+            }
+        }
+    }
+    if gate == DensityGate::Revive {
+        // The batch reaches densities below zero that ask for more: the
+        // gate is exercised.
+        let revived = clamped_density
+            .iter()
+            .enumerate()
+            .filter(|(n, c)| (cpu_grad[4 * n + 3] - **c).abs() > 1e-9)
+            .count();
+        eprintln!("{revived} nodes take gradient below zero");
+        assert!(revived > 0);
     }
     let gpu_grad = trainer.gradient(&mut renderer).unwrap();
     let scale = cpu_grad.iter().fold(0.0f64, |a, g| a.max(g.abs()));
@@ -1188,6 +1219,8 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
         "{negative} below zero, {inert} inert"
     );
     assert_eq!(trained.bricks, None);
+    // Its first stage never emptied: trained with the clamp's own gradient.
+    assert_eq!(trained.emptied, None);
 
     // The second stage trained in bricks (`--sparse`), only around the
     // surfaces the first made visible (measured: 16 of 18 bricks; more
@@ -1211,6 +1244,46 @@ fn a_grid_trained_on_a_recipe_s_views_renders_the_held_out_views() {
             s.psnr,
             d.psnr
         );
+    }
+}
+
+/// A coarse first stage (8 nodes across, of a 32-node run in three
+/// stages) behind a random background: every node's first gradient asks
+/// for less density (most rays see the background), and Adam's first,
+/// sign-sized step takes every density below zero. Where no gradient
+/// passed there, nothing came back: the field stayed empty through every
+/// stage, and the run wrote it (DOG's and CUPS' held-out views 0.000 as
+/// bright as their photographs). The trainer now finds the field empty
+/// and lets its densities below zero take the gradient that asks for more
+/// (`DensityGate::Revive`) until it holds density again, and the field
+/// comes back.
+#[test]
+fn a_first_stage_emptied_by_its_first_step_comes_back() {
+    let ctx = common::gpu();
+    let lib = common::test_library();
+    let dataset = recipe_dataset_with("dog.toml", false, true);
+    let knobs = inlay_passes::train::TrainKnobs {
+        resolution: 32,
+        stages: 3,
+        iterations: 300,
+        random_background: true,
+        ..small_knobs()
+    };
+    let trained = train_with(&ctx, &lib, &dataset, &knobs);
+    common::assert_no_validation_errors(&ctx);
+    let dense = trained.field.nodes.iter().filter(|n| n[3] > 0.0).count();
+    eprintln!("{dense} nodes above zero; emptied {:?}", trained.emptied);
+    // Emptied by its first step, holding density again a few after.
+    let (emptied, again) = trained.emptied.unwrap();
+    assert_eq!(emptied, 1);
+    assert!(again.is_some_and(|a| a <= 10), "{again:?}");
+    assert!(dense > 0);
+    for v in &trained.held_out {
+        eprintln!(
+            "held-out {}: PSNR {:.2} dB, brightness {:.3}",
+            v.frame, v.psnr, v.brightness
+        );
+        assert!(v.brightness > 0.5, "frame {}: {}", v.frame, v.brightness);
     }
 }
 

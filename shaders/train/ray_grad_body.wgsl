@@ -57,7 +57,9 @@ struct TrainPush {
     depth_weight: f32,
     // The depth loss's tolerance s (scene units).
     depth_tolerance: f32,
-    pad0: u32,
+    // 1: densities below zero take the gradient that asks for more
+    // (density_gate).
+    revive: u32,
 }
 
 // A ray and what its pixel says: kind 0 value, 1 lower bound, 2 bracket.
@@ -102,6 +104,15 @@ fn field_node_index(i: vec3<u32>) -> u32 {
     }
     let r = pc.resolution;
     return i.x + r.x * (i.y + r.y * i.z);
+}
+
+// The share of a sample's density gradient `d_sigma` that reaches its
+// nodes (train::render::DensityGate::share): all of it where the
+// interpolated raw density is above zero; where the clamp at zero holds,
+// none, or with pc.revive all of it if it asks for more density (the
+// slope of the loss were the density raised from zero).
+fn density_gate(raw: f32, d_sigma: f32) -> f32 {
+    return select(select(0.0, 1.0, pc.revive != 0u && d_sigma < 0.0), 1.0, raw > 0.0);
 }
 
 // The first sample past a dropped brick, where sample `s` (its cell
@@ -348,9 +359,6 @@ fn march_backward(ray: TrainRay, y: array<f32, 8>, f: RayForward, background: ve
         let t_next = t_i * (1.0 - alpha);
         so_far += w * c;
         let d_c = g * w * open;
-        // The clamp at zero after interpolation passes no gradient where
-        // it holds (density_at).
-        let open_sigma = select(0.0, 1.0, v.w > 0.0);
         var d_sigma = dt * dot(g, t_next * c - (f.colour - so_far) - f.transmittance * background);
         if distort {
             // e = ∂L_d/∂w of this sample, from the sums before and after it.
@@ -369,7 +377,9 @@ fn march_backward(ray: TrainRay, y: array<f32, 8>, f: RayForward, background: ve
             z_so_far += w * rho;
             d_sigma += mu * dt * (t_next * rho - (depth_all - z_so_far));
         }
-        d_sigma *= open_sigma;
+        // Where the clamp at zero after interpolation holds (density_at),
+        // none passes, or what asks for more density (density_gate).
+        d_sigma *= density_gate(v.w, d_sigma);
         // A sample with no weight (empty space: σ = 0) moves no colour:
         // its colour and coefficient adds would add zeros, one atomic each.
         let colour_moves = any(d_c != vec3<f32>(0.0));

@@ -58,8 +58,9 @@ inlay_engine::gpu_struct! {
         pub depth_weight: f32,
         /// The depth loss's tolerance s (scene units).
         pub depth_tolerance: f32,
-        /// Padding.
-        pub pad0: u32,
+        /// 1: densities below zero take the gradient that asks for more
+        /// ([`super::DensityGate::Revive`]).
+        pub revive: u32,
     }
 }
 
@@ -462,6 +463,9 @@ pub struct GpuTrainer {
     /// a depth ([`TrainRay::with_depth`]; [`super::depth`]); None leaves
     /// it out.
     pub depth: Option<(f64, f64)>,
+    /// What a density below zero passes of its gradient
+    /// ([`super::DensityGate`]; the clamp's true derivative unless set).
+    pub gate: super::DensityGate,
     scatter: GradientScatter,
     rays_per_pixel: u32,
 }
@@ -605,6 +609,7 @@ impl GpuTrainer {
             gain_rate: None,
             distortion: 0.0,
             depth: None,
+            gate: super::DensityGate::Clamp,
             scatter,
             rays_per_pixel: 1,
         })
@@ -736,7 +741,7 @@ impl GpuTrainer {
             rays_per_pixel: self.rays_per_pixel,
             depth_weight: self.depth.map_or(0.0, |d| d.0 / self.bounds.diagonal()) as f32,
             depth_tolerance: self.depth.map_or(1.0, |d| d.1) as f32,
-            pad0: 0,
+            revive: (self.gate == super::DensityGate::Revive) as u32,
         }
     }
 
@@ -992,6 +997,16 @@ impl GpuTrainer {
             .map(|j| self.read(renderer, self.sh_pages.values(j)))
             .collect::<anyhow::Result<Vec<_>>>()?;
         Ok(interleave(base, &pages))
+    }
+
+    /// Whether any node's density is above zero (a grid every density of
+    /// which lies below renders nothing).
+    pub fn holds_density(&self, renderer: &mut Renderer) -> anyhow::Result<bool> {
+        let nodes = 4 * self.node_count() as usize;
+        let values = self.values(renderer)?;
+        Ok(values[..nodes.min(values.len())]
+            .chunks_exact(4)
+            .any(|v| v[3] > 0.0))
     }
 
     /// The grid now, as a field (occupancy built from its densities; a

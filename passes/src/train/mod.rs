@@ -40,7 +40,10 @@ pub use knobs::{
 };
 pub use loss::{pixel_loss, PixelTarget};
 pub use pixels::{held_out_frames, held_out_poses};
-pub use render::{render_pixel_with_gradient, render_ray_with_gradient, RayGradient};
+pub use render::{
+    render_pixel_with_gradient, render_pixel_with_gradient_gated, render_ray_with_gradient,
+    render_ray_with_gradient_gated, DensityGate, RayGradient,
+};
 pub use step_times::StepTimes;
 pub use trainer::{
     resample, train, transparent_pixels, view_march, with_sh_degree, HeldOutView, TrainControl,

@@ -704,6 +704,17 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         let (low, high) = luminance_range(&trained.gains);
         eprintln!("learnt exposure gains (luminance, frame 0 = 1): {low:.3} to {high:.3}");
     }
+    if let Some((emptied, again)) = trained.emptied {
+        eprintln!(
+            "the first stage's field held no density after step {emptied} (Adam's first steps took \
+             every density below zero): its densities below zero took the gradient that asks for \
+             more {}",
+            match again {
+                Some(step) => format!("until step {step}, when it held some again"),
+                None => "to the stage's end, and it held none again".into(),
+            }
+        );
+    }
     if let Some((kept, all)) = trained.bricks {
         eprintln!("the last stage trained {kept} of {all} bricks of 8³ nodes (sparse)");
     }
