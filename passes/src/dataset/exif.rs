@@ -122,17 +122,53 @@ pub fn exposure_from_exif(exif: &[u8]) -> Option<ExifExposure> {
     })
 }
 
-/// The exposure the image at `path` records in its EXIF block, if any
-/// (None for files without one, or that cannot be read: the loader
-/// reports unreadable images itself).
-pub fn exposure_of(path: &Path) -> Option<ExifExposure> {
+/// The EXIF block of the image at `path`, if it has one (None for files
+/// without one, or that cannot be read: the loader reports unreadable
+/// images itself).
+fn exif_block(path: &Path) -> Option<Vec<u8>> {
     use image::ImageDecoder as _;
     let reader = image::ImageReader::open(path)
         .ok()?
         .with_guessed_format()
         .ok()?;
     let mut decoder = reader.into_decoder().ok()?;
-    exposure_from_exif(&decoder.exif_metadata().ok()??)
+    decoder.exif_metadata().ok()?
+}
+
+/// The exposure the image at `path` records in its EXIF block, if any.
+pub fn exposure_of(path: &Path) -> Option<ExifExposure> {
+    exposure_from_exif(&exif_block(path)?)
+}
+
+/// The turn or flip the image at `path` records in its EXIF block
+/// (Orientation, tag 0x0112) for a viewer to show it upright, where it
+/// records one other than none. The loader reads the pixels as stored,
+/// as COLMAP, instant-ngp and nerfstudio do: a capture's poses are those
+/// of the stored pixels.
+pub fn orientation_of(path: &Path) -> Option<image::metadata::Orientation> {
+    let o = image::metadata::Orientation::from_exif_chunk(&exif_block(path)?)?;
+    (o != image::metadata::Orientation::NoTransforms).then_some(o)
+}
+
+/// Whether `o` turns an image by a quarter (its width and height swap).
+pub fn turns_quarter(o: image::metadata::Orientation) -> bool {
+    use image::metadata::Orientation::*;
+    matches!(o, Rotate90 | Rotate270 | Rotate90FlipH | Rotate270FlipH)
+}
+
+/// `o` in words.
+pub fn orientation_words(o: image::metadata::Orientation) -> &'static str {
+    use image::metadata::Orientation::*;
+    match o {
+        NoTransforms => "upright",
+        Rotate90 => "turned 90° clockwise",
+        Rotate180 => "turned 180°",
+        Rotate270 => "turned 90° anticlockwise",
+        FlipHorizontal => "mirrored left to right",
+        FlipVertical => "mirrored top to bottom",
+        Rotate90FlipH => "turned 90° clockwise and mirrored",
+        Rotate270FlipH => "turned 90° anticlockwise and mirrored",
+    }
 }
 
 /// Each of `exposures`' relative exposure, in seconds at the reference ISO

@@ -197,6 +197,33 @@ impl Dataset {
         })
     }
 
+    /// The file's indices of the frames whose images record an EXIF
+    /// orientation other than upright ([`exif::orientation_of`]), with it.
+    pub fn turned_frames(&self) -> Vec<(usize, image::metadata::Orientation)> {
+        self.frames
+            .iter()
+            .filter_map(|f| exif::orientation_of(&f.image_path).map(|o| (f.index, o)))
+            .collect()
+    }
+
+    /// A warning naming the frames whose images record an EXIF orientation,
+    /// if any do: their pixels are read as stored, and poses made on the
+    /// images as a viewer shows them would not match.
+    pub fn turned_frames_warning(&self) -> Option<String> {
+        let turned = self.turned_frames();
+        let (first, o) = *turned.first()?;
+        Some(format!(
+            "{} of {} frames (frame {first} first: {}) record an EXIF orientation that a \
+             viewer applies; their pixels are read as stored, as COLMAP, instant-ngp and \
+             nerfstudio read them. Poses made on the images as a viewer shows them would not \
+             match: turn the pixels and clear the tag (`exiftran -ai`, `mogrify -auto-orient`) \
+             and make the poses again",
+            turned.len(),
+            self.frames.len(),
+            exif::orientation_words(o)
+        ))
+    }
+
     /// The frames [`LoadOptions::skip_bad_frames`] left out, a line each
     /// under a heading, if any were.
     pub fn skipped_report(&self) -> Option<String> {
@@ -745,9 +772,20 @@ fn frame_camera(s: &FrameSpec, options: &LoadOptions) -> Result<FrameCamera, Str
     let (w, h) = pixels::image_size(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     if let [Some(fw), Some(fh)] = s.camera.size {
         if (fw, fh) != (w as f64, h as f64) {
+            let turned = exif::orientation_of(&path)
+                .filter(|o| exif::turns_quarter(*o) && (fw, fh) == (h as f64, w as f64));
             return Err(format!(
-                "{} is {w}x{h}, the file says w = {fw}, h = {fh}",
-                path.display()
+                "{} is {w}x{h}, the file says w = {fw}, h = {fh}{}",
+                path.display(),
+                match turned {
+                    Some(o) => format!(
+                        ": its EXIF orientation ({}) shows it {h}x{w}, so the poses were made \
+                         on it as a viewer shows it; turn its pixels and clear the tag \
+                         (`exiftran -ai`, `mogrify -auto-orient`)",
+                        exif::orientation_words(o)
+                    ),
+                    None => String::new(),
+                }
             ));
         }
     }

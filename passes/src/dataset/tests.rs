@@ -362,6 +362,74 @@ fn exposure_times_come_from_exif_where_the_file_gives_none() {
     assert!(crate::train::pixels::is_bracket(&d.frames[0]));
 }
 
+/// A big-endian TIFF block whose first directory records EXIF
+/// orientation `o` (tag 0x0112, one SHORT).
+fn orientation_block(o: u16) -> Vec<u8> {
+    let mut b = b"MM\0\x2a".to_vec();
+    b.extend_from_slice(&8u32.to_be_bytes());
+    b.extend_from_slice(&1u16.to_be_bytes());
+    for v in [0x0112u16, 3] {
+        b.extend_from_slice(&v.to_be_bytes());
+    }
+    b.extend_from_slice(&1u32.to_be_bytes());
+    b.extend_from_slice(&o.to_be_bytes());
+    b.extend_from_slice(&[0, 0, 0, 0, 0, 0]);
+    b
+}
+
+/// JPEG frames whose EXIF records an orientation are read as stored and
+/// named in a warning; one whose stored size is the file's w and h
+/// swapped, and whose orientation turns it a quarter, is reported with
+/// that reason and the fix (the poses were made on the turned image).
+#[test]
+fn frames_with_an_exif_orientation_are_named() {
+    let dir = folder("exif-orientation");
+    let mut frames = Vec::new();
+    for (i, e) in eyes().iter().enumerate() {
+        let name = format!("f{i}.jpg");
+        image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
+            .save(dir.join(&name))
+            .unwrap();
+        match i {
+            1 => add_exif_block(&dir.join(&name), &orientation_block(6)),
+            2 => add_exif_block(&dir.join(&name), &orientation_block(3)),
+            3 => add_exif_block(&dir.join(&name), &orientation_block(1)),
+            _ => {}
+        }
+        frames.push(serde_json::json!({ "file_path": name, "transform_matrix": pose_rows(*e) }));
+    }
+    let doc = serde_json::json!({ "fl_x": 7.0, "w": 8, "h": 6, "frames": frames.clone() });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    use image::metadata::Orientation;
+    assert_eq!(
+        d.turned_frames(),
+        vec![(1, Orientation::Rotate90), (2, Orientation::Rotate180)]
+    );
+    let w = d.turned_frames_warning().unwrap();
+    assert!(
+        w.starts_with("2 of 4 frames (frame 1 first: turned 90° clockwise)")
+            && w.contains("mogrify -auto-orient"),
+        "{w}"
+    );
+    // The pixels as stored: 8 wide.
+    assert_eq!(d.frames[1].intrinsics.width, 8);
+    // Frame 1's entry says 6 × 8, as a viewer shows it.
+    frames[1]["w"] = 6.into();
+    frames[1]["h"] = 8.into();
+    let doc = serde_json::json!({ "fl_x": 7.0, "w": 8, "h": 6, "frames": frames });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let e = load_dataset(&dir, &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.frames.len(), 1, "{e}");
+    assert!(
+        e.frames[0].problem.contains(
+            "is 8x6, the file says w = 6, h = 8: its EXIF orientation (turned 90° clockwise) \
+             shows it 6x8"
+        ),
+        "{e}"
+    );
+}
+
 /// A phone's bracket: equal times, ISO 100, 400 and 1600 in the frames'
 /// EXIF, and f/2.8 against f/5.6: the exposures follow the light each
 /// recorded (the median ISO and f-number the reference), not the times.

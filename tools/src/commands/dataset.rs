@@ -145,6 +145,9 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     if let Some(w) = d.blind_frames_warning() {
         println!("warning: {w}");
     }
+    if let Some(w) = d.turned_frames_warning() {
+        println!("warning: {w}");
+    }
     let total: usize = d.frames.iter().map(|f| f.image.state.len()).sum();
     let c = d.counts;
     println!(

@@ -482,6 +482,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     if let Some(w) = dataset.blind_frames_warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
+    if let Some(w) = dataset.turned_frames_warning() {
+        eprintln!("warning: {}: {w}", dataset.file.display());
+    }
     if let Some(w) = inlay_passes::train::pixels::saturated_in_every_bracket(&dataset).warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
