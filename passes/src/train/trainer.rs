@@ -317,12 +317,29 @@ pub fn transparent_pixels(dataset: &Dataset, frames: &[u32]) -> TransparentPixel
     out
 }
 
-/// Why `dataset` cannot be trained with `knobs`, before any work: a random
-/// background behind exposure brackets with transparent pixels (a
+/// Why `dataset` cannot be trained with `knobs`, before any work: every
+/// usable pixel black, or a random background behind exposure brackets
+/// with transparent pixels (a
 /// bracket's code was recorded over the fixed background, and another
 /// cannot be put behind it). Transparent linear frames take it: their
 /// alpha composites each step's background.
 pub fn check_dataset(knobs: &TrainKnobs, dataset: &Dataset) -> anyhow::Result<()> {
+    // Photographs that record no light teach an empty field, which the
+    // run would refuse only at its end.
+    let lit = |f: &Frame| {
+        f.image
+            .radiance
+            .iter()
+            .zip(&f.image.state)
+            .any(|(c, s)| *s != PixelState::Masked && c.iter().any(|v| *v > 0.0))
+    };
+    anyhow::ensure!(
+        dataset.frames.is_empty() || dataset.frames.iter().any(lit),
+        "{}: every usable pixel of its {} frames is black (radiance 0): there is nothing to \
+         train on (images written in other units, or an exposure_time that reads them as none?)",
+        dataset.file.display(),
+        dataset.frames.len()
+    );
     let every: Vec<u32> = (0..dataset.frames.len() as u32).collect();
     let transparent = transparent_pixels(dataset, &every).brackets;
     anyhow::ensure!(
@@ -1407,6 +1424,31 @@ mod tests {
         assert!(check_dataset(&random, &with(vec![opaque])).is_ok());
         let fixed = TrainKnobs::default();
         assert!(check_dataset(&fixed, &with(vec![transparent(Some(1.0))])).is_ok());
+    }
+
+    /// Photographs that record no light are refused before any work,
+    /// naming the file (training would end in an empty field); one lit
+    /// pixel is enough, a masked one is not.
+    #[test]
+    fn photographs_that_record_no_light_are_refused() {
+        let fixed = TrainKnobs::default();
+        let with = |frames| Dataset {
+            frames,
+            ..dataset_with(0)
+        };
+        let black = frame_of(&[0.0; 3], None);
+        let e = check_dataset(&fixed, &with(vec![black.clone(), black.clone()]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("shots/transforms.json: every usable pixel of its 2 frames is black"),
+            "{e}"
+        );
+        let mut masked = frame_of(&[0.0, 0.3, 0.0], None);
+        masked.image.state[1] = PixelState::Masked;
+        assert!(check_dataset(&fixed, &with(vec![black.clone(), masked])).is_err());
+        let lit = frame_of(&[0.0, 0.3, 0.0], None);
+        assert!(check_dataset(&fixed, &with(vec![black, lit])).is_ok());
     }
 
     /// A transparent pixel trained over another background says its
