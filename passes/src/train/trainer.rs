@@ -678,7 +678,10 @@ pub fn train(
         knobs.sparsity,
         knobs.density_rate
     );
-    // Pruned unless Ctrl-C ended the run (the field so far, at once).
+    // Pruned unless Ctrl-C ended the run (the field so far, at once), and
+    // not where pruning would leave nothing (a run stopped by its time
+    // budget in its first steps: no training ray yet weighs the grey
+    // start's nodes as much as the threshold).
     let mut pruned = 0;
     if knobs.prune > 0.0 && !(control.stop)() {
         let visibility = pool_visibility_gpu(
@@ -690,7 +693,12 @@ pub fn train(
             &view_march,
             Auto,
         )?;
-        (field, pruned) = super::prune::prune(&field, &visibility, knobs.prune);
+        let (kept, n) = super::prune::prune(&field, &visibility, knobs.prune);
+        if kept.nodes.iter().any(|n| n[3] > 0.0) {
+            (field, pruned) = (kept, n);
+        } else {
+            log::info!("pruning would leave no density: the field is kept unpruned");
+        }
     }
     // Empty space below zero costs a sparse file its bricks; zeroing it
     // changes no density.
