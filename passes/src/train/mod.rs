@@ -41,8 +41,8 @@ pub use knobs::{
 pub use loss::{pixel_loss, PixelTarget};
 pub use pixels::{held_out_frames, held_out_poses};
 pub use render::{
-    render_pixel_with_gradient, render_pixel_with_gradient_gated, render_ray_with_gradient,
-    render_ray_with_gradient_gated, DensityGate, RayGradient,
+    render_pixel_with_gradient, render_ray_with_gradient, render_ray_with_gradient_gated,
+    DensityGate, RayGradient,
 };
 pub use step_times::StepTimes;
 pub use trainer::{

@@ -151,31 +151,11 @@ pub fn render_ray_with_gradient_gated<'a>(
     ray: &Ray,
     knobs: &MarchKnobs,
     background: impl Into<Behind<'a>>,
-    priors: (f64, Option<DepthTerm>),
+    (distortion, depth): (f64, Option<DepthTerm>),
     d_colour: impl Fn(DVec3) -> DVec3,
     gate: DensityGate,
 ) -> RayGradient {
-    ray_gradient(
-        field,
-        ray,
-        knobs,
-        background.into(),
-        priors,
-        &d_colour,
-        gate,
-    )
-}
-
-/// [`render_ray_with_gradient_gated`], its arguments resolved.
-fn ray_gradient(
-    field: &GridField,
-    ray: &Ray,
-    knobs: &MarchKnobs,
-    behind: Behind<'_>,
-    (distortion, depth): (f64, Option<DepthTerm>),
-    d_colour: &dyn Fn(DVec3) -> DVec3,
-    gate: DensityGate,
-) -> RayGradient {
+    let behind = background.into();
     let background = behind.eval(ray.dir);
     let steps = samples(field, ray, knobs);
     let lambda = distortion / field.bounds.diagonal();
@@ -322,56 +302,16 @@ pub fn render_pixel_with_gradient<'a>(
     rays: &[Ray],
     knobs: &MarchKnobs,
     background: impl Into<Behind<'a>>,
-    priors: (f64, &[Option<DepthTerm>]),
-    d_colour: impl Fn(DVec3) -> DVec3,
-) -> RayGradient {
-    render_pixel_with_gradient_gated(
-        field,
-        rays,
-        knobs,
-        background,
-        priors,
-        d_colour,
-        DensityGate::Clamp,
-    )
-}
-
-/// [`render_pixel_with_gradient`] with the density gradient passed by
-/// `gate`.
-pub fn render_pixel_with_gradient_gated<'a>(
-    field: &GridField,
-    rays: &[Ray],
-    knobs: &MarchKnobs,
-    background: impl Into<Behind<'a>>,
-    priors: (f64, &[Option<DepthTerm>]),
-    d_colour: impl Fn(DVec3) -> DVec3,
-    gate: DensityGate,
-) -> RayGradient {
-    pixel_gradient(
-        field,
-        rays,
-        knobs,
-        background.into(),
-        priors,
-        &d_colour,
-        gate,
-    )
-}
-
-/// [`render_pixel_with_gradient_gated`], its arguments resolved.
-fn pixel_gradient(
-    field: &GridField,
-    rays: &[Ray],
-    knobs: &MarchKnobs,
-    behind: Behind<'_>,
     (distortion, depths): (f64, &[Option<DepthTerm>]),
-    d_colour: &dyn Fn(DVec3) -> DVec3,
-    gate: DensityGate,
+    d_colour: impl Fn(DVec3) -> DVec3,
 ) -> RayGradient {
+    let behind = background.into();
     let n = rays.len().max(1) as f64;
     let colour = rays
         .iter()
-        .map(|r| ray_gradient(field, r, knobs, behind, (0.0, None), &|_| DVec3::ZERO, gate).colour)
+        .map(|r| {
+            render_ray_with_gradient(field, r, knobs, behind, (0.0, None), |_| DVec3::ZERO).colour
+        })
         .sum::<DVec3>()
         / n;
     let g = d_colour(colour) / n;
@@ -388,15 +328,7 @@ fn pixel_gradient(
             weight: d.weight / n,
             ..d
         });
-        let r = ray_gradient(
-            field,
-            ray,
-            knobs,
-            behind,
-            (distortion / n, depth),
-            &|_| g,
-            gate,
-        );
+        let r = render_ray_with_gradient(field, ray, knobs, behind, (distortion / n, depth), |_| g);
         out.distortion += r.distortion;
         out.depth += r.depth;
         out.opacity += r.opacity / n;
