@@ -321,6 +321,13 @@ fn add_exif_block(path: &Path, block: &[u8]) {
     std::fs::write(path, out).unwrap();
 }
 
+/// Writes an 8 × 6 JPEG of one colour at `path`.
+fn plain_jpeg(path: &Path) {
+    image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
+        .save(path)
+        .unwrap();
+}
+
 /// JPEG frames whose EXIF records their exposure time take it when the
 /// file gives none (and become brackets); the file's key wins over EXIF;
 /// a frame with neither has none.
@@ -330,9 +337,7 @@ fn exposure_times_come_from_exif_where_the_file_gives_none() {
     let mut frames = Vec::new();
     for (i, e) in eyes().iter().enumerate() {
         let name = format!("f{i}.jpg");
-        image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
-            .save(dir.join(&name))
-            .unwrap();
+        plain_jpeg(&dir.join(&name));
         if i < 3 {
             add_exif(&dir.join(&name), 1, [250, 60, 30][i]);
         }
@@ -387,9 +392,7 @@ fn frames_with_an_exif_orientation_are_named() {
     let mut frames = Vec::new();
     for (i, e) in eyes().iter().enumerate() {
         let name = format!("f{i}.jpg");
-        image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
-            .save(dir.join(&name))
-            .unwrap();
+        plain_jpeg(&dir.join(&name));
         match i {
             1 => add_exif_block(&dir.join(&name), &orientation_block(6)),
             2 => add_exif_block(&dir.join(&name), &orientation_block(3)),
@@ -444,9 +447,7 @@ fn exif_exposures_follow_the_iso_and_the_aperture() {
     let mut frames = Vec::new();
     for (i, (e, (f_number, iso))) in eyes().iter().zip(settings).enumerate() {
         let name = format!("f{i}.jpg");
-        image::RgbImage::from_pixel(8, 6, image::Rgb([120, 60, 30]))
-            .save(dir.join(&name))
-            .unwrap();
+        plain_jpeg(&dir.join(&name));
         add_exif_block(
             &dir.join(&name),
             &super::exif::tests::exif_block_with(i % 2 == 0, (1, 100), f_number, Some(iso)),

@@ -120,6 +120,12 @@ impl GridField {
         sh_colour_unclamped(base, &self.interpolate_sh(x), d).max(DVec3::ZERO)
     }
 
+    /// Whether any node's density is above zero (a grid every density of
+    /// which lies at or below renders nothing).
+    pub fn holds_density(&self) -> bool {
+        self.nodes.iter().any(|n| n[3] > 0.0)
+    }
+
     /// Distance between neighbouring nodes along each axis.
     pub fn spacing(&self) -> DVec3 {
         self.bounds.size() / (self.resolution.as_dvec3() - DVec3::ONE)

@@ -477,6 +477,11 @@ pub fn train(
     let mut emptied: Option<(u32, Option<u32>)> = None;
     let mut gate = super::DensityGate::Clamp;
     let view_march = view_march(knobs);
+    // The largest weight each node takes in any training ray (sparse
+    // stages, pruning).
+    let visibility_of = |renderer: &mut Renderer, field: &GridField| {
+        pool_visibility_gpu(renderer, lib, field, dataset, &pool, &view_march, Auto)
+    };
     'stages: for (phase, &(s, end)) in phases.iter().enumerate() {
         // A phase that ends where the one before it did has no step.
         if phase > 0 && end <= phases[phase - 1].1 {
@@ -490,15 +495,7 @@ pub fn train(
         // The bricks around what the stage before (or the resumed field)
         // made visible, and those a resumed field holds.
         let layout = if sparse {
-            let visibility = pool_visibility_gpu(
-                &mut renderer,
-                lib,
-                &field,
-                dataset,
-                &pool,
-                &view_march,
-                Auto,
-            )?;
+            let visibility = visibility_of(&mut renderer, &field)?;
             Some(super::sparse_stage::stage_layout(
                 &field,
                 &visibility,
@@ -670,7 +667,7 @@ pub fn train(
     // A field with no density shows nothing an object could be put into:
     // never written as if trained.
     anyhow::ensure!(
-        field.nodes.iter().any(|n| n[3] > 0.0),
+        field.holds_density(),
         "training left the field empty: after {step} steps no node's density is above zero, \
          every ray's light given to what lies behind the field; check that the bounds hold what \
          the photographs show (`inlay dataset` prints them) and the knobs that pull density \
@@ -684,17 +681,9 @@ pub fn train(
     // start's nodes as much as the threshold).
     let mut pruned = 0;
     if knobs.prune > 0.0 && !(control.stop)() {
-        let visibility = pool_visibility_gpu(
-            &mut renderer,
-            lib,
-            &field,
-            dataset,
-            &pool,
-            &view_march,
-            Auto,
-        )?;
+        let visibility = visibility_of(&mut renderer, &field)?;
         let (kept, n) = super::prune::prune(&field, &visibility, knobs.prune);
-        if kept.nodes.iter().any(|n| n[3] > 0.0) {
+        if kept.holds_density() {
             (field, pruned) = (kept, n);
         } else {
             log::info!("pruning would leave no density: the field is kept unpruned");
