@@ -42,7 +42,9 @@ mean over each pixel's area; no clamping, no denoising):
   at each object's centre with the objects removed, as an equirect map in
   inlay's convention (2n × n, +Y up, u = atan2(z, x)/2π, v = θ/π).
 - training: `training/` with `transforms.json` (nerfstudio/instant-ngp
-  convention, OpenGL camera axes, inlay's world axes, the field's `aabb`)
+  convention, OpenGL camera axes, inlay's world axes, an `aabb` that holds
+  the recipe's bounds and every surface that crosses them, which Cycles
+  draws whole)
   and one linear HDR EXR per view (half floats), full bounces, no objects.
   `--only-views 8,24 --seeds 2 --out DIR` renders those views again with
   another seed: the PSNR between the two renders of a view bounds what any
@@ -358,6 +360,10 @@ def plane_mesh(point, normal, extent=1e3):
 
 
 def build_recipe(recipe, collection):
+    """Adds the recipe's primitives to `collection`; returns the surfaces and
+    media (not lights, not endless planes), whose extents can reach past
+    the recipe's bounds."""
+    solids = []
     for i, p in enumerate(recipe.get("primitives", [])):
         name = p.get("name", f"primitive-{i}")
         t = p["type"]
@@ -402,6 +408,27 @@ def build_recipe(recipe, collection):
         else:
             mat = diffuse_material(name, albedo, p.get("checker"))
         obj.data.materials.append(mat)
+        if max(emission) <= 0 and t != "plane":
+            solids.append(obj)
+    return solids
+
+
+def bounds_holding(bounds, solids):
+    """The recipe's bounds widened to hold every solid that crosses them:
+    a field in the recipe's bounds holds only the part inside (as inlay's
+    `Recipe::crossing_bounds` says), but Cycles draws the whole primitive,
+    so a training set's `aabb` must hold all of what its photographs show.
+    Solids wholly outside stay outside."""
+    lo, hi = np.array(bounds["min"], float), np.array(bounds["max"], float)
+    out_lo, out_hi = lo.copy(), hi.copy()
+    for obj in solids:
+        v = np.array([obj.matrix_world @ x.co for x in obj.data.vertices], float)
+        # Blender's axes to inlay's: the inverse of `to_b`.
+        v = np.stack([v[:, 0], v[:, 2], -v[:, 1]], axis=1)
+        e_lo, e_hi = v.min(axis=0), v.max(axis=0)
+        if np.all(e_lo < hi) and np.all(e_hi > lo):
+            out_lo, out_hi = np.minimum(out_lo, e_lo), np.maximum(out_hi, e_hi)
+    return [[round(float(x), 6) for x in out_lo], [round(float(x), 6) for x in out_hi]]
 
 
 # ---------------------------------------------------------------- environment
@@ -849,7 +876,7 @@ def main():
     sc = bpy.context.scene
     field = bpy.data.collections.new("field")
     sc.collection.children.link(field)
-    build_recipe(spec["recipe"], field)
+    solids = build_recipe(spec["recipe"], field)
     sc.world = world_from_environment(scene_dir, spec.get("environment"))
     objects = bpy.data.collections.new("objects")
     sc.collection.children.link(objects)
@@ -947,7 +974,7 @@ def main():
             "cy": n / 2,
             "w": n,
             "h": n,
-            "aabb": [spec["recipe"]["bounds"]["min"], spec["recipe"]["bounds"]["max"]],
+            "aabb": bounds_holding(spec["recipe"]["bounds"], solids),
             "frames": frames,
         }
         with open(os.path.join(tdir, "transforms.json.partial"), "w") as fh:
@@ -1013,4 +1040,5 @@ def main():
     os.replace(meta_path + ".partial", meta_path)
 
 
-main()
+if __name__ == "__main__":
+    main()

@@ -180,21 +180,59 @@ impl Dataset {
     /// A warning naming the frames that see none of the bounds, if any do.
     pub fn blind_frames_warning(&self) -> Option<String> {
         let blind = self.blind_frames();
-        let list: Vec<String> = blind.iter().take(8).map(|i| i.to_string()).collect();
         (!blind.is_empty()).then(|| {
             format!(
-                "frames {}{} ({} of {}) see none of the field's bounds: they teach only the \
-                 light past them",
-                list.join(", "),
-                if blind.len() > list.len() {
-                    ", …"
-                } else {
-                    ""
-                },
-                blind.len(),
-                self.frames.len()
+                "{} see none of the field's bounds: they teach only the light past them",
+                self.frame_list(&blind)
             )
         })
+    }
+
+    /// Whether any usable pixel of any frame records light (a channel
+    /// above 0): photographs that record none teach an empty field.
+    pub fn records_light(&self) -> bool {
+        self.frames.iter().any(|f| f.image.records_light())
+    }
+
+    /// The file's indices of the frames none of whose usable pixels records
+    /// light.
+    pub fn dark_frames(&self) -> Vec<usize> {
+        self.frames
+            .iter()
+            .filter(|f| !f.image.records_light())
+            .map(|f| f.index)
+            .collect()
+    }
+
+    /// A warning naming the frames that record no light, if any do: each
+    /// teaches that its cameras see nothing.
+    pub fn dark_frames_warning(&self) -> Option<String> {
+        let dark = self.dark_frames();
+        (!dark.is_empty()).then(|| {
+            format!(
+                "{} record no light (every usable pixel black): each teaches that nothing lies \
+                 in its view (a covered lens, images written in other units, or an \
+                 exposure_time that reads them as none?); a short exposure bracket may be black \
+                 where nothing is bright",
+                self.frame_list(&dark)
+            )
+        })
+    }
+
+    /// "frames 3, 7 (2 of 40)": up to eight of `indices` by name.
+    fn frame_list(&self, indices: &[usize]) -> String {
+        let list: Vec<String> = indices.iter().take(8).map(|i| i.to_string()).collect();
+        let more = if indices.len() > list.len() {
+            ", …"
+        } else {
+            ""
+        };
+        format!(
+            "frames {}{more} ({} of {})",
+            list.join(", "),
+            indices.len(),
+            self.frames.len()
+        )
     }
 
     /// The file's indices of the frames whose images record an EXIF

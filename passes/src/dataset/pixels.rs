@@ -118,6 +118,15 @@ impl FrameImage {
     pub fn alpha_at(&self, i: usize) -> f32 {
         self.alpha.get(i).copied().unwrap_or(1.0)
     }
+
+    /// Whether any pixel that is not masked records light (a channel above
+    /// 0).
+    pub fn records_light(&self) -> bool {
+        self.radiance
+            .iter()
+            .zip(&self.state)
+            .any(|(c, s)| *s != PixelState::Masked && c.iter().any(|v| *v > 0.0))
+    }
 }
 
 /// Reads the frame at `path`. An alpha channel is composited over

@@ -82,6 +82,43 @@ fn the_committed_cycles_training_set_loads() {
     }
 }
 
+/// Cycles draws every primitive whole, so each committed Cycles set's
+/// `aabb` must hold what its photographs show: the recipe's bounds, widened
+/// to CUPS' and PLANTS' walls, which reach past them (a field in the
+/// recipe's bounds cannot hold their tops, and the views that see them
+/// missed 30 dB by them alone).
+#[test]
+fn the_committed_cycles_training_sets_hold_what_their_photographs_show() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for (name, top) in [
+        ("dog", 0.9),
+        ("cups", 1.1),
+        ("books", 1.0),
+        ("plants", 1.25),
+        ("room", 1.4),
+    ] {
+        let d = load_dataset(
+            &root.join(format!("docs/cycles/{name}/training")),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let scene = crate::scene::load_scene(&root.join(format!("scenes/{name}.toml"))).unwrap();
+        let recipe = scene.recipe().unwrap();
+        assert_eq!(recipe.crossing(d.bounds).len(), 0, "{name}");
+        assert!(
+            (d.bounds.min - recipe.bounds.min).length() < 1e-12,
+            "{name}"
+        );
+        assert!(
+            (d.bounds.max.y - top).abs() < 1e-12,
+            "{name}: {:?}",
+            d.bounds
+        );
+        let (m, r) = (d.bounds.max, recipe.bounds.max);
+        assert!((m.x - r.x).abs() + (m.z - r.z).abs() < 1e-12, "{name}");
+    }
+}
+
 #[test]
 fn blender_synthetic_frames_are_composited_and_saturation_is_a_lower_bound() {
     let dir = folder("blender");
@@ -633,6 +670,39 @@ fn poses_in_opencv_convention_are_refused_and_a_frame_looking_away_named() {
     write(&dir, &|_| false);
     let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
     assert_eq!(d.blind_frames_warning(), None);
+}
+
+/// Frames whose every usable pixel is black are named (a lit pixel that is
+/// masked does not count), and a set of lit frames has none.
+#[test]
+fn frames_that_record_no_light_are_named() {
+    let dir = folder("dark-frames");
+    let frames: Vec<_> = eyes()
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let name = format!("f{i}.exr");
+            write_exr(&dir.join(&name), 8, 6, |x, y| match (i, x, y) {
+                (0, 3, 2) => [0.0, 0.2, 0.0],
+                (2, 1, 1) => [f32::NAN, 5.0, 5.0],
+                (1 | 2, _, _) => [0.0; 3],
+                _ => [0.5, 0.4, 0.3],
+            });
+            serde_json::json!({ "file_path": name, "transform_matrix": pose_rows(*e) })
+        })
+        .collect();
+    let doc = serde_json::json!({ "fl_x": 7.0, "w": 8, "h": 6, "frames": frames });
+    std::fs::write(dir.join("transforms.json"), doc.to_string()).unwrap();
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert!(d.records_light());
+    assert_eq!(d.dark_frames(), vec![1, 2]);
+    let w = d.dark_frames_warning().unwrap();
+    assert!(w.starts_with("frames 1, 2 (2 of 4) record no light"), "{w}");
+    for i in [1, 2] {
+        write_exr(&dir.join(format!("f{i}.exr")), 8, 6, |_, _| [0.1; 3]);
+    }
+    let d = load_dataset(&dir, &LoadOptions::default()).unwrap();
+    assert_eq!(d.dark_frames_warning(), None);
 }
 
 /// `--downscale 2` reads each 2 × 2 block as one pixel, its mean, with the

@@ -125,7 +125,13 @@ impl Recipe {
     /// themselves (Cycles, `render_cycles.py`) draws all of it, so its
     /// pictures show what no field in these bounds can.
     pub fn crossing_bounds(&self) -> Vec<(&Primitive, f64)> {
-        let b = self.bounds;
+        self.crossing(self.bounds)
+    }
+
+    /// The surfaces and media (not lights) that cross `b`, each with how
+    /// far it reaches past it: [`Recipe::crossing_bounds`] for another box,
+    /// such as a dataset's that was widened to hold them.
+    pub fn crossing(&self, b: Aabb) -> Vec<(&Primitive, f64)> {
         self.primitives
             .iter()
             .filter(|p| !p.is_emitter())

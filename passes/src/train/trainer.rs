@@ -326,15 +326,8 @@ pub fn transparent_pixels(dataset: &Dataset, frames: &[u32]) -> TransparentPixel
 pub fn check_dataset(knobs: &TrainKnobs, dataset: &Dataset) -> anyhow::Result<()> {
     // Photographs that record no light teach an empty field, which the
     // run would refuse only at its end.
-    let lit = |f: &Frame| {
-        f.image
-            .radiance
-            .iter()
-            .zip(&f.image.state)
-            .any(|(c, s)| *s != PixelState::Masked && c.iter().any(|v| *v > 0.0))
-    };
     anyhow::ensure!(
-        dataset.frames.is_empty() || dataset.frames.iter().any(lit),
+        dataset.frames.is_empty() || dataset.records_light(),
         "{}: every usable pixel of its {} frames is black (radiance 0): there is nothing to \
          train on (images written in other units, or an exposure_time that reads them as none?)",
         dataset.file.display(),

@@ -145,6 +145,9 @@ pub fn run(args: &DatasetArgs) -> Result<()> {
     if let Some(w) = d.blind_frames_warning() {
         println!("warning: {w}");
     }
+    if let Some(w) = d.dark_frames_warning() {
+        println!("warning: {w}");
+    }
     if let Some(w) = d.turned_frames_warning() {
         println!("warning: {w}");
     }

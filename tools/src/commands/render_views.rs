@@ -110,7 +110,12 @@ pub fn run(args: &RenderViewsArgs) -> Result<()> {
             scene.path.display()
         )
     })?;
-    super::crossing_bounds::warn_crossing_bounds(&scene.path, recipe);
+    super::crossing_bounds::warn_crossing_bounds(
+        &scene.path,
+        recipe,
+        recipe.bounds,
+        "the recipe's",
+    );
     let (w, h) = args.size;
     std::fs::create_dir_all(&args.out)?;
     let brackets_dir = args.out.join("brackets");

@@ -445,7 +445,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
                 d.min.to_array(),
                 d.max.to_array()
             );
-            super::crossing_bounds::warn_crossing_bounds(p, recipe);
+            super::crossing_bounds::warn_crossing_bounds(p, recipe, d, "the dataset's");
             Some(scene)
         }
         None => None,
@@ -480,6 +480,9 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         }
     }
     if let Some(w) = dataset.blind_frames_warning() {
+        eprintln!("warning: {}: {w}", dataset.file.display());
+    }
+    if let Some(w) = dataset.dark_frames_warning() {
         eprintln!("warning: {}: {w}", dataset.file.display());
     }
     if let Some(w) = dataset.turned_frames_warning() {
