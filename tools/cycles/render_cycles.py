@@ -59,6 +59,16 @@ mean over each pixel's area; no clamping, no denoising):
   up, each frame's `depth_file_path` and the file's
   `depth_unit_scale_factor` added. The photographs alone stay
   `training/transforms.json`.
+- alpha: `training/alpha/view-NNN.exr`, the training views (rendered
+  first: `--what training`) with alpha, as a synthetic set of the Blender
+  convention is made: the share of each pixel's area whose rays meet the
+  scene (`--alpha-samples` a pixel, the film transparent, no bounces) as
+  alpha, and the photograph less the environment seen through the rest
+  (the environment's mean over the pixel, rendered alone with the same
+  samples, times 1 − alpha) as its premultiplied colour;
+  `training/alpha/transforms.json` names them. What the photographs
+  record of the scene is untouched; only the environment seen past it
+  leaves.
 - `render.json`: Blender's version, the command, samples, seeds and the
   wall time of each image.
 """
@@ -102,6 +112,7 @@ def parse_args():
     p.add_argument("--views", type=int, default=32, help="training views")
     p.add_argument("--view-size", type=int, default=96)
     p.add_argument("--view-samples", type=int, default=256)
+    p.add_argument("--alpha-samples", type=int, default=1024, help="samples a pixel of --what alpha's two passes")
     p.add_argument(
         "--only-views",
         default="",
@@ -801,6 +812,48 @@ def png16_grey(path, values):
     os.replace(path + ".partial", path)
 
 
+def render_pixels(name):
+    """Renders the current camera into a temporary RGBA EXR and returns its
+    pixels as an (h, w, 4) array, top row first."""
+    sc = bpy.context.scene
+    tmp = os.path.join(bpy.app.tempdir, f"{name}.exr")
+    sc.render.filepath = tmp
+    bpy.ops.render.render(write_still=True)
+    px = read_exr(tmp)
+    os.remove(tmp)
+    return px
+
+
+def read_exr(path):
+    """An EXR's pixels as an (h, w, 4) float64 array, top row first, as
+    stored (no colour transform)."""
+    img = bpy.data.images.load(path)
+    img.colorspace_settings.name = "Non-Color"
+    w, h = img.size
+    px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[::-1]
+    bpy.data.images.remove(img)
+    return px
+
+
+def write_exr_rgba(path, px):
+    """Writes (h, w, 4) linear RGBA, top row first, as a half-float RGBA EXR
+    (the scene's EXR settings), through a partial file."""
+    sc = bpy.context.scene
+    h, w, _ = px.shape
+    img = bpy.data.images.new("alpha-out", w, h, alpha=True, float_buffer=True)
+    img.colorspace_settings.name = "Non-Color"
+    img.pixels = px[::-1].astype(np.float32).ravel()
+    tmp = path + ".partial.exr"
+    img.save_render(tmp, scene=sc)
+    bpy.data.images.remove(img)
+    back = read_exr(tmp)
+    # Half floats keep 11 bits: anything further off is a colour transform.
+    err = np.abs(back - px).max() / max(1e-6, np.abs(px).max())
+    if err > 2e-3:
+        raise SystemExit(f"{path}: the EXR written reads back {err:.2e} off (relative): a colour transform?")
+    os.replace(tmp, path)
+
+
 def render_depth(path, log):
     """Renders the current camera's Z pass through the compositor into a
     float EXR, reads it back and writes it as `png16_grey` in thousandths
@@ -860,6 +913,39 @@ def training_views(scene_spec, count):
         d = np.array([math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)])
         views.append((centre + radius * d, centre))
     return views
+
+
+def write_json(path, value):
+    """Writes `value` as JSON through a partial file: an interrupted run
+    leaves the earlier file as it was."""
+    with open(path + ".partial", "w") as fh:
+        json.dump(value, fh, indent=1)
+    os.replace(path + ".partial", path)
+
+
+def training_set_variant(spec, args, name, prefix):
+    """For a folder `name` beside the training set (rendered first: `--what
+    training`): its path, the set's transforms (to be written there), and
+    each of the set's views as (k, frame), its camera (`prefix`-NNN) placed
+    as the view's and made the scene's."""
+    tdir = os.path.join(args.out, "training")
+    sub = os.path.join(tdir, name)
+    os.makedirs(sub, exist_ok=True)
+    with open(os.path.join(tdir, "transforms.json")) as fh:
+        transforms = json.load(fh)
+    by_file = {f["file_path"]: f for f in transforms["frames"]}
+    fov = math.radians(40.0)
+
+    def views():
+        for k, (pos, tgt) in enumerate(training_views(spec, args.views)):
+            frame = by_file.get(f"view-{k:03d}.exr")
+            if frame is None:
+                continue
+            cam = add_camera(f"{prefix}-{k:03d}", pos, tgt, [0, 1, 0], math.degrees(fov))
+            bpy.context.scene.camera = cam
+            yield k, frame
+
+    return sub, transforms, views()
 
 
 def main():
@@ -937,9 +1023,7 @@ def main():
             for s in seeds:
                 sensors[f"s{s}"] = measure_irradiance(centre, args.sensor_samples, s, log)
             path = os.path.join(args.out, f"irradiance-{name}.json")
-            with open(path + ".partial", "w") as fh:
-                json.dump({"centre": [float(x) for x in centre], "irradiance": sensors}, fh, indent=1)
-            os.replace(path + ".partial", path)
+            write_json(path, {"centre": [float(x) for x in centre], "irradiance": sensors})
             print(f"wrote {path}", flush=True)
 
     if "training" in what:
@@ -977,41 +1061,62 @@ def main():
             "aabb": bounds_holding(spec["recipe"]["bounds"], solids),
             "frames": frames,
         }
-        with open(os.path.join(tdir, "transforms.json.partial"), "w") as fh:
-            json.dump(transforms, fh, indent=1)
-        os.replace(os.path.join(tdir, "transforms.json.partial"), os.path.join(tdir, "transforms.json"))
+        write_json(os.path.join(tdir, "transforms.json"), transforms)
 
     if "depth" in what:
         show_objects(False)
         set_bounces(0)
         bpy.context.view_layer.use_pass_z = True
-        tdir = os.path.join(args.out, "training")
-        ddir = os.path.join(tdir, "depth")
-        os.makedirs(ddir, exist_ok=True)
         n = args.view_size
         sc.render.resolution_x = sc.render.resolution_y = n
         # One sample at each pixel's centre: the depth along its centre ray.
         sc.cycles.samples = 1
         sc.cycles.filter_width = 0.01
-        fov = math.radians(40.0)
-        with open(os.path.join(tdir, "transforms.json")) as fh:
-            transforms = json.load(fh)
-        by_file = {f["file_path"]: f for f in transforms["frames"]}
-        for k, (pos, tgt) in enumerate(training_views(spec, args.views)):
-            frame = by_file.get(f"view-{k:03d}.exr")
-            if frame is None:
-                continue
-            cam = add_camera(f"depth-{k:03d}", pos, tgt, [0, 1, 0], math.degrees(fov))
-            sc.camera = cam
+        ddir, transforms, views = training_set_variant(spec, args, "depth", "depth")
+        for k, frame in views:
             name = f"depth-{k:03d}.png"
             render_depth(os.path.join(ddir, name), log)
             frame["file_path"] = "../" + frame["file_path"]
             frame["depth_file_path"] = name
         transforms["depth_unit_scale_factor"] = 0.001
-        dpath = os.path.join(ddir, "transforms.json")
-        with open(dpath + ".partial", "w") as fh:
-            json.dump(transforms, fh, indent=1)
-        os.replace(dpath + ".partial", dpath)
+        write_json(os.path.join(ddir, "transforms.json"), transforms)
+
+    if "alpha" in what:
+        show_objects(False)
+        set_bounces(0)
+        sc.use_nodes = False
+        bpy.context.view_layer.use_pass_z = False
+        n = args.view_size
+        sc.render.resolution_x = sc.render.resolution_y = n
+        sc.render.image_settings.color_mode = "RGBA"
+        sc.render.image_settings.color_depth = "16"
+        sc.cycles.samples = args.alpha_samples
+        sc.cycles.seed = seeds[0]
+        sc.cycles.filter_width = 1.0
+        adir, transforms, views = training_set_variant(spec, args, "alpha", "alpha")
+        for k, frame in views:
+            fname = frame["file_path"]
+            # The share of the pixel whose rays meet the scene.
+            t0 = time.time()
+            sc.render.film_transparent = True
+            alpha = np.clip(render_pixels(f"alpha-{k:03d}")[..., 3], 0.0, 1.0)
+            # The environment alone, its mean over each pixel: seen through
+            # the share the scene leaves (a held-out scene would not do:
+            # Cycles holds out surfaces, not media, and a medium the lights
+            # still reach would scatter into the environment's picture).
+            sc.render.film_transparent = False
+            field.hide_render = True
+            world = render_pixels(f"environment-{k:03d}")[..., :3]
+            field.hide_render = False
+            full = read_exr(os.path.join(args.out, "training", fname))[..., :3]
+            rgb = np.maximum(full - (1.0 - alpha[..., None]) * world, 0.0)
+            rgb[alpha <= 0.0] = 0.0
+            write_exr_rgba(os.path.join(adir, fname), np.concatenate([rgb, alpha[..., None]], axis=2))
+            log.append({"file": f"alpha/{fname}", "seconds": round(time.time() - t0, 1), "samples": sc.cycles.samples, "seed": sc.cycles.seed})
+            print(f"wrote {os.path.join(adir, fname)}: alpha {alpha.mean():.3f} on average", flush=True)
+        sc.render.film_transparent = False
+        sc.render.image_settings.color_mode = "RGB"
+        write_json(os.path.join(adir, "transforms.json"), transforms)
 
     command = "blender -b --factory-startup --python tools/cycles/render_cycles.py -- " + " ".join(
         sys.argv[sys.argv.index("--") + 1 :]

@@ -116,6 +116,31 @@ fn the_committed_cycles_training_sets_hold_what_their_photographs_show() {
         );
         let (m, r) = (d.bounds.max, recipe.bounds.max);
         assert!((m.x - r.x).abs() + (m.z - r.z).abs() < 1e-12, "{name}");
+        // The same views with alpha (`--what alpha`): the same cameras and
+        // box, and where a pixel is wholly the scene's, the photograph's
+        // radiance (half floats: 2⁻¹¹ of it).
+        let a = load_dataset(
+            &root.join(format!("docs/cycles/{name}/training/alpha")),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(a.bounds, d.bounds, "{name}");
+        assert_eq!(a.frames.len(), d.frames.len(), "{name}");
+        assert!(a.counts.transparent > 0, "{name}");
+        for (fa, fd) in a.frames.iter().zip(&d.frames) {
+            assert_eq!(fa.pose, fd.pose, "{name}");
+            let opaque = (0..fa.image.radiance.len()).filter(|&i| fa.image.alpha_at(i) >= 1.0);
+            for i in opaque {
+                let (ca, cd) = (fa.image.radiance[i], fd.image.radiance[i]);
+                for c in 0..3 {
+                    assert!(
+                        (ca[c] - cd[c]).abs() <= 1e-3 * cd[c].abs() + 1e-6,
+                        "{name} frame {} pixel {i}",
+                        fa.index
+                    );
+                }
+            }
+        }
     }
 }
 
