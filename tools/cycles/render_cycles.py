@@ -874,11 +874,7 @@ def render_depth(path, log):
     t0 = time.time()
     bpy.ops.render.render(write_still=False)
     written = [f for f in os.listdir(tmp_dir) if f.startswith("z") and f.endswith(".exr")]
-    img = bpy.data.images.load(os.path.join(tmp_dir, written[0]))
-    img.colorspace_settings.name = "Non-Color"
-    w, h = img.size
-    px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, 4)[::-1, :, 0]
-    bpy.data.images.remove(img)
+    px = read_exr(os.path.join(tmp_dir, written[0]))[..., 0]
     for f in written:
         os.remove(os.path.join(tmp_dir, f))
     os.rmdir(tmp_dir)
@@ -1140,9 +1136,7 @@ def main():
     merged = {e["file"]: e for e in old.get("images", [])}
     merged.update({e["file"]: e for e in log})
     meta["images"] = sorted(merged.values(), key=lambda e: e["file"])
-    with open(meta_path + ".partial", "w") as fh:
-        json.dump(meta, fh, indent=1)
-    os.replace(meta_path + ".partial", meta_path)
+    write_json(meta_path, meta)
 
 
 if __name__ == "__main__":
