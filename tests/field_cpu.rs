@@ -362,3 +362,26 @@ fn lighting_knobs_come_from_the_scene_file() {
         inlay_passes::scene::LightingKnobs::default()
     );
 }
+
+/// DOG-CHECKER is DOG with a checkerboard floor and nothing else changed:
+/// trained side by side, the two scenes' depth errors tell what the
+/// photographs leave open from what the trainer gets wrong
+/// (docs/benchmarks.md, issue 25's forty-third pass).
+#[test]
+fn dog_checker_is_dog_with_a_checkerboard_floor() {
+    let text = |n: &str| std::fs::read_to_string(scenes_dir().join(n)).unwrap();
+    let from_recipe = |t: &str| t[t.find("[recipe]").unwrap()..].to_string();
+    let (dog, checker) = (text("dog.toml"), text("dog-checker.toml"));
+    let line = "checker = { size = 0.06, albedo = [0.3, 0.3, 0.32] }\n";
+    assert_eq!(
+        from_recipe(&checker).replacen(line, "", 1),
+        from_recipe(&dog)
+    );
+    let s = scene("dog-checker.toml");
+    let floor = &s.recipe().unwrap().primitives[0];
+    assert_eq!(floor.name, "floor");
+    assert!(floor.checker.is_some());
+    assert!(scene("dog.toml").recipe().unwrap().primitives[0]
+        .checker
+        .is_none());
+}

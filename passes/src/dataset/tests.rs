@@ -96,6 +96,7 @@ fn the_committed_cycles_training_sets_hold_what_their_photographs_show() {
         ("books", 1.0),
         ("plants", 1.25),
         ("room", 1.4),
+        ("dog-checker", 0.9),
     ] {
         let d = load_dataset(
             &root.join(format!("docs/cycles/{name}/training")),
