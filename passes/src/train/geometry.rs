@@ -385,7 +385,7 @@ fn median(v: &[f64]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use glam::{DVec3, UVec3};
 
     use super::*;
@@ -396,12 +396,12 @@ mod tests {
 
     /// A 24³ field over [−1, 1]³ opaque below `floor` (density 400 a unit),
     /// empty above.
-    fn slab(floor: f64) -> GridField {
+    pub(in crate::train) fn slab(floor: f64) -> GridField {
         foggy_slab(floor, 0.0)
     }
 
     /// [`slab`] with density `fog` a unit above `floor`.
-    fn foggy_slab(floor: f64, fog: f32) -> GridField {
+    pub(in crate::train) fn foggy_slab(floor: f64, fog: f32) -> GridField {
         let n = 24u32;
         let bounds = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
         let h = 2.0 / (n - 1) as f64;
@@ -422,7 +422,7 @@ mod tests {
     }
 
     /// A camera above the field looking down at its centre, 32² pixels.
-    fn frame() -> Frame {
+    pub(in crate::train) fn frame() -> Frame {
         let (w, h) = (32, 32);
         Frame {
             index: 0,
@@ -454,7 +454,7 @@ mod tests {
         }
     }
 
-    fn march() -> MarchKnobs {
+    pub(in crate::train) fn march() -> MarchKnobs {
         MarchKnobs {
             samples_per_ray: 512,
             termination: 1e-4,

@@ -19,6 +19,7 @@ pub mod render;
 pub mod seen_lights;
 pub mod sh_pages;
 pub mod sparse_stage;
+pub mod spread;
 pub mod step_times;
 pub mod trainer;
 pub mod tv;

@@ -19,6 +19,7 @@ use super::knobs::TrainKnobs;
 use super::past_bounds::{frame_sees_bounds, pose_light};
 use super::pixels::{bracket_sets, is_bracket, merged_brackets, training_frames, PixelPool};
 use super::seen_lights::SeenLight;
+use super::spread::{surface_spread, SurfaceSpread};
 use super::view_pixel::{view_pixel, PixelSplit};
 use super::visibility::pool_visibility_gpu;
 use crate::dataset::pixels::srgb_encode as encoded;
@@ -80,6 +81,9 @@ pub struct HeldOutView {
     pub rendered: Vec<[f32; 3]>,
     /// Width and height.
     pub size: (u32, u32),
+    /// How far the field's surfaces spread along the rays through the
+    /// view's pixels: where wide, the photographs left their depth open.
+    pub spread: SurfaceSpread,
 }
 
 /// A finished run.
@@ -929,6 +933,7 @@ pub fn score_view<'a>(
         truth,
         rendered,
         size: (w, h),
+        spread: surface_spread(frame, field, march),
     }
 }
 

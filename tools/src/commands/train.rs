@@ -748,6 +748,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
             v.frame, v.psnr, v.relative_error, v.brightness
         );
     }
+    print_spread(&trained.held_out, trained.field.spacing().min_element());
     let depths = match &scene {
         Some(scene) => print_geometry(scene, &dataset, &trained, &knobs),
         None => Vec::new(),
@@ -789,6 +790,43 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
     }
     outputs.commit(Some(ctx))?;
     Ok(())
+}
+
+/// Prints how far each held-out view's surfaces spread along its rays
+/// ([`inlay_passes::train::spread`]), and warns where the share spread
+/// wide says the photographs left the depth open.
+fn print_spread(views: &[inlay_passes::train::HeldOutView], spacing: f64) {
+    use inlay_passes::train::spread::{WIDE_SHARE_WARNING, WIDE_SPREAD};
+    for v in views {
+        let s = &v.spread;
+        let read = match s.stride {
+            1 => String::new(),
+            n => format!(" (one pixel of each {n} × {n} block read)"),
+        };
+        println!(
+            "held-out frame {}: the field's surfaces spread over {WIDE_SPREAD} node spacings ({:.3} units) or more \
+             along the ray at {} of its {} surface pixels{read}",
+            v.frame,
+            WIDE_SPREAD * spacing,
+            percent_of(s.wide_share()),
+            s.surfaces
+        );
+    }
+    let wide: Vec<String> = views
+        .iter()
+        .filter(|v| v.spread.wide_share() >= WIDE_SHARE_WARNING)
+        .map(|v| format!("frame {}: {}", v.frame, percent_of(v.spread.wide_share())))
+        .collect();
+    if !wide.is_empty() {
+        eprintln!(
+            "warning: the field's depth is uncertain where a surface's weight spreads along the ray \
+             (held-out {}): photographs cannot place a plain, untextured surface, whose colour a \
+             translucent sheet in front of it renders from every side. Occlusion, probes and shadows \
+             read that depth; photographs with alpha, or depth maps (`depth_file_path`), place it. \
+             A medium such as foliage spreads by nature",
+            wide.join(", ")
+        );
+    }
 }
 
 /// The smallest and largest luminance of `colours`.
