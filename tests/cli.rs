@@ -347,6 +347,7 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     // and readable by `render`.
     let field = dir.join("views.inlayfield");
     let depth_picture = dir.join("depth.exr");
+    let spread_picture = dir.join("spread.exr");
     // A picture of held-out views with none held out is refused before
     // any work, naming the flag.
     let o = inlay(&[
@@ -388,6 +389,8 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
         "4",
         "--depth-picture",
         depth_picture.to_str().unwrap(),
+        "--spread-picture",
+        spread_picture.to_str().unwrap(),
     ]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
@@ -401,6 +404,14 @@ fn render_views_writes_a_dataset_that_dataset_reads() {
     let view = inlay_engine::HdrImage::load_exr(&out.join("view-001.exr")).unwrap();
     assert_eq!((drawn.width, drawn.height), (view.width, view.height));
     assert!(drawn.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0));
+    // How far its surfaces spread, printed and drawn at the view's size.
+    assert!(
+        t.contains("held-out frame 1: the field's surfaces spread over 4 node spacings"),
+        "{t}"
+    );
+    let spread = inlay_engine::HdrImage::load_exr(&spread_picture).unwrap();
+    assert_eq!((spread.width, spread.height), (view.width, view.height));
+    assert!(spread.pixels.iter().any(|p| p[0] + p[1] + p[2] > 0.0));
     // Where a step's time went, the training rays' pass among the rest.
     assert!(t.contains("a step took") && t.contains("train-rays"), "{t}");
     // And the radiance the knobs were fractions of.

@@ -57,7 +57,7 @@ pub fn depth_spread(field: &dyn RadianceField, ray: &Ray, march: &MarchKnobs) ->
 }
 
 /// One view's surfaces' spread ([`surface_spread`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct SurfaceSpread {
     /// Pixels read whose ray the field makes opaque (at least
     /// [`SURFACE_OPACITY`]).
@@ -67,6 +67,11 @@ pub struct SurfaceSpread {
     pub wide: usize,
     /// Every `stride`-th pixel of every `stride`-th row was read.
     pub stride: u32,
+    /// The lattice of pixels read: its width and height.
+    pub size: (u32, u32),
+    /// Each pixel read's spread in node spacings, row by row; NaN where
+    /// it is masked or the field holds no surface along it.
+    pub spreads: Vec<f32>,
 }
 
 impl SurfaceSpread {
@@ -96,24 +101,43 @@ pub fn surface_spread(
 ) -> SurfaceSpread {
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
     let stride = (((w as f64 * h as f64) / SPREAD_PIXELS as f64).sqrt().ceil() as u32).max(1);
+    let size = (w.div_ceil(stride), h.div_ceil(stride));
     let spacing = field.spacing().min_element();
-    let pixels: Vec<u32> = (0..h)
-        .step_by(stride as usize)
-        .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| y * w + x))
-        .filter(|&p| frame.image.state[p as usize] != PixelState::Masked)
-        .collect();
-    let spreads: Vec<f64> = pixels
+    let spreads: Vec<f32> = (0..size.0 * size.1)
         .into_par_iter()
-        .filter_map(|p| depth_spread(field, &pixel_ray(frame, p)?, march))
+        .map(|i| {
+            let p = (i / size.0) * stride * w + (i % size.0) * stride;
+            if frame.image.state[p as usize] == PixelState::Masked {
+                return f32::NAN;
+            }
+            pixel_ray(frame, p)
+                .and_then(|ray| depth_spread(field, &ray, march))
+                .map_or(f32::NAN, |s| (s / spacing) as f32)
+        })
         .collect();
+    let surfaces: Vec<f32> = spreads.iter().copied().filter(|s| !s.is_nan()).collect();
     SurfaceSpread {
-        surfaces: spreads.len(),
-        wide: spreads
+        surfaces: surfaces.len(),
+        wide: surfaces
             .iter()
-            .filter(|&&s| s >= WIDE_SPREAD * spacing)
+            .filter(|&&s| s as f64 >= WIDE_SPREAD)
             .count(),
         stride,
+        size,
+        spreads,
     }
+}
+
+/// A pixel's spread as a colour (linear RGB in [0, 1]): white where the
+/// surface gathers at a point, darkening to orange at [`WIDE_SPREAD`]
+/// node spacings and beyond; black where there is no surface (NaN).
+pub fn spread_colour(spread: f32) -> [f32; 3] {
+    if spread.is_nan() {
+        return [0.0; 3];
+    }
+    let t = (spread as f64 / WIDE_SPREAD).clamp(0.0, 1.0) as f32;
+    let orange = [1.0, 0.35, 0.0];
+    [0, 1, 2].map(|c| 1.0 + t * (orange[c] - 1.0))
 }
 
 #[cfg(test)]
@@ -200,6 +224,30 @@ mod tests {
         let share = coarse.surfaces as f64 / (150.0 * 150.0);
         let whole = bare.surfaces as f64 / 1024.0;
         assert!((share - whole).abs() < 0.02, "{share} against {whole}");
+        assert_eq!(coarse.size, (150, 150));
+        assert_eq!(coarse.spreads.len(), 150 * 150);
+        // Each pixel's spread: NaN off the surfaces and on masked pixels.
+        assert_eq!(bare.size, (32, 32));
+        let nan = |s: &SurfaceSpread| s.spreads.iter().filter(|v| v.is_nan()).count();
+        assert_eq!(nan(&bare), 1024 - bare.surfaces);
+        assert_eq!(nan(&without), 1024 - without.surfaces);
+        assert!(without.spreads[16 * 32 + 16].is_nan());
+        assert!(bare.spreads.iter().all(|&v| v.is_nan() || v < 1.0));
+        let wide = fog.spreads.iter().filter(|&&v| v as f64 >= WIDE_SPREAD);
+        assert_eq!(wide.count(), fog.wide);
         assert_eq!(SurfaceSpread::default().wide_share(), 0.0);
+    }
+
+    /// White at a point, orange from [`WIDE_SPREAD`] on, black where no
+    /// surface is.
+    #[test]
+    fn a_spread_is_drawn_white_to_orange() {
+        assert_eq!(spread_colour(f32::NAN), [0.0; 3]);
+        assert_eq!(spread_colour(0.0), [1.0; 3]);
+        let near = |a: [f32; 3], b: [f32; 3]| (0..3).all(|c| (a[c] - b[c]).abs() < 1e-6);
+        assert!(near(spread_colour(WIDE_SPREAD as f32), [1.0, 0.35, 0.0]));
+        assert!(near(spread_colour(40.0), [1.0, 0.35, 0.0]));
+        let half = spread_colour(0.5 * WIDE_SPREAD as f32);
+        assert!(near(half, [1.0, 0.675, 0.5]), "{half:?}");
     }
 }
