@@ -970,7 +970,7 @@ fn depth_maps_place_the_surfaces_photographs_without_alpha_leave_soft() {
         // Each held-out view's surfaces' spread is read (on these small
         // views of a 24-node grid, 171 and 230 surface pixels, 0–2 of
         // them wide).
-        assert!(p.spread.surfaces > 100 && h.spread.surfaces > 100);
+        assert!(p.spread.surfaces() > 100 && h.spread.surfaces() > 100);
         assert!(*b < 0.7 * a && *b < 1.0, "{b} vs {a}");
         assert!(h.psnr > p.psnr - 0.5, "{} vs {}", h.psnr, p.psnr);
     }

@@ -170,22 +170,15 @@ impl Dataset {
     /// bounds ([`sight::sees_bounds`]): they teach the field nothing, only
     /// what lies past it.
     pub fn blind_frames(&self) -> Vec<usize> {
-        self.frames
-            .iter()
-            .filter(|f| !sight::sees_bounds(&f.pose, &f.intrinsics, &self.bounds))
-            .map(|f| f.index)
-            .collect()
+        self.frames_where(|f| !sight::sees_bounds(&f.pose, &f.intrinsics, &self.bounds))
     }
 
     /// A warning naming the frames that see none of the bounds, if any do.
     pub fn blind_frames_warning(&self) -> Option<String> {
-        let blind = self.blind_frames();
-        (!blind.is_empty()).then(|| {
-            format!(
-                "{} see none of the field's bounds: they teach only the light past them",
-                self.frame_list(&blind)
-            )
-        })
+        self.frames_warning(
+            &self.blind_frames(),
+            "see none of the field's bounds: they teach only the light past them",
+        )
     }
 
     /// Whether any usable pixel of any frame records light (a channel
@@ -197,26 +190,33 @@ impl Dataset {
     /// The file's indices of the frames none of whose usable pixels records
     /// light.
     pub fn dark_frames(&self) -> Vec<usize> {
-        self.frames
-            .iter()
-            .filter(|f| !f.image.records_light())
-            .map(|f| f.index)
-            .collect()
+        self.frames_where(|f| !f.image.records_light())
     }
 
     /// A warning naming the frames that record no light, if any do: each
     /// teaches that its cameras see nothing.
     pub fn dark_frames_warning(&self) -> Option<String> {
-        let dark = self.dark_frames();
-        (!dark.is_empty()).then(|| {
-            format!(
-                "{} record no light (every usable pixel black): each teaches that nothing lies \
-                 in its view (a covered lens, images written in other units, or an \
-                 exposure_time that reads them as none?); a short exposure bracket may be black \
-                 where nothing is bright",
-                self.frame_list(&dark)
-            )
-        })
+        self.frames_warning(
+            &self.dark_frames(),
+            "record no light (every usable pixel black): each teaches that nothing lies \
+             in its view (a covered lens, images written in other units, or an \
+             exposure_time that reads them as none?); a short exposure bracket may be black \
+             where nothing is bright",
+        )
+    }
+
+    /// The file's indices of the frames `keep` holds for.
+    fn frames_where(&self, keep: impl Fn(&Frame) -> bool) -> Vec<usize> {
+        self.frames
+            .iter()
+            .filter(|f| keep(f))
+            .map(|f| f.index)
+            .collect()
+    }
+
+    /// "frames 3, 7 (2 of 40) `what`", where any frames are named.
+    fn frames_warning(&self, indices: &[usize], what: &str) -> Option<String> {
+        (!indices.is_empty()).then(|| format!("{} {what}", self.frame_list(indices)))
     }
 
     /// "frames 3, 7 (2 of 40)": up to eight of `indices` by name.

@@ -59,12 +59,6 @@ pub fn depth_spread(field: &dyn RadianceField, ray: &Ray, march: &MarchKnobs) ->
 /// One view's surfaces' spread ([`surface_spread`]).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SurfaceSpread {
-    /// Pixels read whose ray the field makes opaque (at least
-    /// [`SURFACE_OPACITY`]).
-    pub surfaces: usize,
-    /// Of those, the pixels whose depth spreads over [`WIDE_SPREAD`] node
-    /// spacings or more.
-    pub wide: usize,
     /// Every `stride`-th pixel of every `stride`-th row was read.
     pub stride: u32,
     /// The lattice of pixels read: its width and height.
@@ -75,13 +69,27 @@ pub struct SurfaceSpread {
 }
 
 impl SurfaceSpread {
+    /// Pixels read whose ray the field makes opaque (at least
+    /// [`SURFACE_OPACITY`]).
+    pub fn surfaces(&self) -> usize {
+        self.spreads.iter().filter(|s| !s.is_nan()).count()
+    }
+
+    /// Of those, the pixels whose depth spreads over [`WIDE_SPREAD`] node
+    /// spacings or more.
+    pub fn wide(&self) -> usize {
+        self.spreads
+            .iter()
+            .filter(|&&s| s as f64 >= WIDE_SPREAD)
+            .count()
+    }
+
     /// The share of the surface pixels that spread wide (0 where there are
     /// none).
     pub fn wide_share(&self) -> f64 {
-        if self.surfaces == 0 {
-            0.0
-        } else {
-            self.wide as f64 / self.surfaces as f64
+        match self.surfaces() {
+            0 => 0.0,
+            n => self.wide() as f64 / n as f64,
         }
     }
 }
@@ -115,13 +123,7 @@ pub fn surface_spread(
                 .map_or(f32::NAN, |s| (s / spacing) as f32)
         })
         .collect();
-    let surfaces: Vec<f32> = spreads.iter().copied().filter(|s| !s.is_nan()).collect();
     SurfaceSpread {
-        surfaces: surfaces.len(),
-        wide: surfaces
-            .iter()
-            .filter(|&&s| s as f64 >= WIDE_SPREAD)
-            .count(),
         stride,
         size,
         spreads,
@@ -198,20 +200,20 @@ mod tests {
         // (The corner pixels' rays leave through the bounds' sides above
         // the floor: through the fog alone where there is one.)
         let bare = surface_spread(&f, &slab(-0.5), &march());
-        assert!(bare.surfaces > 800, "{bare:?}");
-        assert_eq!((bare.wide, bare.stride), (0, 1));
+        assert!(bare.surfaces() > 800, "{bare:?}");
+        assert_eq!((bare.wide(), bare.stride), (0, 1));
         let fog = surface_spread(&f, &foggy_slab(-0.5, 1.0), &march());
-        assert!(fog.surfaces >= bare.surfaces, "{fog:?}");
+        assert!(fog.surfaces() >= bare.surfaces(), "{fog:?}");
         assert!(fog.wide_share() > 0.95, "{fog:?}");
         let faint = surface_spread(&f, &foggy_slab(-0.5, 0.05), &march());
-        assert_eq!(faint.wide, 0, "{faint:?}");
+        assert_eq!(faint.wide(), 0, "{faint:?}");
         // The 8 × 8 pixels at the centre, all on the floor, masked.
         let mut masked = frame();
         for y in 12..20 {
             masked.image.state[y * 32 + 12..y * 32 + 20].fill(PixelState::Masked);
         }
         let without = surface_spread(&masked, &slab(-0.5), &march());
-        assert_eq!(without.surfaces, bare.surfaces - 64);
+        assert_eq!(without.surfaces(), bare.surfaces() - 64);
         let mut large = frame();
         let (w, h) = (300u32, 300u32);
         large.intrinsics = crate::dataset::Intrinsics::centred(w, h, 40.0);
@@ -220,21 +222,17 @@ mod tests {
         large.image.radiance = vec![[0.5; 3]; (w * h) as usize];
         large.image.state = vec![PixelState::Value; (w * h) as usize];
         let coarse = surface_spread(&large, &slab(-0.5), &march());
-        assert_eq!((coarse.stride, coarse.wide), (2, 0));
-        let share = coarse.surfaces as f64 / (150.0 * 150.0);
-        let whole = bare.surfaces as f64 / 1024.0;
+        assert_eq!((coarse.stride, coarse.wide()), (2, 0));
+        let share = coarse.surfaces() as f64 / (150.0 * 150.0);
+        let whole = bare.surfaces() as f64 / 1024.0;
         assert!((share - whole).abs() < 0.02, "{share} against {whole}");
         assert_eq!(coarse.size, (150, 150));
         assert_eq!(coarse.spreads.len(), 150 * 150);
         // Each pixel's spread: NaN off the surfaces and on masked pixels.
-        assert_eq!(bare.size, (32, 32));
-        let nan = |s: &SurfaceSpread| s.spreads.iter().filter(|v| v.is_nan()).count();
-        assert_eq!(nan(&bare), 1024 - bare.surfaces);
-        assert_eq!(nan(&without), 1024 - without.surfaces);
+        assert_eq!((bare.size, bare.spreads.len()), ((32, 32), 1024));
         assert!(without.spreads[16 * 32 + 16].is_nan());
+        assert!(!bare.spreads[16 * 32 + 16].is_nan());
         assert!(bare.spreads.iter().all(|&v| v.is_nan() || v < 1.0));
-        let wide = fog.spreads.iter().filter(|&&v| v as f64 >= WIDE_SPREAD);
-        assert_eq!(wide.count(), fog.wide);
         assert_eq!(SurfaceSpread::default().wide_share(), 0.0);
     }
 

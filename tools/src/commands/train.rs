@@ -824,7 +824,7 @@ fn print_spread(views: &[inlay_passes::train::HeldOutView], spacing: f64) {
             v.frame,
             WIDE_SPREAD * spacing,
             percent_of(s.wide_share()),
-            s.surfaces
+            s.surfaces()
         );
     }
     let wide: Vec<String> = views
