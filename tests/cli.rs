@@ -877,6 +877,13 @@ fn train_finds_a_bulb_past_the_bounds_and_keeps_it_beside_the_field() {
     let o = train(&[]);
     let t = text(&o);
     assert!(o.status.success(), "{t}");
+    // Its frames record no depth: two runs, what the first run's field
+    // places and leaves open said between them.
+    assert!(
+        t.contains("two runs: the first on the photographs alone")
+            && t.contains("training pixels whose weight spreads over 3 spacings or more"),
+        "{t}"
+    );
     assert!(
         t.contains("light past the bounds: a sphere at") && t.contains("seen in 5 training views"),
         "{t}"

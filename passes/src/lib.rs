@@ -20,6 +20,7 @@ pub mod camera;
 pub mod composite;
 pub mod dataset;
 pub mod edge_aa;
+pub mod eigen;
 pub mod envest;
 pub mod field;
 pub mod frame;

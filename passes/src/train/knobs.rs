@@ -169,6 +169,18 @@ pub struct TrainKnobs {
     /// noise and a surface's place within its cell). 3 instead of 1
     /// changed DOG's noisy-map depth errors by at most 0.02 spacings.
     pub depth_tolerance: f64,
+    /// Train twice where the photographs leave surfaces open: the planes
+    /// through the surfaces the first run's field places complete, as
+    /// depths, the training pixels whose weight it spreads wide, and a
+    /// second run trains from the start holding them there
+    /// ([`super::planes`], [`super::completing`]). Where some training
+    /// frame has no depth map, from the start (not `--resume`), at a depth
+    /// weight above 0. On the Cycles sets from photographs alone the
+    /// held-out views came within a node spacing on 9 of 10 views (2 of
+    /// 10 from one run); two runs of [`TWO_RUN_SHARE`] of the steps took
+    /// 1.4–1.7 times one run's time (`docs/benchmarks.md`, issue 25's
+    /// forty-fourth pass).
+    pub planes: bool,
     /// Each step's rays end on a random colour behind the field (each
     /// channel uniform over 0 to twice the photographs' mean radiance)
     /// rather than on the fixed background: a field a ray partly sees
@@ -293,6 +305,7 @@ impl Default for TrainKnobs {
             distortion: 0.0,
             depth_weight: 1.0,
             depth_tolerance: 1.0,
+            planes: true,
             random_background: false,
             sky: 0,
             sh_degree: 0,
@@ -376,6 +389,26 @@ pub fn default_iterations(resolution: u32) -> u32 {
     let grown = FINE_GRID_STEPS as u64 * r * r
         / (FEW_STEPS_RESOLUTION as u64 * FEW_STEPS_RESOLUTION as u64);
     (grown as u32).max(TrainKnobs::default().iterations)
+}
+
+/// The share of [`default_iterations`] each run takes where a training
+/// makes two ([`TrainKnobs::planes`]): on DOG's Cycles set two runs of
+/// 2000 steps read 0.50 and 0.62 node spacings, 35.39 and 37.84 dB, in
+/// 140 s, where two of 3000 read 0.37 and 0.46, 35.74 and 37.32 dB, in
+/// twice one run's time (118 s), and one run of 3000 2.55 and 1.30,
+/// 35.30 and 36.34 dB (`docs/benchmarks.md`, issue 25's forty-fourth
+/// pass).
+pub const TWO_RUN_SHARE: f64 = 2.0 / 3.0;
+
+/// The steps of each of `runs` runs (1 or 2) when `inlay train` is not
+/// told: [`default_iterations`], times [`TWO_RUN_SHARE`] for two.
+pub fn default_run_iterations(resolution: u32, runs: u32) -> u32 {
+    let all = default_iterations(resolution);
+    if runs > 1 {
+        (all as f64 * TWO_RUN_SHARE).round() as u32
+    } else {
+        all
+    }
 }
 
 /// The steps of [`default_iterations`]' growth at 128 nodes, from which

@@ -7,6 +7,7 @@
 
 pub mod adam;
 pub mod behind;
+pub mod completing;
 pub mod depth;
 pub mod geometry;
 pub mod gpu;
@@ -14,6 +15,7 @@ pub mod knobs;
 pub mod loss;
 pub mod past_bounds;
 pub mod pixels;
+pub mod planes;
 pub mod prune;
 pub mod render;
 pub mod seen_lights;

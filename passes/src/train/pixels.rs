@@ -371,14 +371,17 @@ impl PixelPool {
     /// an even split of its area: [`area_offsets`]), what it
     /// says (with `shift` behind its transparent part: [`pixel_target`]),
     /// its frame, and the length along each ray to the surface the
-    /// frame's depth map records at the pixel (None where it has none:
-    /// [`super::depth::ray_depth`]), in the order of their frames and pixels
+    /// frame's depth map records at the pixel (`depth`'s map for the frame
+    /// where it is given and not empty, else the frame's own; None where
+    /// it records none: [`super::depth::ray_depth`]), in the order of their frames and pixels
     /// (neighbouring rays of a view then march side by side on the device,
     /// over the same nodes and about as far). A pixel whose rays the lens model
     /// cannot all invert is not drawn.
+    #[allow(clippy::too_many_arguments)]
     pub fn batch(
         &self,
         dataset: &Dataset,
+        depth: &[Vec<f32>],
         count: usize,
         seed: u64,
         step: u64,
@@ -417,7 +420,11 @@ impl PixelPool {
         out.into_iter()
             .map(|(r, rays, t)| {
                 let frame = &dataset.frames[r.frame as usize];
-                let z = frame.depth.get(r.pixel as usize).copied();
+                let map = match depth.get(r.frame as usize) {
+                    Some(d) if !d.is_empty() => d,
+                    _ => &frame.depth,
+                };
+                let z = map.get(r.pixel as usize).copied();
                 let forward = frame.pose.forward();
                 let depths = rays
                     .iter()

@@ -31,29 +31,79 @@ pub const WIDE_SPREAD: f64 = 4.0;
 /// surface does not spread).
 pub const WIDE_SHARE_WARNING: f64 = 0.1;
 
-/// The weighted standard deviation of the depth along `ray` (unit
-/// direction) through `field`, √(Σ wᵢ(tᵢ − t̄)² / Σ wᵢ) over the march's
-/// samples ([`march_samples`]: each sample's weight at its midpoint, as
-/// the expected depth is read), in the ray's units; None where the ray
-/// gathers less than [`SURFACE_OPACITY`] (no surface to place). Summed as
-/// offsets from the first weighted sample's depth, so that a far surface
-/// loses no precision to t².
-pub fn depth_spread(field: &dyn RadianceField, ray: &Ray, march: &MarchKnobs) -> Option<f64> {
-    let (mut origin, mut w0, mut w1, mut w2) = (None, 0.0, 0.0, 0.0);
+/// How a ray's rendering weight lies along it ([`ray_weights`]), in the
+/// ray's units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RayWeights {
+    /// Σ wᵢ: the field's opacity along the ray.
+    pub opacity: f64,
+    /// The expected depth Σ wᵢtᵢ / Σ wᵢ.
+    pub mean: f64,
+    /// The weighted standard deviation of the depth, √(Σ wᵢ(tᵢ − t̄)² /
+    /// Σ wᵢ).
+    pub spread: f64,
+    /// The depth by which the ray has gathered the tail's share of its
+    /// weight.
+    pub front: f64,
+    /// The depth by which it has gathered all but the tail's share.
+    pub back: f64,
+}
+
+/// How the weight of `ray` (unit direction) through `field` lies along it,
+/// over the march's samples ([`march_samples`]: each sample's weight at
+/// its midpoint, as the expected depth is read), with `tail` the share of
+/// the weight [`RayWeights::front`] and [`RayWeights::back`] leave out at
+/// each end; None where the ray gathers less than [`SURFACE_OPACITY`] (no
+/// surface to place). The moments are summed as offsets from the first
+/// weighted sample's depth, so that a far surface loses no precision to t².
+pub fn ray_weights(
+    field: &dyn RadianceField,
+    ray: &Ray,
+    march: &MarchKnobs,
+    tail: f64,
+) -> Option<RayWeights> {
+    let mut samples = Vec::new();
     march_samples(field, ray, f64::INFINITY, march, |s| {
-        if s.weight <= 0.0 {
-            return;
+        if s.weight > 0.0 {
+            samples.push((s.t, s.weight));
         }
-        let d = s.t - *origin.get_or_insert(s.t);
-        w0 += s.weight;
-        w1 += s.weight * d;
-        w2 += s.weight * d * d;
     });
+    let origin = samples.first()?.0;
+    let (mut w0, mut w1, mut w2) = (0.0, 0.0, 0.0);
+    for &(t, w) in &samples {
+        let d = t - origin;
+        w0 += w;
+        w1 += w * d;
+        w2 += w * d * d;
+    }
     if w0 < SURFACE_OPACITY {
         return None;
     }
     let mean = w1 / w0;
-    Some((w2 / w0 - mean * mean).max(0.0).sqrt())
+    let at_share = |share: f64| {
+        let mut gathered = 0.0;
+        samples
+            .iter()
+            .find(|&&(_, w)| {
+                gathered += w;
+                gathered >= share * w0
+            })
+            .map_or(samples[samples.len() - 1].0, |s| s.0)
+    };
+    Some(RayWeights {
+        opacity: w0,
+        mean: origin + mean,
+        spread: (w2 / w0 - mean * mean).max(0.0).sqrt(),
+        front: at_share(tail),
+        back: at_share(1.0 - tail),
+    })
+}
+
+/// The weighted standard deviation of the depth along `ray` (unit
+/// direction) through `field` ([`RayWeights::spread`]), in the ray's
+/// units; None where the ray gathers less than [`SURFACE_OPACITY`].
+pub fn depth_spread(field: &dyn RadianceField, ray: &Ray, march: &MarchKnobs) -> Option<f64> {
+    ray_weights(field, ray, march, 0.0).map(|w| w.spread)
 }
 
 /// One view's surfaces' spread ([`surface_spread`]).
@@ -187,6 +237,38 @@ mod tests {
             );
         }
         assert_eq!(depth_spread(&medium(0.5), &ray, &knobs), None);
+    }
+
+    /// In the same medium the weight's share gathered by depth t is
+    /// (1 − e^{−σt}) / (1 − e^{−σ}) over the unit box, so the depth that
+    /// gathers share q is −ln(1 − q(1 − e^{−σ}))/σ, and the expected depth
+    /// 1/σ − e^{−σ}/(1 − e^{−σ}). The front and back are read at a
+    /// sample's midpoint: within a sample's width (1/4096) of those.
+    #[test]
+    fn a_homogeneous_medium_gathers_its_weight_where_the_closed_form_says() {
+        let knobs = MarchKnobs {
+            samples_per_ray: 4096,
+            termination: 0.0,
+            skip_empty: false,
+        };
+        let ray = Ray {
+            origin: DVec3::new(-1.0, 0.5, 0.5),
+            dir: DVec3::X,
+        };
+        let sigma = 10.0f64;
+        let kept = 1.0 - (-sigma).exp();
+        let at = |q: f64| 1.0 - (1.0 - q * kept).ln() / sigma;
+        let w = ray_weights(&medium(sigma as f32), &ray, &knobs, 0.05).unwrap();
+        let mean = 1.0 + 1.0 / sigma - (-sigma).exp() / kept;
+        assert!((w.mean - mean).abs() < 1e-4, "{w:?} against {mean}");
+        assert!((w.opacity - kept).abs() < 1e-6, "{w:?}");
+        for (got, q) in [(w.front, 0.05), (w.back, 0.95)] {
+            assert!(
+                (got - at(q)).abs() <= 1.0 / 4096.0,
+                "{w:?}: {q} at {}",
+                at(q)
+            );
+        }
     }
 
     /// Seen from above, a bare opaque floor gathers each ray's weight

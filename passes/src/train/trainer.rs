@@ -367,6 +367,15 @@ pub struct TrainControl<'a> {
     /// training pixels are the caller's to leave out
     /// ([`super::seen_lights::mask_seen_lights`]).
     pub seen_lights: &'a [SeenLight],
+    /// Depth maps that stand in for the frames' own, frame by frame (each
+    /// pixel's z-depth, 0 where none; an empty map leaves the frame's
+    /// own): the planes' completion of the open surfaces
+    /// ([`super::planes`]).
+    pub depth: Option<&'a [Vec<f32>]>,
+    /// Whether the held-out views are rendered and scored at the end
+    /// ([`Trained::held_out`] empty where not: a first run whose field
+    /// only leads to the next).
+    pub score_held_out: bool,
 }
 
 impl Default for TrainControl<'_> {
@@ -377,6 +386,8 @@ impl Default for TrainControl<'_> {
             budget: None,
             stop: &|| false,
             seen_lights: &[],
+            depth: None,
+            score_held_out: true,
         }
     }
 }
@@ -562,6 +573,7 @@ pub fn train(
             let behind = step_background(knobs, background, scale, step);
             let batch = pool.batch(
                 dataset,
+                control.depth.unwrap_or(&[]),
                 knobs.pixels_per_step() as usize,
                 knobs.seed,
                 step as u64,
@@ -690,32 +702,18 @@ pub fn train(
     // changes no density.
     (field, _) = super::prune::clear_inert_negatives(&field);
     let behind = sky.as_ref().map_or(Behind::Colour(background), Behind::Sky);
-    // Each held-out pose once; a bracketed one as its brackets merged.
-    let sets = bracket_sets(dataset, &pool.held_out);
-    let held_out = pool
-        .held_out
-        .iter()
-        .filter(|&&f| sets[f as usize][0] == f)
-        .map(|&f| {
-            let set = &sets[f as usize];
-            let merged =
-                is_bracket(&dataset.frames[f as usize]).then(|| merged_brackets(dataset, set));
-            let frame = merged.as_ref().unwrap_or(&dataset.frames[f as usize]);
-            HeldOutView {
-                brackets: set.len(),
-                ..score_view(
-                    frame,
-                    f,
-                    &field,
-                    &view_march,
-                    behind,
-                    control.seen_lights,
-                    knobs.learn_exposure,
-                    knobs.held_out_samples,
-                )
-            }
-        })
-        .collect();
+    let held_out = if control.score_held_out {
+        score_held_out(
+            dataset,
+            &pool.held_out,
+            &field,
+            knobs,
+            behind,
+            control.seen_lights,
+        )
+    } else {
+        Vec::new()
+    };
     Ok(Trained {
         field,
         history,
@@ -730,6 +728,42 @@ pub fn train(
         step_times,
         emptied,
     })
+}
+
+/// `dataset`'s frames `held` (held out of training) rendered from `field`
+/// over `behind` with `seen_lights` beside it, and scored: each pose once,
+/// a bracketed one as its brackets merged ([`merged_brackets`]).
+pub fn score_held_out(
+    dataset: &Dataset,
+    held: &[u32],
+    field: &GridField,
+    knobs: &TrainKnobs,
+    behind: Behind,
+    seen_lights: &[SeenLight],
+) -> Vec<HeldOutView> {
+    let sets = bracket_sets(dataset, held);
+    held.iter()
+        .filter(|&&f| sets[f as usize][0] == f)
+        .map(|&f| {
+            let set = &sets[f as usize];
+            let merged =
+                is_bracket(&dataset.frames[f as usize]).then(|| merged_brackets(dataset, set));
+            let frame = merged.as_ref().unwrap_or(&dataset.frames[f as usize]);
+            HeldOutView {
+                brackets: set.len(),
+                ..score_view(
+                    frame,
+                    f,
+                    field,
+                    &view_march(knobs),
+                    behind,
+                    seen_lights,
+                    knobs.learn_exposure,
+                    knobs.held_out_samples,
+                )
+            }
+        })
+        .collect()
 }
 
 /// Colours more than this many × the loss's floor ε step by the colour
@@ -1164,14 +1198,65 @@ mod tests {
             ..dataset_with(0)
         };
         let pool = PixelPool::new(&dataset, 0);
-        let batch = pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, CENTRE);
+        let batch = pool.batch(&dataset, &[], 64, 1, 5, DVec3::ZERO, CENTRE);
         assert_eq!(batch.len(), 64);
         let keys: Vec<(u32, f64)> = batch.iter().map(|(r, _, f, _)| (*f, r[0].dir.x)).collect();
         assert!(keys.windows(2).all(|w| w[0].0 <= w[1].0), "{keys:?}");
         assert!(keys.iter().any(|k| k.0 == 0) && keys.iter().any(|k| k.0 == 2));
         // The same draw for the same seed and step, another for the next step.
-        assert_eq!(pool.batch(&dataset, 64, 1, 5, DVec3::ZERO, CENTRE), batch);
-        assert_ne!(pool.batch(&dataset, 64, 1, 6, DVec3::ZERO, CENTRE), batch);
+        assert_eq!(
+            pool.batch(&dataset, &[], 64, 1, 5, DVec3::ZERO, CENTRE),
+            batch
+        );
+        assert_ne!(
+            pool.batch(&dataset, &[], 64, 1, 6, DVec3::ZERO, CENTRE),
+            batch
+        );
+    }
+
+    /// Depth maps given beside the dataset stand in for its frames' own
+    /// frame by frame: a frame given a map reads its pixels' depths from
+    /// it (z over the ray's cosine to the camera's axis; none where it
+    /// records 0), a frame given an empty one keeps its own, and a frame
+    /// with neither has none.
+    #[test]
+    fn depth_maps_given_beside_the_frames_stand_in_for_theirs() {
+        let radiance: Vec<f32> = (0..200).map(|i| i as f32 / 200.0).collect();
+        let mut own = frame_of(&radiance, None);
+        own.depth = vec![3.0; 200];
+        let dataset = Dataset {
+            frames: vec![frame_of(&radiance, None), own, frame_of(&radiance, None)],
+            ..dataset_with(0)
+        };
+        let given: Vec<f32> = (0..200)
+            .map(|p| if p % 2 == 0 { 2.0 } else { 0.0 })
+            .collect();
+        let depth = vec![given, Vec::new(), Vec::new()];
+        let pool = PixelPool::new(&dataset, 0);
+        let batch = pool.batch(&dataset, &depth, 256, 1, 5, DVec3::ZERO, CENTRE);
+        let mut seen = [0; 3];
+        for (rays, _, f, depths) in &batch {
+            let frame = &dataset.frames[*f as usize];
+            let cos = rays[0].dir.normalize().dot(frame.pose.forward());
+            let (u, _) = frame
+                .intrinsics
+                .project(frame.pose.matrix.inverse().transform_vector3(rays[0].dir))
+                .unwrap();
+            let p = u.floor() as usize;
+            let want = match f {
+                0 => (p % 2 == 0).then(|| 2.0 / cos),
+                1 => Some(3.0 / cos),
+                _ => None,
+            };
+            let got = depths[0];
+            assert!(
+                got.zip(want)
+                    .map_or(got == want, |(g, w)| (g - w).abs() < 1e-9),
+                "frame {f} pixel {p}: {got:?} against {want:?}"
+            );
+            seen[*f as usize] += 1;
+        }
+        assert!(seen.iter().all(|&n| n > 0), "{seen:?}");
     }
 
     /// A pixel's n × n rays pass through its own area (each through its
@@ -1190,7 +1275,7 @@ mod tests {
         for area in [1u32, 2, 3] {
             for jitter in [false, true] {
                 let rays = PixelRays { area, jitter };
-                let batch = pool.batch(&dataset, 256, 1, 5, DVec3::ZERO, rays);
+                let batch = pool.batch(&dataset, &[], 256, 1, 5, DVec3::ZERO, rays);
                 let mut offsets = Vec::new();
                 for (pixel_rays, target, ..) in &batch {
                     assert_eq!(pixel_rays.len() as u32, area * area);

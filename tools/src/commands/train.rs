@@ -17,7 +17,9 @@ use inlay_passes::dataset::{load_dataset, LoadOptions};
 use inlay_passes::field::seen_lights::{seen_lights_path, seen_lights_text};
 use inlay_passes::field::{checked_field_bytes, sky_path};
 use inlay_passes::geometry::Aabb;
-use inlay_passes::train::{default_iterations, train, TrainControl, TrainKnobs};
+use inlay_passes::train::completing::{completion_runs, train_completing, CompletedTraining};
+use inlay_passes::train::planes::Completion;
+use inlay_passes::train::{default_iterations, TrainControl, TrainKnobs};
 use inlay_passes::train::{depth_error_colour, PixelDepth};
 
 use crate::commands::auto_value::{parse_auto, Auto};
@@ -49,9 +51,10 @@ pub struct TrainArgs {
     /// `auto` (the default): 0.5 behind a random background, else 0.
     #[arg(long, value_parser = parse_auto::<f64>, default_value = "auto")]
     pub refine_density_exponent: Auto<f64>,
-    /// Optimiser steps. Default: 3000 up to 128 nodes along the longest
-    /// axis, 2000 × (nodes / 128)² above where that is more (256: 8000),
-    /// for the `--resume` field's resolution when resuming.
+    /// Optimiser steps of each run. Default: 3000 up to 128 nodes along
+    /// the longest axis, 2000 × (nodes / 128)² above where that is more
+    /// (256: 8000), for the `--resume` field's resolution when resuming;
+    /// two thirds of that for each of two runs (`--planes`).
     #[arg(long)]
     pub iterations: Option<u32>,
     /// Rays per step.
@@ -290,6 +293,14 @@ pub struct TrainArgs {
     /// (`on`, the default); `off` trains on every pixel as it is.
     #[arg(long, value_parser = parse_on_off, default_value = "on", action = clap::ArgAction::Set)]
     pub seen_lights: bool,
+    /// Where the photographs leave surfaces open (a plain floor or wall,
+    /// whose depth they cannot place), train twice: the planes through
+    /// the surfaces the first run places give the open pixels a depth,
+    /// and a second run holds them there as it would a depth map (`on`,
+    /// the default: twice the time, for frames without depth maps and not
+    /// with --resume); `off` trains once.
+    #[arg(long, value_parser = parse_on_off, default_value = "on", action = clap::ArgAction::Set)]
+    pub planes: bool,
 }
 
 /// A knob that is on, off, or chosen from the dataset.
@@ -365,6 +376,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         first_stage_share: args.first_stage_share,
         // Set below from the background where auto.
         refine_density_exponent: args.refine_density_exponent.or(0.0),
+        // Set below once the runs are known where not given.
         iterations: args.iterations.unwrap_or_else(|| default_iterations(nodes)),
         batch: args.batch,
         samples_per_ray: args.samples_per_ray,
@@ -383,6 +395,7 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         distortion: args.distortion,
         depth_weight: args.depth_weight,
         depth_tolerance: args.depth_tolerance,
+        planes: args.planes,
         // Set below from the photographs' alpha where auto.
         random_background: args.random_background == Switch::On,
         // Set below from the dataset's light past the bounds where auto.
@@ -428,6 +441,15 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         ..LoadOptions::default()
     };
     let mut dataset = load_dataset(&args.dataset, &options)?;
+    // Two runs where the planes are to complete what the photographs leave
+    // open, each of two thirds of the default steps where not told.
+    let runs: u32 = match completion_runs(&dataset, &knobs, args.hold_out, resume.is_some()) {
+        Ok(()) => 2,
+        Err(_) => 1,
+    };
+    if args.iterations.is_none() {
+        knobs.iterations = inlay_passes::train::knobs::default_run_iterations(nodes, runs);
+    }
     let scene = match &args.scene {
         Some(p) => {
             let scene = inlay_passes::scene::load_scene(p)?;
@@ -654,7 +676,6 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         );
     }
     let started = Instant::now();
-    let bar = progress_bar("training", knobs.iterations as u64);
     let background = DVec3::from_array(args.background.map(|v| v as f64));
     // Ctrl-C ends the run with the field so far (a second one kills it).
     inlay_engine::interrupt::catch_interrupts()?;
@@ -664,8 +685,24 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         budget,
         stop: &inlay_engine::interrupt::interrupted,
         seen_lights: &seen_lights,
+        ..TrainControl::default()
     };
-    let trained = train(
+    if runs == 2 {
+        eprintln!(
+            "two runs{}: the first on the photographs alone; then the planes through the \
+             surfaces it places give the pixels whose depth it leaves open a depth, which the \
+             second holds as a depth map (--planes off trains once)",
+            if args.iterations.is_none() {
+                format!(" of {} steps", knobs.iterations)
+            } else {
+                String::new()
+            }
+        );
+    }
+    let bar = progress_bar("training", (runs * knobs.iterations) as u64);
+    let CompletedTraining {
+        trained, single, ..
+    } = train_completing(
         ctx,
         &inlay_passes::shaders::library()?,
         &dataset,
@@ -673,15 +710,30 @@ pub fn run(ctx: &Arc<Context>, args: &TrainArgs) -> Result<()> {
         args.hold_out,
         background,
         &control,
-        &|p| {
-            bar.set_position(p.step as u64);
+        &|r| {
+            let p = &r.progress;
+            bar.set_position((r.run * knobs.iterations + p.step) as u64);
             bar.set_message(format!(
-                "loss {:.3e}, PSNR {:.1} dB, {:.0} rays/s, {}x{}x{}",
-                p.loss, p.psnr, p.rays_per_second, p.resolution.x, p.resolution.y, p.resolution.z
+                "{}loss {:.3e}, PSNR {:.1} dB, {:.0} rays/s, {}x{}x{}",
+                if r.runs > 1 {
+                    format!("run {} of {}: ", r.run + 1, r.runs)
+                } else {
+                    String::new()
+                },
+                p.loss,
+                p.psnr,
+                p.rays_per_second,
+                p.resolution.x,
+                p.resolution.y,
+                p.resolution.z
             ));
         },
+        &|c| bar.suspend(|| print_completion(c)),
     )?;
     bar.finish_and_clear();
+    if let (2, Some(why)) = (runs, single) {
+        eprintln!("one run, not two: {why}");
+    }
     let f = &trained.field;
     if trained.steps < knobs.iterations {
         eprintln!(
@@ -837,8 +889,9 @@ fn print_spread(views: &[inlay_passes::train::HeldOutView], spacing: f64) {
             "warning: the field's depth is uncertain where a surface's weight spreads along the ray \
              (held-out {}): photographs cannot place a plain, untextured surface, whose colour a \
              translucent sheet in front of it renders from every side. Occlusion, probes and shadows \
-             read that depth; photographs with alpha, or depth maps (`depth_file_path`), place it. \
-             A medium such as foliage spreads by nature",
+             read that depth; photographs with alpha, or depth maps (`depth_file_path`), place it, \
+             and `--planes` (on by default) only where the surface lies on a plane through surfaces \
+             the photographs place. A medium such as foliage spreads by nature",
             wide.join(", ")
         );
     }
@@ -930,6 +983,45 @@ fn percent_of(share: f64) -> String {
     } else {
         format!("{:.1} %", 100.0 * share)
     }
+}
+
+/// What the planes made of the first run's field: the planes, and the
+/// open pixels they completed.
+fn print_completion(c: &Completion) {
+    eprintln!(
+        "the first run's field places {} training pixels' surfaces (their weight within {} node \
+         spacings); {} plane(s) hold {} % of them",
+        c.placed,
+        inlay_passes::train::planes::PLACED_SPREAD,
+        c.planes.len(),
+        if c.placed == 0 {
+            0.0
+        } else {
+            (100.0 * c.planes.iter().map(|(_, n)| *n).sum::<usize>() as f64 / c.placed as f64)
+                .round()
+        }
+    );
+    for (p, n) in &c.planes {
+        eprintln!(
+            "  plane n = ({:.3}, {:.3}, {:.3}), n·x = {:.4}: {n} points",
+            p.normal.x, p.normal.y, p.normal.z, -p.offset
+        );
+    }
+    eprintln!(
+        "of {} training pixels whose weight spreads over {} spacings or more, {} were given the \
+         depth of a plane within their spread{} ({:.1} s)",
+        c.open,
+        inlay_passes::train::planes::OPEN_SPREAD,
+        c.completed,
+        match c.media {
+            0 => String::new(),
+            n => format!(
+                " and {n} left alone: the weight in front of the plane is not of its colour (a \
+                 medium)"
+            ),
+        },
+        c.elapsed.as_secs_f64()
+    );
 }
 
 /// Where a step's time went: its wall-clock mean and each pass's GPU
