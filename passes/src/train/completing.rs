@@ -87,13 +87,9 @@ pub fn train_completing(
     progress: &dyn Fn(&RunProgress),
     completed: &dyn Fn(&Completion),
 ) -> anyhow::Result<CompletedTraining> {
-    let single = |trained, why| CompletedTraining {
-        trained,
-        completion: None,
-        single: Some(why),
-    };
-    if let Err(why) = completion_runs(dataset, knobs, hold_out, control.resume.is_some()) {
-        let trained = train(
+    // Run `run` of `runs` under `control`, its progress reported as such.
+    let run_of = |run: u32, runs: u32, control: &TrainControl| {
+        train(
             ctx,
             lib,
             dataset,
@@ -103,35 +99,27 @@ pub fn train_completing(
             control,
             &|p| {
                 progress(&RunProgress {
-                    run: 0,
-                    runs: 1,
+                    run,
+                    runs,
                     progress: *p,
                 })
             },
-        )?;
-        return Ok(single(trained, why));
+        )
+    };
+    let single = |trained, why| CompletedTraining {
+        trained,
+        completion: None,
+        single: Some(why),
+    };
+    if let Err(why) = completion_runs(dataset, knobs, hold_out, control.resume.is_some()) {
+        return Ok(single(run_of(0, 1, control)?, why));
     }
     let started = Instant::now();
     let first_control = TrainControl {
         score_held_out: false,
         ..*control
     };
-    let first = train(
-        ctx,
-        lib,
-        dataset,
-        knobs,
-        hold_out,
-        background,
-        &first_control,
-        &|p| {
-            progress(&RunProgress {
-                run: 0,
-                runs: 2,
-                progress: *p,
-            })
-        },
-    )?;
+    let first = run_of(0, 2, &first_control)?;
     let rescored = |first: Trained| -> anyhow::Result<Trained> {
         let held = super::pixels::held_out_poses(dataset, hold_out);
         let behind = first
@@ -168,22 +156,7 @@ pub fn train_completing(
         budget: control.budget.map(|b| b.saturating_sub(started.elapsed())),
         ..*control
     };
-    let trained = train(
-        ctx,
-        lib,
-        dataset,
-        knobs,
-        hold_out,
-        background,
-        &second_control,
-        &|p| {
-            progress(&RunProgress {
-                run: 1,
-                runs: 2,
-                progress: *p,
-            })
-        },
-    )?;
+    let trained = run_of(1, 2, &second_control)?;
     // A second run cut short is a field part way to its end: the first,
     // which ran its course, is the better one.
     if trained.steps < knobs.iterations {

@@ -208,6 +208,24 @@ mod tests {
         GridField::new(UVec3::splat(4), bounds, nodes, DEFAULT_OCCUPANCY_BLOCK)
     }
 
+    /// 4096 samples along the diagonal, none skipped, no early stop.
+    fn fine_march() -> MarchKnobs {
+        MarchKnobs {
+            samples_per_ray: 4096,
+            termination: 0.0,
+            skip_empty: false,
+        }
+    }
+
+    /// A ray along x through the middle of [`medium`]'s box, entering it
+    /// at t = 1.
+    fn across_the_medium() -> Ray {
+        Ray {
+            origin: DVec3::new(-1.0, 0.5, 0.5),
+            dir: DVec3::X,
+        }
+    }
+
     /// Along a ray through a homogeneous medium of density σ the weight
     /// falls as σe^{−σt}, whose standard deviation is the mean free path
     /// 1/σ (the unit box cuts off e^{−40} of it at σ = 40). The march's
@@ -216,15 +234,7 @@ mod tests {
     /// light holds no surface.
     #[test]
     fn a_homogeneous_medium_spreads_by_its_mean_free_path() {
-        let knobs = MarchKnobs {
-            samples_per_ray: 4096,
-            termination: 0.0,
-            skip_empty: false,
-        };
-        let ray = Ray {
-            origin: DVec3::new(-1.0, 0.5, 0.5),
-            dir: DVec3::X,
-        };
+        let (knobs, ray) = (fine_march(), across_the_medium());
         for sigma in [10.0, 40.0] {
             let spread = depth_spread(&medium(sigma), &ray, &knobs).unwrap();
             let exact = 1.0 / sigma as f64;
@@ -246,15 +256,7 @@ mod tests {
     /// sample's midpoint: within a sample's width (1/4096) of those.
     #[test]
     fn a_homogeneous_medium_gathers_its_weight_where_the_closed_form_says() {
-        let knobs = MarchKnobs {
-            samples_per_ray: 4096,
-            termination: 0.0,
-            skip_empty: false,
-        };
-        let ray = Ray {
-            origin: DVec3::new(-1.0, 0.5, 0.5),
-            dir: DVec3::X,
-        };
+        let (knobs, ray) = (fine_march(), across_the_medium());
         let sigma = 10.0f64;
         let kept = 1.0 - (-sigma).exp();
         let at = |q: f64| 1.0 - (1.0 - q * kept).ln() / sigma;
