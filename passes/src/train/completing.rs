@@ -120,7 +120,7 @@ pub fn train_completing(
         ..*control
     };
     let first = run_of(0, 2, &first_control)?;
-    let rescored = |first: Trained| -> anyhow::Result<Trained> {
+    let rescored = |first: Trained| {
         let held = super::pixels::held_out_poses(dataset, hold_out);
         let behind = first
             .sky
@@ -134,10 +134,10 @@ pub fn train_completing(
             behind,
             control.seen_lights,
         );
-        Ok(Trained { held_out, ..first })
+        Trained { held_out, ..first }
     };
     if first.steps < knobs.iterations || (control.stop)() {
-        return Ok(single(rescored(first)?, "the first run was stopped"));
+        return Ok(single(rescored(first), "the first run was stopped"));
     }
     let frames = training_frames(dataset, hold_out);
     let completion = complete_plain_surfaces(
@@ -149,7 +149,7 @@ pub fn train_completing(
     );
     completed(&completion);
     if completion.completed == 0 {
-        return Ok(single(rescored(first)?, "the planes completed no pixel"));
+        return Ok(single(rescored(first), "the planes completed no pixel"));
     }
     let second_control = TrainControl {
         depth: Some(&completion.depth),
@@ -161,7 +161,7 @@ pub fn train_completing(
     // which ran its course, is the better one.
     if trained.steps < knobs.iterations {
         return Ok(single(
-            rescored(first)?,
+            rescored(first),
             "the second run was stopped: the first run's field",
         ));
     }

@@ -22,11 +22,11 @@ use rayon::prelude::*;
 
 use super::geometry::SURFACE_OPACITY;
 use super::pixels::pixel_ray;
-use super::spread::ray_weights;
+use super::spread::{weighted_samples, RayWeights};
 use crate::dataset::{Dataset, PixelState};
 use crate::field::{GridField, RadianceField};
 use crate::geometry::Ray;
-use crate::march::MarchKnobs;
+use crate::march::{MarchKnobs, MarchSample};
 use crate::rng::Pcg32;
 
 /// A pixel's surface counts as placed, and its expected depth a point a
@@ -300,15 +300,16 @@ pub fn complete_plain_surfaces(
         .map(|&f| size(f).0 as u64 * size(f).1 as u64)
         .sum();
     let stride = plane_stride(all);
-    // Each pixel's ray and how its weight lies, where it is usable and the
-    // field makes it opaque.
+    // Each pixel's ray, its samples and how their weight lies, where it is
+    // usable and the field makes it opaque.
     let read = |f: u32, p: u32| {
         let frame = &dataset.frames[f as usize];
         if frame.image.state[p as usize] == PixelState::Masked {
             return None;
         }
         let ray = pixel_ray(frame, p)?;
-        ray_weights(field, &ray, march, SPREAD_TAIL).map(|w| (ray, w))
+        let samples = weighted_samples(field, &ray, march);
+        RayWeights::of(&samples, SPREAD_TAIL).map(|w| (ray, samples, w))
     };
     // Each placed point, and the direction of the ray that placed it.
     let placed: Vec<(DVec3, DVec3)> = frames
@@ -322,8 +323,8 @@ pub fn complete_plain_surfaces(
             lattice
                 .into_par_iter()
                 .filter_map(|p| read(f, p))
-                .filter(|(_, w)| w.spread < PLACED_SPREAD * spacing)
-                .map(|(ray, w)| (ray.at(w.mean), ray.dir))
+                .filter(|(_, _, w)| w.spread < PLACED_SPREAD * spacing)
+                .map(|(ray, _, w)| (ray.at(w.mean), ray.dir))
                 .collect::<Vec<_>>()
         })
         .collect();
@@ -355,7 +356,7 @@ pub fn complete_plain_surfaces(
         let fates: Vec<Fate> = (0..w * h)
             .into_par_iter()
             .map(|p| {
-                let Some((ray, weights)) = read(f, p) else {
+                let Some((ray, samples, weights)) = read(f, p) else {
                     return Fate::Untouched;
                 };
                 if weights.spread < OPEN_SPREAD * spacing {
@@ -372,7 +373,7 @@ pub fn complete_plain_surfaces(
                 else {
                     return Fate::Open;
                 };
-                if same_colour_in_front(field, &ray, march, t - spacing, t + spacing) {
+                if same_colour_in_front(field, &ray, &samples, t - spacing, t + spacing) {
                     Fate::Completed((t * ray.dir.dot(forward)) as f32)
                 } else {
                     Fate::Medium
@@ -402,9 +403,9 @@ pub fn complete_plain_surfaces(
     completion
 }
 
-/// Whether the weight `ray` gathers in front of `near` (a plane's stretch
-/// [`near`, `far`] along it) carries the colour the field shows at the
-/// plane: its weighted mean colour within [`SAME_COLOUR`] of the plane's
+/// Whether the weight `ray`'s `samples` ([`weighted_samples`] through
+/// `field`) gather in front of `near` (a plane's stretch [`near`, `far`]
+/// along it) carry the colour the field shows at the plane: its weighted mean colour within [`SAME_COLOUR`] of the plane's
 /// (relative to the plane's, summed over the channels). The plane's is the
 /// weighted mean over the stretch, or the field's colour at its middle
 /// where the stretch holds no weight (the ray spent before it). True
@@ -413,13 +414,13 @@ pub fn complete_plain_surfaces(
 pub fn same_colour_in_front(
     field: &dyn RadianceField,
     ray: &Ray,
-    march: &MarchKnobs,
+    samples: &[MarchSample],
     near: f64,
     far: f64,
 ) -> bool {
     let (mut front, mut front_weight) = (DVec3::ZERO, 0.0);
     let (mut plane, mut plane_weight) = (DVec3::ZERO, 0.0);
-    crate::march::march_samples(field, ray, f64::INFINITY, march, |s| {
+    for s in samples {
         if s.t < near {
             front += s.weight * s.colour;
             front_weight += s.weight;
@@ -427,7 +428,7 @@ pub fn same_colour_in_front(
             plane += s.weight * s.colour;
             plane_weight += s.weight;
         }
-    });
+    }
     if front_weight < 0.1 * SURFACE_OPACITY {
         return true;
     }
@@ -451,6 +452,7 @@ mod tests {
     use crate::field::DEFAULT_OCCUPANCY_BLOCK;
     use crate::geometry::Aabb;
     use crate::train::geometry::tests::{frame, march};
+    use crate::train::spread::ray_weights;
 
     /// Three points on a line make no plane; a ray meets a plane where
     /// the distance says and never one it runs along.

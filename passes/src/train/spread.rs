@@ -17,7 +17,7 @@ use super::pixels::pixel_ray;
 use crate::dataset::{Frame, PixelState};
 use crate::field::RadianceField;
 use crate::geometry::Ray;
-use crate::march::{march_samples, MarchKnobs};
+use crate::march::{march_samples, MarchKnobs, MarchSample};
 
 /// Standard deviation of a ray's depth, in node spacings, from which the
 /// field's surface along it counts as spread: its expected depth uncertain
@@ -49,54 +49,72 @@ pub struct RayWeights {
     pub back: f64,
 }
 
-/// How the weight of `ray` (unit direction) through `field` lies along it,
-/// over the march's samples ([`march_samples`]: each sample's weight at
-/// its midpoint, as the expected depth is read), with `tail` the share of
-/// the weight [`RayWeights::front`] and [`RayWeights::back`] leave out at
-/// each end; None where the ray gathers less than [`SURFACE_OPACITY`] (no
-/// surface to place). The moments are summed as offsets from the first
-/// weighted sample's depth, so that a far surface loses no precision to t².
+/// The samples of the march's quadrature along `ray` (unit direction)
+/// through `field` that carry weight ([`march_samples`]), in order.
+pub fn weighted_samples(
+    field: &dyn RadianceField,
+    ray: &Ray,
+    march: &MarchKnobs,
+) -> Vec<MarchSample> {
+    let mut samples = Vec::new();
+    march_samples(field, ray, f64::INFINITY, march, |s| {
+        if s.weight > 0.0 {
+            samples.push(*s);
+        }
+    });
+    samples
+}
+
+impl RayWeights {
+    /// How the weight of a ray's `samples` ([`weighted_samples`]) lies
+    /// along it, each sample's weight at its midpoint (as the expected
+    /// depth is read), with `tail` the share of the weight
+    /// [`RayWeights::front`] and [`RayWeights::back`] leave out at each
+    /// end; None where the ray gathers less than [`SURFACE_OPACITY`] (no
+    /// surface to place). The moments are summed as offsets from the first
+    /// sample's depth, so that a far surface loses no precision to t².
+    pub fn of(samples: &[MarchSample], tail: f64) -> Option<RayWeights> {
+        let origin = samples.first()?.t;
+        let (mut w0, mut w1, mut w2) = (0.0, 0.0, 0.0);
+        for s in samples {
+            let d = s.t - origin;
+            w0 += s.weight;
+            w1 += s.weight * d;
+            w2 += s.weight * d * d;
+        }
+        if w0 < SURFACE_OPACITY {
+            return None;
+        }
+        let mean = w1 / w0;
+        let at_share = |share: f64| {
+            let mut gathered = 0.0;
+            samples
+                .iter()
+                .find(|s| {
+                    gathered += s.weight;
+                    gathered >= share * w0
+                })
+                .map_or(samples[samples.len() - 1].t, |s| s.t)
+        };
+        Some(RayWeights {
+            opacity: w0,
+            mean: origin + mean,
+            spread: (w2 / w0 - mean * mean).max(0.0).sqrt(),
+            front: at_share(tail),
+            back: at_share(1.0 - tail),
+        })
+    }
+}
+
+/// How the weight of `ray` (unit direction) through `field` lies along it
+/// ([`RayWeights::of`] its [`weighted_samples`]).
 pub fn ray_weights(
     field: &dyn RadianceField,
     ray: &Ray,
     march: &MarchKnobs,
     tail: f64,
 ) -> Option<RayWeights> {
-    let mut samples = Vec::new();
-    march_samples(field, ray, f64::INFINITY, march, |s| {
-        if s.weight > 0.0 {
-            samples.push((s.t, s.weight));
-        }
-    });
-    let origin = samples.first()?.0;
-    let (mut w0, mut w1, mut w2) = (0.0, 0.0, 0.0);
-    for &(t, w) in &samples {
-        let d = t - origin;
-        w0 += w;
-        w1 += w * d;
-        w2 += w * d * d;
-    }
-    if w0 < SURFACE_OPACITY {
-        return None;
-    }
-    let mean = w1 / w0;
-    let at_share = |share: f64| {
-        let mut gathered = 0.0;
-        samples
-            .iter()
-            .find(|&&(_, w)| {
-                gathered += w;
-                gathered >= share * w0
-            })
-            .map_or(samples[samples.len() - 1].0, |s| s.0)
-    };
-    Some(RayWeights {
-        opacity: w0,
-        mean: origin + mean,
-        spread: (w2 / w0 - mean * mean).max(0.0).sqrt(),
-        front: at_share(tail),
-        back: at_share(1.0 - tail),
-    })
+    RayWeights::of(&weighted_samples(field, ray, march), tail)
 }
 
 /// The weighted standard deviation of the depth along `ray` (unit
