@@ -1009,9 +1009,13 @@ fn print_completion(c: &Completion) {
         );
     }
     eprintln!(
-        "of {} training pixels whose weight spreads over {} spacings or more, {} were given the \
-         depth of a plane within their spread{} ({:.1} s)",
+        "of {} training pixels{} whose weight spreads over {} spacings or more, {} were given the \
+         depth of a plane within their spread{}{} ({:.1} s)",
         c.open,
+        match c.stride {
+            1 => String::new(),
+            s => format!(" read (every {s}th pixel of every {s}th row)"),
+        },
         inlay_passes::train::planes::OPEN_SPREAD,
         c.completed,
         match c.media {
@@ -1019,6 +1023,14 @@ fn print_completion(c: &Completion) {
             n => format!(
                 " and {n} left alone: the weight in front of the plane is not of its colour (a \
                  medium)"
+            ),
+        },
+        match c.stride {
+            1 => String::new(),
+            _ => format!(
+                "; {} pixels in all hold a plane's depth, those between taking the plane the \
+                 pixels read around them agree on",
+                c.depths
             ),
         },
         c.elapsed.as_secs_f64()
