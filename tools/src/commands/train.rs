@@ -1014,7 +1014,7 @@ fn print_completion(c: &Completion) {
         c.open,
         match c.stride {
             1 => String::new(),
-            s => format!(" read (every {s}th pixel of every {s}th row)"),
+            s => format!(" read (one pixel of each {s} × {s} block)"),
         },
         inlay_passes::train::planes::OPEN_SPREAD,
         c.completed,
