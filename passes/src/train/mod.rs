@@ -12,6 +12,7 @@ pub mod depth;
 pub mod geometry;
 pub mod gpu;
 pub mod knobs;
+pub mod lattice;
 pub mod loss;
 pub mod past_bounds;
 pub mod pixels;

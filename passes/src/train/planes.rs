@@ -21,9 +21,10 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::geometry::SURFACE_OPACITY;
+use super::lattice::{lattice_stride, Lattice};
 use super::pixels::pixel_ray;
-use super::spread::{weighted_samples, RayWeights};
-use crate::dataset::{Dataset, PixelState};
+use super::spread::{ray_weights, weighted_samples, RayWeights};
+use crate::dataset::{Dataset, Frame, PixelState};
 use crate::field::{GridField, RadianceField};
 use crate::geometry::Ray;
 use crate::march::{MarchKnobs, MarchSample};
@@ -207,8 +208,8 @@ pub struct Completion {
     /// Each frame's depth map (its pixels' z-depth, 0 where none), for
     /// the frames given; empty for the others.
     pub depth: Vec<Vec<f32>>,
-    /// How long the completion took (the CPU's march over every training
-    /// pixel).
+    /// How long the completion took (the CPU's march over the training
+    /// pixels read, each marched once but where a plane meets it).
     pub elapsed: std::time::Duration,
 }
 
@@ -281,13 +282,6 @@ pub fn plane_stride(pixels: u64) -> u32 {
 /// in the `render-views` ones) are marched whole.
 pub const COMPLETION_PIXELS: u64 = 1 << 22;
 
-/// The least n for which every n-th pixel of every n-th row of `pixels`
-/// pixels is at most `most` of them (about: n² × that where rows do not
-/// divide evenly).
-pub fn lattice_stride(pixels: u64, most: u64) -> u32 {
-    ((pixels as f64 / most.max(1) as f64).sqrt().ceil() as u32).max(1)
-}
-
 /// The planes through the surfaces `field` places in `frames` of
 /// `dataset` (read on a lattice over [`PLANE_PIXELS`]), and for each of
 /// those frames a depth map that gives each open pixel the depth of the
@@ -337,35 +331,62 @@ fn complete_on_lattice(
         .iter()
         .map(|&f| size(f).0 as u64 * size(f).1 as u64)
         .sum();
-    let stride = plane_stride(all);
-    // Each pixel's ray, its samples and how their weight lies, where it is
-    // usable and the field makes it opaque.
+    let search = plane_stride(all);
+    let stride = lattice_stride(all, most);
+    // A pixel's ray and how its weight lies, where it is usable and the
+    // field makes it opaque.
     let read = |f: u32, p: u32| {
         let frame = &dataset.frames[f as usize];
         if frame.image.state[p as usize] == PixelState::Masked {
             return None;
         }
         let ray = pixel_ray(frame, p)?;
-        let samples = weighted_samples(field, &ray, march);
-        RayWeights::of(&samples, SPREAD_TAIL).map(|w| (ray, samples, w))
+        ray_weights(field, &ray, march, SPREAD_TAIL).map(|w| (ray, w))
     };
-    // Each placed point, and the direction of the ray that placed it.
-    let placed: Vec<(DVec3, DVec3)> = frames
-        .iter()
-        .flat_map(|&f| {
-            let (w, h) = size(f);
-            let lattice: Vec<u32> = (0..h)
-                .step_by(stride as usize)
-                .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| y * w + x))
-                .collect();
-            lattice
-                .into_par_iter()
-                .filter_map(|p| read(f, p))
-                .filter(|(_, _, w)| w.spread < PLACED_SPREAD * spacing)
-                .map(|(ray, _, w)| (ray.at(w.mean), ray.dir))
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    // Each frame's lattice marched once: each of its pixels whose surface
+    // is open (its index on the lattice), with the stretch that holds its
+    // weight (but for the tails) widened by a spacing. And each placed
+    // point with the direction of the ray that placed it, read on the
+    // search's lattice in its order; its pixels on the completion's
+    // lattice are not marched again (every pixel of both, where both read
+    // every pixel).
+    let mut open: Vec<Vec<(u32, f64, f64)>> = Vec::with_capacity(frames.len());
+    let mut placed: Vec<(DVec3, DVec3)> = Vec::new();
+    for &f in &frames {
+        let (w, h) = size(f);
+        let lattice = Lattice::new(w, h, stride);
+        let reads: Vec<Option<(Ray, RayWeights)>> = (0..lattice.len())
+            .into_par_iter()
+            .map(|i| read(f, lattice.pixel(i)))
+            .collect();
+        let searched = Lattice::new(w, h, search);
+        let points: Vec<(DVec3, DVec3)> = (0..searched.len())
+            .into_par_iter()
+            .filter_map(|i| {
+                let p = searched.pixel(i);
+                match lattice.index(p) {
+                    Some(j) => reads[j as usize],
+                    None => read(f, p),
+                }
+            })
+            .filter(|(_, w)| w.spread < PLACED_SPREAD * spacing)
+            .map(|(ray, w)| (ray.at(w.mean), ray.dir))
+            .collect();
+        placed.extend(points);
+        open.push(
+            (0..lattice.len())
+                .zip(reads)
+                .filter_map(|(i, read)| {
+                    let (_, w) = read?;
+                    (w.spread >= OPEN_SPREAD * spacing).then_some((
+                        i,
+                        w.front - spacing,
+                        w.back + spacing,
+                    ))
+                })
+                .collect(),
+        );
+    }
     let points: Vec<DVec3> = placed.iter().map(|(x, _)| *x).collect();
     let least = (PLANE_SHARE * points.len() as f64).ceil() as usize;
     let tolerance = PLANE_TOLERANCE * spacing;
@@ -374,9 +395,8 @@ fn complete_on_lattice(
         .filter(|(p, _)| !on_a_face_of(p, &field.bounds, BOUNDS_FACE * spacing))
         .map(|(p, n)| (facing_its_cameras(p, &placed, tolerance), n))
         .collect();
-    let lattice = lattice_stride(all, most);
     let mut completion = Completion {
-        stride: lattice,
+        stride,
         placed: placed.len(),
         depth: vec![Vec::new(); dataset.frames.len()],
         ..Completion::default()
@@ -391,69 +411,58 @@ fn complete_on_lattice(
         Completed(usize),
         Medium,
     }
-    for &f in &frames {
+    // An open pixel's fate, `stretch` along its ray holding its weight.
+    let fate = |frame: &Frame, p: u32, stretch: std::ops::RangeInclusive<f64>| {
+        let Some(ray) = pixel_ray(frame, p) else {
+            return Fate::Open;
+        };
+        let Some((k, t)) = planes
+            .iter()
+            .enumerate()
+            .filter(|(_, (plane, _))| plane.normal.dot(ray.dir) < 0.0)
+            .filter_map(|(k, (plane, n))| plane.hit(&ray).map(|t| (k, t, n)))
+            .filter(|(_, t, _)| stretch.contains(t))
+            .max_by_key(|(_, _, n)| **n)
+            .map(|(k, t, _)| (k, t))
+        else {
+            return Fate::Open;
+        };
+        // The colour rule reads the samples themselves: marched again for
+        // the pixels a plane meets alone.
+        let samples = weighted_samples(field, &ray, march);
+        if same_colour_in_front(field, &ray, &samples, t - spacing, t + spacing) {
+            Fate::Completed(k)
+        } else {
+            Fate::Medium
+        }
+    };
+    for (&f, open) in frames.iter().zip(&open) {
         let frame = &dataset.frames[f as usize];
         let forward = frame.pose.forward();
         let (w, h) = size(f);
-        let (lw, lh) = (w.div_ceil(lattice), h.div_ceil(lattice));
-        let fates: Vec<Fate> = (0..lw * lh)
-            .into_par_iter()
-            .map(|i| {
-                let p = (i / lw) * lattice * w + (i % lw) * lattice;
-                let Some((ray, samples, weights)) = read(f, p) else {
-                    return Fate::Untouched;
-                };
-                if weights.spread < OPEN_SPREAD * spacing {
-                    return Fate::Untouched;
-                }
-                let stretch = weights.front - spacing..=weights.back + spacing;
-                let Some((k, t)) = planes
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, (plane, _))| plane.normal.dot(ray.dir) < 0.0)
-                    .filter_map(|(k, (plane, n))| plane.hit(&ray).map(|t| (k, t, n)))
-                    .filter(|(_, t, _)| stretch.contains(t))
-                    .max_by_key(|(_, _, n)| **n)
-                    .map(|(k, t, _)| (k, t))
-                else {
-                    return Fate::Open;
-                };
-                if same_colour_in_front(field, &ray, &samples, t - spacing, t + spacing) {
-                    Fate::Completed(k)
-                } else {
-                    Fate::Medium
-                }
-            })
+        let lattice = Lattice::new(w, h, stride);
+        let met: Vec<(u32, Fate)> = open
+            .par_iter()
+            .map(|&(i, front, back)| (i, fate(frame, lattice.pixel(i), front..=back)))
             .collect();
-        for fate in &fates {
-            completion.open += (*fate != Fate::Untouched) as usize;
+        let mut fates = vec![Fate::Untouched; lattice.len() as usize];
+        for &(i, fate) in &met {
+            fates[i as usize] = fate;
+        }
+        completion.open += open.len();
+        for (_, fate) in &met {
             completion.media += (*fate == Fate::Medium) as usize;
             completion.completed += matches!(fate, Fate::Completed(_)) as usize;
         }
         // Each pixel's plane: its own on the lattice; between, the one all
         // the lattice pixels around it were completed by.
         let plane_of = |x: u32, y: u32| {
-            let (i, j) = (x / lattice, y / lattice);
-            // The lattice's columns and rows around (x, y): its own where
-            // it lies on one.
-            let columns = if x % lattice == 0 {
-                i..=i
-            } else {
-                i..=(i + 1).min(lw - 1)
-            };
-            let rows = if y % lattice == 0 {
-                j..=j
-            } else {
-                j..=(j + 1).min(lh - 1)
-            };
             let mut agreed = None;
-            for cj in rows {
-                for ci in columns.clone() {
-                    match (fates[(cj * lw + ci) as usize], agreed) {
-                        (Fate::Completed(k), None) => agreed = Some(k),
-                        (Fate::Completed(k), Some(a)) if k == a => {}
-                        _ => return None,
-                    }
+            for i in lattice.around(x, y) {
+                match (fates[i as usize], agreed) {
+                    (Fate::Completed(k), None) => agreed = Some(k),
+                    (Fate::Completed(k), Some(a)) if k == a => {}
+                    _ => return None,
                 }
             }
             agreed

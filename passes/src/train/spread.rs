@@ -13,6 +13,7 @@
 use rayon::prelude::*;
 
 use super::geometry::SURFACE_OPACITY;
+use super::lattice::{lattice_stride, Lattice};
 use super::pixels::pixel_ray;
 use crate::dataset::{Frame, PixelState};
 use crate::field::RadianceField;
@@ -165,7 +166,7 @@ impl SurfaceSpread {
 /// Pixels a view's spread reads at most: a photograph of more is read on
 /// every n-th pixel of every n-th row, n the least that keeps it under
 /// (a share, which so many pixels read to within half a percent).
-pub const SPREAD_PIXELS: u32 = 1 << 16;
+pub const SPREAD_PIXELS: u64 = 1 << 16;
 
 /// How far `field`'s surfaces spread along the rays through the centres of
 /// `frame`'s usable pixels ([`depth_spread`], in the field's smallest node
@@ -176,13 +177,12 @@ pub fn surface_spread(
     march: &MarchKnobs,
 ) -> SurfaceSpread {
     let (w, h) = (frame.intrinsics.width, frame.intrinsics.height);
-    let stride = (((w as f64 * h as f64) / SPREAD_PIXELS as f64).sqrt().ceil() as u32).max(1);
-    let size = (w.div_ceil(stride), h.div_ceil(stride));
+    let lattice = Lattice::new(w, h, lattice_stride(w as u64 * h as u64, SPREAD_PIXELS));
     let spacing = field.spacing().min_element();
-    let spreads: Vec<f32> = (0..size.0 * size.1)
+    let spreads: Vec<f32> = (0..lattice.len())
         .into_par_iter()
         .map(|i| {
-            let p = (i / size.0) * stride * w + (i % size.0) * stride;
+            let p = lattice.pixel(i);
             if frame.image.state[p as usize] == PixelState::Masked {
                 return f32::NAN;
             }
@@ -192,8 +192,8 @@ pub fn surface_spread(
         })
         .collect();
     SurfaceSpread {
-        stride,
-        size,
+        stride: lattice.stride,
+        size: (lattice.columns(), lattice.rows()),
         spreads,
     }
 }
