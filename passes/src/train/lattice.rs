@@ -73,16 +73,20 @@ impl Lattice {
     /// column `x` and row `y`: itself where it lies on the lattice,
     /// otherwise the lattice's columns and rows on either side of it (two
     /// or four pixels; one or two at the picture's last column or row,
-    /// past the lattice's last).
+    /// past the lattice's last; none on an empty lattice).
     pub fn around(&self, x: u32, y: u32) -> impl Iterator<Item = u32> {
         let s = self.stride;
         let span = |at: u32, last: u32| {
             let i = at / s;
             i..=if at % s == 0 { i } else { (i + 1).min(last) }
         };
-        let columns = span(x, self.columns() - 1);
+        let columns = span(x, self.columns().saturating_sub(1));
         let c = self.columns();
-        span(y, self.rows() - 1).flat_map(move |j| columns.clone().map(move |i| j * c + i))
+        // An empty lattice (of an empty picture) has no pixel around any.
+        let most = if self.is_empty() { 0 } else { 4 };
+        span(y, self.rows().saturating_sub(1))
+            .flat_map(move |j| columns.clone().map(move |i| j * c + i))
+            .take(most)
     }
 }
 
@@ -123,6 +127,12 @@ mod tests {
         assert_eq!(around(6, 2), [2, 5]);
         let every = Lattice::new(4, 2, 0);
         assert_eq!((every.stride, every.len()), (1, 8));
-        assert!(Lattice::new(0, 3, 2).is_empty());
+        let empty = Lattice::new(0, 3, 2);
+        assert!(empty.is_empty());
+        assert_eq!(
+            empty.around(0, 0).count(),
+            0,
+            "no pixel around on an empty lattice"
+        );
     }
 }

@@ -16,6 +16,7 @@ pub mod lattice;
 pub mod loss;
 pub mod past_bounds;
 pub mod pixels;
+pub mod plane_colour;
 pub mod planes;
 pub mod prune;
 pub mod render;

@@ -23,7 +23,8 @@ use rayon::prelude::*;
 use super::geometry::SURFACE_OPACITY;
 use super::lattice::{lattice_stride, Lattice};
 use super::pixels::pixel_ray;
-use super::spread::{ray_weights, weighted_samples, RayWeights};
+use super::plane_colour::{PlaneColours, PLANE_COLOUR_REACH};
+use super::spread::{weighted_samples, RayWeights};
 use crate::dataset::{Dataset, Frame, PixelState};
 use crate::field::{GridField, RadianceField};
 use crate::geometry::Ray;
@@ -289,7 +290,9 @@ pub const COMPLETION_PIXELS: u64 = 1 << 22;
 /// [`SPREAD_TAIL`] at each end, widened by a spacing), the one holding the
 /// most placed points where it meets several (a plane found by chance
 /// among scattered points is small), where the weight in front of the
-/// plane is of the plane's colour ([`SAME_COLOUR`]). A plane completes
+/// plane is of the plane's colour ([`same_colour_in_front`]: the field's
+/// at the plane, or the photographs' on it nearby where the ray's weight
+/// does not reach it, [`PlaneColours`]). A plane completes
 /// only rays that reach it from the side its points were placed from
 /// ([`facing_its_cameras`]), and a face of the bounds none
 /// ([`on_a_face_of`]). Frames that record depth already are left out
@@ -334,33 +337,39 @@ fn complete_on_lattice(
     let search = plane_stride(all);
     let stride = lattice_stride(all, most);
     // A pixel's ray and how its weight lies, where it is usable and the
-    // field makes it opaque.
+    // field makes it opaque; and where it places its surface, the colour
+    // it gathers (the colour the photographs show there).
     let read = |f: u32, p: u32| {
         let frame = &dataset.frames[f as usize];
         if frame.image.state[p as usize] == PixelState::Masked {
             return None;
         }
         let ray = pixel_ray(frame, p)?;
-        ray_weights(field, &ray, march, SPREAD_TAIL).map(|w| (ray, w))
+        let samples = weighted_samples(field, &ray, march);
+        let w = RayWeights::of(&samples, SPREAD_TAIL)?;
+        let colour = (w.spread < PLACED_SPREAD * spacing)
+            .then(|| samples.iter().map(|s| s.weight * s.colour).sum::<DVec3>() / w.opacity);
+        Some((ray, w, colour))
     };
     // Each frame's lattice marched once: each of its pixels whose surface
     // is open (its index on the lattice), with the stretch that holds its
     // weight (but for the tails) widened by a spacing. And each placed
-    // point with the direction of the ray that placed it, read on the
-    // search's lattice in its order; its pixels on the completion's
-    // lattice are not marched again (every pixel of both, where both read
-    // every pixel).
+    // point with the direction of the ray that placed it (and its colour),
+    // read on the search's lattice in its order; its pixels on the
+    // completion's lattice are not marched again (every pixel of both,
+    // where both read every pixel).
     let mut open: Vec<Vec<(u32, f64, f64)>> = Vec::with_capacity(frames.len());
     let mut placed: Vec<(DVec3, DVec3)> = Vec::new();
+    let mut placed_colours: Vec<DVec3> = Vec::new();
     for &f in &frames {
         let (w, h) = size(f);
         let lattice = Lattice::new(w, h, stride);
-        let reads: Vec<Option<(Ray, RayWeights)>> = (0..lattice.len())
+        let reads: Vec<Option<(Ray, RayWeights, Option<DVec3>)>> = (0..lattice.len())
             .into_par_iter()
             .map(|i| read(f, lattice.pixel(i)))
             .collect();
         let searched = Lattice::new(w, h, search);
-        let points: Vec<(DVec3, DVec3)> = (0..searched.len())
+        let points: Vec<(DVec3, DVec3, DVec3)> = (0..searched.len())
             .into_par_iter()
             .filter_map(|i| {
                 let p = searched.pixel(i);
@@ -369,15 +378,17 @@ fn complete_on_lattice(
                     None => read(f, p),
                 }
             })
-            .filter(|(_, w)| w.spread < PLACED_SPREAD * spacing)
-            .map(|(ray, w)| (ray.at(w.mean), ray.dir))
+            .filter_map(|(ray, w, colour)| Some((ray.at(w.mean), ray.dir, colour?)))
             .collect();
-        placed.extend(points);
+        for (x, d, colour) in points {
+            placed.push((x, d));
+            placed_colours.push(colour);
+        }
         open.push(
             (0..lattice.len())
                 .zip(reads)
                 .filter_map(|(i, read)| {
-                    let (_, w) = read?;
+                    let (_, w, _) = read?;
                     (w.spread >= OPEN_SPREAD * spacing).then_some((
                         i,
                         w.front - spacing,
@@ -395,6 +406,14 @@ fn complete_on_lattice(
         .filter(|(p, _)| !on_a_face_of(p, &field.bounds, BOUNDS_FACE * spacing))
         .map(|(p, n)| (facing_its_cameras(p, &placed, tolerance), n))
         .collect();
+    let faces: Vec<Plane> = planes.iter().map(|(p, _)| *p).collect();
+    let seen = PlaneColours::new(
+        &faces,
+        &placed,
+        &placed_colours,
+        tolerance,
+        PLANE_COLOUR_REACH * spacing,
+    );
     let mut completion = Completion {
         stride,
         placed: placed.len(),
@@ -430,7 +449,8 @@ fn complete_on_lattice(
         // The colour rule reads the samples themselves: marched again for
         // the pixels a plane meets alone.
         let samples = weighted_samples(field, &ray, march);
-        if same_colour_in_front(field, &ray, &samples, t - spacing, t + spacing) {
+        let plane_seen = seen.near(k, ray.at(t));
+        if same_colour_in_front(field, &ray, &samples, t - spacing, t + spacing, plane_seen) {
             Fate::Completed(k)
         } else {
             Fate::Medium
@@ -498,18 +518,24 @@ fn complete_on_lattice(
 
 /// Whether the weight `ray`'s `samples` ([`weighted_samples`] through
 /// `field`) gather in front of `near` (a plane's stretch [`near`, `far`]
-/// along it) carry the colour the field shows at the plane: its weighted mean colour within [`SAME_COLOUR`] of the plane's
-/// (relative to the plane's, summed over the channels). The plane's is the
-/// weighted mean over the stretch, or the field's colour at its middle
-/// where the stretch holds no weight (the ray spent before it). True
-/// where less than [`SURFACE_OPACITY`] × 0.1 lies in front: no medium to
-/// keep.
+/// along it) carry the plane's colour: their weighted mean colour within
+/// [`SAME_COLOUR`] of it (relative to the plane's, summed over the
+/// channels). The plane's colour is the weighted mean over the stretch,
+/// or the field's colour at its middle where the stretch holds no weight.
+/// Where the stretch holds less than [`SURFACE_OPACITY`] × 0.1 (the ray
+/// spent before it), the field's colour there is what lies behind the
+/// surface it shows, which the ray never delivers; the colour the
+/// photographs show on the plane nearby (`seen`, [`PlaneColours::near`])
+/// then counts as the plane's too, and either one matching is enough.
+/// True where less than [`SURFACE_OPACITY`] × 0.1 lies in front: no
+/// medium to keep.
 pub fn same_colour_in_front(
     field: &dyn RadianceField,
     ray: &Ray,
     samples: &[MarchSample],
     near: f64,
     far: f64,
+    seen: Option<DVec3>,
 ) -> bool {
     let (mut front, mut front_weight) = (DVec3::ZERO, 0.0);
     let (mut plane, mut plane_weight) = (DVec3::ZERO, 0.0);
@@ -525,14 +551,17 @@ pub fn same_colour_in_front(
     if front_weight < 0.1 * SURFACE_OPACITY {
         return true;
     }
-    let plane = if plane_weight > 1e-6 {
+    let front = front / front_weight;
+    let within = |colour: DVec3| {
+        let scale = colour.abs().element_sum().max(1e-12);
+        (front - colour).abs().element_sum() <= SAME_COLOUR * scale
+    };
+    let stretch = if plane_weight > 1e-6 {
         plane / plane_weight
     } else {
         field.colour(ray.at(0.5 * (near + far)), ray.dir)
     };
-    let front = front / front_weight;
-    let scale = plane.abs().element_sum().max(1e-12);
-    (front - plane).abs().element_sum() <= SAME_COLOUR * scale
+    within(stretch) || (plane_weight < 0.1 * SURFACE_OPACITY && seen.is_some_and(within))
 }
 
 #[cfg(test)]
@@ -744,6 +773,58 @@ mod tests {
     /// floor, holding nearly all the placed points; the grey haze's pixels take the floor's depth; the green
     /// medium's are left alone; a frame that records depth, and one not
     /// asked for, get no map.
+    /// Where a ray's weight is spent in front of the plane, the plane's
+    /// colour is the one the photographs show on it nearby, not the
+    /// field's there (the back face behind the surface it shows); where
+    /// the plane's stretch holds weight, that weight's colour stands.
+    #[test]
+    fn a_plane_the_ray_never_reaches_is_of_the_colour_seen_on_it() {
+        let field = hazy_floor();
+        let ray = Ray {
+            origin: DVec3::ZERO,
+            dir: DVec3::X,
+        };
+        let tan = DVec3::new(0.6, 0.5, 0.4);
+        let blue = DVec3::new(0.1, 0.2, 0.6);
+        let sample = |t: f64, weight: f64, colour: DVec3| MarchSample {
+            x: ray.at(t),
+            t,
+            a: t - 0.05,
+            b: t + 0.05,
+            sigma: 1.0,
+            colour,
+            transmittance: 1.0,
+            weight,
+        };
+        // 0.9 of the weight smeared in front, the wall's colour; a
+        // hundredth at the plane, the back face's.
+        let mut spent: Vec<MarchSample> = (0..4)
+            .map(|i| sample(0.5 + 0.1 * i as f64, 0.225, tan))
+            .collect();
+        spent.push(sample(1.1, 0.01, blue));
+        let same = |samples: &[MarchSample], seen| {
+            same_colour_in_front(&field, &ray, samples, 1.0, 1.2, seen)
+        };
+        assert!(!same(&spent, None), "against the back face: a medium");
+        assert!(same(&spent, Some(DVec3::new(0.62, 0.5, 0.41))));
+        assert!(
+            !same(&spent, Some(DVec3::new(0.1, 0.6, 0.1))),
+            "a green plane"
+        );
+        // Weight at the plane: its own colour, whatever was seen near.
+        let mut reached = spent.clone();
+        reached.last_mut().unwrap().weight = 0.3;
+        assert!(!same(&reached, Some(tan)));
+        reached.last_mut().unwrap().colour = tan;
+        assert!(same(&reached, Some(blue)));
+        // Spent before the plane, the field's colour there still counts
+        // where it matches (a thick surface of one colour).
+        let mut thick = spent.clone();
+        thick.last_mut().unwrap().colour = tan;
+        assert!(same(&thick, Some(DVec3::new(0.1, 0.6, 0.1))));
+        assert!(same(&thick, None));
+    }
+
     #[test]
     fn open_pixels_over_a_placed_floor_take_its_depth_and_a_medium_keeps_its_own() {
         let field = hazy_floor();
