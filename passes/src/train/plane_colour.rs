@@ -68,7 +68,8 @@ impl PlaneColours {
     /// colour is the one that side shows. A cell's colour is the mean of
     /// the points filed in the cells whose centres lie within `reach` of
     /// its centre, none where fewer than [`PLANE_COLOUR_POINTS`] are.
-    /// `reach` is in the points' units.
+    /// `colours` holds one colour for each of `placed`; `reach` is in the
+    /// points' units.
     pub fn new(
         planes: &[Plane],
         placed: &[(DVec3, DVec3)],
@@ -76,6 +77,7 @@ impl PlaneColours {
         tolerance: f64,
         reach: f64,
     ) -> PlaneColours {
+        debug_assert_eq!(placed.len(), colours.len(), "a colour for each point");
         let cell = reach / PLANE_COLOUR_CELLS as f64;
         let r = PLANE_COLOUR_CELLS;
         let within: Vec<IVec2> = (-r..=r)
