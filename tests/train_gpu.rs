@@ -1566,9 +1566,13 @@ const TV: inlay_passes::train::tv::TvWeights = inlay_passes::train::tv::TvWeight
     sparsity_edge: 1.5,
 };
 
+/// [`TV`] without its colour weight: the kernels of the densities alone.
+const DENSITY_TV: inlay_passes::train::tv::TvWeights =
+    inlay_passes::train::tv::TvWeights { colour: 0.0, ..TV };
+
 /// `train-tv` and `train-descend` take the CPU reference's total-variation
 /// step after Adam's (here of size zero, with rays of zero weight: nothing
-/// else moves the values).
+/// else moves the values), with a colour weight and without one.
 #[test]
 fn the_tv_step_matches_the_cpu_step() {
     let ctx = common::gpu();
@@ -1588,16 +1592,23 @@ fn the_tv_step_matches_the_cpu_step() {
         beta1: 0.9,
         beta2: 0.99,
     };
-    trainer
-        .run_batch(
-            &mut renderer,
-            &records,
-            DVec3::ZERO,
-            0.05,
-            Some((&still, 1.0)),
-        )
-        .unwrap();
-    let gpu = trainer.field(&mut renderer).unwrap().nodes;
+    // One step under `weights`: the nodes after it, the gradient cleared.
+    let mut step_with = |trainer: &mut GpuTrainer, weights| {
+        trainer.tv_weights = weights;
+        trainer
+            .run_batch(
+                &mut renderer,
+                &records,
+                DVec3::ZERO,
+                0.05,
+                Some((&still, 1.0)),
+            )
+            .unwrap();
+        let grad = trainer.gradient(&mut renderer).unwrap();
+        assert!(grad.iter().all(|g| *g == 0.0));
+        trainer.field(&mut renderer).unwrap().nodes
+    };
+    let gpu = step_with(&mut trainer, TV);
     let mut cpu = field.nodes.clone();
     inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, TV);
     for (i, (g, c)) in gpu.iter().flatten().zip(cpu.iter().flatten()).enumerate() {
@@ -1607,11 +1618,21 @@ fn the_tv_step_matches_the_cpu_step() {
         );
     }
     assert_ne!(gpu, field.nodes);
-    assert!(trainer
-        .gradient(&mut renderer)
-        .unwrap()
-        .iter()
-        .all(|g| *g == 0.0));
+    // Without a colour weight the kernels read and step the densities
+    // alone: the same step, the colours untouched.
+    let after = step_with(&mut trainer, DENSITY_TV);
+    let mut cpu = gpu.clone();
+    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, DENSITY_TV);
+    for (i, ((a, c), g)) in after.iter().zip(&cpu).zip(&gpu).enumerate() {
+        assert_eq!(a[..3], g[..3], "node {i}'s colour");
+        assert!(
+            (a[3] - c[3]).abs() < 1e-5 * (1.0 + c[3].abs()),
+            "node {i}: {} vs {}",
+            a[3],
+            c[3]
+        );
+    }
+    assert!(after.iter().zip(&gpu).any(|(a, g)| a[3] != g[3]));
     common::assert_no_validation_errors(&ctx);
 }
 
@@ -1875,6 +1896,27 @@ fn a_sparse_grid_trains_as_the_dense_one_where_it_has_bricks() {
         }
     }
     assert_ne!(gpu, field.nodes);
+    // The densities' kernels alone (no colour weight) read a neighbour in
+    // the node's own brick at its stride in the pool, and across a
+    // brick's face through the table: the same step again.
+    trainer.tv_weights = DENSITY_TV;
+    trainer
+        .run_batch(&mut renderer, &quiet, bg, eps, Some((&still, 1.0)))
+        .unwrap();
+    let after = trainer.field(&mut renderer).unwrap().nodes;
+    let mut cpu = gpu.clone();
+    inlay_passes::train::tv::tv_step(&mut cpu, field.resolution, DENSITY_TV);
+    // The trained nodes (x from 8), in the dense grid's order.
+    let trained = (0..after.len()).filter(|d| d % r.x as usize >= 8);
+    for d in trained {
+        let (a, c) = (after[d], cpu[d]);
+        assert_eq!(a[..3], gpu[d][..3], "node {d}'s colour");
+        assert!(
+            (a[3] - c[3]).abs() < 1e-5 * (1.0 + c[3].abs()),
+            "node {d}: {a:?} vs {c:?}"
+        );
+    }
+    assert!(after.iter().zip(&gpu).any(|(a, g)| a[3] != g[3]));
     common::assert_no_validation_errors(&ctx);
 }
 

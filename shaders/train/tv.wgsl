@@ -6,6 +6,9 @@
 // (σ₊·inv)²) with its own edge's inv, weighted), into the gradient buffer Adam's step left empty;
 // train/descend.wgsl then takes one plain step along it. A sparse grid's
 // nodes are its pool's, a dropped brick's neighbours zero (held so).
+// With TV_COLOUR false (a bool define: the colour's weight is zero,
+// passes/src/train/gpu.rs) only the densities are read and their
+// gradient written: the colours' would be zero.
 // Mirrors passes/src/train/tv.rs tv_gradient.
 
 struct TvPush {
@@ -39,23 +42,53 @@ var<immediate> pc: TvPush;
 
 #include "field/bricks.wgsl"
 
-// A neighbour's values: zero where a sparse grid dropped its brick.
-fn neighbour(m: vec3<u32>) -> vec4<f32> {
+// The pool index of node n's neighbour one step along axis a (up or
+// down), n at grid coordinates i, or EMPTY_BRICK where a sparse grid
+// dropped the neighbour's brick. In n's own brick (and on a dense grid)
+// it lies at a fixed stride from n; only a step out of the brick reads
+// the brick table.
+fn neighbour_index(n: u32, i: vec3<u32>, a: u32, up: bool) -> u32 {
     let r = pc.resolution;
-    if pc.brick_dims.x == 0u {
-        return params[m.x + r.x * (m.y + r.y * m.z)];
+    let dense = pc.brick_dims.x == 0u;
+    let side = select(BRICK_SIDE, r.x, dense);
+    let stride = select(1u, select(side, side * select(BRICK_SIDE, r.y, dense), a == 2u), a > 0u);
+    let local = i[a] % BRICK_SIDE;
+    if dense || (up && local + 1u < BRICK_SIDE) {
+        return select(n - stride, n + stride, up);
     }
+    if !up && local > 0u {
+        return n - stride;
+    }
+    var m = i;
+    m[a] = select(i[a] - 1u, i[a] + 1u, up);
     let slot = bricks[brick_table_index(m, pc.brick_dims)];
     if slot == EMPTY_BRICK {
+        return EMPTY_BRICK;
+    }
+    return brick_pool_index(slot, m);
+}
+
+// The values of the node at pool index k: zero where it is EMPTY_BRICK;
+// only its density without TV_COLOUR.
+fn neighbour(k: u32) -> vec4<f32> {
+    if k == EMPTY_BRICK {
         return vec4<f32>(0.0);
     }
-    return params[brick_pool_index(slot, m)];
+    if TV_COLOUR {
+        return params[k];
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, params[k].w);
 }
 
 // Half the penalty's derivative for a difference d: d / √(1 + (d·inv)²)
 // with the colour's inv for r, g, b and the density's for σ
 // (passes/src/train/tv.rs edge_pull).
+// Without TV_COLOUR only σ's (the others zero).
 fn pull(d: vec4<f32>) -> vec4<f32> {
+    if !TV_COLOUR {
+        let s = d.w * pc.density_edge_inverse;
+        return vec4<f32>(0.0, 0.0, 0.0, d.w / sqrt(1.0 + s * s));
+    }
     let inv = vec4<f32>(vec3<f32>(pc.colour_edge_inverse), pc.density_edge_inverse);
     let s = d * inv;
     return d / sqrt(vec4<f32>(1.0) + s * s);
@@ -83,20 +116,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             return; // a partial brick's padding: stays zero
         }
     }
-    let v = params[n];
+    let v = neighbour(n);
     var acc = vec4<f32>(0.0);
     for (var a = 0u; a < 3u; a++) {
-        var e = vec3<u32>(0u);
-        e[a] = 1u;
         if i[a] + 1u < r[a] {
-            acc += pull(v - neighbour(i + e));
+            acc += pull(v - neighbour(neighbour_index(n, i, a, true)));
         }
         if i[a] > 0u {
-            acc += pull(v - neighbour(i - e));
+            acc += pull(v - neighbour(neighbour_index(n, i, a, false)));
         }
     }
     let w = vec4<f32>(pc.colour_weight, pc.colour_weight, pc.colour_weight, pc.density_weight);
     acc *= w;
     acc.w += pc.sparsity * sparsity_pull(v.w);
-    grad[n] += 2.0 * acc;
+    if TV_COLOUR {
+        grad[n] += 2.0 * acc;
+    } else {
+        grad[n].w += 2.0 * acc.w;
+    }
 }

@@ -266,6 +266,20 @@ pub const VALUES_PER_INVOCATION: u32 = 4;
 /// The defines of the kernels that step every value.
 const VALUES_DEFINES: [Define; 1] = [Define::U32("VALUES_PER_INVOCATION", VALUES_PER_INVOCATION)];
 
+/// A total variation kernel (`train/tv.wgsl`, `train/descend.wgsl`) with
+/// its bool define `name` set to `value`, stepping
+/// [`VALUES_PER_INVOCATION`] values an invocation where it steps values.
+fn tv_pipeline(
+    ctx: &Arc<Context>,
+    lib: &ShaderLibrary,
+    file: &str,
+    name: &'static str,
+    value: bool,
+) -> anyhow::Result<Arc<ComputePipeline>> {
+    let defines = [VALUES_DEFINES[0].clone(), Define::Bool(name, value)];
+    Ok(lib.compute_pipeline(ctx, file, "main", &defines)?)
+}
+
 /// Workgroups (of 64) to step `count` values, [`VALUES_PER_INVOCATION`]
 /// an invocation, split over y past the dispatch limit.
 fn value_groups(count: u32) -> [u32; 3] {
@@ -428,8 +442,10 @@ pub struct GpuTrainer {
     slot_bricks: Arc<Buffer>,
     ray_grad: Arc<ComputePipeline>,
     adam: Arc<ComputePipeline>,
-    tv: Arc<ComputePipeline>,
-    descend: Arc<ComputePipeline>,
+    /// Total variation's gradient and plain step: of every value, and of
+    /// the densities only (where the colour's weight is zero).
+    tv: [Arc<ComputePipeline>; 2],
+    descend: [Arc<ComputePipeline>; 2],
     params: Arc<Buffer>,
     grad: Arc<Buffer>,
     moments: [Arc<Buffer>; 2],
@@ -582,8 +598,14 @@ impl GpuTrainer {
                 &RAY_GRAD_DEFINES,
             )?,
             adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &VALUES_DEFINES)?,
-            tv: lib.compute_pipeline(ctx, "train/tv.wgsl", "main", &[])?,
-            descend: lib.compute_pipeline(ctx, "train/descend.wgsl", "main", &VALUES_DEFINES)?,
+            tv: [
+                tv_pipeline(ctx, lib, "train/tv.wgsl", "TV_COLOUR", true)?,
+                tv_pipeline(ctx, lib, "train/tv.wgsl", "TV_COLOUR", false)?,
+            ],
+            descend: [
+                tv_pipeline(ctx, lib, "train/descend.wgsl", "DENSITIES_ONLY", false)?,
+                tv_pipeline(ctx, lib, "train/descend.wgsl", "DENSITIES_ONLY", true)?,
+            ],
             params: Arc::new(Buffer::with_data(
                 ctx,
                 "train-params",
@@ -952,17 +974,24 @@ impl GpuTrainer {
             pad3: 0,
         };
         let groups = nodes.div_ceil(64);
+        // A colour weight of zero takes nothing from the colours: only the
+        // densities are read and stepped (exactly as when all are).
+        let densities_only = self.tv_weights.colour == 0.0;
+        let which = usize::from(densities_only);
         let mut pass = graph.compute_pass(TRAIN_TV);
         pass.buffer_at("params", params, BufferAccess::StorageRead);
         let grad = pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
         pass.buffer_at("bricks", table, BufferAccess::StorageRead);
         pass.buffer_at("slot_bricks", slots, BufferAccess::StorageRead);
-        pass.dispatch(&self.tv)
-            .push(&t)
-            .groups([groups.min(65535), groups.div_ceil(65535), 1]);
+        pass.dispatch(&self.tv[which]).push(&t).groups([
+            groups.min(65535),
+            groups.div_ceil(65535),
+            1,
+        ]);
         pass.finish();
+        let stepped = if densities_only { nodes } else { 4 * nodes };
         let d = DescendPush {
-            count: 4 * nodes,
+            count: stepped,
             limit: crate::scene::RADIANCE_LIMIT as f32,
             pad1: 0,
             pad2: 0,
@@ -970,9 +999,9 @@ impl GpuTrainer {
         let mut pass = graph.compute_pass(TRAIN_DESCEND);
         pass.buffer_at("params", params, BufferAccess::StorageReadWrite);
         pass.buffer_at("grad", grad, BufferAccess::StorageReadWrite);
-        pass.dispatch(&self.descend)
+        pass.dispatch(&self.descend[which])
             .push(&d)
-            .groups(value_groups(4 * nodes));
+            .groups(value_groups(stepped));
         pass.finish();
     }
 
