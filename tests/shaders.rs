@@ -28,6 +28,8 @@ fn knob_defines() -> Vec<Define> {
             "VALUES_PER_INVOCATION",
             inlay_passes::train::gpu::VALUES_PER_INVOCATION,
         ),
+        Define::Bool(inlay_passes::train::gpu::TV_COLOUR_DEFINE, false),
+        Define::Bool(inlay_passes::train::gpu::DENSITIES_ONLY_DEFINE, true),
         Define::U32(
             "MAX_RAYS_PER_PIXEL",
             inlay_passes::train::gpu::MAX_RAYS_PER_PIXEL,

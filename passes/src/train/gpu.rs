@@ -266,6 +266,14 @@ pub const VALUES_PER_INVOCATION: u32 = 4;
 /// The defines of the kernels that step every value.
 const VALUES_DEFINES: [Define; 1] = [Define::U32("VALUES_PER_INVOCATION", VALUES_PER_INVOCATION)];
 
+/// The bool define of `train/tv.wgsl`: true reads and steps every
+/// channel, false the densities alone (a colour weight of zero).
+pub const TV_COLOUR_DEFINE: &str = "TV_COLOUR";
+
+/// The bool define of `train/descend.wgsl`: true steps the densities
+/// alone (value j is node j's density), false every value.
+pub const DENSITIES_ONLY_DEFINE: &str = "DENSITIES_ONLY";
+
 /// A total variation kernel (`train/tv.wgsl`, `train/descend.wgsl`) with
 /// its bool define `name` set to `value`, stepping
 /// [`VALUES_PER_INVOCATION`] values an invocation where it steps values.
@@ -599,12 +607,12 @@ impl GpuTrainer {
             )?,
             adam: lib.compute_pipeline(ctx, "train/adam.wgsl", "main", &VALUES_DEFINES)?,
             tv: [
-                tv_pipeline(ctx, lib, "train/tv.wgsl", "TV_COLOUR", true)?,
-                tv_pipeline(ctx, lib, "train/tv.wgsl", "TV_COLOUR", false)?,
+                tv_pipeline(ctx, lib, "train/tv.wgsl", TV_COLOUR_DEFINE, true)?,
+                tv_pipeline(ctx, lib, "train/tv.wgsl", TV_COLOUR_DEFINE, false)?,
             ],
             descend: [
-                tv_pipeline(ctx, lib, "train/descend.wgsl", "DENSITIES_ONLY", false)?,
-                tv_pipeline(ctx, lib, "train/descend.wgsl", "DENSITIES_ONLY", true)?,
+                tv_pipeline(ctx, lib, "train/descend.wgsl", DENSITIES_ONLY_DEFINE, false)?,
+                tv_pipeline(ctx, lib, "train/descend.wgsl", DENSITIES_ONLY_DEFINE, true)?,
             ],
             params: Arc::new(Buffer::with_data(
                 ctx,
