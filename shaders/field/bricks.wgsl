@@ -19,6 +19,13 @@ fn brick_pool_index(slot: u32, i: vec3<u32>) -> u32 {
     return slot * BRICK_NODES + l.x + BRICK_SIDE * (l.y + BRICK_SIDE * l.z);
 }
 
+// The step in the pool from a node to its neighbour along axis a in the
+// same brick: brick_pool_index's strides (x fastest).
+fn brick_pool_stride(a: u32) -> u32 {
+    let strides = vec3<u32>(1u, BRICK_SIDE, BRICK_SIDE * BRICK_SIDE);
+    return strides[a];
+}
+
 // The grid coordinates of node `local` (0..BRICK_NODES, x fastest) of the
 // brick at index `t` of a table of `dims` bricks.
 fn brick_node(t: u32, dims: vec3<u32>, local: u32) -> vec3<u32> {

@@ -50,8 +50,9 @@ var<immediate> pc: TvPush;
 fn neighbour_index(n: u32, i: vec3<u32>, a: u32, up: bool) -> u32 {
     let r = pc.resolution;
     let dense = pc.brick_dims.x == 0u;
-    let side = select(BRICK_SIDE, r.x, dense);
-    let stride = select(1u, select(side, side * select(BRICK_SIDE, r.y, dense), a == 2u), a > 0u);
+    // A dense grid's strides, x fastest (ray_grad_body's field_node_index).
+    let dense_strides = vec3<u32>(1u, r.x, r.x * r.y);
+    let stride = select(brick_pool_stride(a), dense_strides[a], dense);
     let local = i[a] % BRICK_SIDE;
     if dense || (up && local + 1u < BRICK_SIDE) {
         return select(n - stride, n + stride, up);
