@@ -13,14 +13,18 @@ fn sh_count(degree: u32) -> u32 {
     return (degree + 1u) * (degree + 1u) - 1u;
 }
 
-// Corner k's weighted term of sh_trilinear (zero where its brick was
-// dropped).
-fn sh_corner(cell: TrilinearCell, k: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
-    let n = field_node_index(cell.base + trilinear_corner(k));
+// Corner k's weighted term of sh_trilinear, its node at pool index n
+// (zero where n is EMPTY_BRICK: its brick was dropped).
+fn sh_corner_at(cell: TrilinearCell, k: u32, n: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
     if n == EMPTY_BRICK {
         return vec3<f32>(0.0);
     }
     return trilinear_weight(cell.f, k) * field_sh_node(n, count, basis);
+}
+
+// Corner k's weighted term of sh_trilinear.
+fn sh_corner(cell: TrilinearCell, k: u32, count: u32, basis: array<f32, 8>) -> vec3<f32> {
+    return sh_corner_at(cell, k, field_node_index(cell.base + trilinear_corner(k)), count, basis);
 }
 
 // The view-dependent part at a cell (a dropped brick's coefficients are
@@ -48,4 +52,21 @@ fn sh_trilinear(cell: TrilinearCell, degree: u32, basis: array<f32, 8>) -> vec3<
         + sh_corner(cell, 2u, count, basis) + sh_corner(cell, 3u, count, basis)
         + sh_corner(cell, 4u, count, basis) + sh_corner(cell, 5u, count, basis)
         + sh_corner(cell, 6u, count, basis) + sh_corner(cell, 7u, count, basis);
+}
+
+// sh_trilinear where the pool indices of the cell's corners are already
+// known (`nodes`, corner k's at k: a kernel that also reads the corners'
+// values and scatters their gradients looks each up once), the corners
+// always in a loop: for kernels compiled with SH_CORNER_LOOP (the
+// trainer's, passes/src/train/gpu.rs).
+fn sh_trilinear_nodes(cell: TrilinearCell, nodes: CellNodes, degree: u32, basis: array<f32, 8>) -> vec3<f32> {
+    let count = sh_count(degree);
+    if count == 0u {
+        return vec3<f32>(0.0);
+    }
+    var c = vec3<f32>(0.0);
+    for (var k = 0u; k < 8u; k++) {
+        c += sh_corner_at(cell, k, node_of(nodes, k), count, basis);
+    }
+    return c;
 }

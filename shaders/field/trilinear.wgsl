@@ -34,3 +34,17 @@ fn trilinear_weight(f: vec3<f32>, k: u32) -> f32 {
 fn density_at(raw: f32) -> f32 {
     return max(raw, 0.0);
 }
+
+// The pool indices of a cell's eight corner nodes, corner k's
+// (trilinear_corner(k)) at k: corners 0–3 in lo, 4–7 in hi. A kernel
+// that reads a sample's corners more than once looks them up once.
+struct CellNodes {
+    lo: vec4<u32>,
+    hi: vec4<u32>,
+}
+
+// Corner k's pool index.
+fn node_of(c: CellNodes, k: u32) -> u32 {
+    let v = select(c.lo, c.hi, k >= 4u);
+    return v[k & 3u];
+}

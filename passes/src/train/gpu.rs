@@ -263,6 +263,9 @@ pub enum GradientScatter {
 /// fourteenth pass).
 pub const VALUES_PER_INVOCATION: u32 = 4;
 
+// `train/adam.wgsl` steps a node's four values at once.
+const _: () = assert!(VALUES_PER_INVOCATION % 4 == 0);
+
 /// The defines of the kernels that step every value.
 const VALUES_DEFINES: [Define; 1] = [Define::U32("VALUES_PER_INVOCATION", VALUES_PER_INVOCATION)];
 
